@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Installs the system packages hrtao needs on Debian 12 (bookworm) / Ubuntu, skipping what is present.
+# Vulkan loader, Mesa lavapipe with VK_KHR_ray_query (Mesa >= 23; on Debian 12 from bookworm-backports),
+# glslc (shader compiler), Xvfb (windows without a display), Khronos validation layers.
+set -euo pipefail
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
+need=()
+have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+for p in libvulkan1 vulkan-tools glslc xvfb vulkan-validationlayers xauth libxkbcommon-x11-0 libx11-xcb1; do
+  have_pkg "$p" || need+=("$p")
+done
+
+# lavapipe must be new enough to expose VK_KHR_ray_query (Mesa 25 in bookworm-backports).
+lavapipe_ok() {
+  command -v vulkaninfo >/dev/null 2>&1 || return 1
+  local out
+  out=$(vulkaninfo 2>/dev/null || true)
+  [[ "$out" == *VK_KHR_ray_query* ]]
+}
+
+. /etc/os-release
+backports=""
+if [ "${ID:-}" = "debian" ] && [ "${VERSION_CODENAME:-}" = "bookworm" ]; then
+  backports="bookworm-backports"
+  if ! grep -rqs "bookworm-backports" /etc/apt/sources.list /etc/apt/sources.list.d/; then
+    echo "[install-deps] adding bookworm-backports to apt sources"
+    echo "deb http://deb.debian.org/debian bookworm-backports main" | $SUDO tee /etc/apt/sources.list.d/hrtao-backports.list >/dev/null
+    updated_needed=1
+  fi
+fi
+
+mesa_need=0
+if ! have_pkg mesa-vulkan-drivers; then mesa_need=1
+elif ! lavapipe_ok; then mesa_need=1; fi
+
+if [ ${#need[@]} -eq 0 ] && [ $mesa_need -eq 0 ] && [ -z "${updated_needed:-}" ]; then
+  echo "[install-deps] system packages present"
+  exit 0
+fi
+
+echo "[install-deps] installing: ${need[*]} $( [ $mesa_need -eq 1 ] && echo mesa-vulkan-drivers)"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+if [ ${#need[@]} -gt 0 ]; then
+  $SUDO apt-get install -y -qq --no-install-recommends "${need[@]}"
+fi
+if [ $mesa_need -eq 1 ]; then
+  if [ -n "$backports" ]; then
+    $SUDO apt-get install -y -qq --no-install-recommends -t "$backports" mesa-vulkan-drivers
+  else
+    $SUDO apt-get install -y -qq --no-install-recommends mesa-vulkan-drivers
+  fi
+fi
+if ! lavapipe_ok; then
+  echo "[install-deps] WARNING: no Vulkan device with VK_KHR_ray_query found after install." >&2
+  echo "[install-deps] hrtao needs Mesa >= 23 lavapipe (mesa-vulkan-drivers) or a GPU driver with ray queries." >&2
+fi
+echo "[install-deps] done"
