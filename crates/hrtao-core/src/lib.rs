@@ -1,1 +1,27 @@
-pub fn placeholder() {}
+//! hrtao-core: the Vulkan ray-query core of hrtao.
+//!
+//! - `context`: instance, validation, device selection (`Gpu`).
+//! - `buffer`, `accel`: GPU memory and acceleration structures (`SceneGpu`).
+//! - `gpu`: the GPU-visible structs shared with GLSL (generated header).
+//! - `pass`, `timer`: the one way to declare and record a compute pass, and its timing.
+//! - `renderer`: the frame (primary visibility, per-pixel RTAO, HRTAO passes, composite).
+//! - `hash`: CPU mirror of the shaders' hash functions (paper eq. 1-6).
+//! - `camera`, `settings`, `imageio`, `headless`: inputs and outputs.
+pub mod accel;
+pub mod buffer;
+pub mod camera;
+pub mod context;
+pub mod error;
+pub mod gpu;
+pub mod imageio;
+pub mod pass;
+pub mod renderer;
+pub mod settings;
+pub mod timer;
+
+pub use accel::SceneGpu;
+pub use camera::Camera;
+pub use context::{ContextOptions, DeviceInfo, Gpu};
+pub use error::{CoreError, Result};
+pub use renderer::{FrameReport, Renderer};
+pub use settings::{AoSettings, Mode};

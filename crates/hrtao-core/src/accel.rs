@@ -1,0 +1,504 @@
+//! Acceleration structures: one BLAS per unique mesh (one geometry per primitive, built for fast trace and
+//! compacted), one TLAS over the scene's visible instances, rebuilt after instance edits.
+use std::sync::Arc;
+use std::time::Instant;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use hrtao_scene::Scene;
+
+use crate::buffer::{full_barrier, Buffer};
+use crate::context::Gpu;
+use crate::error::{CoreError, Result};
+use crate::gpu::{GeometryInfo, InstanceInfo};
+
+/// An acceleration structure with its backing buffer; destroyed on drop.
+pub struct AccelStruct {
+    gpu: Arc<Gpu>,
+    pub raw: vk::AccelerationStructureKHR,
+    pub address: u64,
+    _buffer: Buffer,
+}
+
+impl AccelStruct {
+    fn new(gpu: &Arc<Gpu>, name: &str, ty: vk::AccelerationStructureTypeKHR, size: u64) -> Result<Self> {
+        let buffer = Buffer::new(
+            gpu,
+            name,
+            size,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR,
+        )?;
+        unsafe {
+            let raw = gpu
+                .accel
+                .create_acceleration_structure(
+                    &vk::AccelerationStructureCreateInfoKHR::builder().buffer(buffer.raw).size(size).ty(ty),
+                    None,
+                )
+                .map_err(|e| CoreError::from_vk("vkCreateAccelerationStructureKHR", e))?;
+            let address = gpu.accel.get_acceleration_structure_device_address(
+                &vk::AccelerationStructureDeviceAddressInfoKHR::builder().acceleration_structure(raw),
+            );
+            Ok(AccelStruct { gpu: gpu.clone(), raw, address, _buffer: buffer })
+        }
+    }
+}
+
+impl Drop for AccelStruct {
+    fn drop(&mut self) {
+        unsafe { self.gpu.accel.destroy_acceleration_structure(self.raw, None) }
+    }
+}
+
+/// Timings and sizes of the last builds.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct BuildStats {
+    pub blas_count: usize,
+    pub geometry_count: usize,
+    pub blas_ms: f64,
+    pub blas_bytes: u64,
+    pub tlas_ms: f64,
+    pub tlas_instances: usize,
+    pub geometry_bytes: u64,
+}
+
+/// A scratch buffer whose device address is aligned as the device requires.
+struct Scratch {
+    _buffer: Buffer,
+    base: u64,
+}
+
+impl Scratch {
+    fn new(gpu: &Arc<Gpu>, size: u64) -> Result<Scratch> {
+        let align = gpu.scratch_alignment;
+        let buffer = Buffer::new(gpu, "AS scratch", size + align, MemoryLocation::GpuOnly, vk::BufferUsageFlags::empty())?;
+        let base = buffer.address.div_ceil(align) * align;
+        Ok(Scratch { _buffer: buffer, base })
+    }
+}
+
+fn align_up(v: u64, a: u64) -> u64 {
+    v.div_ceil(a) * a
+}
+
+/// The scene on the GPU: geometry buffers, BLASes, instance tables and the TLAS.
+pub struct SceneGpu {
+    gpu: Arc<Gpu>,
+    _vertices: Buffer,
+    _indices: Buffer,
+    pub geometries: Buffer,
+    /// Per mesh: index of its first geometry in `geometries`, or None when the mesh has no triangles.
+    geometry_base: Vec<Option<u32>>,
+    blas: Vec<Option<AccelStruct>>,
+    pub instance_info: Buffer,
+    tlas_instances: Buffer,
+    pub tlas: AccelStruct,
+    pub stats: BuildStats,
+}
+
+/// Maximum instance id stored in a TLAS instance's 24-bit custom index.
+const MAX_INSTANCES: usize = (1 << 24) - 1;
+
+fn geometry_triangles(
+    vertex_address: u64,
+    index_address: u64,
+    vertex_count: u32,
+) -> vk::AccelerationStructureGeometryKHR {
+    vk::AccelerationStructureGeometryKHR::builder()
+        .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+        .flags(vk::GeometryFlagsKHR::OPAQUE)
+        .geometry(vk::AccelerationStructureGeometryDataKHR {
+            triangles: vk::AccelerationStructureGeometryTrianglesDataKHR::builder()
+                .vertex_format(vk::Format::R32G32B32_SFLOAT)
+                .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: vertex_address })
+                .vertex_stride(12)
+                .max_vertex(vertex_count.saturating_sub(1))
+                .index_type(vk::IndexType::UINT32)
+                .index_data(vk::DeviceOrHostAddressConstKHR { device_address: index_address })
+                .build(),
+        })
+        .build()
+}
+
+impl SceneGpu {
+    pub fn new(gpu: &Arc<Gpu>, scene: &Scene) -> Result<SceneGpu> {
+        if scene.instances.len() > MAX_INSTANCES {
+            return Err(CoreError::Invalid(format!(
+                "{} instances: at most {MAX_INSTANCES} are supported",
+                scene.instances.len()
+            )));
+        }
+        // 1. Geometry: all primitives' vertices and indices packed into two buffers.
+        let mut vertices: Vec<[f32; 3]> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        struct Geo {
+            vertex_offset: u64,
+            index_offset: u64,
+            vertex_count: u32,
+            triangles: u32,
+            color: [f32; 4],
+        }
+        let mut per_mesh: Vec<Vec<Geo>> = Vec::with_capacity(scene.meshes.len());
+        for mesh in &scene.meshes {
+            let mut geos = Vec::new();
+            for p in &mesh.primitives {
+                let tris = (p.indices.len() / 3) as u32;
+                if tris == 0 || p.positions.is_empty() {
+                    continue;
+                }
+                geos.push(Geo {
+                    vertex_offset: (vertices.len() * 12) as u64,
+                    index_offset: (indices.len() * 4) as u64,
+                    vertex_count: p.positions.len() as u32,
+                    triangles: tris,
+                    color: p.base_color,
+                });
+                vertices.extend_from_slice(&p.positions);
+                indices.extend_from_slice(&p.indices[..tris as usize * 3]);
+            }
+            per_mesh.push(geos);
+        }
+        let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
+        let vbuf = Buffer::device_local_from_slice(gpu, "vertices", &vertices, input)?;
+        let ibuf = Buffer::device_local_from_slice(gpu, "indices", &indices, input)?;
+        let geometry_bytes = (vertices.len() * 12 + indices.len() * 4) as u64;
+        drop(vertices);
+        drop(indices);
+
+        let mut table = Vec::new();
+        let mut geometry_base = Vec::with_capacity(per_mesh.len());
+        for geos in &per_mesh {
+            if geos.is_empty() {
+                geometry_base.push(None);
+                continue;
+            }
+            geometry_base.push(Some(table.len() as u32));
+            for g in geos {
+                table.push(GeometryInfo {
+                    vertices: vbuf.address + g.vertex_offset,
+                    indices: ibuf.address + g.index_offset,
+                    color: g.color,
+                });
+            }
+        }
+        let geometries = Buffer::device_local_from_slice(gpu, "geometry table", &table, vk::BufferUsageFlags::empty())?;
+
+        // 2. BLAS per mesh, in batches bounded by scratch memory, then compacted.
+        let t0 = Instant::now();
+        let mut blas: Vec<Option<AccelStruct>> = (0..per_mesh.len()).map(|_| None).collect();
+        let mut blas_bytes = 0u64;
+        let mut mesh = 0usize;
+        const SCRATCH_BUDGET: u64 = 128 << 20;
+        while mesh < per_mesh.len() {
+            // Gather a batch.
+            let mut batch: Vec<(usize, Vec<vk::AccelerationStructureGeometryKHR>, Vec<u32>, vk::AccelerationStructureBuildSizesInfoKHR)> = Vec::new();
+            let mut scratch_total = 0u64;
+            while mesh < per_mesh.len() && (batch.is_empty() || scratch_total < SCRATCH_BUDGET) && batch.len() < 1024 {
+                let geos = &per_mesh[mesh];
+                if !geos.is_empty() {
+                    let geoms: Vec<_> = geos
+                        .iter()
+                        .map(|g| {
+                            geometry_triangles(vbuf.address + g.vertex_offset, ibuf.address + g.index_offset, g.vertex_count)
+                        })
+                        .collect();
+                    let counts: Vec<u32> = geos.iter().map(|g| g.triangles).collect();
+                    let info = vk::AccelerationStructureBuildGeometryInfoKHR::builder()
+                        .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+                        .flags(
+                            vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
+                                | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION,
+                        )
+                        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+                        .geometries(&geoms);
+                    let sizes = unsafe {
+                        gpu.accel.get_acceleration_structure_build_sizes(
+                            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                            &info,
+                            &counts,
+                        )
+                    };
+                    scratch_total += align_up(sizes.build_scratch_size, gpu.scratch_alignment);
+                    batch.push((mesh, geoms, counts, sizes));
+                }
+                mesh += 1;
+            }
+            if batch.is_empty() {
+                continue;
+            }
+            let scratch = Scratch::new(gpu, scratch_total)?;
+            let mut built = Vec::with_capacity(batch.len());
+            for (m, _, _, sizes) in &batch {
+                built.push(AccelStruct::new(
+                    gpu,
+                    &format!("BLAS mesh {m}"),
+                    vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                    sizes.acceleration_structure_size,
+                )?);
+            }
+            let query_pool = unsafe {
+                gpu.device
+                    .create_query_pool(
+                        &vk::QueryPoolCreateInfo::builder()
+                            .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
+                            .query_count(batch.len() as u32),
+                        None,
+                    )
+                    .map_err(|e| CoreError::from_vk("vkCreateQueryPool", e))?
+            };
+            let record = gpu.run_commands(|cmd| unsafe {
+                gpu.device.cmd_reset_query_pool(cmd, query_pool, 0, batch.len() as u32);
+                let mut offset = 0u64;
+                for ((_, geoms, counts, sizes), dst) in batch.iter().zip(&built) {
+                    let info = vk::AccelerationStructureBuildGeometryInfoKHR::builder()
+                        .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+                        .flags(
+                            vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
+                                | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION,
+                        )
+                        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+                        .dst_acceleration_structure(dst.raw)
+                        .geometries(geoms)
+                        .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.base + offset })
+                        .build();
+                    offset += align_up(sizes.build_scratch_size, gpu.scratch_alignment);
+                    let ranges: Vec<vk::AccelerationStructureBuildRangeInfoKHR> = counts
+                        .iter()
+                        .map(|&c| vk::AccelerationStructureBuildRangeInfoKHR {
+                            primitive_count: c,
+                            primitive_offset: 0,
+                            first_vertex: 0,
+                            transform_offset: 0,
+                        })
+                        .collect();
+                    gpu.accel.cmd_build_acceleration_structures(cmd, &[info], &[&ranges]);
+                }
+                let barrier = [vk::MemoryBarrier::builder()
+                    .src_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR)
+                    .dst_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR)
+                    .build()];
+                gpu.device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR,
+                    vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR,
+                    vk::DependencyFlags::empty(),
+                    &barrier,
+                    &[],
+                    &[],
+                );
+                let handles: Vec<_> = built.iter().map(|a| a.raw).collect();
+                gpu.accel.cmd_write_acceleration_structures_properties(
+                    cmd,
+                    &handles,
+                    vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR,
+                    query_pool,
+                    0,
+                );
+            });
+            let compact_sizes = record.and_then(|_| {
+                let mut sizes = vec![0u64; batch.len()];
+                unsafe {
+                    gpu.device
+                        .get_query_pool_results(query_pool, 0, batch.len() as u32, &mut sizes, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                        .map_err(|e| CoreError::from_vk("vkGetQueryPoolResults", e))?;
+                }
+                Ok(sizes)
+            });
+            unsafe { gpu.device.destroy_query_pool(query_pool, None) };
+            let compact_sizes = compact_sizes?;
+            drop(scratch);
+            // Compaction copies.
+            let mut compacted = Vec::with_capacity(built.len());
+            for ((m, ..), size) in batch.iter().zip(&compact_sizes) {
+                compacted.push(AccelStruct::new(
+                    gpu,
+                    &format!("BLAS mesh {m} (compacted)"),
+                    vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                    (*size).max(256),
+                )?);
+            }
+            gpu.run_commands(|cmd| unsafe {
+                for (src, dst) in built.iter().zip(&compacted) {
+                    gpu.accel.cmd_copy_acceleration_structure(
+                        cmd,
+                        &vk::CopyAccelerationStructureInfoKHR::builder()
+                            .src(src.raw)
+                            .dst(dst.raw)
+                            .mode(vk::CopyAccelerationStructureModeKHR::COMPACT),
+                    );
+                }
+            })?;
+            drop(built);
+            for (((m, ..), a), size) in batch.iter().zip(compacted).zip(&compact_sizes) {
+                blas_bytes += size;
+                blas[*m] = Some(a);
+            }
+        }
+        let blas_ms = t0.elapsed().as_secs_f64() * 1e3;
+
+        let n = scene.instances.len().max(1) as u64;
+        let instance_info = Buffer::new(
+            gpu,
+            "instance table",
+            n * std::mem::size_of::<InstanceInfo>() as u64,
+            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        let tlas_instances = Buffer::new(
+            gpu,
+            "TLAS instances",
+            n * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>() as u64,
+            MemoryLocation::CpuToGpu,
+            input,
+        )?;
+        let placeholder = AccelStruct::new(gpu, "TLAS (empty)", vk::AccelerationStructureTypeKHR::TOP_LEVEL, 256)?;
+        let mut s = SceneGpu {
+            gpu: gpu.clone(),
+            _vertices: vbuf,
+            _indices: ibuf,
+            geometries,
+            geometry_base,
+            blas,
+            instance_info,
+            tlas_instances,
+            tlas: placeholder,
+            stats: BuildStats {
+                blas_count: per_mesh.iter().filter(|g| !g.is_empty()).count(),
+                geometry_count: table.len(),
+                blas_ms,
+                blas_bytes,
+                geometry_bytes,
+                ..Default::default()
+            },
+        };
+        s.update_instances(scene, u32::MAX)?;
+        Ok(s)
+    }
+
+    /// Number of BLASes built (one per unique mesh with triangles).
+    pub fn blas_count(&self) -> usize {
+        self.blas.iter().filter(|b| b.is_some()).count()
+    }
+
+    /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
+    /// `selected` is the instance to highlight (u32::MAX for none).
+    pub fn update_instances(&mut self, scene: &Scene, selected: u32) -> Result<()> {
+        let gpu = self.gpu.clone();
+        if scene.instances.len() > MAX_INSTANCES {
+            return Err(CoreError::Invalid(format!("at most {MAX_INSTANCES} instances are supported")));
+        }
+        let n = scene.instances.len().max(1) as u64;
+        let info_size = n * std::mem::size_of::<InstanceInfo>() as u64;
+        if self.instance_info.size < info_size {
+            self.instance_info = Buffer::new(&gpu, "instance table", info_size, MemoryLocation::CpuToGpu, vk::BufferUsageFlags::empty())?;
+        }
+        let inst_size = n * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>() as u64;
+        if self.tlas_instances.size < inst_size {
+            self.tlas_instances = Buffer::new(
+                &gpu,
+                "TLAS instances",
+                inst_size,
+                MemoryLocation::CpuToGpu,
+                vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
+            )?;
+        }
+        let mut infos = Vec::with_capacity(scene.instances.len());
+        let mut raw: Vec<u8> = Vec::with_capacity(scene.instances.len() * 64);
+        let mut count = 0u32;
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let base = self.geometry_base.get(inst.mesh as usize).copied().flatten();
+            let flags = if i as u32 == selected { crate::gpu::INSTANCE_SELECTED } else { 0 };
+            infos.push(InstanceInfo { geometry_base: base.unwrap_or(0), flags });
+            let (Some(_), Some(Some(blas))) = (base, self.blas.get(inst.mesh as usize)) else { continue };
+            if !inst.visible {
+                continue;
+            }
+            let m = inst.transform;
+            if !m.is_finite() {
+                return Err(CoreError::Invalid(format!("instance {i} has a non-finite transform")));
+            }
+            let mut matrix = [0f32; 12];
+            for r in 0..3 {
+                for c in 0..4 {
+                    matrix[r * 4 + c] = m.col(c)[r];
+                }
+            }
+            let instance = vk::AccelerationStructureInstanceKHR {
+                transform: vk::TransformMatrixKHR { matrix },
+                instance_custom_index_and_mask: vk::Packed24_8::new(i as u32, 0xff),
+                instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
+                    0,
+                    vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
+                ),
+                acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
+                    device_handle: blas.address,
+                },
+            };
+            // SAFETY: AccelerationStructureInstanceKHR is a plain 64-byte C struct.
+            let bytes = unsafe {
+                std::slice::from_raw_parts(
+                    &instance as *const _ as *const u8,
+                    std::mem::size_of::<vk::AccelerationStructureInstanceKHR>(),
+                )
+            };
+            raw.extend_from_slice(bytes);
+            count += 1;
+        }
+        if infos.is_empty() {
+            infos.push(InstanceInfo::default());
+        }
+        self.instance_info.write(&infos)?;
+        self.tlas_instances.write_bytes(0, &raw)?;
+
+        let t0 = Instant::now();
+        let geometry = [vk::AccelerationStructureGeometryKHR::builder()
+            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+            .geometry(vk::AccelerationStructureGeometryDataKHR {
+                instances: vk::AccelerationStructureGeometryInstancesDataKHR::builder()
+                    .array_of_pointers(false)
+                    .data(vk::DeviceOrHostAddressConstKHR { device_address: self.tlas_instances.address })
+                    .build(),
+            })
+            .build()];
+        let flags = vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE;
+        let info = vk::AccelerationStructureBuildGeometryInfoKHR::builder()
+            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
+            .flags(flags)
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .geometries(&geometry);
+        let sizes = unsafe {
+            gpu.accel.get_acceleration_structure_build_sizes(
+                vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                &info,
+                &[count],
+            )
+        };
+        let tlas = AccelStruct::new(
+            &gpu,
+            "TLAS",
+            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+            sizes.acceleration_structure_size.max(256),
+        )?;
+        let scratch = Scratch::new(&gpu, sizes.build_scratch_size.max(256))?;
+        let info = info.dst_acceleration_structure(tlas.raw).scratch_data(vk::DeviceOrHostAddressKHR {
+            device_address: scratch.base,
+        });
+        let range = [vk::AccelerationStructureBuildRangeInfoKHR {
+            primitive_count: count,
+            primitive_offset: 0,
+            first_vertex: 0,
+            transform_offset: 0,
+        }];
+        gpu.run_commands(|cmd| unsafe {
+            full_barrier(&gpu, cmd);
+            gpu.accel.cmd_build_acceleration_structures(cmd, &[info.build()], &[&range]);
+            full_barrier(&gpu, cmd);
+        })?;
+        drop(scratch);
+        self.tlas = tlas;
+        self.stats.tlas_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.stats.tlas_instances = count as usize;
+        Ok(())
+    }
+}

@@ -1,0 +1,195 @@
+//! GPU buffers: each `Buffer` owns its `vk::Buffer` and its allocation and frees both on drop.
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use crate::context::Gpu;
+use crate::error::{CoreError, Result};
+
+pub struct Buffer {
+    gpu: Arc<Gpu>,
+    pub raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    pub size: u64,
+    /// Buffer device address (every buffer is addressable: the shaders reach buffers through addresses).
+    pub address: u64,
+    name: String,
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes (at least 16) in `location`, usable as storage, transfer source/destination
+    /// and by address, plus `extra` usages.
+    pub fn new(
+        gpu: &Arc<Gpu>,
+        name: &str,
+        size: u64,
+        location: MemoryLocation,
+        extra: vk::BufferUsageFlags,
+    ) -> Result<Buffer> {
+        let size = size.max(16);
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+            | extra;
+        unsafe {
+            let raw = gpu
+                .device
+                .create_buffer(&vk::BufferCreateInfo::builder().size(size).usage(usage), None)
+                .map_err(|e| CoreError::from_vk("vkCreateBuffer", e))?;
+            let requirements = gpu.device.get_buffer_memory_requirements(raw);
+            let allocation = gpu.allocator().allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+            let allocation = match allocation {
+                Ok(a) => a,
+                Err(e) => {
+                    gpu.device.destroy_buffer(raw, None);
+                    return Err(CoreError::Memory(format!("allocating {size} bytes for `{name}`: {e}")));
+                }
+            };
+            if let Err(e) = gpu.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) {
+                let _ = gpu.allocator().free(allocation);
+                gpu.device.destroy_buffer(raw, None);
+                return Err(CoreError::from_vk("vkBindBufferMemory", e));
+            }
+            let address =
+                gpu.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::builder().buffer(raw));
+            Ok(Buffer { gpu: gpu.clone(), raw, allocation: Some(allocation), size, address, name: name.into() })
+        }
+    }
+
+    /// A host-visible buffer initialised with `data`.
+    pub fn from_slice<T: bytemuck::Pod>(
+        gpu: &Arc<Gpu>,
+        name: &str,
+        data: &[T],
+        extra: vk::BufferUsageFlags,
+    ) -> Result<Buffer> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let mut b = Buffer::new(gpu, name, bytes.len() as u64, MemoryLocation::CpuToGpu, extra)?;
+        b.write_bytes(0, bytes)?;
+        Ok(b)
+    }
+
+    /// A device-local buffer filled with `data` through a staging copy.
+    pub fn device_local_from_slice<T: bytemuck::Pod>(
+        gpu: &Arc<Gpu>,
+        name: &str,
+        data: &[T],
+        extra: vk::BufferUsageFlags,
+    ) -> Result<Buffer> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let staging = Buffer::from_slice(gpu, &format!("{name} (staging)"), bytes, vk::BufferUsageFlags::empty())?;
+        let b = Buffer::new(gpu, name, bytes.len() as u64, MemoryLocation::GpuOnly, extra)?;
+        gpu.run_commands(|cmd| unsafe {
+            let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len().max(1) as u64 }];
+            if !bytes.is_empty() {
+                gpu.device.cmd_copy_buffer(cmd, staging.raw, b.raw, &region);
+            }
+        })?;
+        Ok(b)
+    }
+
+    fn mapped(&self) -> Result<&[u8]> {
+        let a = self.allocation.as_ref().unwrap();
+        a.mapped_slice().ok_or_else(|| CoreError::Invalid(format!("buffer `{}` is not host visible", self.name)))
+    }
+
+    /// Writes bytes into a host-visible buffer at `offset`.
+    pub fn write_bytes(&mut self, offset: u64, bytes: &[u8]) -> Result<()> {
+        let name = self.name.clone();
+        let a = self.allocation.as_mut().unwrap();
+        let slice =
+            a.mapped_slice_mut().ok_or_else(|| CoreError::Invalid(format!("buffer `{name}` is not host visible")))?;
+        let start = offset as usize;
+        let end = start + bytes.len();
+        if end > slice.len() {
+            return Err(CoreError::Invalid(format!("write of {end} bytes past the end of buffer `{name}`")));
+        }
+        slice[start..end].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    pub fn write<T: bytemuck::Pod>(&mut self, data: &[T]) -> Result<()> {
+        self.write_bytes(0, bytemuck::cast_slice(data))
+    }
+
+    /// Reads `count` values of a host-visible buffer.
+    pub fn read<T: bytemuck::Pod>(&self, count: usize) -> Result<Vec<T>> {
+        let bytes = self.mapped()?;
+        let n = count * std::mem::size_of::<T>();
+        if n > bytes.len() {
+            return Err(CoreError::Invalid(format!("read past the end of buffer `{}`", self.name)));
+        }
+        Ok(bytemuck::pod_collect_to_vec(&bytes[..n]))
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        unsafe {
+            if let Some(a) = self.allocation.take() {
+                let _ = self.gpu.allocator().free(a);
+            }
+            self.gpu.device.destroy_buffer(self.raw, None);
+        }
+    }
+}
+
+/// Records a full memory barrier between shader/transfer/AS work (the passes form a simple linear chain).
+pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
+    let barrier = [vk::MemoryBarrier::builder()
+        .src_access_mask(
+            vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_WRITE
+                | vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR,
+        )
+        .dst_access_mask(
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE
+                | vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR,
+        )
+        .build()];
+    let stages = vk::PipelineStageFlags::COMPUTE_SHADER
+        | vk::PipelineStageFlags::TRANSFER
+        | vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR;
+    unsafe {
+        gpu.device.cmd_pipeline_barrier(
+            cmd,
+            stages,
+            stages,
+            vk::DependencyFlags::empty(),
+            &barrier,
+            &[],
+            &[],
+        );
+    }
+}
+
+/// Makes all device writes visible to the host (end of a command buffer whose results are read back).
+pub fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
+    let barrier = [vk::MemoryBarrier::builder()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)
+        .build()];
+    unsafe {
+        gpu.device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &barrier,
+            &[],
+            &[],
+        );
+    }
+}

@@ -1,0 +1,518 @@
+//! The Vulkan context: instance, optional validation, device selection and the logical device.
+//!
+//! `Gpu` owns every long-lived Vulkan handle of the process (entry, instance, messenger, device, allocator,
+//! command pool) and destroys them in one place, its `Drop`. Everything else holds an `Arc<Gpu>`.
+
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+
+use ash::extensions::{ext, khr};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use crate::error::{CoreError, Result};
+
+/// What the caller wants from the context.
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Enable the Khronos validation layer (messages go to the log and are counted).
+    pub validation: bool,
+    /// Only consider devices whose name contains this (case-insensitive).
+    pub device: Option<String>,
+    /// Instance extensions needed for presenting (from ash-window), empty for headless use.
+    pub surface_extensions: Vec<&'static CStr>,
+}
+
+impl ContextOptions {
+    /// Headless options, with validation on when `HRTAO_VALIDATION=1`.
+    pub fn from_env() -> Self {
+        ContextOptions { validation: validation_requested_by_env(), ..Default::default() }
+    }
+}
+
+/// True when the `HRTAO_VALIDATION` environment variable asks for the validation layer.
+pub fn validation_requested_by_env() -> bool {
+    matches!(std::env::var("HRTAO_VALIDATION").as_deref(), Ok("1") | Ok("true") | Ok("yes"))
+}
+
+/// Validation messages counted by severity since the context was created.
+#[derive(Default, Debug)]
+pub struct ValidationCounters {
+    pub errors: AtomicU32,
+    pub warnings: AtomicU32,
+}
+
+impl ValidationCounters {
+    pub fn total(&self) -> u32 {
+        self.errors.load(Ordering::Relaxed) + self.warnings.load(Ordering::Relaxed)
+    }
+}
+
+/// Facts about the chosen device, for logs, stats and the UI.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub kind: String,
+    pub driver: String,
+    pub api_version: String,
+    pub is_software: bool,
+    pub timestamp_period_ns: f32,
+    pub timestamps: bool,
+    pub validation: bool,
+}
+
+pub struct Gpu {
+    pub device: ash::Device,
+    pub instance: ash::Instance,
+    pub physical: vk::PhysicalDevice,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub accel: khr::AccelerationStructure,
+    pub info: DeviceInfo,
+    pub limits: vk::PhysicalDeviceLimits,
+    pub scratch_alignment: u64,
+    pub validation: Arc<ValidationCounters>,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    command_pool: Mutex<vk::CommandPool>,
+    debug: Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>,
+    /// Kept alive until the very end: the loader library must outlive every Vulkan call.
+    pub entry: ash::Entry,
+    _validation_box: Option<Box<Arc<ValidationCounters>>>,
+}
+
+const DEVICE_EXTENSIONS: [&CStr; 3] = [
+    vk::KhrAccelerationStructureFn::name(),
+    vk::KhrRayQueryFn::name(),
+    vk::KhrDeferredHostOperationsFn::name(),
+];
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    let msg = if data.is_null() || (*data).p_message.is_null() {
+        "<no message>".to_string()
+    } else {
+        CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
+    };
+    let counters = if user.is_null() { None } else { Some(&*(user as *const Arc<ValidationCounters>)) };
+    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        log::error!("[vulkan {kind:?}] {msg}");
+        if let Some(c) = counters {
+            c.errors.fetch_add(1, Ordering::Relaxed);
+        }
+    } else if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING) {
+        log::warn!("[vulkan {kind:?}] {msg}");
+        if let Some(c) = counters {
+            c.warnings.fetch_add(1, Ordering::Relaxed);
+        }
+    } else {
+        log::debug!("[vulkan {kind:?}] {msg}");
+    }
+    vk::FALSE
+}
+
+/// Why a physical device was not chosen, or that it was.
+struct Candidate {
+    physical: vk::PhysicalDevice,
+    name: String,
+    kind: vk::PhysicalDeviceType,
+    problem: Option<String>,
+    queue_family: u32,
+}
+
+fn device_kind_rank(kind: vk::PhysicalDeviceType) -> u32 {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::OTHER => 3,
+        _ => 4, // CPU (lavapipe) last
+    }
+}
+
+fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "CPU (software)",
+        _ => "other",
+    }
+}
+
+const LAVAPIPE_HINT: &str = "hrtao needs a Vulkan device with VK_KHR_ray_query and VK_KHR_acceleration_structure. \
+Without such a GPU, install Mesa's lavapipe (software Vulkan, Mesa >= 23): on Debian 12 \
+`apt-get install -t bookworm-backports mesa-vulkan-drivers`, on Ubuntu `apt-get install mesa-vulkan-drivers` \
+(or run scripts/install-deps.sh).";
+
+unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Candidate {
+    let props = instance.get_physical_device_properties(physical);
+    let name = CStr::from_ptr(props.device_name.as_ptr()).to_string_lossy().into_owned();
+    let mut cand =
+        Candidate { physical, name, kind: props.device_type, problem: None, queue_family: u32::MAX };
+    if vk::api_version_minor(props.api_version) < 2 && vk::api_version_major(props.api_version) == 1 {
+        cand.problem = Some("Vulkan 1.2 not supported".into());
+        return cand;
+    }
+    let exts = instance.enumerate_device_extension_properties(physical).unwrap_or_default();
+    let has = |want: &CStr| exts.iter().any(|e| CStr::from_ptr(e.extension_name.as_ptr()) == want);
+    let missing: Vec<String> =
+        DEVICE_EXTENSIONS.iter().filter(|e| !has(e)).map(|e| e.to_string_lossy().into_owned()).collect();
+    if !missing.is_empty() {
+        cand.problem = Some(format!("missing {}", missing.join(", ")));
+        return cand;
+    }
+    let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+    let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f2 =
+        vk::PhysicalDeviceFeatures2::builder().push_next(&mut rq).push_next(&mut asf).push_next(&mut v12).build();
+    instance.get_physical_device_features2(physical, &mut f2);
+    let mut lacking = Vec::new();
+    if rq.ray_query == 0 {
+        lacking.push("rayQuery");
+    }
+    if asf.acceleration_structure == 0 {
+        lacking.push("accelerationStructure");
+    }
+    if v12.buffer_device_address == 0 {
+        lacking.push("bufferDeviceAddress");
+    }
+    if v12.scalar_block_layout == 0 {
+        lacking.push("scalarBlockLayout");
+    }
+    if f2.features.shader_int64 == 0 {
+        lacking.push("shaderInt64");
+    }
+    if !lacking.is_empty() {
+        cand.problem = Some(format!("lacks features {}", lacking.join(", ")));
+        return cand;
+    }
+    let families = instance.get_physical_device_queue_family_properties(physical);
+    let want = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+    match families.iter().position(|f| f.queue_flags.contains(want)) {
+        Some(i) => cand.queue_family = i as u32,
+        None => cand.problem = Some("no graphics+compute queue".into()),
+    }
+    cand
+}
+
+impl Gpu {
+    /// Creates the instance and the device. Picks a hardware GPU with ray queries when present, else lavapipe.
+    pub fn new(options: &ContextOptions) -> Result<Arc<Gpu>> {
+        unsafe { Self::create(options) }
+    }
+
+    unsafe fn create(options: &ContextOptions) -> Result<Arc<Gpu>> {
+        let entry = ash::Entry::load().map_err(|e| {
+            CoreError::NoDevice(format!("cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"))
+        })?;
+        let app_name = CString::new("hrtao").unwrap();
+        let app = vk::ApplicationInfo::builder()
+            .application_name(&app_name)
+            .application_version(1)
+            .engine_name(&app_name)
+            .api_version(vk::API_VERSION_1_2);
+
+        let layer_name = CString::new("VK_LAYER_KHRONOS_validation").unwrap();
+        let mut layers: Vec<*const i8> = Vec::new();
+        let mut extensions: Vec<*const i8> = options.surface_extensions.iter().map(|e| e.as_ptr()).collect();
+        let mut validation = false;
+        if options.validation {
+            let available = entry.enumerate_instance_layer_properties().unwrap_or_default();
+            if available.iter().any(|l| CStr::from_ptr(l.layer_name.as_ptr()) == layer_name.as_c_str()) {
+                layers.push(layer_name.as_ptr());
+                validation = true;
+            } else {
+                return Err(CoreError::Validation(
+                    "validation requested but VK_LAYER_KHRONOS_validation is not installed \
+                     (apt-get install vulkan-validationlayers)"
+                        .into(),
+                ));
+            }
+        }
+        let have_debug_utils = entry
+            .enumerate_instance_extension_properties(None)
+            .unwrap_or_default()
+            .iter()
+            .any(|e| CStr::from_ptr(e.extension_name.as_ptr()) == ext::DebugUtils::name());
+        if have_debug_utils {
+            extensions.push(ext::DebugUtils::name().as_ptr());
+        }
+        let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features = vk::ValidationFeaturesEXT::builder().enabled_validation_features(&enabled_features);
+        let counters = Arc::new(ValidationCounters::default());
+        let counters_box = Box::new(counters.clone());
+        let messenger_info = || vk::DebugUtilsMessengerCreateInfoEXT::builder()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(debug_callback))
+            .user_data(&*counters_box as *const Arc<ValidationCounters> as *mut c_void)
+            .build();
+        // One messenger info chained into instance creation (covers vkCreateInstance itself), another for the
+        // persistent messenger: a struct chained once has its pNext set and cannot be reused.
+        let mut creation_messenger = messenger_info();
+        let mut create = vk::InstanceCreateInfo::builder()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        if validation && have_debug_utils {
+            create = create.push_next(&mut features).push_next(&mut creation_messenger);
+        }
+        let instance = entry
+            .create_instance(&create, None)
+            .map_err(|e| CoreError::NoDevice(format!("vkCreateInstance failed: {e}. {LAVAPIPE_HINT}")))?;
+        let debug = if validation && have_debug_utils {
+            let du = ext::DebugUtils::new(&entry, &instance);
+            match du.create_debug_utils_messenger(&messenger_info(), None) {
+                Ok(m) => Some((du, m)),
+                Err(e) => {
+                    instance.destroy_instance(None);
+                    return Err(CoreError::Vulkan("vkCreateDebugUtilsMessengerEXT", e));
+                }
+            }
+        } else {
+            None
+        };
+        let destroy_instance = |debug: &Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>| {
+            if let Some((du, m)) = debug {
+                du.destroy_debug_utils_messenger(*m, None);
+            }
+            instance.destroy_instance(None);
+        };
+
+        let physicals = instance.enumerate_physical_devices().unwrap_or_default();
+        let mut candidates: Vec<Candidate> = physicals.iter().map(|&p| check_candidate(&instance, p)).collect();
+        if let Some(filter) = &options.device {
+            let f = filter.to_lowercase();
+            for c in candidates.iter_mut() {
+                if c.problem.is_none() && !c.name.to_lowercase().contains(&f) {
+                    c.problem = Some(format!("name does not contain `{filter}`"));
+                }
+            }
+        }
+        let chosen = candidates
+            .iter()
+            .filter(|c| c.problem.is_none())
+            .min_by_key(|c| device_kind_rank(c.kind))
+            .map(|c| (c.physical, c.queue_family));
+        let Some((physical, queue_family)) = chosen else {
+            let mut listing = String::new();
+            for c in &candidates {
+                listing.push_str(&format!(
+                    "\n  - {} ({}): {}",
+                    c.name,
+                    kind_name(c.kind),
+                    c.problem.as_deref().unwrap_or("usable")
+                ));
+            }
+            if candidates.is_empty() {
+                listing.push_str("\n  (no Vulkan devices at all)");
+            }
+            destroy_instance(&debug);
+            return Err(CoreError::NoDevice(format!(
+                "no usable Vulkan device with ray queries. Devices found:{listing}\n{LAVAPIPE_HINT}"
+            )));
+        };
+
+        let props = instance.get_physical_device_properties(physical);
+        let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+        let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::builder()
+            .push_next(&mut as_props)
+            .push_next(&mut driver_props)
+            .build();
+        instance.get_physical_device_properties2(physical, &mut props2);
+        let name = CStr::from_ptr(props.device_name.as_ptr()).to_string_lossy().into_owned();
+        let driver = format!(
+            "{} {}",
+            CStr::from_ptr(driver_props.driver_name.as_ptr()).to_string_lossy(),
+            CStr::from_ptr(driver_props.driver_info.as_ptr()).to_string_lossy()
+        );
+        let families = instance.get_physical_device_queue_family_properties(physical);
+        let timestamps = families[queue_family as usize].timestamp_valid_bits > 0;
+
+        // Features: ray queries, acceleration structures, buffer device address, scalar layout, int64 (+ atomics).
+        let mut supported_v12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut supported = vk::PhysicalDeviceFeatures2::builder().push_next(&mut supported_v12).build();
+        instance.get_physical_device_features2(physical, &mut supported);
+        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::builder().ray_query(true);
+        let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::builder().acceleration_structure(true);
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::builder()
+            .buffer_device_address(true)
+            .scalar_block_layout(true)
+            .host_query_reset(supported_v12.host_query_reset == vk::TRUE)
+            .shader_buffer_int64_atomics(supported_v12.shader_buffer_int64_atomics == vk::TRUE);
+        let base = vk::PhysicalDeviceFeatures::builder().shader_int64(true).build();
+        let mut features2 = vk::PhysicalDeviceFeatures2::builder()
+            .features(base)
+            .push_next(&mut rq)
+            .push_next(&mut asf)
+            .push_next(&mut v12);
+        let priorities = [1.0f32];
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::builder().queue_family_index(queue_family).queue_priorities(&priorities).build()];
+        let mut dev_exts: Vec<*const i8> = DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        if !options.surface_extensions.is_empty() {
+            dev_exts.push(khr::Swapchain::name().as_ptr());
+        }
+        let device_info = vk::DeviceCreateInfo::builder()
+            .queue_create_infos(&queue_info)
+            .enabled_extension_names(&dev_exts)
+            .push_next(&mut features2);
+        let device = match instance.create_device(physical, &device_info, None) {
+            Ok(d) => d,
+            Err(e) => {
+                destroy_instance(&debug);
+                return Err(CoreError::Vulkan("vkCreateDevice", e));
+            }
+        };
+        let queue = device.get_device_queue(queue_family, 0);
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: true,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|e| CoreError::Memory(format!("creating the allocator: {e}")))?;
+        let pool = device
+            .create_command_pool(
+                &vk::CommandPoolCreateInfo::builder()
+                    .queue_family_index(queue_family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )
+            .map_err(|e| CoreError::Vulkan("vkCreateCommandPool", e))?;
+        let accel = khr::AccelerationStructure::new(&instance, &device);
+        let is_software = props.device_type == vk::PhysicalDeviceType::CPU;
+        let info = DeviceInfo {
+            name,
+            kind: kind_name(props.device_type).into(),
+            driver,
+            api_version: format!(
+                "{}.{}.{}",
+                vk::api_version_major(props.api_version),
+                vk::api_version_minor(props.api_version),
+                vk::api_version_patch(props.api_version)
+            ),
+            is_software,
+            timestamp_period_ns: props.limits.timestamp_period,
+            timestamps,
+            validation,
+        };
+        log::info!("Vulkan device: {} ({}, {}), validation {}", info.name, info.kind, info.driver, validation);
+        Ok(Arc::new(Gpu {
+            device,
+            instance,
+            physical,
+            queue,
+            queue_family,
+            accel,
+            info,
+            limits: props.limits,
+            scratch_alignment: as_props.min_acceleration_structure_scratch_offset_alignment.max(1) as u64,
+            validation: counters,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            command_pool: Mutex::new(pool),
+            debug,
+            entry,
+            _validation_box: Some(counters_box),
+        }))
+    }
+
+    pub fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Records commands with `record`, submits them and waits for completion.
+    pub fn run_commands<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
+        unsafe {
+            let pool = self.command_pool.lock().unwrap_or_else(|p| p.into_inner());
+            let cmd = self
+                .device
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::builder().command_pool(*pool).command_buffer_count(1),
+                )
+                .map_err(|e| CoreError::Vulkan("vkAllocateCommandBuffers", e))?[0];
+            let result = (|| {
+                self.device
+                    .begin_command_buffer(
+                        cmd,
+                        &vk::CommandBufferBeginInfo::builder().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    )
+                    .map_err(|e| CoreError::Vulkan("vkBeginCommandBuffer", e))?;
+                let r = record(cmd);
+                self.device.end_command_buffer(cmd).map_err(|e| CoreError::Vulkan("vkEndCommandBuffer", e))?;
+                self.submit_and_wait(cmd)?;
+                Ok(r)
+            })();
+            self.device.free_command_buffers(*pool, &[cmd]);
+            result
+        }
+    }
+
+    /// Submits one command buffer and waits for it with a fence (bounded wait: a hung device is an error).
+    pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {
+        unsafe {
+            let fence = self
+                .device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .map_err(|e| CoreError::Vulkan("vkCreateFence", e))?;
+            let cmds = [cmd];
+            let submit = [vk::SubmitInfo::builder().command_buffers(&cmds).build()];
+            let result = self
+                .device
+                .queue_submit(self.queue, &submit, fence)
+                .map_err(|e| CoreError::from_vk("vkQueueSubmit", e))
+                .and_then(|_| {
+                    // 10 minutes: lavapipe is slow, but a frame never legitimately takes that long.
+                    self.device
+                        .wait_for_fences(&[fence], true, 600_000_000_000)
+                        .map_err(|e| CoreError::from_vk("vkWaitForFences", e))
+                });
+            self.device.destroy_fence(fence, None);
+            result
+        }
+    }
+
+    pub fn wait_idle(&self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+        }
+    }
+
+    /// Errors and warnings reported by the validation layer so far.
+    pub fn validation_messages(&self) -> u32 {
+        self.validation.total()
+    }
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);
+            self.device.destroy_device(None);
+            if let Some((du, m)) = self.debug.take() {
+                du.destroy_debug_utils_messenger(m, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}

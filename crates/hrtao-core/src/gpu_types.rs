@@ -1,0 +1,151 @@
+// The one definition of every GPU-visible struct and constant.
+//
+// This file is compiled twice: by the library (where `gpu_structs!`/`gpu_consts!` expand to `#[repr(C)]`
+// Rust types, see `gpu.rs`) and by `build.rs` (where the same macros expand to GLSL source written to
+// `$OUT_DIR/gpu_types.glsl`, included by every shader). GLSL blocks use `scalar` layout, so the Rust
+// `#[repr(C)]` layout of these all-4-byte (or naturally aligned u64) fields is the GLSL layout.
+
+gpu_consts! {
+    /// Compute work-group edge (threads are WORKGROUP_SIZE x WORKGROUP_SIZE).
+    WORKGROUP_SIZE: u32 = 8;
+    /// Levels of detail allocated per pixel: the target s_wd and 3 successively coarser ones (paper §4).
+    LOD_COUNT: u32 = 4;
+    /// `FrameGlobals::mode` values.
+    MODE_RTAO: u32 = 0;
+    MODE_HRTAO: u32 = 1;
+    MODE_NO_AO: u32 = 2;
+    MODE_DEBUG_CELLS: u32 = 3;
+    MODE_DEBUG_LOD: u32 = 4;
+    MODE_DEBUG_SAMPLES: u32 = 5;
+    /// `FrameGlobals::flags` bits.
+    FLAG_OUTPUT_BGRA: u32 = 1;
+    FLAG_FILTER: u32 = 2;
+    FLAG_CHECK_BOUNDS: u32 = 4;
+    FLAG_SHADED: u32 = 8;
+    /// `InstanceInfo::flags` bits.
+    INSTANCE_SELECTED: u32 = 1;
+    /// `GPixel::instance` of a pixel whose primary ray hit nothing.
+    NO_INSTANCE: u32 = 0xffff_ffff;
+    /// Hash cell checksum value of a free cell (checksums are never 0: see hash.glsl).
+    EMPTY_CELL: u32 = 0;
+    /// Indices into `FrameStats::counters`.
+    STAT_RAYS: u32 = 0;
+    STAT_CELLS_INSERTED: u32 = 1;
+    STAT_FAILED_INSERTS: u32 = 2;
+    STAT_MAX_PROBE: u32 = 3;
+    STAT_RECLAIMED: u32 = 4;
+    STAT_BOUNDS_VIOLATIONS: u32 = 5;
+    STAT_CAPPED_PIXELS: u32 = 6;
+    /// Live cells in the table: persistent (not reset per frame), incremented on insert, decremented on reclaim.
+    STAT_OCCUPIED: u32 = 7;
+    STAT_COUNT: u32 = 8;
+    /// Counters below this index are reset at the start of every frame.
+    STAT_PER_FRAME: u32 = 7;
+}
+
+gpu_structs! {
+    /// Per-frame parameters, read by every pass (binding 1).
+    struct FrameGlobals {
+        /// Camera: eye position; `cam_u`/`cam_v` span half the image (right * tan(fov/2) * aspect,
+        /// up * tan(fov/2)); `cam_w` is the unit forward vector.
+        eye: [f32; 4],
+        cam_u: [f32; 4],
+        cam_v: [f32; 4],
+        cam_w: [f32; 4],
+        width: u32,
+        height: u32,
+        /// Index of this frame in the current accumulation (per-pixel RTAO averages frames 0..=accum_index).
+        accum_index: u32,
+        /// The paper's F (eq. 6): bumped on every scene edit.
+        scene_frame: u32,
+        /// Monotonic count of rendered frames (hash cell "last touched").
+        frame_counter: u32,
+        mode: u32,
+        flags: u32,
+        rays_per_pixel: u32,
+        ao_radius: f32,
+        /// eq. (2): tan(max(f/R_x, f R_x / R_y^2) s_p) precomputed on the CPU, so s_w = d * s_w_per_distance.
+        s_w_per_distance: f32,
+        /// eq. (3): the smallest world feature.
+        s_min: f32,
+        /// eq. (5): normal discretisation.
+        s_nd: f32,
+        hash_capacity: u32,
+        max_samples: u32,
+        min_samples: u32,
+        max_probe: u32,
+        stale_frames: u32,
+        selected_instance: u32,
+        filter_iterations: u32,
+        _pad0: u32,
+        background_top: [f32; 4],
+        background_bottom: [f32; 4],
+        /// Buffer device addresses of the frame's buffers.
+        gbuffer: u64,
+        instances: u64,
+        geometries: u64,
+        ao_accum: u64,
+        ao: u64,
+        ao_lod: u64,
+        filter_tmp: u64,
+        output_rgba: u64,
+        hash_cells: u64,
+        pixel_cells: u64,
+        stats: u64,
+    }
+
+    /// One pixel of the G-buffer written by the primary visibility pass.
+    struct GPixel {
+        /// World-space hit position.
+        position: [f32; 3],
+        /// Hit distance along the primary ray; negative when the ray hit nothing.
+        t: f32,
+        /// Geometric (face) normal, unit length, turned toward the camera.
+        normal: [f32; 3],
+        /// Scene instance id (`NO_INSTANCE` on a miss).
+        instance: u32,
+        /// Linear base colour.
+        color: [f32; 3],
+        _pad: u32,
+    }
+
+    /// Per scene instance: where its mesh's geometries start in the geometry table.
+    struct InstanceInfo {
+        geometry_base: u32,
+        flags: u32,
+    }
+
+    /// Per BLAS geometry (a glTF primitive): its vertex and index buffers and base colour.
+    struct GeometryInfo {
+        vertices: u64,
+        indices: u64,
+        color: [f32; 4],
+    }
+
+    /// One cell of the world-space hash map (paper §1).
+    struct HashCell {
+        /// Second, independent hash of the cell key; `EMPTY_CELL` marks a free cell.
+        checksum: u32,
+        /// Rays accumulated in the cell.
+        samples: u32,
+        /// Rays that escaped (hit nothing within the AO radius).
+        unoccluded: u32,
+        /// Next index into the cell's QMC sequence (paper §3).
+        qmc_index: u32,
+        /// `frame_counter` of the last frame that used the cell (lazy removal of stale cells).
+        last_frame: u32,
+    }
+
+    /// Per pixel, the hash cell indices at the LOD_COUNT levels (cell finder output).
+    struct PixelCells {
+        cells: [u32; 4],
+        /// Finest level's LOD index (log2(s_wd/s_min)), for debug views.
+        lod: u32,
+        _pad: [u32; 3],
+    }
+
+    /// Counters read back after every frame.
+    struct FrameStats {
+        counters: [u32; 8],
+    }
+}

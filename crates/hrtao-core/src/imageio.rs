@@ -1,0 +1,125 @@
+//! Image files: linear float AO as PFM (bottom row first, little endian) or OpenEXR, shaded RGBA8 as PNG.
+use std::io::Write;
+use std::path::Path;
+
+use crate::error::{CoreError, Result};
+
+fn io_err(path: &Path, e: std::io::Error) -> CoreError {
+    CoreError::Io { path: path.display().to_string(), source: e }
+}
+
+/// Writes a one-channel float image (`data` row 0 = top) as greyscale PFM ("Pf", negative scale).
+pub fn write_pfm(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<()> {
+    check_len(width, height, data.len())?;
+    let mut out = Vec::with_capacity(data.len() * 4 + 32);
+    write!(out, "Pf\n{width} {height}\n-1.0\n").unwrap();
+    for y in (0..height as usize).rev() {
+        for v in &data[y * width as usize..(y + 1) * width as usize] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    std::fs::write(path, out).map_err(|e| io_err(path, e))
+}
+
+fn check_len(width: u32, height: u32, len: usize) -> Result<()> {
+    if width as usize * height as usize != len {
+        return Err(CoreError::Invalid(format!("image of {width}x{height} needs {} values, got {len}", width * height)));
+    }
+    Ok(())
+}
+
+/// Reads a PFM file ("Pf" greyscale or "PF" colour: the first channel is kept) into rows top first.
+pub fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
+    let bytes = std::fs::read(path).map_err(|e| io_err(path, e))?;
+    let bad = |why: &str| CoreError::Invalid(format!("{}: not a valid PFM file ({why})", path.display()));
+    let mut fields = Vec::new();
+    let mut pos = 0;
+    while fields.len() < 4 {
+        while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        let start = pos;
+        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err(bad("truncated header"));
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..pos]).into_owned());
+    }
+    pos += 1; // the single whitespace byte after the scale
+    let channels = match fields[0].as_str() {
+        "Pf" => 1,
+        "PF" => 3,
+        _ => return Err(bad("bad magic")),
+    };
+    let w: u32 = fields[1].parse().map_err(|_| bad("bad width"))?;
+    let h: u32 = fields[2].parse().map_err(|_| bad("bad height"))?;
+    let scale: f32 = fields[3].parse().map_err(|_| bad("bad scale"))?;
+    let n = w as usize * h as usize * channels;
+    if bytes.len() < pos + n * 4 {
+        return Err(bad("truncated data"));
+    }
+    let mut data = vec![0f32; w as usize * h as usize];
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            let i = pos + ((y * w as usize + x) * channels) * 4;
+            let raw = [bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]];
+            let v = if scale < 0.0 { f32::from_le_bytes(raw) } else { f32::from_be_bytes(raw) };
+            data[(h as usize - 1 - y) * w as usize + x] = v;
+        }
+    }
+    Ok((w, h, data))
+}
+
+/// Writes a one-channel float image as an OpenEXR file (R, G and B all equal to the value).
+pub fn write_exr(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<()> {
+    check_len(width, height, data.len())?;
+    let w = width as usize;
+    exr::prelude::write_rgb_file(path, w, height as usize, |x, y| {
+        let v = data[y * w + x];
+        (v, v, v)
+    })
+    .map_err(|e| CoreError::Invalid(format!("writing {}: {e}", path.display())))
+}
+
+/// Writes the AO image as .pfm or .exr, chosen by the extension.
+pub fn write_ao(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+        Some("pfm") => write_pfm(path, width, height, data),
+        Some("exr") => write_exr(path, width, height, data),
+        _ => Err(CoreError::Invalid(format!("{}: AO output must end in .pfm or .exr", path.display()))),
+    }
+}
+
+/// Writes packed RGBA8 pixels (row 0 = top) as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+    check_len(width, height, rgba.len() / 4)?;
+    image::save_buffer(path, rgba, width, height, image::ExtendedColorType::Rgba8)
+        .map_err(|e| CoreError::Invalid(format!("writing {}: {e}", path.display())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pfm_round_trip_keeps_rows_top_first() {
+        let dir = std::env::temp_dir().join(format!("hrtao-pfm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("a.pfm");
+        let data: Vec<f32> = (0..6).map(|i| i as f32 / 5.0).collect();
+        write_pfm(&p, 3, 2, &data).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        assert!(bytes.starts_with(b"Pf\n3 2\n-1.0\n"));
+        // Bottom row first in the file: the first value stored is data[3].
+        let first = f32::from_le_bytes(bytes[12..16].try_into().unwrap());
+        assert_eq!(first, data[3]);
+        let (w, h, back) = read_pfm(&p).unwrap();
+        assert_eq!((w, h), (3, 2));
+        assert_eq!(back, data);
+        assert!(read_pfm(&dir.join("missing.pfm")).is_err());
+        std::fs::write(dir.join("bad.pfm"), b"P6\n1 1\n").unwrap();
+        assert!(read_pfm(&dir.join("bad.pfm")).is_err());
+    }
+}

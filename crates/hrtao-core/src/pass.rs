@@ -1,0 +1,263 @@
+//! The one way to declare and record a compute pass.
+//!
+//! Every pass shares one pipeline layout: set 0 = { binding 0: the TLAS, binding 1: `FrameGlobals` },
+//! plus 16 bytes of push constants. Buffers are reached through device addresses stored in `FrameGlobals`,
+//! so a pass is only its shader: `Pass` names it, `PassSet` builds all pipelines, `Recorder::dispatch`
+//! binds, dispatches over pixels, times it under its Table-2 section and inserts the barrier after it.
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::buffer::{full_barrier, Buffer};
+use crate::context::Gpu;
+use crate::error::{CoreError, Result};
+use crate::gpu::WORKGROUP_SIZE;
+use crate::timer::GpuTimer;
+
+include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+
+/// Every compute pass of the renderer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Pass {
+    Clear,
+    Primary,
+    Rtao,
+    CellFinder,
+    AoUpdate,
+    Resolve,
+    Filter,
+    Composite,
+    HashTest,
+}
+
+impl Pass {
+    pub const ALL: [Pass; 9] = [
+        Pass::Clear,
+        Pass::Primary,
+        Pass::Rtao,
+        Pass::CellFinder,
+        Pass::AoUpdate,
+        Pass::Resolve,
+        Pass::Filter,
+        Pass::Composite,
+        Pass::HashTest,
+    ];
+
+    /// The shader file (`shaders/<name>.comp`).
+    pub fn shader(self) -> &'static str {
+        match self {
+            Pass::Clear => "clear",
+            Pass::Primary => "primary",
+            Pass::Rtao => "rtao",
+            Pass::CellFinder => "cell_finder",
+            Pass::AoUpdate => "ao_update",
+            Pass::Resolve => "resolve",
+            Pass::Filter => "filter",
+            Pass::Composite => "composite",
+            Pass::HashTest => "hash_test",
+        }
+    }
+
+    /// The timing section it belongs to (the paper's Table 2 columns, plus ours).
+    pub fn section(self) -> &'static str {
+        match self {
+            Pass::Clear => "clear",
+            Pass::Primary => "primary visibility",
+            Pass::Rtao => "per-pixel RTAO",
+            Pass::CellFinder => "cell finder",
+            Pass::AoUpdate => "ray-tracing update",
+            Pass::Resolve => "per-pixel AO",
+            Pass::Filter => "filtering",
+            Pass::Composite => "composite",
+            Pass::HashTest => "hash test",
+        }
+    }
+}
+
+/// Pipelines of all passes and their shared layout and descriptor set.
+pub struct PassSet {
+    gpu: Arc<Gpu>,
+    set_layout: vk::DescriptorSetLayout,
+    pub layout: vk::PipelineLayout,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    pipelines: Vec<(Pass, vk::Pipeline)>,
+    bound_tlas: vk::AccelerationStructureKHR,
+}
+
+fn spirv_words(bytes: &[u8]) -> Vec<u32> {
+    bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+}
+
+impl PassSet {
+    pub fn new(gpu: &Arc<Gpu>, globals: &Buffer) -> Result<PassSet> {
+        let device = &gpu.device;
+        unsafe {
+            let bindings = [
+                vk::DescriptorSetLayoutBinding::builder()
+                    .binding(0)
+                    .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                    .build(),
+                vk::DescriptorSetLayoutBinding::builder()
+                    .binding(1)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                    .build(),
+            ];
+            let set_layout = device
+                .create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::builder().bindings(&bindings), None)
+                .map_err(|e| CoreError::from_vk("vkCreateDescriptorSetLayout", e))?;
+            let push = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::COMPUTE, offset: 0, size: 16 }];
+            let set_layouts = [set_layout];
+            let layout = device
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::builder().set_layouts(&set_layouts).push_constant_ranges(&push),
+                    None,
+                )
+                .map_err(|e| CoreError::from_vk("vkCreatePipelineLayout", e))?;
+            let sizes = [
+                vk::DescriptorPoolSize { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, descriptor_count: 1 },
+                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: 1 },
+            ];
+            let pool = device
+                .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::builder().max_sets(1).pool_sizes(&sizes), None)
+                .map_err(|e| CoreError::from_vk("vkCreateDescriptorPool", e))?;
+            let set = device
+                .allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::builder().descriptor_pool(pool).set_layouts(&set_layouts),
+                )
+                .map_err(|e| CoreError::from_vk("vkAllocateDescriptorSets", e))?[0];
+            let buffer_info = [vk::DescriptorBufferInfo { buffer: globals.raw, offset: 0, range: vk::WHOLE_SIZE }];
+            let write = vk::WriteDescriptorSet::builder()
+                .dst_set(set)
+                .dst_binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&buffer_info)
+                .build();
+            device.update_descriptor_sets(&[write], &[]);
+            let mut passes = PassSet {
+                gpu: gpu.clone(),
+                set_layout,
+                layout,
+                pool,
+                set,
+                pipelines: Vec::new(),
+                bound_tlas: vk::AccelerationStructureKHR::null(),
+            };
+            for pass in Pass::ALL {
+                let spirv = SHADERS
+                    .iter()
+                    .find(|(n, _)| *n == pass.shader())
+                    .ok_or_else(|| CoreError::Invalid(format!("shader {} was not compiled", pass.shader())))?
+                    .1;
+                let words = spirv_words(spirv);
+                let module = device
+                    .create_shader_module(&vk::ShaderModuleCreateInfo::builder().code(&words), None)
+                    .map_err(|e| CoreError::from_vk("vkCreateShaderModule", e))?;
+                let entry = c"main";
+                let stage = vk::PipelineShaderStageCreateInfo::builder()
+                    .stage(vk::ShaderStageFlags::COMPUTE)
+                    .module(module)
+                    .name(entry)
+                    .build();
+                let info = [vk::ComputePipelineCreateInfo::builder().stage(stage).layout(layout).build()];
+                let result = device.create_compute_pipelines(vk::PipelineCache::null(), &info, None);
+                device.destroy_shader_module(module, None);
+                let pipeline = result.map_err(|(_, e)| CoreError::from_vk("vkCreateComputePipelines", e))?[0];
+                passes.pipelines.push((pass, pipeline));
+            }
+            Ok(passes)
+        }
+    }
+
+    /// Points binding 0 at `tlas` (after a TLAS rebuild). Must not be called while a frame is in flight.
+    pub fn bind_tlas(&mut self, tlas: vk::AccelerationStructureKHR) {
+        if self.bound_tlas == tlas {
+            return;
+        }
+        let handles = [tlas];
+        let mut as_write =
+            vk::WriteDescriptorSetAccelerationStructureKHR::builder().acceleration_structures(&handles);
+        let mut write = vk::WriteDescriptorSet::builder()
+            .dst_set(self.set)
+            .dst_binding(0)
+            .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+            .push_next(&mut as_write)
+            .build();
+        write.descriptor_count = 1;
+        unsafe { self.gpu.device.update_descriptor_sets(&[write], &[]) };
+        self.bound_tlas = tlas;
+    }
+
+    fn pipeline(&self, pass: Pass) -> vk::Pipeline {
+        self.pipelines.iter().find(|(p, _)| *p == pass).map(|(_, p)| *p).unwrap()
+    }
+}
+
+impl Drop for PassSet {
+    fn drop(&mut self) {
+        unsafe {
+            let d = &self.gpu.device;
+            for (_, p) in self.pipelines.drain(..) {
+                d.destroy_pipeline(p, None);
+            }
+            d.destroy_descriptor_pool(self.pool, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// Records passes into one command buffer.
+pub struct Recorder<'a> {
+    pub gpu: &'a Gpu,
+    pub cmd: vk::CommandBuffer,
+    passes: &'a PassSet,
+    timer: Option<&'a mut GpuTimer>,
+}
+
+impl<'a> Recorder<'a> {
+    pub fn new(gpu: &'a Gpu, cmd: vk::CommandBuffer, passes: &'a PassSet, mut timer: Option<&'a mut GpuTimer>) -> Self {
+        if let Some(t) = timer.as_deref_mut() {
+            t.reset(cmd);
+        }
+        unsafe {
+            gpu.device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                passes.layout,
+                0,
+                &[passes.set],
+                &[],
+            );
+        }
+        Recorder { gpu, cmd, passes, timer }
+    }
+
+    /// Dispatches `pass` over a `width` x `height` grid of threads (one per pixel), with push constants `push`,
+    /// then a barrier so the next pass sees its writes.
+    pub fn dispatch(&mut self, pass: Pass, width: u32, height: u32, push: [u32; 4]) {
+        let d = &self.gpu.device;
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.begin(self.cmd, pass.section());
+        }
+        unsafe {
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, self.passes.pipeline(pass));
+            d.cmd_push_constants(
+                self.cmd,
+                self.passes.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::cast_slice(&push),
+            );
+            d.cmd_dispatch(self.cmd, width.div_ceil(WORKGROUP_SIZE), height.div_ceil(WORKGROUP_SIZE), 1);
+        }
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.end(self.cmd);
+        }
+        full_barrier(self.gpu, self.cmd);
+    }
+}

@@ -1,0 +1,396 @@
+//! The frame: per-resolution targets, the persistent world-space hash map, and the pass sequence
+//! primary visibility → (per-pixel RTAO | cell finder → ray-tracing update → per-pixel AO → filter) → composite.
+use std::sync::Arc;
+use std::time::Instant;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use crate::accel::SceneGpu;
+use crate::buffer::{host_read_barrier, Buffer};
+use crate::camera::Camera;
+use crate::context::Gpu;
+use crate::error::{CoreError, Result};
+use crate::gpu::{self, FrameGlobals, FrameStats, GPixel, HashCell, PixelCells};
+use crate::pass::{Pass, PassSet, Recorder};
+use crate::settings::{AoSettings, Mode};
+use crate::timer::GpuTimer;
+
+/// Buffers whose size follows the image resolution.
+struct Targets {
+    width: u32,
+    height: u32,
+    gbuffer: Buffer,
+    ao_accum: Buffer,
+    ao: Buffer,
+    ao_lod: Buffer,
+    filter_tmp: Buffer,
+    output: Buffer,
+    pixel_cells: Buffer,
+}
+
+impl Targets {
+    fn new(gpu: &Arc<Gpu>, width: u32, height: u32) -> Result<Targets> {
+        let n = width as u64 * height as u64;
+        let b = |name: &str, bytes: u64| Buffer::new(gpu, name, bytes, MemoryLocation::GpuOnly, vk::BufferUsageFlags::empty());
+        Ok(Targets {
+            width,
+            height,
+            gbuffer: b("G-buffer", n * std::mem::size_of::<GPixel>() as u64)?,
+            ao_accum: b("AO accumulation", n * 4)?,
+            ao: b("AO", n * 4)?,
+            ao_lod: b("AO LOD used", n * 4)?,
+            filter_tmp: b("filter ping-pong", n * 4)?,
+            output: b("output RGBA8", n * 4)?,
+            pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
+        })
+    }
+}
+
+/// The world-space hash map (paper §1), persistent across frames.
+struct HashMapGpu {
+    capacity: u32,
+    cells: Buffer,
+}
+
+/// What one frame did.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct FrameReport {
+    /// GPU milliseconds per section (Table 2 names), when the device has timestamps.
+    pub gpu_ms: Vec<(String, f64)>,
+    pub gpu_total_ms: f64,
+    pub wall_ms: f64,
+    pub rays: u64,
+    pub cells_inserted: u32,
+    pub failed_inserts: u32,
+    pub longest_probe: u32,
+    pub reclaimed: u32,
+    pub bounds_violations: u32,
+    pub capped_pixels: u32,
+    pub occupied_cells: u32,
+    pub load_factor: f64,
+    /// F of the scene when the frame was rendered.
+    pub scene_frame: u32,
+    pub accumulated_frames: u32,
+}
+
+pub struct Renderer {
+    gpu: Arc<Gpu>,
+    pub settings: AoSettings,
+    passes: PassSet,
+    timer: Option<GpuTimer>,
+    globals: Buffer,
+    stats: Buffer,
+    targets: Targets,
+    hash: HashMapGpu,
+    frame_counter: u32,
+    accum_index: u32,
+    accum_key: Option<(Camera, AoSettings, u32, vk::AccelerationStructureKHR)>,
+    pub selected_instance: u32,
+    pub background_top: [f32; 3],
+    pub background_bottom: [f32; 3],
+    pub output_bgra: bool,
+    pub check_bounds: bool,
+}
+
+impl Renderer {
+    pub fn new(gpu: &Arc<Gpu>, width: u32, height: u32, settings: AoSettings) -> Result<Renderer> {
+        settings.validate().map_err(CoreError::Invalid)?;
+        let globals = Buffer::new(
+            gpu,
+            "frame globals",
+            std::mem::size_of::<FrameGlobals>() as u64,
+            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        let stats = Buffer::new(
+            gpu,
+            "frame stats",
+            std::mem::size_of::<FrameStats>() as u64,
+            MemoryLocation::GpuToCpu,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        let passes = PassSet::new(gpu, &globals)?;
+        let hash = Self::create_hash(gpu, settings.hash_capacity)?;
+        let r = Renderer {
+            gpu: gpu.clone(),
+            timer: GpuTimer::new(gpu)?,
+            passes,
+            globals,
+            stats,
+            targets: Targets::new(gpu, width.max(1), height.max(1))?,
+            hash,
+            settings,
+            frame_counter: 0,
+            accum_index: 0,
+            accum_key: None,
+            selected_instance: u32::MAX,
+            background_top: [0.62, 0.68, 0.76],
+            background_bottom: [0.93, 0.94, 0.95],
+            output_bgra: false,
+            check_bounds: false,
+        };
+        gpu.run_commands(|cmd| unsafe {
+            gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
+        })?;
+        Ok(r)
+    }
+
+    fn create_hash(gpu: &Arc<Gpu>, capacity: u32) -> Result<HashMapGpu> {
+        let cells = Buffer::new(
+            gpu,
+            "hash map cells",
+            capacity as u64 * std::mem::size_of::<HashCell>() as u64,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        gpu.run_commands(|cmd| unsafe {
+            gpu.device.cmd_fill_buffer(cmd, cells.raw, 0, vk::WHOLE_SIZE, 0);
+        })?;
+        Ok(HashMapGpu { capacity, cells })
+    }
+
+    pub fn gpu(&self) -> &Arc<Gpu> {
+        &self.gpu
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.targets.width, self.targets.height)
+    }
+
+    /// Changes the internal resolution (the hash map is world space and survives).
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
+        let (w, h) = (width.max(1), height.max(1));
+        if (w, h) != self.size() {
+            self.gpu.wait_idle();
+            self.targets = Targets::new(&self.gpu, w, h)?;
+            self.accum_key = None;
+        }
+        Ok(())
+    }
+
+    /// Applies new settings; a new hash capacity reallocates (and empties) the map.
+    pub fn set_settings(&mut self, settings: AoSettings) -> Result<()> {
+        settings.validate().map_err(CoreError::Invalid)?;
+        if settings.hash_capacity != self.hash.capacity {
+            self.gpu.wait_idle();
+            self.hash = Self::create_hash(&self.gpu, settings.hash_capacity)?;
+            self.gpu.run_commands(|cmd| unsafe {
+                // The occupancy counter restarts with the empty table.
+                self.gpu.device.cmd_fill_buffer(cmd, self.stats.raw, 0, vk::WHOLE_SIZE, 0);
+            })?;
+        }
+        self.settings = settings;
+        Ok(())
+    }
+
+    /// Empties the hash map (all cached AO is forgotten).
+    pub fn clear_cache(&mut self) -> Result<()> {
+        self.gpu.wait_idle();
+        let (cells, stats) = (self.hash.cells.raw, self.stats.raw);
+        self.gpu.run_commands(|cmd| unsafe {
+            self.gpu.device.cmd_fill_buffer(cmd, cells, 0, vk::WHOLE_SIZE, 0);
+            self.gpu.device.cmd_fill_buffer(cmd, stats, 0, vk::WHOLE_SIZE, 0);
+        })?;
+        Ok(())
+    }
+
+    fn globals_for(&self, camera: &Camera, scene_frame: u32) -> FrameGlobals {
+        let s = &self.settings;
+        let t = &self.targets;
+        let cam = Camera { width: t.width, height: t.height, ..*camera };
+        let f = cam.frame();
+        // eq. (2): s_w = d tan(max(f / R_x, f R_x / R_y^2) s_p), with f the vertical aperture in radians.
+        let aperture = cam.fov_y_deg.to_radians();
+        let (rx, ry) = (t.width as f32, t.height as f32);
+        let angle = (aperture / rx).max(aperture * rx / (ry * ry)) * s.s_p;
+        let mut flags = 0;
+        if self.output_bgra {
+            flags |= gpu::FLAG_OUTPUT_BGRA;
+        }
+        if s.filter && s.filter_iterations > 0 {
+            flags |= gpu::FLAG_FILTER;
+        }
+        if self.check_bounds {
+            flags |= gpu::FLAG_CHECK_BOUNDS;
+        }
+        if s.shaded {
+            flags |= gpu::FLAG_SHADED;
+        }
+        let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
+        let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
+        FrameGlobals {
+            eye: v4(f.eye),
+            cam_u: v4(f.u),
+            cam_v: v4(f.v),
+            cam_w: v4(f.w),
+            width: t.width,
+            height: t.height,
+            accum_index: self.accum_index,
+            scene_frame,
+            frame_counter: self.frame_counter,
+            mode: s.mode.gpu_value(),
+            flags,
+            rays_per_pixel: s.rays_per_pixel,
+            ao_radius: s.ao_radius,
+            s_w_per_distance: angle.tan(),
+            s_min: s.s_min,
+            s_nd: s.s_nd,
+            hash_capacity: self.hash.capacity,
+            max_samples: s.max_samples,
+            min_samples: s.min_samples,
+            max_probe: s.max_probe,
+            stale_frames: s.stale_frames,
+            selected_instance: self.selected_instance,
+            filter_iterations: s.filter_iterations,
+            _pad0: 0,
+            background_top: c4(self.background_top),
+            background_bottom: c4(self.background_bottom),
+            gbuffer: t.gbuffer.address,
+            instances: 0,
+            geometries: 0,
+            ao_accum: t.ao_accum.address,
+            ao: t.ao.address,
+            ao_lod: t.ao_lod.address,
+            filter_tmp: t.filter_tmp.address,
+            output_rgba: t.output.address,
+            hash_cells: self.hash.cells.address,
+            pixel_cells: t.pixel_cells.address,
+            stats: self.stats.address,
+        }
+    }
+
+    /// Prepares the frame's globals and records all passes into `cmd` (the caller submits and then calls
+    /// `finish_frame`). The output is left in `output_buffer()`.
+    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, scene: &SceneGpu, scene_frame: u32, camera: &Camera) -> Result<()> {
+        let key = (
+            Camera { width: self.targets.width, height: self.targets.height, ..*camera },
+            self.settings.clone(),
+            scene_frame,
+            scene.tlas.raw,
+        );
+        if self.accum_key.as_ref() == Some(&key) {
+            self.accum_index = self.accum_index.saturating_add(1);
+        } else {
+            self.accum_index = 0;
+            self.accum_key = Some(key);
+        }
+        let mut globals = self.globals_for(camera, scene_frame);
+        globals.instances = scene.instance_info.address;
+        globals.geometries = scene.geometries.address;
+        self.globals.write(&[globals])?;
+        self.passes.bind_tlas(scene.tlas.raw);
+
+        let (w, h) = self.size();
+        let mode = self.settings.mode;
+        let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
+        rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
+        rec.dispatch(Pass::Primary, w, h, [0; 4]);
+        if mode == Mode::Rtao {
+            rec.dispatch(Pass::Rtao, w, h, [0; 4]);
+        } else if mode.uses_hash() {
+            rec.dispatch(Pass::CellFinder, w, h, [0; 4]);
+            rec.dispatch(Pass::AoUpdate, w, h, [0; 4]);
+            rec.dispatch(Pass::Resolve, w, h, [0; 4]);
+            if self.settings.filter {
+                // Ping-pong: iteration i reads one buffer and writes the other; an even count ends in `ao`.
+                let iterations = self.settings.filter_iterations;
+                for i in 0..iterations {
+                    rec.dispatch(Pass::Filter, w, h, [i, iterations, 0, 0]);
+                }
+            }
+        }
+        rec.dispatch(Pass::Composite, w, h, [0; 4]);
+        host_read_barrier(&self.gpu, cmd);
+        Ok(())
+    }
+
+    /// Reads the statistics of the frame just completed.
+    pub fn finish_frame(&mut self, scene_frame: u32, wall_ms: f64) -> Result<FrameReport> {
+        self.frame_counter = self.frame_counter.wrapping_add(1);
+        let c: Vec<u32> = self.stats.read(gpu::STAT_COUNT as usize)?;
+        let gpu_ms = match &self.timer {
+            Some(t) => t.read()?,
+            None => Vec::new(),
+        };
+        let occupied = c[gpu::STAT_OCCUPIED as usize];
+        Ok(FrameReport {
+            gpu_total_ms: gpu_ms.iter().map(|(_, ms)| ms).sum(),
+            gpu_ms,
+            wall_ms,
+            rays: c[gpu::STAT_RAYS as usize] as u64,
+            cells_inserted: c[gpu::STAT_CELLS_INSERTED as usize],
+            failed_inserts: c[gpu::STAT_FAILED_INSERTS as usize],
+            longest_probe: c[gpu::STAT_MAX_PROBE as usize],
+            reclaimed: c[gpu::STAT_RECLAIMED as usize],
+            bounds_violations: c[gpu::STAT_BOUNDS_VIOLATIONS as usize],
+            capped_pixels: c[gpu::STAT_CAPPED_PIXELS as usize],
+            occupied_cells: occupied,
+            load_factor: occupied as f64 / self.hash.capacity as f64,
+            scene_frame,
+            accumulated_frames: self.accum_index + 1,
+        })
+    }
+
+    /// Renders one frame headless and waits for it.
+    pub fn render(&mut self, scene: &SceneGpu, scene_frame: u32, camera: &Camera) -> Result<FrameReport> {
+        let t0 = Instant::now();
+        let gpu = self.gpu.clone();
+        let mut recorded = Ok(());
+        gpu.run_commands(|cmd| recorded = self.record_frame(cmd, scene, scene_frame, camera))?;
+        recorded?;
+        self.finish_frame(scene_frame, t0.elapsed().as_secs_f64() * 1e3)
+    }
+
+    /// The RGBA8 output buffer (for copying to a swapchain image).
+    pub fn output_buffer(&self) -> &Buffer {
+        &self.targets.output
+    }
+
+    fn read_buffer<T: bytemuck::Pod>(&self, src: &Buffer, count: usize) -> Result<Vec<T>> {
+        let bytes = (count * std::mem::size_of::<T>()) as u64;
+        let staging = Buffer::new(&self.gpu, "readback", bytes, MemoryLocation::GpuToCpu, vk::BufferUsageFlags::empty())?;
+        self.gpu.run_commands(|cmd| unsafe {
+            self.gpu.device.cmd_copy_buffer(cmd, src.raw, staging.raw, &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }]);
+            host_read_barrier(&self.gpu, cmd);
+        })?;
+        staging.read(count)
+    }
+
+    fn pixel_count(&self) -> usize {
+        self.targets.width as usize * self.targets.height as usize
+    }
+
+    /// The linear AO image of the last frame, row 0 at the top (background = 1).
+    pub fn read_ao(&self) -> Result<Vec<f32>> {
+        self.read_buffer(&self.targets.ao, self.pixel_count())
+    }
+
+    /// The composited sRGB RGBA8 image of the last frame, row 0 at the top.
+    pub fn read_rgba(&self) -> Result<Vec<u8>> {
+        let px: Vec<u32> = self.read_buffer(&self.targets.output, self.pixel_count())?;
+        Ok(bytemuck::cast_slice(&px).to_vec())
+    }
+
+    /// The G-buffer of the last frame (tests, picking).
+    pub fn read_gbuffer(&self) -> Result<Vec<GPixel>> {
+        self.read_buffer(&self.targets.gbuffer, self.pixel_count())
+    }
+
+    /// The LOD index used per pixel by the last HRTAO frame (0 = finest, LOD_COUNT = none).
+    pub fn read_lod_used(&self) -> Result<Vec<u32>> {
+        self.read_buffer(&self.targets.ao_lod, self.pixel_count())
+    }
+
+    pub fn read_pixel_cells(&self) -> Result<Vec<PixelCells>> {
+        self.read_buffer(&self.targets.pixel_cells, self.pixel_count())
+    }
+
+    pub fn read_hash_cells(&self) -> Result<Vec<HashCell>> {
+        self.read_buffer(&self.hash.cells, self.hash.capacity as usize)
+    }
+
+    pub fn frame_counter(&self) -> u32 {
+        self.frame_counter
+    }
+}

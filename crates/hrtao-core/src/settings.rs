@@ -1,0 +1,152 @@
+//! User-facing AO settings, with the paper's names.
+use serde::{Deserialize, Serialize};
+
+use crate::gpu;
+
+/// What the renderer computes and shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// Brute-force per-pixel ray-traced AO (the baseline), accumulated while nothing changes.
+    Rtao,
+    /// The paper's hashed ray-traced AO.
+    #[default]
+    Hrtao,
+    /// Shading without AO.
+    NoAo,
+    /// Debug: hash cell false colours (paper Fig. 3).
+    DebugCells,
+    /// Debug: LOD used per pixel.
+    DebugLod,
+    /// Debug: samples per cell heat map.
+    DebugSamples,
+}
+
+impl Mode {
+    pub fn gpu_value(self) -> u32 {
+        match self {
+            Mode::Rtao => gpu::MODE_RTAO,
+            Mode::Hrtao => gpu::MODE_HRTAO,
+            Mode::NoAo => gpu::MODE_NO_AO,
+            Mode::DebugCells => gpu::MODE_DEBUG_CELLS,
+            Mode::DebugLod => gpu::MODE_DEBUG_LOD,
+            Mode::DebugSamples => gpu::MODE_DEBUG_SAMPLES,
+        }
+    }
+
+    /// True when the hash map passes run (HRTAO and its debug views).
+    pub fn uses_hash(self) -> bool {
+        matches!(self, Mode::Hrtao | Mode::DebugCells | Mode::DebugLod | Mode::DebugSamples)
+    }
+
+    pub const ALL: [Mode; 6] = [Mode::Hrtao, Mode::Rtao, Mode::NoAo, Mode::DebugCells, Mode::DebugLod, Mode::DebugSamples];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Mode::Rtao => "per-pixel RTAO",
+            Mode::Hrtao => "HRTAO",
+            Mode::NoAo => "AO off",
+            Mode::DebugCells => "debug: hash cells",
+            Mode::DebugLod => "debug: LOD used",
+            Mode::DebugSamples => "debug: samples per cell",
+        }
+    }
+}
+
+impl std::str::FromStr for Mode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Ok(match s {
+            "rtao" => Mode::Rtao,
+            "hrtao" => Mode::Hrtao,
+            "none" | "no-ao" => Mode::NoAo,
+            "cells" | "debug-cells" => Mode::DebugCells,
+            "lod" | "debug-lod" => Mode::DebugLod,
+            "samples" | "debug-samples" => Mode::DebugSamples,
+            _ => return Err(format!("unknown mode `{s}` (rtao, hrtao, none, debug-cells, debug-lod, debug-samples)")),
+        })
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AoSettings {
+    pub mode: Mode,
+    /// AO radius R in scene units (rays longer than this count as unoccluded).
+    pub ao_radius: f32,
+    /// Ray budget B: rays traced per pixel per frame (§3, §6).
+    pub rays_per_pixel: u32,
+    /// s_p: target feature size in pixels (eq. 2).
+    pub s_p: f32,
+    /// s_nd: normal discretisation (eq. 5).
+    pub s_nd: f32,
+    /// s_min: smallest world feature (eq. 3).
+    pub s_min: f32,
+    /// Rays per cell after which a cell stops receiving rays (§6: 1000).
+    pub max_samples: u32,
+    /// Fewer samples than this in the finest cell: use the next coarser LOD (§4).
+    pub min_samples: u32,
+    /// Adaptive à-trous filter on/off (§5) and its iterations.
+    pub filter: bool,
+    pub filter_iterations: u32,
+    /// Hash map capacity in cells (power of two).
+    pub hash_capacity: u32,
+    /// Longest linear probe before an insert fails.
+    pub max_probe: u32,
+    /// Cells untouched for this many frames may be reclaimed while probing (lazy removal, eq. 6).
+    pub stale_frames: u32,
+    /// Use base colours (else a uniform grey clay look).
+    pub shaded: bool,
+}
+
+impl Default for AoSettings {
+    fn default() -> Self {
+        AoSettings {
+            mode: Mode::Hrtao,
+            ao_radius: 1.0,
+            rays_per_pixel: 4,
+            s_p: 8.0,
+            s_nd: 3.0,
+            s_min: 1e-10,
+            max_samples: 1000,
+            min_samples: 32,
+            filter: true,
+            filter_iterations: 3,
+            hash_capacity: 1 << 20,
+            max_probe: 32,
+            stale_frames: 240,
+            shaded: true,
+        }
+    }
+}
+
+impl AoSettings {
+    /// Checks ranges; the message names the setting.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.ao_radius.is_finite() && self.ao_radius > 0.0) {
+            return Err(format!("AO radius must be a positive number, got {}", self.ao_radius));
+        }
+        if !(self.s_p.is_finite() && self.s_p > 0.0) {
+            return Err(format!("s_p must be positive, got {}", self.s_p));
+        }
+        if !(self.s_nd.is_finite() && self.s_nd > 0.0) {
+            return Err(format!("s_nd must be positive, got {}", self.s_nd));
+        }
+        if !(self.s_min.is_finite() && self.s_min > 0.0) {
+            return Err(format!("s_min must be positive, got {}", self.s_min));
+        }
+        if !self.hash_capacity.is_power_of_two() || self.hash_capacity < 1024 || self.hash_capacity > 1 << 28 {
+            return Err(format!("hash capacity must be a power of two in 1024..=2^28, got {}", self.hash_capacity));
+        }
+        if self.rays_per_pixel > 1024 {
+            return Err(format!("ray budget {} is above 1024 rays per pixel", self.rays_per_pixel));
+        }
+        if self.max_probe == 0 || self.max_probe > 4096 {
+            return Err("max probe must be in 1..=4096".into());
+        }
+        if self.filter_iterations > 8 {
+            return Err("at most 8 filter iterations".into());
+        }
+        Ok(())
+    }
+}

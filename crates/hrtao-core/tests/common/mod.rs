@@ -1,0 +1,58 @@
+//! Test helpers: a validated GPU context and small analytic scenes built in code.
+#![allow(dead_code)]
+use std::sync::Arc;
+
+use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Mode, Renderer, SceneGpu};
+use hrtao_scene::glam::{Mat4, Vec3};
+use hrtao_scene::{Instance, Mesh, Primitive, Scene};
+
+/// A GPU context with the Khronos validation layer on (tests fail on any message: see `assert_clean`).
+pub fn gpu() -> Arc<Gpu> {
+    let _ = env_logger::builder().is_test(true).try_init();
+    let opts = ContextOptions { validation: true, device: std::env::var("HRTAO_DEVICE").ok(), ..Default::default() };
+    Gpu::new(&opts).expect("a Vulkan device with ray queries (run scripts/install-deps.sh)")
+}
+
+pub fn assert_clean(gpu: &Gpu) {
+    assert_eq!(gpu.validation_messages(), 0, "the validation layer reported messages (see the log above)");
+}
+
+/// An axis-aligned quad as a mesh: centre, two half-extent edge vectors.
+pub fn quad(center: Vec3, a: Vec3, b: Vec3) -> Primitive {
+    let p = [center - a - b, center + a - b, center + a + b, center - a + b];
+    Primitive {
+        positions: p.iter().map(|v| v.to_array()).collect(),
+        indices: vec![0, 1, 2, 0, 2, 3],
+        base_color: [0.8, 0.8, 0.8, 1.0],
+    }
+}
+
+pub fn scene_of(prims: Vec<Primitive>) -> Scene {
+    let mut s = Scene::new("test");
+    s.meshes.push(Mesh { name: "m".into(), primitives: prims });
+    s.instances.push(Instance { mesh: 0, transform: Mat4::IDENTITY, name: "i".into(), visible: true });
+    s
+}
+
+/// A 200 x 200 floor at z = 0.
+pub fn floor() -> Primitive {
+    quad(Vec3::ZERO, Vec3::X * 100.0, Vec3::Y * 100.0)
+}
+
+pub fn top_down_camera(height: f32, w: u32, h: u32) -> Camera {
+    Camera { eye: [0.0, 0.0, height], target: [0.0, 0.0, 0.0], up: [0.0, 1.0, 0.0], fov_y_deg: 60.0, width: w, height: h }
+}
+
+pub fn rtao(rays: u32, radius: f32) -> AoSettings {
+    AoSettings { mode: Mode::Rtao, rays_per_pixel: rays, ao_radius: radius, ..Default::default() }
+}
+
+/// Renders `frames` frames and returns the renderer (for read-backs).
+pub fn render(gpu: &Arc<Gpu>, scene: &Scene, cam: &Camera, settings: AoSettings, frames: u32) -> (Renderer, SceneGpu) {
+    let sg = SceneGpu::new(gpu, scene).expect("scene upload");
+    let mut r = Renderer::new(gpu, cam.width, cam.height, settings).expect("renderer");
+    for _ in 0..frames {
+        r.render(&sg, scene.frame(), cam).expect("frame");
+    }
+    (r, sg)
+}

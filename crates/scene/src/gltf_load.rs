@@ -1,0 +1,586 @@
+//! glTF 2.0 loader (.gltf with external or embedded buffers, .glb).
+//!
+//! Only geometry is read: images are never loaded or decoded. Accessors are decoded here
+//! with bounds-checked arithmetic instead of `gltf::mesh::Reader`, which can panic on
+//! malformed accessors (zero counts, short strides, wrong component types).
+
+use std::path::Path;
+
+use glam::Mat4;
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+use gltf::Semantic;
+
+use crate::error::SceneError;
+use crate::scene::{transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
+
+/// Maximum node nesting depth.
+const MAX_DEPTH: usize = 256;
+/// Maximum node visits while flattening (guards against exponential DAGs).
+const MAX_NODE_VISITS: u64 = 10_000_000;
+/// Maximum element count of an accessor that has no buffer view (implicit zeros).
+const MAX_IMPLICIT_COUNT: usize = 50_000_000;
+
+/// Loads a .gltf or .glb file. Unreferenced meshes are kept so that mesh ids equal glTF
+/// mesh indices.
+pub fn load_gltf(
+    path: &Path,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
+    let err = |message: String| SceneError::Gltf {
+        path: path.to_path_buf(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    progress(LoadProgress {
+        stage: "read",
+        done: 1,
+        total: 1,
+    });
+    let is_glb_ext = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    check_glb_header(&bytes, is_glb_ext).map_err(err)?;
+
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| err(format!("cannot parse: {e}")))?;
+    drop(bytes);
+    for ext in document.extensions_required() {
+        if ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression" {
+            return Err(err(format!("requires unsupported extension {ext}")));
+        }
+    }
+    let base = path.parent();
+    let buffers = gltf::import_buffers(&document, base, blob)
+        .map_err(|e| err(format!("cannot load buffers: {e}")))?;
+    progress(LoadProgress {
+        stage: "buffers",
+        done: 1,
+        total: 1,
+    });
+
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut scene = Scene::new(name);
+
+    let total = document.meshes().len() as u64;
+    for (mi, mesh) in document.meshes().enumerate() {
+        let mut primitives = Vec::new();
+        for (pi, prim) in mesh.primitives().enumerate() {
+            let at = format!("mesh {mi} primitive {pi}");
+            if let Some(p) = load_primitive(&prim, &buffers).map_err(|m| err(format!("{at}: {m}")))? {
+                primitives.push(p);
+            } else {
+                log::warn!(
+                    "{}: {at}: skipping non-triangle primitive (mode {:?})",
+                    path.display(),
+                    prim.mode()
+                );
+            }
+        }
+        scene.meshes.push(Mesh {
+            name: mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {mi}")),
+            primitives,
+        });
+        progress(LoadProgress {
+            stage: "meshes",
+            done: mi as u64 + 1,
+            total,
+        });
+    }
+
+    scene.instances = flatten_nodes(&document).map_err(|e| match e {
+        Flatten::Invalid(m) => err(m),
+        Flatten::TooLarge(m) => SceneError::TooLarge(format!("{}: {m}", path.display())),
+    })?;
+    progress(LoadProgress {
+        stage: "nodes",
+        done: scene.instances.len() as u64,
+        total: scene.instances.len() as u64,
+    });
+    Ok(scene)
+}
+
+/// Rejects truncated/garbled GLB headers before the gltf crate sees them (its reader
+/// underflows on tiny declared lengths).
+fn check_glb_header(bytes: &[u8], is_glb_ext: bool) -> Result<(), String> {
+    let is_glb = bytes.starts_with(b"glTF");
+    if !is_glb {
+        if is_glb_ext {
+            let n = bytes.len().min(4);
+            return Err(format!(
+                "not a binary glTF: expected magic \"glTF\", found {:?}",
+                String::from_utf8_lossy(&bytes[..n])
+            ));
+        }
+        return Ok(());
+    }
+    if bytes.len() < 20 {
+        return Err(format!("truncated GLB: only {} bytes", bytes.len()));
+    }
+    let u32_at = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let version = u32_at(4);
+    if version != 2 {
+        return Err(format!("unsupported GLB version {version} (need 2)"));
+    }
+    let declared = u32_at(8) as usize;
+    if declared < 20 {
+        return Err(format!("GLB header declares impossible length {declared}"));
+    }
+    if declared > bytes.len() {
+        return Err(format!(
+            "truncated GLB: header declares {declared} bytes but the file has {}",
+            bytes.len()
+        ));
+    }
+    let json_len = u32_at(12) as usize;
+    if json_len > declared - 20 {
+        return Err(format!(
+            "truncated GLB: JSON chunk declares {json_len} bytes but only {} remain",
+            declared - 20
+        ));
+    }
+    Ok(())
+}
+
+/// Decodes one primitive into a triangle list; `Ok(None)` for points/lines.
+fn load_primitive(
+    prim: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<Primitive>, String> {
+    let mode = prim.mode();
+    if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+        return Ok(None);
+    }
+    let pos_acc = prim
+        .get(&Semantic::Positions)
+        .ok_or("no POSITION attribute")?;
+    if pos_acc.dimensions() != Dimensions::Vec3 {
+        return Err(format!(
+            "POSITION accessor {} has type {:?}, expected VEC3",
+            pos_acc.index(),
+            pos_acc.dimensions()
+        ));
+    }
+    let positions = read_accessor(&pos_acc, buffers, "POSITION", |dt, norm, b| {
+        let s = dt.size();
+        [
+            comp_f32(dt, norm, &b[..s]),
+            comp_f32(dt, norm, &b[s..2 * s]),
+            comp_f32(dt, norm, &b[2 * s..3 * s]),
+        ]
+    })?;
+
+    let raw_indices: Vec<u32> = match prim.indices() {
+        Some(acc) => {
+            if acc.dimensions() != Dimensions::Scalar
+                || !matches!(acc.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+            {
+                return Err(format!(
+                    "index accessor {} must be SCALAR u8/u16/u32, found {:?} {:?}",
+                    acc.index(),
+                    acc.dimensions(),
+                    acc.data_type()
+                ));
+            }
+            read_accessor(&acc, buffers, "indices", |dt, _, b| comp_u32(dt, b))?
+        }
+        None => {
+            let n = u32::try_from(positions.len())
+                .map_err(|_| format!("{} vertices exceed u32 indices", positions.len()))?;
+            (0..n).collect()
+        }
+    };
+    let indices = to_triangle_list(mode, raw_indices);
+
+    let factor = prim
+        .material()
+        .index()
+        .map(|_| prim.material().pbr_metallic_roughness().base_color_factor());
+    let mean = match prim.get(&Semantic::Colors(0)) {
+        Some(acc) => mean_color(&acc, buffers)?,
+        None => None,
+    };
+    let base_color = match (factor, mean) {
+        (Some(f), Some(c)) => [f[0] * c[0], f[1] * c[1], f[2] * c[2], f[3] * c[3]],
+        (Some(f), None) => f,
+        (None, Some(c)) => c,
+        (None, None) => DEFAULT_BASE_COLOR,
+    };
+    Ok(Some(Primitive {
+        positions,
+        indices,
+        base_color,
+    }))
+}
+
+/// Converts strips/fans to a list; drops a trailing partial triangle of a list.
+fn to_triangle_list(mode: Mode, idx: Vec<u32>) -> Vec<u32> {
+    let n = idx.len();
+    match mode {
+        Mode::TriangleStrip => (0..n.saturating_sub(2))
+            .flat_map(|i| {
+                if i % 2 == 0 {
+                    [idx[i], idx[i + 1], idx[i + 2]]
+                } else {
+                    [idx[i + 1], idx[i], idx[i + 2]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (1..n.saturating_sub(1))
+            .flat_map(|i| [idx[0], idx[i], idx[i + 1]])
+            .collect(),
+        _ => {
+            let mut idx = idx;
+            if n % 3 != 0 {
+                log::warn!("triangle list with {n} indices; dropping the last {}", n % 3);
+                idx.truncate(n - n % 3);
+            }
+            idx
+        }
+    }
+}
+
+/// Mean RGBA of a COLOR_n accessor (float, or normalized u8/u16; RGB gets alpha 1).
+fn mean_color(
+    acc: &gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<[f32; 4]>, String> {
+    let dims = match acc.dimensions() {
+        Dimensions::Vec3 => 3,
+        Dimensions::Vec4 => 4,
+        d => return Err(format!("COLOR_0 accessor {} has type {d:?}, expected VEC3/VEC4", acc.index())),
+    };
+    if !matches!(acc.data_type(), DataType::F32 | DataType::U8 | DataType::U16) {
+        return Err(format!(
+            "COLOR_0 accessor {} has component type {:?}, expected float/u8/u16",
+            acc.index(),
+            acc.data_type()
+        ));
+    }
+    let colors = read_accessor(acc, buffers, "COLOR_0", |dt, _, b| {
+        let s = dt.size();
+        let mut c = [1.0f32; 4];
+        for (k, v) in c.iter_mut().enumerate().take(dims) {
+            // Integer colours are always normalized in glTF.
+            *v = comp_f32(dt, true, &b[k * s..(k + 1) * s]);
+        }
+        c
+    })?;
+    if colors.is_empty() {
+        return Ok(None);
+    }
+    let mut sum = [0.0f64; 4];
+    for c in &colors {
+        for k in 0..4 {
+            sum[k] += c[k] as f64;
+        }
+    }
+    let n = colors.len() as f64;
+    Ok(Some(sum.map(|s| (s / n) as f32)))
+}
+
+fn comp_f32(dt: DataType, normalized: bool, b: &[u8]) -> f32 {
+    match dt {
+        DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        DataType::U8 => {
+            let v = b[0] as f32;
+            if normalized {
+                v / 255.0
+            } else {
+                v
+            }
+        }
+        DataType::I8 => {
+            let v = b[0] as i8 as f32;
+            if normalized {
+                (v / 127.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+        DataType::U16 => {
+            let v = u16::from_le_bytes([b[0], b[1]]) as f32;
+            if normalized {
+                v / 65535.0
+            } else {
+                v
+            }
+        }
+        DataType::I16 => {
+            let v = i16::from_le_bytes([b[0], b[1]]) as f32;
+            if normalized {
+                (v / 32767.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+        DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+    }
+}
+
+fn comp_u32(dt: DataType, b: &[u8]) -> u32 {
+    match dt {
+        DataType::U8 => b[0] as u32,
+        DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as u32,
+        _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+    }
+}
+
+/// Byte range `offset..offset+len` of a buffer view, checked against the loaded data.
+fn view_bytes<'b>(
+    view: &gltf::buffer::View,
+    buffers: &'b [gltf::buffer::Data],
+) -> Result<&'b [u8], String> {
+    let data = buffers
+        .get(view.buffer().index())
+        .ok_or_else(|| format!("bufferView {} references missing buffer", view.index()))?;
+    let end = view
+        .offset()
+        .checked_add(view.length())
+        .filter(|&e| e <= data.len())
+        .ok_or_else(|| {
+            format!(
+                "bufferView {} (offset {}, length {}) exceeds buffer {} of {} bytes",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index(),
+                data.len()
+            )
+        })?;
+    Ok(&data[view.offset()..end])
+}
+
+/// Slice of `count` elements of `elem` bytes each, `stride` apart, starting at `offset`.
+fn elements<'b>(
+    bytes: &'b [u8],
+    offset: usize,
+    stride: usize,
+    elem: usize,
+    count: usize,
+    what: &str,
+) -> Result<&'b [u8], String> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    let end = (count - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(offset))
+        .and_then(|x| x.checked_add(elem))
+        .filter(|&e| e <= bytes.len())
+        .ok_or_else(|| {
+            format!(
+                "{what}: {count} elements of {elem} bytes (stride {stride}, offset {offset}) \
+                 exceed the {} bytes available",
+                bytes.len()
+            )
+        })?;
+    Ok(&bytes[offset..end])
+}
+
+/// Decodes all elements of an accessor (including sparse substitution) with `decode`,
+/// which gets the component type, normalized flag and the element's bytes.
+fn read_accessor<T: Copy>(
+    acc: &gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+    what: &str,
+    decode: impl Fn(DataType, bool, &[u8]) -> T,
+) -> Result<Vec<T>, String> {
+    let what = format!("{what} accessor {}", acc.index());
+    let dt = acc.data_type();
+    let norm = acc.normalized();
+    let elem = dt.size() * acc.dimensions().multiplicity();
+    let count = acc.count();
+    let mut out: Vec<T> = match acc.view() {
+        Some(view) => {
+            let stride = view.stride().unwrap_or(elem);
+            if stride < elem {
+                return Err(format!("{what}: byteStride {stride} < element size {elem}"));
+            }
+            let bytes = elements(view_bytes(&view, buffers)?, acc.offset(), stride, elem, count, &what)?;
+            (0..count)
+                .map(|k| decode(dt, norm, &bytes[k * stride..k * stride + elem]))
+                .collect()
+        }
+        None => {
+            if acc.sparse().is_none() {
+                log::warn!("{what} has no bufferView and no sparse data; using zeros");
+            }
+            if count > MAX_IMPLICIT_COUNT {
+                return Err(format!("{what}: implicit count {count} is too large"));
+            }
+            let zeros = vec![0u8; elem];
+            vec![decode(dt, norm, &zeros); count]
+        }
+    };
+    if let Some(sparse) = acc.sparse() {
+        let n = sparse.count();
+        let idx = sparse.indices();
+        let isize_ = idx.index_type().size();
+        let ibytes = elements(
+            view_bytes(&idx.view(), buffers)?,
+            idx.offset(),
+            isize_,
+            isize_,
+            n,
+            &format!("{what} sparse indices"),
+        )?;
+        let vals = sparse.values();
+        let vbytes = elements(
+            view_bytes(&vals.view(), buffers)?,
+            vals.offset(),
+            elem,
+            elem,
+            n,
+            &format!("{what} sparse values"),
+        )?;
+        for k in 0..n {
+            let b = &ibytes[k * isize_..(k + 1) * isize_];
+            let i = match isize_ {
+                1 => b[0] as usize,
+                2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+            };
+            let slot = out
+                .get_mut(i)
+                .ok_or_else(|| format!("{what}: sparse index {i} >= count {count}"))?;
+            *slot = decode(dt, norm, &vbytes[k * elem..(k + 1) * elem]);
+        }
+    }
+    Ok(out)
+}
+
+enum Flatten {
+    Invalid(String),
+    TooLarge(String),
+}
+
+/// Flattens the default scene (else scene 0, else all root nodes) into instances.
+fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Instance>, Flatten> {
+    let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(s) => s.nodes().map(|n| n.index()).collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            (0..is_child.len()).filter(|&i| !is_child[i]).collect()
+        }
+    };
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut w = Walker {
+        nodes: &nodes,
+        on_path: vec![false; nodes.len()],
+        seen: vec![false; nodes.len()],
+        visits: 0,
+        out: Vec::new(),
+    };
+    for r in roots {
+        w.visit(r, Mat4::IDENTITY, 0)?;
+    }
+    Ok(w.out)
+}
+
+struct Walker<'a, 'd> {
+    nodes: &'a [gltf::Node<'d>],
+    on_path: Vec<bool>,
+    seen: Vec<bool>,
+    visits: u64,
+    out: Vec<Instance>,
+}
+
+impl Walker<'_, '_> {
+    fn visit(&mut self, idx: usize, parent: Mat4, depth: usize) -> Result<(), Flatten> {
+        if depth > MAX_DEPTH {
+            return Err(Flatten::Invalid(format!(
+                "node {idx}: node hierarchy deeper than {MAX_DEPTH}"
+            )));
+        }
+        if self.on_path[idx] {
+            return Err(Flatten::Invalid(format!(
+                "node {idx}: cyclic node graph (node is its own ancestor)"
+            )));
+        }
+        if self.seen[idx] {
+            log::warn!("node {idx} has more than one parent; instancing it again");
+        }
+        self.visits += 1;
+        if self.visits > MAX_NODE_VISITS {
+            return Err(Flatten::TooLarge(format!(
+                "more than {MAX_NODE_VISITS} node visits while flattening the hierarchy"
+            )));
+        }
+        self.seen[idx] = true;
+        let node = &self.nodes[idx];
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(Flatten::Invalid(format!(
+                "node {idx}: non-finite world transform {:?}",
+                world.to_cols_array()
+            )));
+        }
+        if let Some(mesh) = node.mesh() {
+            if transform_ok(&world) {
+                self.out.push(Instance {
+                    mesh: mesh.index() as u32,
+                    transform: world,
+                    name: node
+                        .name()
+                        .map(str::to_owned)
+                        .unwrap_or_else(|| format!("node {idx}")),
+                    visible: true,
+                });
+            } else {
+                log::warn!("node {idx}: singular world transform; skipping its mesh instance");
+            }
+        }
+        self.on_path[idx] = true;
+        let children: Vec<usize> = node.children().map(|c| c.index()).collect();
+        for c in children {
+            self.visit(c, world, depth + 1)?;
+        }
+        self.on_path[idx] = false;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strip_and_fan() {
+        assert_eq!(
+            to_triangle_list(Mode::TriangleStrip, vec![0, 1, 2, 3]),
+            vec![0, 1, 2, 2, 1, 3]
+        );
+        assert_eq!(
+            to_triangle_list(Mode::TriangleFan, vec![0, 1, 2, 3]),
+            vec![0, 1, 2, 0, 2, 3]
+        );
+        assert_eq!(to_triangle_list(Mode::Triangles, vec![0, 1, 2, 3]), vec![0, 1, 2]);
+        assert!(to_triangle_list(Mode::TriangleStrip, vec![0, 1]).is_empty());
+    }
+
+    #[test]
+    fn glb_header_checks() {
+        assert!(check_glb_header(b"{}", false).is_ok());
+        assert!(check_glb_header(b"{}", true).unwrap_err().contains("magic"));
+        let mut h = b"glTF".to_vec();
+        h.extend(2u32.to_le_bytes());
+        h.extend(1000u32.to_le_bytes());
+        h.extend([0u8; 8]);
+        assert!(check_glb_header(&h, true).unwrap_err().contains("truncated"));
+        h[8..12].copy_from_slice(&3u32.to_le_bytes());
+        assert!(check_glb_header(&h, true).unwrap_err().contains("impossible"));
+    }
+}

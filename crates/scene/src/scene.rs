@@ -1,0 +1,420 @@
+//! Scene data model (meshes shared by instances), counts, bounds, validation and edits.
+//!
+//! Every successful edit bumps the animation frame identifier `F` (paper eq. 6) so the
+//! renderer can tell that cached per-frame data (TLAS, AO history) is stale.
+
+use glam::{Mat4, Vec3};
+
+use crate::aabb::Aabb;
+use crate::error::SceneError;
+
+/// Default colour for geometry without material or vertex colours.
+pub const DEFAULT_BASE_COLOR: [f32; 4] = [0.8, 0.8, 0.8, 1.0];
+
+/// One triangle list with a flat colour (one BLAS geometry).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Primitive {
+    pub positions: Vec<[f32; 3]>,
+    /// Triangle list: `indices.len()` is a multiple of 3.
+    pub indices: Vec<u32>,
+    /// Linear RGBA.
+    pub base_color: [f32; 4],
+}
+
+impl Primitive {
+    pub fn triangle_count(&self) -> u64 {
+        (self.indices.len() / 3) as u64
+    }
+
+    /// Bounds of all vertex positions (also unreferenced ones).
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.positions.iter().map(|&p| Vec3::from(p)))
+    }
+}
+
+/// One shared mesh (one BLAS with one geometry per primitive).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub name: String,
+    pub primitives: Vec<Primitive>,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> u64 {
+        self.primitives.iter().map(Primitive::triangle_count).sum()
+    }
+
+    /// Object-space bounds of all primitives.
+    pub fn local_bounds(&self) -> Aabb {
+        self.primitives
+            .iter()
+            .fold(Aabb::empty(), |b, p| b.union(&p.bounds()))
+    }
+}
+
+/// A placement of a mesh in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Index into [`Scene::meshes`].
+    pub mesh: u32,
+    /// Object-to-world matrix.
+    pub transform: Mat4,
+    pub name: String,
+    pub visible: bool,
+}
+
+/// Progress report passed to the `progress` callback of the loaders/generators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LoadProgress {
+    pub stage: &'static str,
+    pub done: u64,
+    pub total: u64,
+}
+
+/// Meshes plus instances referencing them.
+#[derive(Clone)]
+pub struct Scene {
+    pub meshes: Vec<Mesh>,
+    pub instances: Vec<Instance>,
+    pub name: String,
+    /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
+    frame: u32,
+}
+
+impl std::fmt::Debug for Scene {
+    // Summary only: a derived Debug would print millions of vertices.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Scene")
+            .field("name", &self.name)
+            .field("meshes", &self.meshes.len())
+            .field("instances", &self.instances.len())
+            .field("unique_triangles", &self.unique_triangle_count())
+            .field("frame", &self.frame)
+            .finish()
+    }
+}
+
+/// Vertex budget of the exact path of [`Scene::bounds`].
+pub const EXACT_BOUNDS_VERTEX_BUDGET: u64 = 64_000_000;
+
+/// True if the linear part maps axes to axes (each column has one non-negligible entry),
+/// in which case transforming a box's corners gives the exact box of the transformed mesh.
+fn is_axis_aligned(m: &Mat4) -> bool {
+    [m.x_axis, m.y_axis, m.z_axis].iter().all(|c| {
+        let c = c.truncate().abs();
+        let eps = c.max_element() * 1e-6;
+        (c.x > eps) as u8 + (c.y > eps) as u8 + (c.z > eps) as u8 <= 1
+    })
+}
+
+/// True if every entry is finite and the determinant is finite and non-zero.
+pub(crate) fn transform_ok(m: &Mat4) -> bool {
+    let det = m.determinant();
+    m.is_finite() && det.is_finite() && det != 0.0
+}
+
+impl Scene {
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            meshes: Vec::new(),
+            instances: Vec::new(),
+            name: name.into(),
+            frame: 0,
+        }
+    }
+
+    /// The animation frame identifier `F`.
+    pub fn frame(&self) -> u32 {
+        self.frame
+    }
+
+    /// Explicit `F` increment (wrapping).
+    pub fn bump_frame(&mut self) {
+        self.frame = self.frame.wrapping_add(1);
+    }
+
+    /// Triangles of every mesh counted once (unreferenced meshes included).
+    pub fn unique_triangle_count(&self) -> u64 {
+        self.meshes.iter().map(Mesh::triangle_count).sum()
+    }
+
+    /// Triangles summed over visible instances (what the renderer traces).
+    pub fn instanced_triangle_count(&self) -> u64 {
+        let per_mesh: Vec<u64> = self.meshes.iter().map(Mesh::triangle_count).collect();
+        self.instances
+            .iter()
+            .filter(|i| i.visible)
+            .map(|i| per_mesh.get(i.mesh as usize).copied().unwrap_or(0))
+            .sum()
+    }
+
+    /// Object-space bounds of one mesh (empty if the id is out of range).
+    pub fn mesh_bounds(&self, mesh: u32) -> Aabb {
+        self.meshes
+            .get(mesh as usize)
+            .map(Mesh::local_bounds)
+            .unwrap_or_else(Aabb::empty)
+    }
+
+    /// World bounds of all visible instances.
+    ///
+    /// Exact (every vertex transformed) for rotated instances as long as the total number
+    /// of transformed vertices stays below [`EXACT_BOUNDS_VERTEX_BUDGET`]; axis-aligned
+    /// transforms (translation, scale, 90° rotations) use the exact transformed mesh box.
+    /// Beyond the budget the transformed mesh box (conservative) is used.
+    pub fn bounds(&self) -> Aabb {
+        let mut local: Vec<Option<Aabb>> = vec![None; self.meshes.len()];
+        let mut budget = EXACT_BOUNDS_VERTEX_BUDGET;
+        let mut out = Aabb::empty();
+        for inst in self.instances.iter().filter(|i| i.visible) {
+            let Some(mesh) = self.meshes.get(inst.mesh as usize) else {
+                continue;
+            };
+            let m = &inst.transform;
+            let verts: u64 = mesh.primitives.iter().map(|p| p.positions.len() as u64).sum();
+            let b = if !is_axis_aligned(m) && verts <= budget {
+                budget -= verts;
+                let mut b = Aabb::empty();
+                for p in mesh.primitives.iter().flat_map(|p| &p.positions) {
+                    b.extend(m.transform_point3(Vec3::from(*p)));
+                }
+                b
+            } else {
+                local[inst.mesh as usize]
+                    .get_or_insert_with(|| mesh.local_bounds())
+                    .transformed(m)
+            };
+            out = out.union(&b);
+        }
+        out
+    }
+
+    /// Conservative world bounds: each visible instance's mesh box, transformed.
+    pub fn bounds_conservative(&self) -> Aabb {
+        let local: Vec<Aabb> = self.meshes.iter().map(Mesh::local_bounds).collect();
+        self.instances
+            .iter()
+            .filter(|i| i.visible)
+            .filter_map(|i| local.get(i.mesh as usize).map(|b| b.transformed(&i.transform)))
+            .fold(Aabb::empty(), |a, b| a.union(&b))
+    }
+
+    /// Checks indices, positions, transforms and mesh references.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let n = |s: &str| if s.is_empty() { String::new() } else { format!(" ({s:?})") };
+        for (mi, mesh) in self.meshes.iter().enumerate() {
+            for (pi, prim) in mesh.primitives.iter().enumerate() {
+                let at = format!("mesh {mi}{} primitive {pi}", n(&mesh.name));
+                if prim.indices.len() % 3 != 0 {
+                    return Err(SceneError::Invalid(format!(
+                        "{at}: index count {} is not a multiple of 3",
+                        prim.indices.len()
+                    )));
+                }
+                let nv = prim.positions.len();
+                if let Some((k, &i)) = prim
+                    .indices
+                    .iter()
+                    .enumerate()
+                    .find(|(_, &i)| i as usize >= nv)
+                {
+                    return Err(SceneError::Invalid(format!(
+                        "{at}: index {k} is {i} but there are only {nv} vertices"
+                    )));
+                }
+                if let Some((k, p)) = prim
+                    .positions
+                    .iter()
+                    .enumerate()
+                    .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+                {
+                    return Err(SceneError::Invalid(format!(
+                        "{at}: vertex {k} has a non-finite position {p:?}"
+                    )));
+                }
+                if !prim.base_color.iter().all(|c| c.is_finite()) {
+                    return Err(SceneError::Invalid(format!(
+                        "{at}: non-finite base colour {:?}",
+                        prim.base_color
+                    )));
+                }
+            }
+        }
+        for (ii, inst) in self.instances.iter().enumerate() {
+            if inst.mesh as usize >= self.meshes.len() {
+                return Err(SceneError::Invalid(format!(
+                    "instance {ii}{} references mesh {} but there are only {} meshes",
+                    n(&inst.name),
+                    inst.mesh,
+                    self.meshes.len()
+                )));
+            }
+            if !transform_ok(&inst.transform) {
+                return Err(SceneError::Invalid(format!(
+                    "instance {ii}{} has a non-finite or singular transform {:?}",
+                    n(&inst.name),
+                    inst.transform.to_cols_array()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn check_instance(&self, instance: u32) -> Result<usize, SceneError> {
+        if (instance as usize) < self.instances.len() {
+            Ok(instance as usize)
+        } else {
+            Err(SceneError::OutOfRange {
+                what: "instance",
+                index: instance as u64,
+                len: self.instances.len() as u64,
+            })
+        }
+    }
+
+    fn check_new_instance(&self, inst: &Instance) -> Result<(), SceneError> {
+        if inst.mesh as usize >= self.meshes.len() {
+            return Err(SceneError::OutOfRange {
+                what: "mesh",
+                index: inst.mesh as u64,
+                len: self.meshes.len() as u64,
+            });
+        }
+        check_transform(&inst.transform)
+    }
+
+    /// Replaces an instance's object-to-world matrix. Rejects non-finite or singular matrices.
+    pub fn set_transform(&mut self, instance: u32, m: Mat4) -> Result<(), SceneError> {
+        let i = self.check_instance(instance)?;
+        check_transform(&m)?;
+        self.instances[i].transform = m;
+        self.bump_frame();
+        Ok(())
+    }
+
+    /// Shows or hides an instance.
+    pub fn set_visible(&mut self, instance: u32, visible: bool) -> Result<(), SceneError> {
+        let i = self.check_instance(instance)?;
+        self.instances[i].visible = visible;
+        self.bump_frame();
+        Ok(())
+    }
+
+    /// Removes an instance (later ids shift down by one) and returns it for undo.
+    pub fn remove_instance(&mut self, instance: u32) -> Result<Instance, SceneError> {
+        let i = self.check_instance(instance)?;
+        let inst = self.instances.remove(i);
+        self.bump_frame();
+        Ok(inst)
+    }
+
+    /// Inserts an instance at position `at` (`at == instances.len()` appends); undo of remove.
+    pub fn insert_instance(&mut self, at: u32, inst: Instance) -> Result<(), SceneError> {
+        if at as usize > self.instances.len() {
+            return Err(SceneError::OutOfRange {
+                what: "insert position",
+                index: at as u64,
+                len: self.instances.len() as u64,
+            });
+        }
+        self.check_new_instance(&inst)?;
+        self.instances.insert(at as usize, inst);
+        self.bump_frame();
+        Ok(())
+    }
+
+    /// Appends an instance and returns its id.
+    pub fn add_instance(&mut self, inst: Instance) -> Result<u32, SceneError> {
+        let id = u32::try_from(self.instances.len()).map_err(|_| {
+            SceneError::TooLarge(format!("scene {} has too many instances", self.name))
+        })?;
+        self.check_new_instance(&inst)?;
+        self.instances.push(inst);
+        self.bump_frame();
+        Ok(id)
+    }
+}
+
+fn check_transform(m: &Mat4) -> Result<(), SceneError> {
+    if transform_ok(m) {
+        Ok(())
+    } else {
+        Err(SceneError::Invalid(format!(
+            "transform must be finite and invertible, got {:?}",
+            m.to_cols_array()
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri_scene() -> Scene {
+        let mut s = Scene::new("t");
+        s.meshes.push(Mesh {
+            name: "tri".into(),
+            primitives: vec![Primitive {
+                positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                indices: vec![0, 1, 2],
+                base_color: DEFAULT_BASE_COLOR,
+            }],
+        });
+        for x in 0..3 {
+            s.instances.push(Instance {
+                mesh: 0,
+                transform: Mat4::from_translation(Vec3::new(x as f32 * 10.0, 0.0, 0.0)),
+                name: format!("i{x}"),
+                visible: true,
+            });
+        }
+        s
+    }
+
+    #[test]
+    fn counts_and_bounds() {
+        let mut s = tri_scene();
+        assert_eq!(s.unique_triangle_count(), 1);
+        assert_eq!(s.instanced_triangle_count(), 3);
+        let b = s.bounds();
+        assert_eq!(b.min, Vec3::ZERO);
+        assert_eq!(b.max, Vec3::new(21.0, 1.0, 0.0));
+        s.set_visible(2, false).unwrap();
+        assert_eq!(s.instanced_triangle_count(), 2);
+        assert_eq!(s.bounds().max, Vec3::new(11.0, 1.0, 0.0));
+        assert_eq!(s.mesh_bounds(0).max, Vec3::new(1.0, 1.0, 0.0));
+        assert!(s.mesh_bounds(7).is_empty());
+        s.validate().unwrap();
+    }
+
+    #[test]
+    fn validate_names_the_culprit() {
+        let mut s = tri_scene();
+        s.meshes[0].primitives[0].indices[2] = 3;
+        let e = s.validate().unwrap_err().to_string();
+        assert!(e.contains("mesh 0") && e.contains("primitive 0") && e.contains("index 2"), "{e}");
+
+        let mut s = tri_scene();
+        s.meshes[0].primitives[0].positions[1][1] = f32::NAN;
+        let e = s.validate().unwrap_err().to_string();
+        assert!(e.contains("vertex 1") && e.contains("non-finite"), "{e}");
+
+        let mut s = tri_scene();
+        s.instances[1].transform = Mat4::ZERO;
+        let e = s.validate().unwrap_err().to_string();
+        assert!(e.contains("instance 1"), "{e}");
+
+        let mut s = tri_scene();
+        s.instances[2].mesh = 5;
+        let e = s.validate().unwrap_err().to_string();
+        assert!(e.contains("instance 2") && e.contains("mesh 5"), "{e}");
+    }
+
+    #[test]
+    fn frame_wraps() {
+        let mut s = tri_scene();
+        s.frame = u32::MAX;
+        s.bump_frame();
+        assert_eq!(s.frame(), 0);
+    }
+}

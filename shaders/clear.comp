@@ -1,0 +1,10 @@
+#version 460
+// Resets the per-frame statistics counters (one thread does it).
+#include "common.glsl"
+
+void main() {
+    if (gl_GlobalInvocationID.x == 0 && gl_GlobalInvocationID.y == 0) {
+        StatsRef stats = StatsRef(g.stats);
+        for (uint i = 0; i < STAT_PER_FRAME; ++i) stats.counters[i] = 0u;
+    }
+}

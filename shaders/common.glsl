@@ -1,0 +1,103 @@
+// Shared by every pass: extensions, the generated GPU types, the one descriptor set, buffer references,
+// camera rays, ray-origin offsetting and sampling helpers.
+#ifndef HRTAO_COMMON_GLSL
+#define HRTAO_COMMON_GLSL
+
+#extension GL_EXT_ray_query : require
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference2 : require
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+#include "gpu_types.glsl"
+
+layout(local_size_x = WORKGROUP_SIZE, local_size_y = WORKGROUP_SIZE, local_size_z = 1) in;
+
+layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
+layout(set = 0, binding = 1, scalar) readonly buffer GlobalsBlock { FrameGlobals g; };
+layout(push_constant) uniform Push { uvec4 push; };
+
+layout(buffer_reference, scalar) buffer GBufferRef { GPixel px[]; };
+layout(buffer_reference, scalar) readonly buffer InstanceRef { InstanceInfo v[]; };
+layout(buffer_reference, scalar) readonly buffer GeometryRef { GeometryInfo v[]; };
+layout(buffer_reference, scalar) readonly buffer VertexRef { vec3 v[]; };
+layout(buffer_reference, scalar) readonly buffer IndexRef { uvec3 v[]; };
+layout(buffer_reference, scalar) buffer FloatRef { float v[]; };
+layout(buffer_reference, scalar) buffer UintRef { uint v[]; };
+layout(buffer_reference, scalar) buffer CellRef { HashCell v[]; };
+layout(buffer_reference, scalar) buffer PixelCellRef { PixelCells v[]; };
+layout(buffer_reference, scalar) buffer StatsRef { uint counters[STAT_COUNT]; };
+
+const float PI = 3.14159265358979;
+
+// The pixel of this invocation, or false when it lies outside the image.
+bool pixel_coords(out uvec2 pix, out uint index) {
+    pix = gl_GlobalInvocationID.xy;
+    index = pix.y * g.width + pix.x;
+    return pix.x < g.width && pix.y < g.height;
+}
+
+// Pinhole camera through the pixel centre; the vertical field of view spans the image height.
+vec3 camera_dir(uvec2 pix) {
+    vec2 ndc = (vec2(pix) + 0.5) / vec2(g.width, g.height) * 2.0 - 1.0;
+    return normalize(g.cam_w.xyz + ndc.x * g.cam_u.xyz - ndc.y * g.cam_v.xyz);
+}
+
+// Offsets a ray origin off the surface along the normal, robust at any scale
+// (Waechter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems, ch. 6).
+vec3 offset_ray(vec3 p, vec3 n) {
+    const float origin = 1.0 / 32.0;
+    const float float_scale = 1.0 / 65536.0;
+    const float int_scale = 256.0;
+    ivec3 of_i = ivec3(int_scale * n);
+    vec3 p_i = vec3(intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
+                    intBitsToFloat(floatBitsToInt(p.y) + ((p.y < 0.0) ? -of_i.y : of_i.y)),
+                    intBitsToFloat(floatBitsToInt(p.z) + ((p.z < 0.0) ? -of_i.z : of_i.z)));
+    return vec3(abs(p.x) < origin ? p.x + float_scale * n.x : p_i.x,
+                abs(p.y) < origin ? p.y + float_scale * n.y : p_i.y,
+                abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
+}
+
+// Orthonormal basis around n (Duff et al. 2017).
+void basis(vec3 n, out vec3 t, out vec3 b) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+// Cosine-weighted direction around n from a point u of the unit square.
+vec3 cosine_direction(vec3 n, vec2 u) {
+    vec3 t, b;
+    basis(n, t, b);
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    return normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - u.x)) * n);
+}
+
+// PCG-style integer hash for per-pixel random rotations.
+uint pcg_hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+float uint_to_unit(uint v) { return float(v >> 8) * (1.0 / 16777216.0); }
+
+// The R2 low-discrepancy sequence (Roberts 2018), point i, rotated by `shift` (Cranley-Patterson).
+vec2 r2_point(uint i, vec2 shift) {
+    const vec2 alpha = vec2(0.7548776662466927, 0.5698402909980532);
+    return fract(shift + alpha * float(i));
+}
+
+// True when the ray from p along dir hits nothing within tmax.
+bool ray_unoccluded(vec3 p, vec3 dir, float tmax) {
+    rayQueryEXT rq;
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, 0.0, dir, tmax);
+    while (rayQueryProceedEXT(rq)) {
+    }
+    return rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT;
+}
+
+#endif
