@@ -113,3 +113,39 @@ mod tests {
         assert!(cam.validate().is_err());
     }
 }
+
+/// Which world axis points up for automatic cameras.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum UpAxis {
+    #[default]
+    Y,
+    Z,
+}
+
+impl UpAxis {
+    pub fn vector(self) -> Vec3 {
+        match self {
+            UpAxis::Y => Vec3::Y,
+            UpAxis::Z => Vec3::Z,
+        }
+    }
+}
+
+impl Camera {
+    /// A camera that frames the box `min..max` from an isometric-like direction (front-right-above).
+    pub fn fit(min: Vec3, max: Vec3, up: UpAxis, fov_y_deg: f32, width: u32, height: u32) -> Camera {
+        let center = (min + max) * 0.5;
+        let radius = ((max - min).length() * 0.5).max(1e-6);
+        let upv = up.vector();
+        let dir = match up {
+            UpAxis::Y => Vec3::new(1.0, 0.8, 1.2),
+            UpAxis::Z => Vec3::new(1.0, -1.2, 0.8),
+        }
+        .normalize();
+        let aspect = width as f32 / height.max(1) as f32;
+        let half = (fov_y_deg.to_radians() * 0.5).tan().min((fov_y_deg.to_radians() * 0.5).tan() * aspect);
+        let dist = radius / half.atan().sin();
+        let eye = center + dir * dist;
+        Camera { eye: eye.to_array(), target: center.to_array(), up: upv.to_array(), fov_y_deg, width, height }
+    }
+}

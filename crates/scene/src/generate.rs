@@ -4,7 +4,7 @@
 //!
 //! | spec | parameters (default) | content |
 //! |---|---|---|
-//! | `gen:racks` | `rows` (25), `cols` (100), `units` (40), `detail` (2000) | server room: floor slab, rows×cols rack frames, `units` 1U servers per rack; the server mesh has ≈`detail` triangles (vent louvres). Defaults give 102,501 instances. |
+//! | `gen:racks` | `rows` (25), `cols` (100), `units` (40), `detail` (2000) | server room: floor slab, rows×cols rack frames, `units` 1U servers per rack; the server mesh has exactly `detail` triangles (vent louvres). Defaults give 102,501 instances. |
 //! | `gen:city` | `blocks` (8), `per_block` (3), `variants` (6), `floors` (30), `seed` (1) | blocks×blocks city blocks, per_block² instanced towers with recessed windows per block, a kerb slab per block, and a ground plane |
 //! | `gen:box` | `size` (2) | closed-top box open towards −Y (inside corners for AO tests) |
 //! | `gen:plane` | `size` (100) | one square quad at z = 0 |
@@ -35,9 +35,16 @@ pub fn generate(spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Sc
         None => (body, ""),
     };
     let mut scene = match name {
-        "racks" => racks(Params::parse(name, query, &["rows", "cols", "units", "detail"])?, progress)?,
+        "racks" => racks(
+            Params::parse(name, query, &["rows", "cols", "units", "detail"])?,
+            progress,
+        )?,
         "city" => city(
-            Params::parse(name, query, &["blocks", "per_block", "variants", "floors", "seed"])?,
+            Params::parse(
+                name,
+                query,
+                &["blocks", "per_block", "variants", "floors", "seed"],
+            )?,
             progress,
         )?,
         "box" => open_box(Params::parse(name, query, &["size"])?)?,
@@ -87,10 +94,7 @@ impl Params {
     }
 
     fn raw(&self, key: &str) -> Option<&str> {
-        self.pairs
-            .iter()
-            .find(|(k, _)| k == key)
-            .map(|(_, v)| v.as_str())
+        self.pairs.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
 
     fn bad(&self, key: &str, v: &str, why: String) -> SceneError {
@@ -115,7 +119,14 @@ impl Params {
     }
 
     /// Finite number in `min..=max` (exclusive of `min` if `min_exclusive`).
-    fn num(&self, key: &str, default: f32, min: f32, min_exclusive: bool, max: f32) -> Result<f32, SceneError> {
+    fn num(
+        &self,
+        key: &str,
+        default: f32,
+        min: f32,
+        min_exclusive: bool,
+        max: f32,
+    ) -> Result<f32, SceneError> {
         let Some(v) = self.raw(key) else {
             return Ok(default);
         };
@@ -255,9 +266,7 @@ fn racks(p: Params, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, Sce
     progress(step(3));
 
     scene.instances.reserve_exact(n_inst as usize);
-    scene
-        .instances
-        .push(instance(2, Mat4::IDENTITY, "floor".into()));
+    scene.instances.push(instance(2, Mat4::IDENTITY, "floor".into()));
     let flip = Mat4::from_translation(Vec3::new(0.0, RACK_DEPTH * 0.5, 0.0))
         * Mat4::from_rotation_z(PI)
         * Mat4::from_translation(Vec3::new(0.0, -RACK_DEPTH * 0.5, 0.0));
@@ -293,13 +302,16 @@ fn racks(p: Params, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, Sce
 }
 
 /// 1U server: chassis, front bezel with ears, and a grid of vent louvres in front of the
-/// bezel; about `detail` triangles (24 + 12 per louvre). Local frame: x across (centred),
+/// bezel; exactly `detail` triangles (24 + 12 per louvre + a label fan for the remainder). Local frame: x across (centred),
 /// y from the front (0) to the back, z up from 0 to 1U.
 fn server_mesh(detail: u64) -> Mesh {
     let mut b = MeshBuilder::default();
     let h = RACK_UNIT;
     b.cuboid(Vec3::new(-0.22, 0.02, 0.001), Vec3::new(0.22, 0.75, h - 0.001));
-    b.cuboid(Vec3::new(-0.2413, 0.005, 0.001), Vec3::new(0.2413, 0.02, h - 0.001));
+    b.cuboid(
+        Vec3::new(-0.2413, 0.005, 0.001),
+        Vec3::new(0.2413, 0.02, h - 0.001),
+    );
     let louvres = (detail.saturating_sub(24) / 12) as usize;
     if louvres > 0 {
         // Grid over the 0.40 m × (1U - 8 mm) vent area with cells roughly square.
@@ -319,6 +331,20 @@ fn server_mesh(detail: u64) -> Mesh {
             );
         }
     }
+    // Make the count exact: a thin label plate (triangle fan) on the lid for the remainder.
+    let rest = (detail.saturating_sub(24) % 12) as u32;
+    if rest > 0 {
+        let base = b.positions.len() as u32;
+        let (cx, cy, z) = (0.0f32, 0.1f32, h - 0.0009);
+        b.positions.push([cx, cy, z]);
+        for k in 0..=rest {
+            let a = k as f32 / rest as f32 * PI;
+            b.positions.push([cx + 0.03 * a.cos(), cy + 0.03 * a.sin(), z]);
+        }
+        for k in 0..rest {
+            b.indices.extend_from_slice(&[base, base + 1 + k, base + 2 + k]);
+        }
+    }
     b.into_mesh("server 1U", [0.16, 0.16, 0.18])
 }
 
@@ -330,7 +356,12 @@ fn rack_mesh(units: u32) -> Mesh {
     let height = top + 0.08;
     b.cuboid(Vec3::new(-hw, 0.0, 0.0), Vec3::new(hw, d, PLINTH));
     b.cuboid(Vec3::new(-hw, 0.0, top), Vec3::new(hw, d, height));
-    for (x, y) in [(-hw, 0.0), (hw - 0.04, 0.0), (-hw, d - 0.04), (hw - 0.04, d - 0.04)] {
+    for (x, y) in [
+        (-hw, 0.0),
+        (hw - 0.04, 0.0),
+        (-hw, d - 0.04),
+        (hw - 0.04, d - 0.04),
+    ] {
         b.cuboid(Vec3::new(x, y, PLINTH), Vec3::new(x + 0.04, y + 0.04, top));
     }
     b.cuboid(Vec3::new(-hw, 0.04, PLINTH), Vec3::new(-hw + 0.01, d - 0.04, top));
@@ -466,7 +497,10 @@ fn tower_mesh(w: f32, d: f32, floors: u32, variant: u32) -> Mesh {
         Vec3::new(hw * 0.2, hd * 0.3, h + 3.0),
     );
     let g = 0.55 + 0.06 * (variant % 5) as f32;
-    b.into_mesh(&format!("tower {variant} ({floors} floors)"), [g, g * 0.97, g * 0.92])
+    b.into_mesh(
+        &format!("tower {variant} ({floors} floors)"),
+        [g, g * 0.97, g * 0.92],
+    )
 }
 
 /// One facade: a grid of `cols`×`rows` cells, each a wall frame around a window recessed
@@ -485,7 +519,13 @@ fn facade(b: &mut MeshBuilder, origin: Vec3, n: Vec3, len: f32, cols: u32, rows:
             let (v0, v1) = (j as f32 * ch, (j + 1) as f32 * ch);
             let (wu0, wu1, wv0, wv1) = (u0 + mu, u1 - mu, v0 + mv, v1 - mv);
             let rect = |b: &mut MeshBuilder, a0: f32, a1: f32, c0: f32, c1: f32| {
-                b.quad(at(a0, c0, 0.0), at(a1, c0, 0.0), at(a1, c1, 0.0), at(a0, c1, 0.0), n)
+                b.quad(
+                    at(a0, c0, 0.0),
+                    at(a1, c0, 0.0),
+                    at(a1, c1, 0.0),
+                    at(a0, c1, 0.0),
+                    n,
+                )
             };
             rect(b, u0, u1, v0, wv0);
             rect(b, u0, u1, wv1, v1);
@@ -500,10 +540,34 @@ fn facade(b: &mut MeshBuilder, origin: Vec3, n: Vec3, len: f32, cols: u32, rows:
                 n,
             );
             // Sill, lintel, jambs.
-            b.quad(at(wu0, wv0, 0.0), at(wu1, wv0, 0.0), at(wu1, wv0, depth), at(wu0, wv0, depth), v);
-            b.quad(at(wu0, wv1, 0.0), at(wu1, wv1, 0.0), at(wu1, wv1, depth), at(wu0, wv1, depth), -v);
-            b.quad(at(wu0, wv0, 0.0), at(wu0, wv1, 0.0), at(wu0, wv1, depth), at(wu0, wv0, depth), u);
-            b.quad(at(wu1, wv0, 0.0), at(wu1, wv1, 0.0), at(wu1, wv1, depth), at(wu1, wv0, depth), -u);
+            b.quad(
+                at(wu0, wv0, 0.0),
+                at(wu1, wv0, 0.0),
+                at(wu1, wv0, depth),
+                at(wu0, wv0, depth),
+                v,
+            );
+            b.quad(
+                at(wu0, wv1, 0.0),
+                at(wu1, wv1, 0.0),
+                at(wu1, wv1, depth),
+                at(wu0, wv1, depth),
+                -v,
+            );
+            b.quad(
+                at(wu0, wv0, 0.0),
+                at(wu0, wv1, 0.0),
+                at(wu0, wv1, depth),
+                at(wu0, wv0, depth),
+                u,
+            );
+            b.quad(
+                at(wu1, wv0, 0.0),
+                at(wu1, wv1, 0.0),
+                at(wu1, wv1, depth),
+                at(wu1, wv0, depth),
+                -u,
+            );
         }
     }
 }
@@ -514,11 +578,41 @@ fn open_box(p: Params) -> Result<Scene, SceneError> {
     let c = |x: f32, y: f32, z: f32| Vec3::new(x * h, y * h, z * s);
     let mut b = MeshBuilder::default();
     // Faces point inwards; the −Y side is open.
-    b.quad(c(-1., -1., 0.), c(1., -1., 0.), c(1., 1., 0.), c(-1., 1., 0.), Vec3::Z);
-    b.quad(c(-1., -1., 1.), c(1., -1., 1.), c(1., 1., 1.), c(-1., 1., 1.), Vec3::NEG_Z);
-    b.quad(c(-1., 1., 0.), c(1., 1., 0.), c(1., 1., 1.), c(-1., 1., 1.), Vec3::NEG_Y);
-    b.quad(c(-1., -1., 0.), c(-1., 1., 0.), c(-1., 1., 1.), c(-1., -1., 1.), Vec3::X);
-    b.quad(c(1., -1., 0.), c(1., 1., 0.), c(1., 1., 1.), c(1., -1., 1.), Vec3::NEG_X);
+    b.quad(
+        c(-1., -1., 0.),
+        c(1., -1., 0.),
+        c(1., 1., 0.),
+        c(-1., 1., 0.),
+        Vec3::Z,
+    );
+    b.quad(
+        c(-1., -1., 1.),
+        c(1., -1., 1.),
+        c(1., 1., 1.),
+        c(-1., 1., 1.),
+        Vec3::NEG_Z,
+    );
+    b.quad(
+        c(-1., 1., 0.),
+        c(1., 1., 0.),
+        c(1., 1., 1.),
+        c(-1., 1., 1.),
+        Vec3::NEG_Y,
+    );
+    b.quad(
+        c(-1., -1., 0.),
+        c(-1., 1., 0.),
+        c(-1., 1., 1.),
+        c(-1., -1., 1.),
+        Vec3::X,
+    );
+    b.quad(
+        c(1., -1., 0.),
+        c(1., 1., 0.),
+        c(1., 1., 1.),
+        c(1., -1., 1.),
+        Vec3::NEG_X,
+    );
     let mut scene = Scene::new("box");
     scene.meshes.push(b.into_mesh("open box", [0.8, 0.8, 0.8]));
     scene.instances.push(instance(0, Mat4::IDENTITY, "box".into()));
@@ -596,9 +690,9 @@ mod tests {
 
     #[test]
     fn server_detail_is_respected() {
-        for d in [24u64, 100, 2500, 10_000] {
+        for d in [24u64, 25, 35, 100, 2500, 10_000, 10_007] {
             let t = server_mesh(d).triangle_count();
-            assert!(t <= d && t + 12 > d, "detail {d} gave {t}");
+            assert_eq!(t, d);
         }
     }
 

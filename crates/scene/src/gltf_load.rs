@@ -23,10 +23,7 @@ const MAX_IMPLICIT_COUNT: usize = 50_000_000;
 
 /// Loads a .gltf or .glb file. Unreferenced meshes are kept so that mesh ids equal glTF
 /// mesh indices.
-pub fn load_gltf(
-    path: &Path,
-    progress: &mut dyn FnMut(LoadProgress),
-) -> Result<Scene, SceneError> {
+pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
     let err = |message: String| SceneError::Gltf {
         path: path.to_path_buf(),
         message,
@@ -40,22 +37,21 @@ pub fn load_gltf(
         done: 1,
         total: 1,
     });
-    let is_glb_ext = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    let is_glb_ext = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
     check_glb_header(&bytes, is_glb_ext).map_err(err)?;
 
     let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| err(format!("cannot parse: {e}")))?;
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(format!("cannot parse: {e}")))?;
     drop(bytes);
     for ext in document.extensions_required() {
         if ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression" {
             return Err(err(format!("requires unsupported extension {ext}")));
         }
     }
+    validate_document(&document).map_err(err)?;
     let base = path.parent();
-    let buffers = gltf::import_buffers(&document, base, blob)
-        .map_err(|e| err(format!("cannot load buffers: {e}")))?;
+    let buffers =
+        gltf::import_buffers(&document, base, blob).map_err(|e| err(format!("cannot load buffers: {e}")))?;
     progress(LoadProgress {
         stage: "buffers",
         done: 1,
@@ -84,7 +80,10 @@ pub fn load_gltf(
             }
         }
         scene.meshes.push(Mesh {
-            name: mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {mi}")),
+            name: mesh
+                .name()
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("mesh {mi}")),
             primitives,
         });
         progress(LoadProgress {
@@ -104,6 +103,33 @@ pub fn load_gltf(
         total: scene.instances.len() as u64,
     });
     Ok(scene)
+}
+
+/// Runs the gltf crate's validation (index references must be in range: the document
+/// accessors panic otherwise), tolerating two common, harmless spec violations: missing
+/// POSITION `min`/`max` (we compute bounds ourselves) and required extensions that do not
+/// change geometry (materials, lights, texture transforms, quantization, which we decode).
+fn validate_document(doc: &gltf::Document) -> Result<(), String> {
+    use gltf::json::validation::{Error as VError, Validate};
+    let root = doc.as_json();
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, e| {
+        let p = path().as_str().to_owned();
+        let harmless = (e == VError::Missing && (p.ends_with(".min") || p.ends_with(".max")))
+            || (e == VError::Unsupported && p.starts_with("extensionsRequired"));
+        if harmless {
+            log::warn!("ignoring glTF validation issue {p}: {e}");
+        } else {
+            errors.push(format!("{p}: {e}"));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        let n = errors.len();
+        errors.truncate(10);
+        Err(format!("invalid glTF ({n} problems): {}", errors.join("; ")))
+    }
 }
 
 /// Rejects truncated/garbled GLB headers before the gltf crate sees them (its reader
@@ -157,9 +183,7 @@ fn load_primitive(
     if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
         return Ok(None);
     }
-    let pos_acc = prim
-        .get(&Semantic::Positions)
-        .ok_or("no POSITION attribute")?;
+    let pos_acc = prim.get(&Semantic::Positions).ok_or("no POSITION attribute")?;
     if pos_acc.dimensions() != Dimensions::Vec3 {
         return Err(format!(
             "POSITION accessor {} has type {:?}, expected VEC3",
@@ -237,9 +261,10 @@ fn to_triangle_list(mode: Mode, idx: Vec<u32>) -> Vec<u32> {
             .collect(),
         _ => {
             let mut idx = idx;
-            if n % 3 != 0 {
-                log::warn!("triangle list with {n} indices; dropping the last {}", n % 3);
-                idx.truncate(n - n % 3);
+            let extra = n % 3;
+            if extra != 0 {
+                log::warn!("triangle list with {n} indices; dropping the last {extra}");
+                idx.truncate(n - extra);
             }
             idx
         }
@@ -247,14 +272,16 @@ fn to_triangle_list(mode: Mode, idx: Vec<u32>) -> Vec<u32> {
 }
 
 /// Mean RGBA of a COLOR_n accessor (float, or normalized u8/u16; RGB gets alpha 1).
-fn mean_color(
-    acc: &gltf::Accessor,
-    buffers: &[gltf::buffer::Data],
-) -> Result<Option<[f32; 4]>, String> {
+fn mean_color(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Option<[f32; 4]>, String> {
     let dims = match acc.dimensions() {
         Dimensions::Vec3 => 3,
         Dimensions::Vec4 => 4,
-        d => return Err(format!("COLOR_0 accessor {} has type {d:?}, expected VEC3/VEC4", acc.index())),
+        d => {
+            return Err(format!(
+                "COLOR_0 accessor {} has type {d:?}, expected VEC3/VEC4",
+                acc.index()
+            ))
+        }
     };
     if !matches!(acc.data_type(), DataType::F32 | DataType::U8 | DataType::U16) {
         return Err(format!(
@@ -333,10 +360,7 @@ fn comp_u32(dt: DataType, b: &[u8]) -> u32 {
 }
 
 /// Byte range `offset..offset+len` of a buffer view, checked against the loaded data.
-fn view_bytes<'b>(
-    view: &gltf::buffer::View,
-    buffers: &'b [gltf::buffer::Data],
-) -> Result<&'b [u8], String> {
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [gltf::buffer::Data]) -> Result<&'b [u8], String> {
     let data = buffers
         .get(view.buffer().index())
         .ok_or_else(|| format!("bufferView {} references missing buffer", view.index()))?;
@@ -403,7 +427,14 @@ fn read_accessor<T: Copy>(
             if stride < elem {
                 return Err(format!("{what}: byteStride {stride} < element size {elem}"));
             }
-            let bytes = elements(view_bytes(&view, buffers)?, acc.offset(), stride, elem, count, &what)?;
+            let bytes = elements(
+                view_bytes(&view, buffers)?,
+                acc.offset(),
+                stride,
+                elem,
+                count,
+                &what,
+            )?;
             (0..count)
                 .map(|k| decode(dt, norm, &bytes[k * stride..k * stride + elem]))
                 .collect()
@@ -461,8 +492,48 @@ enum Flatten {
     TooLarge(String),
 }
 
+/// Errors if the node graph (all nodes, not only the displayed scene) has a cycle.
+/// Iterative three-colour DFS, so arbitrarily deep graphs cannot overflow the stack.
+fn check_acyclic(doc: &gltf::Document) -> Result<(), String> {
+    let children: Vec<Vec<usize>> = doc
+        .nodes()
+        .map(|n| n.children().map(|c| c.index()).collect())
+        .collect();
+    // 0 = unvisited, 1 = on the DFS path, 2 = done
+    let mut state = vec![0u8; children.len()];
+    for start in 0..children.len() {
+        if state[start] != 0 {
+            continue;
+        }
+        let mut stack = vec![(start, 0usize)];
+        state[start] = 1;
+        while let Some((node, next)) = stack.last_mut() {
+            if let Some(&c) = children[*node].get(*next) {
+                *next += 1;
+                match state[c] {
+                    0 => {
+                        state[c] = 1;
+                        stack.push((c, 0));
+                    }
+                    1 => {
+                        return Err(format!(
+                            "cyclic node graph: node {c} is its own ancestor (via node {node})"
+                        ))
+                    }
+                    _ => {}
+                }
+            } else {
+                state[*node] = 2;
+                stack.pop();
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Flattens the default scene (else scene 0, else all root nodes) into instances.
 fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Instance>, Flatten> {
+    check_acyclic(doc).map_err(Flatten::Invalid)?;
     let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(s) => s.nodes().map(|n| n.index()).collect(),
         None => {

@@ -23,10 +23,7 @@ pub use scene::{
 };
 
 /// Loads a glTF 2.0 file (`.gltf` or `.glb`), validated and non-empty.
-pub fn load_gltf(
-    path: &Path,
-    progress: &mut dyn FnMut(LoadProgress),
-) -> Result<Scene, SceneError> {
+pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
     finish(gltf_load::load_gltf(path, progress)?, &path.display().to_string())
 }
 

@@ -32,7 +32,10 @@ pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<S
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
-            log::warn!("{}: materials unavailable ({e}); using default colour", path.display());
+            log::warn!(
+                "{}: materials unavailable ({e}); using default colour",
+                path.display()
+            );
             Vec::new()
         }
     };
@@ -50,11 +53,7 @@ pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<S
                 message: format!("model {mi} ({}): position array is not xyz triples", model.name),
             });
         }
-        let positions: Vec<[f32; 3]> = m
-            .positions
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
+        let positions: Vec<[f32; 3]> = m.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         let base_color = m
             .material_id
             .and_then(|id| materials.get(id))

@@ -201,7 +201,13 @@ impl Scene {
 
     /// Checks indices, positions, transforms and mesh references.
     pub fn validate(&self) -> Result<(), SceneError> {
-        let n = |s: &str| if s.is_empty() { String::new() } else { format!(" ({s:?})") };
+        let n = |s: &str| {
+            if s.is_empty() {
+                String::new()
+            } else {
+                format!(" ({s:?})")
+            }
+        };
         for (mi, mesh) in self.meshes.iter().enumerate() {
             for (pi, prim) in mesh.primitives.iter().enumerate() {
                 let at = format!("mesh {mi}{} primitive {pi}", n(&mesh.name));
@@ -212,12 +218,7 @@ impl Scene {
                     )));
                 }
                 let nv = prim.positions.len();
-                if let Some((k, &i)) = prim
-                    .indices
-                    .iter()
-                    .enumerate()
-                    .find(|(_, &i)| i as usize >= nv)
-                {
+                if let Some((k, &i)) = prim.indices.iter().enumerate().find(|(_, &i)| i as usize >= nv) {
                     return Err(SceneError::Invalid(format!(
                         "{at}: index {k} is {i} but there are only {nv} vertices"
                     )));
@@ -325,9 +326,8 @@ impl Scene {
 
     /// Appends an instance and returns its id.
     pub fn add_instance(&mut self, inst: Instance) -> Result<u32, SceneError> {
-        let id = u32::try_from(self.instances.len()).map_err(|_| {
-            SceneError::TooLarge(format!("scene {} has too many instances", self.name))
-        })?;
+        let id = u32::try_from(self.instances.len())
+            .map_err(|_| SceneError::TooLarge(format!("scene {} has too many instances", self.name)))?;
         self.check_new_instance(&inst)?;
         self.instances.push(inst);
         self.bump_frame();
@@ -392,7 +392,10 @@ mod tests {
         let mut s = tri_scene();
         s.meshes[0].primitives[0].indices[2] = 3;
         let e = s.validate().unwrap_err().to_string();
-        assert!(e.contains("mesh 0") && e.contains("primitive 0") && e.contains("index 2"), "{e}");
+        assert!(
+            e.contains("mesh 0") && e.contains("primitive 0") && e.contains("index 2"),
+            "{e}"
+        );
 
         let mut s = tri_scene();
         s.meshes[0].primitives[0].positions[1][1] = f32::NAN;
@@ -408,6 +411,26 @@ mod tests {
         s.instances[2].mesh = 5;
         let e = s.validate().unwrap_err().to_string();
         assert!(e.contains("instance 2") && e.contains("mesh 5"), "{e}");
+    }
+
+    #[test]
+    fn bounds_are_exact_for_rotated_instances() {
+        let mut s = tri_scene();
+        s.instances.truncate(1);
+        s.instances[0].transform = Mat4::from_rotation_z(std::f32::consts::FRAC_PI_4);
+        let exact = s.bounds();
+        let loose = s.bounds_conservative();
+        let r = std::f32::consts::FRAC_1_SQRT_2;
+        assert!((exact.max.y - r).abs() < 1e-6, "{exact:?}");
+        assert!((exact.min.x + r).abs() < 1e-6, "{exact:?}");
+        assert!(loose.max.y > exact.max.y + 0.5, "{loose:?}");
+        // Axis-aligned transforms take the box path, which is exact there.
+        s.instances[0].transform = Mat4::from_rotation_z(std::f32::consts::FRAC_PI_2);
+        let b = s.bounds();
+        assert!(
+            (b.min.x + 1.0).abs() < 1e-6 && (b.max.y - 1.0).abs() < 1e-6,
+            "{b:?}"
+        );
     }
 
     #[test]

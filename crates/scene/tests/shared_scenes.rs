@@ -24,7 +24,12 @@ fn check(e: &Expected) -> Scene {
         panic!("{}: {err}", path.display());
     });
     assert_eq!(scene.unique_triangle_count(), e.unique, "{}: unique tris", e.file);
-    assert_eq!(scene.instanced_triangle_count(), e.instanced, "{}: instanced tris", e.file);
+    assert_eq!(
+        scene.instanced_triangle_count(),
+        e.instanced,
+        "{}: instanced tris",
+        e.file
+    );
     assert_eq!(scene.meshes.len(), e.meshes, "{}: meshes", e.file);
     assert_eq!(scene.instances.len(), e.instances, "{}: nodes with mesh", e.file);
     scene.validate().unwrap();
@@ -34,7 +39,11 @@ fn check(e: &Expected) -> Scene {
     let diag = (max - min).length();
     for (got, want, what) in [(b.min, min, "min"), (b.max, max, "max")] {
         // ~1e-2 relative to the scene size, and in fact within the printed rounding.
-        assert!((got - want).length() <= 1e-2 * diag, "{}: {what} {got} vs {want}", e.file);
+        assert!(
+            (got - want).length() <= 1e-2 * diag,
+            "{}: {what} {got} vs {want}",
+            e.file
+        );
         for k in 0..3 {
             assert!(
                 (got[k] - want[k]).abs() <= e.step * 0.5 + 1e-4 * want[k].abs() + 1e-5,

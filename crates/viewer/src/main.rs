@@ -1,1 +1,22 @@
-fn main() {}
+//! `hrtao`: CAD viewport with noise-free ray-traced ambient occlusion (HRTAO), and its headless commands.
+mod cli;
+mod render_cmd;
+
+use clap::Parser;
+
+fn main() {
+    let args = cli::Cli::parse();
+    let default_level = if args.verbose { "debug" } else { "info" };
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(default_level))
+        .format_timestamp_millis()
+        .init();
+    let result = match args.command {
+        Some(cli::Command::Render(r)) => render_cmd::run(&r),
+        Some(cli::Command::Devices(d)) => render_cmd::list_devices(&d),
+        None => render_cmd::run_default(),
+    };
+    if let Err(e) = result {
+        eprintln!("hrtao: error: {e:#}");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,211 @@
+//! `hrtao render`: load, build, render K frames headless, write images and statistics.
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use hrtao_core::camera::UpAxis;
+use hrtao_core::{imageio, Camera, ContextOptions, FrameReport, Gpu, Renderer, SceneGpu};
+use hrtao_scene::Scene;
+
+use crate::cli::{DeviceArgs, RenderArgs};
+
+pub fn open_gpu(d: &DeviceArgs) -> Result<Arc<Gpu>> {
+    let opts = ContextOptions {
+        validation: d.validation || hrtao_core::context::validation_requested_by_env(),
+        device: d.device.clone(),
+        ..Default::default()
+    };
+    let gpu = Gpu::new(&opts)?;
+    log::info!("device: {} ({}; {})", gpu.info.name, gpu.info.kind, gpu.info.driver);
+    Ok(gpu)
+}
+
+pub fn load_scene(spec: &str) -> Result<(Scene, f64)> {
+    let t0 = Instant::now();
+    let mut last = Instant::now();
+    let scene = hrtao_scene::load(spec, &mut |p| {
+        if last.elapsed().as_millis() > 500 {
+            log::info!("loading {spec}: {} {}/{}", p.stage, p.done, p.total);
+            last = Instant::now();
+        }
+    })
+    .with_context(|| format!("cannot load scene `{spec}`"))?;
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    log::info!(
+        "scene {}: {} meshes, {} instances, {} unique / {} instanced triangles, loaded in {ms:.0} ms",
+        scene.name,
+        scene.meshes.len(),
+        scene.instances.len(),
+        scene.unique_triangle_count(),
+        scene.instanced_triangle_count()
+    );
+    Ok((scene, ms))
+}
+
+fn parse_up(s: &str) -> Result<UpAxis> {
+    match s.to_ascii_lowercase().as_str() {
+        "y" => Ok(UpAxis::Y),
+        "z" => Ok(UpAxis::Z),
+        _ => bail!("--up must be y or z, got `{s}`"),
+    }
+}
+
+#[derive(serde::Serialize)]
+struct RenderStats<'a> {
+    device: &'a hrtao_core::DeviceInfo,
+    scene: String,
+    unique_triangles: u64,
+    instanced_triangles: u64,
+    instances: usize,
+    meshes: usize,
+    width: u32,
+    height: u32,
+    settings: &'a hrtao_core::AoSettings,
+    load_ms: f64,
+    build: &'a hrtao_core::accel::BuildStats,
+    frames: &'a [FrameReport],
+    total_rays: u64,
+    render_ms: f64,
+    validation_messages: u32,
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let (scene, load_ms) = load_scene(&args.scene)?;
+    let bounds = scene.bounds();
+    let mut camera = match &args.camera {
+        Some(p) => Camera::load(p)?,
+        None => Camera::fit(bounds.min, bounds.max, parse_up(&args.up)?, 40.0, 640, 360),
+    };
+    if let Some(w) = args.width {
+        camera.width = w;
+    }
+    if let Some(h) = args.height {
+        camera.height = h;
+    }
+    camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
+    let settings = args.ao.settings(bounds.diagonal().length());
+    settings.validate().map_err(|e| anyhow::anyhow!(e))?;
+
+    let gpu = open_gpu(&args.device)?;
+    let scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    log::info!(
+        "acceleration structures: {} BLAS in {:.0} ms, TLAS of {} instances in {:.1} ms",
+        scene_gpu.stats.blas_count,
+        scene_gpu.stats.blas_ms,
+        scene_gpu.stats.tlas_instances,
+        scene_gpu.stats.tlas_ms
+    );
+    let mut renderer = Renderer::new(&gpu, camera.width, camera.height, settings.clone())?;
+    let t0 = Instant::now();
+    let mut frames = Vec::new();
+    for i in 0..args.frames {
+        let report = renderer.render(&scene_gpu, scene.frame(), &camera)?;
+        log::info!(
+            "frame {i}: {:.1} ms wall, {:.1} ms GPU, {} rays{}",
+            report.wall_ms,
+            report.gpu_total_ms,
+            report.rays,
+            if settings.mode.uses_hash() {
+                format!(", {} cells ({:.1}% load), {} failed inserts", report.occupied_cells, report.load_factor * 100.0, report.failed_inserts)
+            } else {
+                String::new()
+            }
+        );
+        frames.push(report);
+    }
+    let render_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let (w, h) = renderer.size();
+    if let Some(out) = &args.out {
+        let rgba = renderer.read_rgba()?;
+        imageio::write_png(out, w, h, &rgba)?;
+        log::info!("wrote {}", out.display());
+    }
+    if let Some(out) = &args.ao_out {
+        let ao = renderer.read_ao()?;
+        imageio::write_ao(out, w, h, &ao)?;
+        log::info!("wrote {}", out.display());
+    }
+    let validation_messages = gpu.validation_messages();
+    if let Some(path) = &args.stats {
+        let stats = RenderStats {
+            device: &gpu.info,
+            scene: args.scene.clone(),
+            unique_triangles: scene.unique_triangle_count(),
+            instanced_triangles: scene.instanced_triangle_count(),
+            instances: scene.instances.len(),
+            meshes: scene.meshes.len(),
+            width: w,
+            height: h,
+            settings: &settings,
+            load_ms,
+            build: &scene_gpu.stats,
+            total_rays: frames.iter().map(|f| f.rays).sum(),
+            frames: &frames,
+            render_ms,
+            validation_messages,
+        };
+        write_json(path, &stats)?;
+    }
+    if validation_messages > 0 {
+        log::warn!("the validation layer reported {validation_messages} messages");
+    }
+    Ok(())
+}
+
+pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+}
+
+pub fn list_devices(d: &DeviceArgs) -> Result<()> {
+    let gpu = open_gpu(d)?;
+    println!("{} ({}), driver {}, Vulkan {}", gpu.info.name, gpu.info.kind, gpu.info.driver, gpu.info.api_version);
+    Ok(())
+}
+
+/// The default scene bundled in `assets/`.
+pub fn default_scene_path() -> std::path::PathBuf {
+    let beside_exe = std::env::current_exe().ok().and_then(|p| p.parent().map(|d| d.join("assets")));
+    let candidates = [
+        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/default.glb")),
+        beside_exe.map(|d| d.join("default.glb")),
+        Some(Path::new("assets/default.glb").to_path_buf()),
+    ];
+    candidates.into_iter().flatten().find(|p| p.exists()).unwrap_or_else(|| "assets/default.glb".into())
+}
+
+/// No subcommand: render the default scene (the interactive viewer is the `view` command once it lands).
+pub fn run_default() -> Result<()> {
+    let scene = default_scene_path();
+    let args = RenderArgs {
+        scene: scene.display().to_string(),
+        camera: Some(scene.with_file_name("default.camera.json")),
+        width: None,
+        height: None,
+        up: "z".into(),
+        ao: crate::cli::AoArgs {
+            mode: hrtao_core::Mode::Hrtao,
+            radius: Some(8.0),
+            rays: 8,
+            sp: 8.0,
+            snd: 3.0,
+            max_samples: 1000,
+            min_samples: 32,
+            filter_iterations: 3,
+            hash_capacity: 1 << 20,
+            clay: false,
+        },
+        frames: 8,
+        out: Some("hrtao-default.png".into()),
+        ao_out: None,
+        stats: None,
+        device: DeviceArgs { device: None, validation: false },
+    };
+    run(&args)?;
+    println!("wrote hrtao-default.png");
+    Ok(())
+}
