@@ -28,6 +28,8 @@ gpu_consts! {
     NO_INSTANCE: u32 = 0xffff_ffff;
     /// Hash cell checksum value of a free cell (checksums are never 0: see hash.glsl).
     EMPTY_CELL: u32 = 0;
+    /// A pixel cell index meaning "no cell" (miss, or the insert failed).
+    INVALID_CELL: u32 = 0xffff_ffff;
     /// Indices into `FrameStats::counters`.
     STAT_RAYS: u32 = 0;
     STAT_CELLS_INSERTED: u32 = 1;
@@ -66,8 +68,8 @@ gpu_structs! {
         ao_radius: f32,
         /// eq. (2): tan(max(f/R_x, f R_x / R_y^2) s_p) precomputed on the CPU, so s_w = d * s_w_per_distance.
         s_w_per_distance: f32,
-        /// eq. (3): the smallest world feature.
-        s_min: f32,
+        /// eq. (3): log2 of the smallest world feature s_min (rounded to a power of two, see hash.glsl).
+        log2_s_min: i32,
         /// eq. (5): normal discretisation.
         s_nd: f32,
         hash_capacity: u32,
@@ -134,6 +136,22 @@ gpu_structs! {
         qmc_index: u32,
         /// `frame_counter` of the last frame that used the cell (lazy removal of stale cells).
         last_frame: u32,
+        /// The scene's F (eq. 6) when the cell was created: cells of an older F are free to reclaim at once.
+        scene_frame: u32,
+    }
+
+    /// One CPU-vs-GPU hash test case: inputs, then the GPU's outputs (hash_test.comp).
+    struct HashTestCase {
+        position: [f32; 3],
+        /// Target world feature size s_w (eq. 2) for the point.
+        s_w: f32,
+        normal: [f32; 3],
+        scene_frame: u32,
+        /// LOD offset added to the point's level (0..LOD_COUNT).
+        lod_offset: u32,
+        index: u32,
+        checksum: u32,
+        lod: i32,
     }
 
     /// Per pixel, the hash cell indices at the LOD_COUNT levels (cell finder output).

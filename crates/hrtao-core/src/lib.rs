@@ -13,6 +13,7 @@ pub mod camera;
 pub mod context;
 pub mod error;
 pub mod gpu;
+pub mod hash;
 pub mod imageio;
 pub mod pass;
 pub mod renderer;

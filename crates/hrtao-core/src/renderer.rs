@@ -234,7 +234,7 @@ impl Renderer {
             rays_per_pixel: s.rays_per_pixel,
             ao_radius: s.ao_radius,
             s_w_per_distance: angle.tan(),
-            s_min: s.s_min,
+            log2_s_min: crate::hash::log2_s_min(s.s_min),
             s_nd: s.s_nd,
             hash_capacity: self.hash.capacity,
             max_samples: s.max_samples,

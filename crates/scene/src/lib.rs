@@ -32,8 +32,21 @@ pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<S
     finish(obj_load::load_obj(path, progress)?, &path.display().to_string())
 }
 
-/// Builds a procedural scene from a `gen:NAME?key=value&...` spec (see the generator table
-/// in the crate docs of `generate`); validated and non-empty.
+/// Builds a procedural scene from a `gen:NAME?key=value&...` spec; validated and non-empty.
+///
+/// All generators are in metres, **Z-up**, ground at z = 0:
+///
+/// | spec | parameters (default) |
+/// |---|---|
+/// | `gen:racks` | `rows` (25), `cols` (100), `units` (40), `detail` (2000 = triangles per server mesh) |
+/// | `gen:city` | `blocks` (8, per side), `per_block` (3, buildings per side), `variants` (6), `floors` (30), `seed` (1) |
+/// | `gen:box` | `size` (2): closed-top box open towards −Y |
+/// | `gen:plane` | `size` (100): one quad |
+/// | `gen:slab` | `h` (1), `size` (10), `ground` (100): ground quad plus a 0.1 m slab at height `h` |
+///
+/// Unknown/repeated keys, non-numeric, negative or out-of-range values, more than
+/// [`MAX_INSTANCES`] instances or more than [`MAX_MESH_TRIANGLES`] triangles in a mesh are
+/// [`SceneError::BadGeneratorParam`]; unknown names are [`SceneError::UnknownGenerator`].
 pub fn generate(spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
     finish(generate::generate(spec, progress)?, spec)
 }

@@ -55,7 +55,7 @@ fn check(e: &Expected) -> Scene {
         }
     }
 
-    let last_mesh = stages.iter().filter(|p| p.stage == "meshes").last().unwrap();
+    let last_mesh = stages.iter().rfind(|p| p.stage == "meshes").unwrap();
     assert_eq!(last_mesh.done, last_mesh.total);
     assert_eq!(last_mesh.total, e.meshes as u64);
     assert_eq!(scene.frame(), 0);

@@ -1,0 +1,132 @@
+//! CPU mirror of `shaders/hash.glsl`: the HRTAO world-space hash (paper §1-2, eq. 1-6), bit for bit.
+//!
+//! Tested against the GPU in `tests/hash_gpu.rs`. Positions are quantised exactly (power-of-two cell sizes,
+//! see the shader's header comment), so the CPU and the GPU agree on every key.
+use glam::{IVec3, Vec3};
+
+use crate::gpu::EMPTY_CELL;
+
+/// "lowbias32" (C. Wellons): the index hash `h` of eq. (1).
+pub fn h_index(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^= x >> 16;
+    x
+}
+
+/// PCG RXS-M-XS: the independent checksum hash (§1).
+pub fn h_check(x: u32) -> u32 {
+    let state = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+/// log2 of s_min rounded to an integer: s_min is used as the power of two nearest to it (eq. 3).
+pub fn log2_s_min(s_min: f32) -> i32 {
+    (s_min.max(f32::MIN_POSITIVE) as f64).log2().round() as i32
+}
+
+/// eq. (2): s_w = d tan(max(f / R_x, f R_x / R_y²) s_p), with f the vertical aperture (radians).
+pub fn feature_size(d: f32, aperture: f32, rx: f32, ry: f32, s_p: f32) -> f32 {
+    d * ((aperture / rx).max(aperture * rx / (ry * ry)) * s_p).tan()
+}
+
+/// eq. (3) as an integer LOD: floor(log2(s_w)), at least log2(s_min); the cell size is s_wd = 2^lod.
+pub fn lod_of(s_w: f32, log2_s_min: i32) -> i32 {
+    if s_w.is_nan() || s_w <= 0.0 || s_w.is_infinite() {
+        return log2_s_min;
+    }
+    let biased = ((s_w.to_bits() >> 23) & 0xff) as i32;
+    if biased == 0 {
+        return log2_s_min; // subnormal: far below any s_min
+    }
+    (biased - 127).max(log2_s_min)
+}
+
+/// s_wd of eq. (3) for a LOD.
+pub fn cell_size(lod: i32) -> f32 {
+    2f32.powi(lod)
+}
+
+/// floor(p / s_wd), clamped to the int range.
+pub fn cell_coord(p: Vec3, lod: i32) -> IVec3 {
+    let scale = 2f32.powi(-lod);
+    let q = (p * scale).floor().clamp(Vec3::splat(-2_147_483_520.0), Vec3::splat(2_147_483_520.0));
+    q.as_ivec3()
+}
+
+/// floor(n s_nd) of eq. (5).
+pub fn normal_coord(n: Vec3, s_nd: f32) -> IVec3 {
+    (n.clamp(Vec3::splat(-1.0), Vec3::splat(1.0)) * s_nd).floor().as_ivec3()
+}
+
+/// eq. (4)-(6) chained with one base hash `h`: h(F + H7D), H7D = h(nz + h(ny + h(nx + H4D))),
+/// H4D = h(lod + h(pz + h(py + h(px)))).
+pub fn h8d(h: fn(u32) -> u32, c: IVec3, lod: i32, nq: IVec3, frame: u32) -> u32 {
+    let mut k = h(c.x as u32);
+    k = h((c.y as u32).wrapping_add(k));
+    k = h((c.z as u32).wrapping_add(k));
+    k = h((lod as u32).wrapping_add(k)); // eq. (4): s_wd embedded
+    k = h((nq.x as u32).wrapping_add(k)); // eq. (5)
+    k = h((nq.y as u32).wrapping_add(k));
+    k = h((nq.z as u32).wrapping_add(k));
+    h(frame.wrapping_add(k)) // eq. (6)
+}
+
+/// A cell's slot (before probing) and checksum.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CellKey {
+    pub slot: u32,
+    pub checksum: u32,
+}
+
+pub fn cell_key(p: Vec3, n: Vec3, lod: i32, s_nd: f32, frame: u32, capacity: u32) -> CellKey {
+    let c = cell_coord(p, lod);
+    let nq = normal_coord(n, s_nd);
+    let slot = h8d(h_index, c, lod, nq, frame) & (capacity - 1);
+    let check = h8d(h_check, c, lod, nq, frame);
+    CellKey { slot, checksum: if check == EMPTY_CELL { 1 } else { check } }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lod_is_a_power_of_two_and_steps_when_distance_doubles() {
+        let l2 = log2_s_min(1e-10);
+        assert_eq!(l2, -33);
+        let aperture = 40f32.to_radians();
+        let mut last = None;
+        for i in 0..20 {
+            let d = 0.37 * 2f32.powi(i);
+            let s_w = feature_size(d, aperture, 320.0, 180.0, 8.0);
+            let lod = lod_of(s_w, l2);
+            let s_wd = cell_size(lod);
+            // s_wd = 2^floor(log2(s_w / s_min)) s_min, with s_min a power of two: s_wd <= s_w < 2 s_wd.
+            assert!(s_wd <= s_w && s_w < 2.0 * s_wd, "d={d}: s_w={s_w}, s_wd={s_wd}");
+            if let Some(prev) = last {
+                assert_eq!(lod, prev + 1, "doubling the distance moves one LOD up");
+            }
+            last = Some(lod);
+        }
+        assert_eq!(lod_of(0.0, l2), l2);
+        assert_eq!(lod_of(f32::NAN, l2), l2);
+        assert_eq!(lod_of(1e-30, l2), l2);
+    }
+
+    #[test]
+    fn keys_separate_position_normal_lod_and_frame() {
+        let p = Vec3::new(1.25, -3.5, 7.0);
+        let n = Vec3::Z;
+        let base = cell_key(p, n, -2, 3.0, 0, 1 << 20);
+        assert_eq!(base, cell_key(p + Vec3::splat(0.01), n, -2, 3.0, 0, 1 << 20), "same cell");
+        assert_ne!(base.checksum, cell_key(p + Vec3::X, n, -2, 3.0, 0, 1 << 20).checksum, "next cell");
+        assert_ne!(base.checksum, cell_key(p, -n, -2, 3.0, 0, 1 << 20).checksum, "other normal");
+        assert_ne!(base.checksum, cell_key(p, n, -1, 3.0, 0, 1 << 20).checksum, "other LOD");
+        assert_ne!(base.checksum, cell_key(p, n, -2, 3.0, 1, 1 << 20).checksum, "other F");
+        assert!(base.slot < 1 << 20 && base.checksum != EMPTY_CELL);
+    }
+}
