@@ -65,14 +65,17 @@ struct CellKey {
     uint checksum;  // never EMPTY_CELL
 };
 
-CellKey cell_key(vec3 p, vec3 n, int lod, float s_nd, uint F, uint capacity) {
-    ivec3 c = cell_coord(p, lod);
-    ivec3 nq = normal_coord(n, s_nd);
+// The key of integer cell `c` at LOD `lod` (eq. 4-6), its slot wrapped into the table.
+CellKey cell_key_at(ivec3 c, int lod, ivec3 nq, uint F, uint capacity) {
     CellKey key;
     key.slot = h_index_8d(c, lod, nq, F) & (capacity - 1u);
     uint check = h_check_8d(c, lod, nq, F);
     key.checksum = check == EMPTY_CELL ? 1u : check;
     return key;
+}
+
+CellKey cell_key(vec3 p, vec3 n, int lod, float s_nd, uint F, uint capacity) {
+    return cell_key_at(cell_coord(p, lod), lod, normal_coord(n, s_nd), F, capacity);
 }
 
 #endif

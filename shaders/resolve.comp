@@ -1,3 +1,68 @@
 #version 460
+// Per-pixel AO (paper §4): the finest of the pixel's cells holding at least `min_samples`, else the next
+// coarser one (trading noise for spatial resolution); the LOD used is kept for the filter and debug views.
+// At that LOD the value is reconstructed by trilinear interpolation of the 8 cells around the pixel (cells
+// absent or empty drop out and the weights renormalise), so the cell grid does not show as blocks and the
+// AO is centred on the pixel rather than on its cell.
+// Writes into the buffer the filter's ping-pong starts from (so an even or odd iteration count ends in `ao`).
 #include "common.glsl"
-void main() {}
+#include "hash_map.glsl"
+
+void main() {
+    uvec2 pix;
+    uint index;
+    if (!pixel_coords(pix, index)) return;
+    GPixel px = GBufferRef(g.gbuffer).px[index];
+    float ao = 1.0;
+    uint used = LOD_COUNT;
+    if (px.t >= 0.0) {
+        PixelCells pc = PixelCellRef(g.pixel_cells).v[index];
+        CellRef cells = CellRef(g.hash_cells);
+        uint best = LOD_COUNT;
+        uint best_samples = 0u;
+        for (uint l = 0u; l < LOD_COUNT; ++l) {
+            uint c = pc.cells[l];
+            if (c == INVALID_CELL || !slot_in_bounds(c)) continue;
+            uint s = cells.v[c].samples;
+            if (s >= g.min_samples) {
+                best = l;
+                break;
+            }
+            if (s > best_samples) {
+                best = l;
+                best_samples = s;
+            }
+        }
+        if (best < LOD_COUNT && cells.v[pc.cells[best]].samples > 0u) {
+            used = best;
+            int lod = pixel_lod(px.t) + int(best);
+            ivec3 nq = normal_coord(px.normal, g.s_nd);
+            vec3 u = ldexp(px.position, ivec3(-lod)) - 0.5;
+            vec3 base = floor(u);
+            vec3 f = u - base;
+            ivec3 b = ivec3(clamp(base, vec3(-2147483520.0), vec3(2147483520.0)));
+            float sum = 0.0;
+            float wsum = 0.0;
+            for (int corner = 0; corner < 8; ++corner) {
+                ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+                vec3 wv = mix(1.0 - f, f, vec3(o));
+                float w = wv.x * wv.y * wv.z;
+                if (w <= 0.0) continue;
+                uint c = find_cell(cell_key_at(b + o, lod, nq, g.scene_frame, g.hash_capacity));
+                if (c == INVALID_CELL) continue;
+                uint s = cells.v[c].samples;
+                if (s == 0u) continue;
+                // Cells with few samples count less (they are noisy).
+                w *= min(1.0, float(s) / float(max(g.min_samples, 1u)));
+                sum += w * float(cells.v[c].unoccluded) / float(s);
+                wsum += w;
+            }
+            uint own = pc.cells[best];
+            ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / float(cells.v[own].samples);
+        }
+    }
+    uint iterations = (g.flags & FLAG_FILTER) != 0u ? g.filter_iterations : 0u;
+    FloatRef dst = FloatRef((iterations & 1u) == 1u ? g.filter_tmp : g.ao);
+    dst.v[index] = clamp(ao, 0.0, 1.0);
+    UintRef(g.ao_lod).v[index] = used;
+}

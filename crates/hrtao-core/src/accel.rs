@@ -33,14 +33,22 @@ impl AccelStruct {
             let raw = gpu
                 .accel
                 .create_acceleration_structure(
-                    &vk::AccelerationStructureCreateInfoKHR::builder().buffer(buffer.raw).size(size).ty(ty),
+                    &vk::AccelerationStructureCreateInfoKHR::builder()
+                        .buffer(buffer.raw)
+                        .size(size)
+                        .ty(ty),
                     None,
                 )
                 .map_err(|e| CoreError::from_vk("vkCreateAccelerationStructureKHR", e))?;
             let address = gpu.accel.get_acceleration_structure_device_address(
                 &vk::AccelerationStructureDeviceAddressInfoKHR::builder().acceleration_structure(raw),
             );
-            Ok(AccelStruct { gpu: gpu.clone(), raw, address, _buffer: buffer })
+            Ok(AccelStruct {
+                gpu: gpu.clone(),
+                raw,
+                address,
+                _buffer: buffer,
+            })
         }
     }
 }
@@ -72,9 +80,18 @@ struct Scratch {
 impl Scratch {
     fn new(gpu: &Arc<Gpu>, size: u64) -> Result<Scratch> {
         let align = gpu.scratch_alignment;
-        let buffer = Buffer::new(gpu, "AS scratch", size + align, MemoryLocation::GpuOnly, vk::BufferUsageFlags::empty())?;
+        let buffer = Buffer::new(
+            gpu,
+            "AS scratch",
+            size + align,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::empty(),
+        )?;
         let base = buffer.address.div_ceil(align) * align;
-        Ok(Scratch { _buffer: buffer, base })
+        Ok(Scratch {
+            _buffer: buffer,
+            base,
+        })
     }
 }
 
@@ -111,11 +128,15 @@ fn geometry_triangles(
         .geometry(vk::AccelerationStructureGeometryDataKHR {
             triangles: vk::AccelerationStructureGeometryTrianglesDataKHR::builder()
                 .vertex_format(vk::Format::R32G32B32_SFLOAT)
-                .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: vertex_address })
+                .vertex_data(vk::DeviceOrHostAddressConstKHR {
+                    device_address: vertex_address,
+                })
                 .vertex_stride(12)
                 .max_vertex(vertex_count.saturating_sub(1))
                 .index_type(vk::IndexType::UINT32)
-                .index_data(vk::DeviceOrHostAddressConstKHR { device_address: index_address })
+                .index_data(vk::DeviceOrHostAddressConstKHR {
+                    device_address: index_address,
+                })
                 .build(),
         })
         .build()
@@ -182,7 +203,8 @@ impl SceneGpu {
                 });
             }
         }
-        let geometries = Buffer::device_local_from_slice(gpu, "geometry table", &table, vk::BufferUsageFlags::empty())?;
+        let geometries =
+            Buffer::device_local_from_slice(gpu, "geometry table", &table, vk::BufferUsageFlags::empty())?;
 
         // 2. BLAS per mesh, in batches bounded by scratch memory, then compacted.
         let t0 = Instant::now();
@@ -192,15 +214,27 @@ impl SceneGpu {
         const SCRATCH_BUDGET: u64 = 128 << 20;
         while mesh < per_mesh.len() {
             // Gather a batch.
-            let mut batch: Vec<(usize, Vec<vk::AccelerationStructureGeometryKHR>, Vec<u32>, vk::AccelerationStructureBuildSizesInfoKHR)> = Vec::new();
+            let mut batch: Vec<(
+                usize,
+                Vec<vk::AccelerationStructureGeometryKHR>,
+                Vec<u32>,
+                vk::AccelerationStructureBuildSizesInfoKHR,
+            )> = Vec::new();
             let mut scratch_total = 0u64;
-            while mesh < per_mesh.len() && (batch.is_empty() || scratch_total < SCRATCH_BUDGET) && batch.len() < 1024 {
+            while mesh < per_mesh.len()
+                && (batch.is_empty() || scratch_total < SCRATCH_BUDGET)
+                && batch.len() < 1024
+            {
                 let geos = &per_mesh[mesh];
                 if !geos.is_empty() {
                     let geoms: Vec<_> = geos
                         .iter()
                         .map(|g| {
-                            geometry_triangles(vbuf.address + g.vertex_offset, ibuf.address + g.index_offset, g.vertex_count)
+                            geometry_triangles(
+                                vbuf.address + g.vertex_offset,
+                                ibuf.address + g.index_offset,
+                                g.vertex_count,
+                            )
                         })
                         .collect();
                     let counts: Vec<u32> = geos.iter().map(|g| g.triangles).collect();
@@ -248,7 +282,8 @@ impl SceneGpu {
                     .map_err(|e| CoreError::from_vk("vkCreateQueryPool", e))?
             };
             let record = gpu.run_commands(|cmd| unsafe {
-                gpu.device.cmd_reset_query_pool(cmd, query_pool, 0, batch.len() as u32);
+                gpu.device
+                    .cmd_reset_query_pool(cmd, query_pool, 0, batch.len() as u32);
                 let mut offset = 0u64;
                 for ((_, geoms, counts, sizes), dst) in batch.iter().zip(&built) {
                     let info = vk::AccelerationStructureBuildGeometryInfoKHR::builder()
@@ -260,7 +295,9 @@ impl SceneGpu {
                         .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
                         .dst_acceleration_structure(dst.raw)
                         .geometries(geoms)
-                        .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.base + offset })
+                        .scratch_data(vk::DeviceOrHostAddressKHR {
+                            device_address: scratch.base + offset,
+                        })
                         .build();
                     offset += align_up(sizes.build_scratch_size, gpu.scratch_alignment);
                     let ranges: Vec<vk::AccelerationStructureBuildRangeInfoKHR> = counts
@@ -272,7 +309,8 @@ impl SceneGpu {
                             transform_offset: 0,
                         })
                         .collect();
-                    gpu.accel.cmd_build_acceleration_structures(cmd, &[info], &[&ranges]);
+                    gpu.accel
+                        .cmd_build_acceleration_structures(cmd, &[info], &[&ranges]);
                 }
                 let barrier = [vk::MemoryBarrier::builder()
                     .src_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR)
@@ -300,7 +338,13 @@ impl SceneGpu {
                 let mut sizes = vec![0u64; batch.len()];
                 unsafe {
                     gpu.device
-                        .get_query_pool_results(query_pool, 0, batch.len() as u32, &mut sizes, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                        .get_query_pool_results(
+                            query_pool,
+                            0,
+                            batch.len() as u32,
+                            &mut sizes,
+                            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                        )
                         .map_err(|e| CoreError::from_vk("vkGetQueryPoolResults", e))?;
                 }
                 Ok(sizes)
@@ -352,7 +396,12 @@ impl SceneGpu {
             MemoryLocation::CpuToGpu,
             input,
         )?;
-        let placeholder = AccelStruct::new(gpu, "TLAS (empty)", vk::AccelerationStructureTypeKHR::TOP_LEVEL, 256)?;
+        let placeholder = AccelStruct::new(
+            gpu,
+            "TLAS (empty)",
+            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+            256,
+        )?;
         let mut s = SceneGpu {
             gpu: gpu.clone(),
             _vertices: vbuf,
@@ -386,12 +435,20 @@ impl SceneGpu {
     pub fn update_instances(&mut self, scene: &Scene, selected: u32) -> Result<()> {
         let gpu = self.gpu.clone();
         if scene.instances.len() > MAX_INSTANCES {
-            return Err(CoreError::Invalid(format!("at most {MAX_INSTANCES} instances are supported")));
+            return Err(CoreError::Invalid(format!(
+                "at most {MAX_INSTANCES} instances are supported"
+            )));
         }
         let n = scene.instances.len().max(1) as u64;
         let info_size = n * std::mem::size_of::<InstanceInfo>() as u64;
         if self.instance_info.size < info_size {
-            self.instance_info = Buffer::new(&gpu, "instance table", info_size, MemoryLocation::CpuToGpu, vk::BufferUsageFlags::empty())?;
+            self.instance_info = Buffer::new(
+                &gpu,
+                "instance table",
+                info_size,
+                MemoryLocation::CpuToGpu,
+                vk::BufferUsageFlags::empty(),
+            )?;
         }
         let inst_size = n * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>() as u64;
         if self.tlas_instances.size < inst_size {
@@ -408,15 +465,26 @@ impl SceneGpu {
         let mut count = 0u32;
         for (i, inst) in scene.instances.iter().enumerate() {
             let base = self.geometry_base.get(inst.mesh as usize).copied().flatten();
-            let flags = if i as u32 == selected { crate::gpu::INSTANCE_SELECTED } else { 0 };
-            infos.push(InstanceInfo { geometry_base: base.unwrap_or(0), flags });
-            let (Some(_), Some(Some(blas))) = (base, self.blas.get(inst.mesh as usize)) else { continue };
+            let flags = if i as u32 == selected {
+                crate::gpu::INSTANCE_SELECTED
+            } else {
+                0
+            };
+            infos.push(InstanceInfo {
+                geometry_base: base.unwrap_or(0),
+                flags,
+            });
+            let (Some(_), Some(Some(blas))) = (base, self.blas.get(inst.mesh as usize)) else {
+                continue;
+            };
             if !inst.visible {
                 continue;
             }
             let m = inst.transform;
             if !m.is_finite() {
-                return Err(CoreError::Invalid(format!("instance {i} has a non-finite transform")));
+                return Err(CoreError::Invalid(format!(
+                    "instance {i} has a non-finite transform"
+                )));
             }
             let mut matrix = [0f32; 12];
             for r in 0..3 {
@@ -457,7 +525,9 @@ impl SceneGpu {
             .geometry(vk::AccelerationStructureGeometryDataKHR {
                 instances: vk::AccelerationStructureGeometryInstancesDataKHR::builder()
                     .array_of_pointers(false)
-                    .data(vk::DeviceOrHostAddressConstKHR { device_address: self.tlas_instances.address })
+                    .data(vk::DeviceOrHostAddressConstKHR {
+                        device_address: self.tlas_instances.address,
+                    })
                     .build(),
             })
             .build()];
@@ -481,9 +551,11 @@ impl SceneGpu {
             sizes.acceleration_structure_size.max(256),
         )?;
         let scratch = Scratch::new(&gpu, sizes.build_scratch_size.max(256))?;
-        let info = info.dst_acceleration_structure(tlas.raw).scratch_data(vk::DeviceOrHostAddressKHR {
-            device_address: scratch.base,
-        });
+        let info = info
+            .dst_acceleration_structure(tlas.raw)
+            .scratch_data(vk::DeviceOrHostAddressKHR {
+                device_address: scratch.base,
+            });
         let range = [vk::AccelerationStructureBuildRangeInfoKHR {
             primitive_count: count,
             primitive_offset: 0,
@@ -492,7 +564,8 @@ impl SceneGpu {
         }];
         gpu.run_commands(|cmd| unsafe {
             full_barrier(&gpu, cmd);
-            gpu.accel.cmd_build_acceleration_structures(cmd, &[info.build()], &[&range]);
+            gpu.accel
+                .cmd_build_acceleration_structures(cmd, &[info.build()], &[&range]);
             full_barrier(&gpu, cmd);
         })?;
         drop(scratch);

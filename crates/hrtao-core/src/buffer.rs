@@ -51,17 +51,30 @@ impl Buffer {
                 Ok(a) => a,
                 Err(e) => {
                     gpu.device.destroy_buffer(raw, None);
-                    return Err(CoreError::Memory(format!("allocating {size} bytes for `{name}`: {e}")));
+                    return Err(CoreError::Memory(format!(
+                        "allocating {size} bytes for `{name}`: {e}"
+                    )));
                 }
             };
-            if let Err(e) = gpu.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) {
+            if let Err(e) = gpu
+                .device
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+            {
                 let _ = gpu.allocator().free(allocation);
                 gpu.device.destroy_buffer(raw, None);
                 return Err(CoreError::from_vk("vkBindBufferMemory", e));
             }
-            let address =
-                gpu.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::builder().buffer(raw));
-            Ok(Buffer { gpu: gpu.clone(), raw, allocation: Some(allocation), size, address, name: name.into() })
+            let address = gpu
+                .device
+                .get_buffer_device_address(&vk::BufferDeviceAddressInfo::builder().buffer(raw));
+            Ok(Buffer {
+                gpu: gpu.clone(),
+                raw,
+                allocation: Some(allocation),
+                size,
+                address,
+                name: name.into(),
+            })
         }
     }
 
@@ -86,10 +99,19 @@ impl Buffer {
         extra: vk::BufferUsageFlags,
     ) -> Result<Buffer> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
-        let staging = Buffer::from_slice(gpu, &format!("{name} (staging)"), bytes, vk::BufferUsageFlags::empty())?;
+        let staging = Buffer::from_slice(
+            gpu,
+            &format!("{name} (staging)"),
+            bytes,
+            vk::BufferUsageFlags::empty(),
+        )?;
         let b = Buffer::new(gpu, name, bytes.len() as u64, MemoryLocation::GpuOnly, extra)?;
         gpu.run_commands(|cmd| unsafe {
-            let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len().max(1) as u64 }];
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: bytes.len().max(1) as u64,
+            }];
             if !bytes.is_empty() {
                 gpu.device.cmd_copy_buffer(cmd, staging.raw, b.raw, &region);
             }
@@ -99,19 +121,23 @@ impl Buffer {
 
     fn mapped(&self) -> Result<&[u8]> {
         let a = self.allocation.as_ref().unwrap();
-        a.mapped_slice().ok_or_else(|| CoreError::Invalid(format!("buffer `{}` is not host visible", self.name)))
+        a.mapped_slice()
+            .ok_or_else(|| CoreError::Invalid(format!("buffer `{}` is not host visible", self.name)))
     }
 
     /// Writes bytes into a host-visible buffer at `offset`.
     pub fn write_bytes(&mut self, offset: u64, bytes: &[u8]) -> Result<()> {
         let name = self.name.clone();
         let a = self.allocation.as_mut().unwrap();
-        let slice =
-            a.mapped_slice_mut().ok_or_else(|| CoreError::Invalid(format!("buffer `{name}` is not host visible")))?;
+        let slice = a
+            .mapped_slice_mut()
+            .ok_or_else(|| CoreError::Invalid(format!("buffer `{name}` is not host visible")))?;
         let start = offset as usize;
         let end = start + bytes.len();
         if end > slice.len() {
-            return Err(CoreError::Invalid(format!("write of {end} bytes past the end of buffer `{name}`")));
+            return Err(CoreError::Invalid(format!(
+                "write of {end} bytes past the end of buffer `{name}`"
+            )));
         }
         slice[start..end].copy_from_slice(bytes);
         Ok(())
@@ -126,7 +152,10 @@ impl Buffer {
         let bytes = self.mapped()?;
         let n = count * std::mem::size_of::<T>();
         if n > bytes.len() {
-            return Err(CoreError::Invalid(format!("read past the end of buffer `{}`", self.name)));
+            return Err(CoreError::Invalid(format!(
+                "read past the end of buffer `{}`",
+                self.name
+            )));
         }
         Ok(bytemuck::pod_collect_to_vec(&bytes[..n]))
     }

@@ -18,6 +18,19 @@ pub struct Camera {
     pub height: u32,
 }
 
+impl Default for Camera {
+    fn default() -> Self {
+        Camera {
+            eye: [0.0, 0.0, 1.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov_y_deg: 45.0,
+            width: 640,
+            height: 360,
+        }
+    }
+}
+
 fn default_fov() -> f32 {
     45.0
 }
@@ -39,11 +52,14 @@ pub struct CameraFrame {
 
 impl Camera {
     pub fn load(path: &std::path::Path) -> Result<Camera> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| CoreError::Io { path: path.display().to_string(), source: e })?;
+        let text = std::fs::read_to_string(path).map_err(|e| CoreError::Io {
+            path: path.display().to_string(),
+            source: e,
+        })?;
         let cam: Camera = serde_json::from_str(&text)
             .map_err(|e| CoreError::Invalid(format!("camera file {}: {e}", path.display())))?;
-        cam.validate().map_err(|e| CoreError::Invalid(format!("camera file {}: {e}", path.display())))?;
+        cam.validate()
+            .map_err(|e| CoreError::Invalid(format!("camera file {}: {e}", path.display())))?;
         Ok(cam)
     }
 
@@ -56,7 +72,10 @@ impl Camera {
             return Err(format!("fov_y_deg {} must be in (0, 180)", self.fov_y_deg));
         }
         if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
-            return Err(format!("image size {}x{} must be within 1..=16384", self.width, self.height));
+            return Err(format!(
+                "image size {}x{} must be within 1..=16384",
+                self.width, self.height
+            ));
         }
         let fwd = Vec3::from(self.target) - Vec3::from(self.eye);
         if fwd.length() <= 0.0 {
@@ -75,7 +94,12 @@ impl Camera {
         let up = right.cross(w);
         let tan_half = (self.fov_y_deg.to_radians() * 0.5).tan();
         let aspect = self.width as f32 / self.height as f32;
-        CameraFrame { eye, u: right * tan_half * aspect, v: up * tan_half, w }
+        CameraFrame {
+            eye,
+            u: right * tan_half * aspect,
+            v: up * tan_half,
+            w,
+        }
     }
 
     /// The world-space ray direction through pixel (x, y) centre (row 0 at the top), as the shaders compute it.
@@ -93,7 +117,14 @@ mod tests {
 
     #[test]
     fn centre_ray_looks_at_target_and_corners_span_fov() {
-        let cam = Camera { eye: [0.0, 0.0, 5.0], target: [0.0; 3], up: [0.0, 1.0, 0.0], fov_y_deg: 90.0, width: 2, height: 2 };
+        let cam = Camera {
+            eye: [0.0, 0.0, 5.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov_y_deg: 90.0,
+            width: 2,
+            height: 2,
+        };
         let f = cam.frame();
         assert!((f.w - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
         // With 90 deg vertical fov, the top edge of the image is at 45 deg.
@@ -104,7 +135,14 @@ mod tests {
 
     #[test]
     fn rejects_bad_cameras() {
-        let mut cam = Camera { eye: [0.0; 3], target: [0.0; 3], up: [0.0, 1.0, 0.0], fov_y_deg: 45.0, width: 4, height: 4 };
+        let mut cam = Camera {
+            eye: [0.0; 3],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov_y_deg: 45.0,
+            width: 4,
+            height: 4,
+        };
         assert!(cam.validate().is_err());
         cam.target = [0.0, 1.0, 0.0];
         assert!(cam.validate().is_err(), "up parallel to view");
@@ -143,9 +181,18 @@ impl Camera {
         }
         .normalize();
         let aspect = width as f32 / height.max(1) as f32;
-        let half = (fov_y_deg.to_radians() * 0.5).tan().min((fov_y_deg.to_radians() * 0.5).tan() * aspect);
+        let half = (fov_y_deg.to_radians() * 0.5)
+            .tan()
+            .min((fov_y_deg.to_radians() * 0.5).tan() * aspect);
         let dist = radius / half.atan().sin();
         let eye = center + dir * dist;
-        Camera { eye: eye.to_array(), target: center.to_array(), up: upv.to_array(), fov_y_deg, width, height }
+        Camera {
+            eye: eye.to_array(),
+            target: center.to_array(),
+            up: upv.to_array(),
+            fov_y_deg,
+            width,
+            height,
+        }
     }
 }

@@ -28,13 +28,19 @@ pub struct ContextOptions {
 impl ContextOptions {
     /// Headless options, with validation on when `HRTAO_VALIDATION=1`.
     pub fn from_env() -> Self {
-        ContextOptions { validation: validation_requested_by_env(), ..Default::default() }
+        ContextOptions {
+            validation: validation_requested_by_env(),
+            ..Default::default()
+        }
     }
 }
 
 /// True when the `HRTAO_VALIDATION` environment variable asks for the validation layer.
 pub fn validation_requested_by_env() -> bool {
-    matches!(std::env::var("HRTAO_VALIDATION").as_deref(), Ok("1") | Ok("true") | Ok("yes"))
+    matches!(
+        std::env::var("HRTAO_VALIDATION").as_deref(),
+        Ok("1") | Ok("true") | Ok("yes")
+    )
 }
 
 /// Validation messages counted by severity since the context was created.
@@ -74,7 +80,7 @@ pub struct Gpu {
     pub limits: vk::PhysicalDeviceLimits,
     pub scratch_alignment: u64,
     pub validation: Arc<ValidationCounters>,
-    allocator: ManuallyDrop<Mutex<Allocator>>,
+    allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
     command_pool: Mutex<vk::CommandPool>,
     debug: Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>,
     /// Kept alive until the very end: the loader library must outlive every Vulkan call.
@@ -99,7 +105,11 @@ unsafe extern "system" fn debug_callback(
     } else {
         CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
     };
-    let counters = if user.is_null() { None } else { Some(&*(user as *const Arc<ValidationCounters>)) };
+    let counters = if user.is_null() {
+        None
+    } else {
+        Some(&*(user as *const Arc<ValidationCounters>))
+    };
     if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
         log::error!("[vulkan {kind:?}] {msg}");
         if let Some(c) = counters {
@@ -145,24 +155,40 @@ fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
     }
 }
 
-const LAVAPIPE_HINT: &str = "hrtao needs a Vulkan device with VK_KHR_ray_query and VK_KHR_acceleration_structure. \
+const LAVAPIPE_HINT: &str =
+    "hrtao needs a Vulkan device with VK_KHR_ray_query and VK_KHR_acceleration_structure. \
 Without such a GPU, install Mesa's lavapipe (software Vulkan, Mesa >= 23): on Debian 12 \
 `apt-get install -t bookworm-backports mesa-vulkan-drivers`, on Ubuntu `apt-get install mesa-vulkan-drivers` \
 (or run scripts/install-deps.sh).";
 
 unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Candidate {
     let props = instance.get_physical_device_properties(physical);
-    let name = CStr::from_ptr(props.device_name.as_ptr()).to_string_lossy().into_owned();
-    let mut cand =
-        Candidate { physical, name, kind: props.device_type, problem: None, queue_family: u32::MAX };
+    let name = CStr::from_ptr(props.device_name.as_ptr())
+        .to_string_lossy()
+        .into_owned();
+    let mut cand = Candidate {
+        physical,
+        name,
+        kind: props.device_type,
+        problem: None,
+        queue_family: u32::MAX,
+    };
     if vk::api_version_minor(props.api_version) < 2 && vk::api_version_major(props.api_version) == 1 {
         cand.problem = Some("Vulkan 1.2 not supported".into());
         return cand;
     }
-    let exts = instance.enumerate_device_extension_properties(physical).unwrap_or_default();
-    let has = |want: &CStr| exts.iter().any(|e| CStr::from_ptr(e.extension_name.as_ptr()) == want);
-    let missing: Vec<String> =
-        DEVICE_EXTENSIONS.iter().filter(|e| !has(e)).map(|e| e.to_string_lossy().into_owned()).collect();
+    let exts = instance
+        .enumerate_device_extension_properties(physical)
+        .unwrap_or_default();
+    let has = |want: &CStr| {
+        exts.iter()
+            .any(|e| CStr::from_ptr(e.extension_name.as_ptr()) == want)
+    };
+    let missing: Vec<String> = DEVICE_EXTENSIONS
+        .iter()
+        .filter(|e| !has(e))
+        .map(|e| e.to_string_lossy().into_owned())
+        .collect();
     if !missing.is_empty() {
         cand.problem = Some(format!("missing {}", missing.join(", ")));
         return cand;
@@ -170,8 +196,11 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
     let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
     let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut f2 =
-        vk::PhysicalDeviceFeatures2::builder().push_next(&mut rq).push_next(&mut asf).push_next(&mut v12).build();
+    let mut f2 = vk::PhysicalDeviceFeatures2::builder()
+        .push_next(&mut rq)
+        .push_next(&mut asf)
+        .push_next(&mut v12)
+        .build();
     instance.get_physical_device_features2(physical, &mut f2);
     let mut lacking = Vec::new();
     if rq.ray_query == 0 {
@@ -210,7 +239,9 @@ impl Gpu {
 
     unsafe fn create(options: &ContextOptions) -> Result<Arc<Gpu>> {
         let entry = ash::Entry::load().map_err(|e| {
-            CoreError::NoDevice(format!("cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"))
+            CoreError::NoDevice(format!(
+                "cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"
+            ))
         })?;
         let app_name = CString::new("hrtao").unwrap();
         let app = vk::ApplicationInfo::builder()
@@ -225,7 +256,10 @@ impl Gpu {
         let mut validation = false;
         if options.validation {
             let available = entry.enumerate_instance_layer_properties().unwrap_or_default();
-            if available.iter().any(|l| CStr::from_ptr(l.layer_name.as_ptr()) == layer_name.as_c_str()) {
+            if available
+                .iter()
+                .any(|l| CStr::from_ptr(l.layer_name.as_ptr()) == layer_name.as_c_str())
+            {
                 layers.push(layer_name.as_ptr());
                 validation = true;
             } else {
@@ -245,23 +279,26 @@ impl Gpu {
             extensions.push(ext::DebugUtils::name().as_ptr());
         }
         let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut features = vk::ValidationFeaturesEXT::builder().enabled_validation_features(&enabled_features);
+        let mut features =
+            vk::ValidationFeaturesEXT::builder().enabled_validation_features(&enabled_features);
         let counters = Arc::new(ValidationCounters::default());
         let counters_box = Box::new(counters.clone());
-        let messenger_info = || vk::DebugUtilsMessengerCreateInfoEXT::builder()
-            .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
-            )
-            .message_type(
-                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-            )
-            .pfn_user_callback(Some(debug_callback))
-            .user_data(&*counters_box as *const Arc<ValidationCounters> as *mut c_void)
-            .build();
+        let messenger_info = || {
+            vk::DebugUtilsMessengerCreateInfoEXT::builder()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(&*counters_box as *const Arc<ValidationCounters> as *mut c_void)
+                .build()
+        };
         // One messenger info chained into instance creation (covers vkCreateInstance itself), another for the
         // persistent messenger: a struct chained once has its pNext set and cannot be reused.
         let mut creation_messenger = messenger_info();
@@ -295,7 +332,8 @@ impl Gpu {
         };
 
         let physicals = instance.enumerate_physical_devices().unwrap_or_default();
-        let mut candidates: Vec<Candidate> = physicals.iter().map(|&p| check_candidate(&instance, p)).collect();
+        let mut candidates: Vec<Candidate> =
+            physicals.iter().map(|&p| check_candidate(&instance, p)).collect();
         if let Some(filter) = &options.device {
             let f = filter.to_lowercase();
             for c in candidates.iter_mut() {
@@ -336,7 +374,9 @@ impl Gpu {
             .push_next(&mut driver_props)
             .build();
         instance.get_physical_device_properties2(physical, &mut props2);
-        let name = CStr::from_ptr(props.device_name.as_ptr()).to_string_lossy().into_owned();
+        let name = CStr::from_ptr(props.device_name.as_ptr())
+            .to_string_lossy()
+            .into_owned();
         let driver = format!(
             "{} {}",
             CStr::from_ptr(driver_props.driver_name.as_ptr()).to_string_lossy(),
@@ -347,10 +387,13 @@ impl Gpu {
 
         // Features: ray queries, acceleration structures, buffer device address, scalar layout, int64 (+ atomics).
         let mut supported_v12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut supported = vk::PhysicalDeviceFeatures2::builder().push_next(&mut supported_v12).build();
+        let mut supported = vk::PhysicalDeviceFeatures2::builder()
+            .push_next(&mut supported_v12)
+            .build();
         instance.get_physical_device_features2(physical, &mut supported);
         let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::builder().ray_query(true);
-        let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::builder().acceleration_structure(true);
+        let mut asf =
+            vk::PhysicalDeviceAccelerationStructureFeaturesKHR::builder().acceleration_structure(true);
         let mut v12 = vk::PhysicalDeviceVulkan12Features::builder()
             .buffer_device_address(true)
             .scalar_block_layout(true)
@@ -363,8 +406,10 @@ impl Gpu {
             .push_next(&mut asf)
             .push_next(&mut v12);
         let priorities = [1.0f32];
-        let queue_info =
-            [vk::DeviceQueueCreateInfo::builder().queue_family_index(queue_family).queue_priorities(&priorities).build()];
+        let queue_info = [vk::DeviceQueueCreateInfo::builder()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)
+            .build()];
         let mut dev_exts: Vec<*const i8> = DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
         if !options.surface_extensions.is_empty() {
             dev_exts.push(khr::Swapchain::name().as_ptr());
@@ -415,7 +460,13 @@ impl Gpu {
             timestamps,
             validation,
         };
-        log::info!("Vulkan device: {} ({}, {}), validation {}", info.name, info.kind, info.driver, validation);
+        log::info!(
+            "Vulkan device: {} ({}, {}), validation {}",
+            info.name,
+            info.kind,
+            info.driver,
+            validation
+        );
         Ok(Arc::new(Gpu {
             device,
             instance,
@@ -425,9 +476,11 @@ impl Gpu {
             accel,
             info,
             limits: props.limits,
-            scratch_alignment: as_props.min_acceleration_structure_scratch_offset_alignment.max(1) as u64,
+            scratch_alignment: as_props
+                .min_acceleration_structure_scratch_offset_alignment
+                .max(1) as u64,
             validation: counters,
-            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            allocator: ManuallyDrop::new(Arc::new(Mutex::new(allocator))),
             command_pool: Mutex::new(pool),
             debug,
             entry,
@@ -439,6 +492,12 @@ impl Gpu {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
     }
 
+    /// The shared allocator, for libraries that allocate on our device (egui-ash). Every clone must be
+    /// dropped before the `Gpu`; a clone still alive then is leaked rather than freed on a destroyed device.
+    pub fn allocator_arc(&self) -> Arc<Mutex<Allocator>> {
+        Arc::clone(&self.allocator)
+    }
+
     /// Records commands with `record`, submits them and waits for completion.
     pub fn run_commands<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
         unsafe {
@@ -446,18 +505,23 @@ impl Gpu {
             let cmd = self
                 .device
                 .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::builder().command_pool(*pool).command_buffer_count(1),
+                    &vk::CommandBufferAllocateInfo::builder()
+                        .command_pool(*pool)
+                        .command_buffer_count(1),
                 )
                 .map_err(|e| CoreError::Vulkan("vkAllocateCommandBuffers", e))?[0];
             let result = (|| {
                 self.device
                     .begin_command_buffer(
                         cmd,
-                        &vk::CommandBufferBeginInfo::builder().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                        &vk::CommandBufferBeginInfo::builder()
+                            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                     )
                     .map_err(|e| CoreError::Vulkan("vkBeginCommandBuffer", e))?;
                 let r = record(cmd);
-                self.device.end_command_buffer(cmd).map_err(|e| CoreError::Vulkan("vkEndCommandBuffer", e))?;
+                self.device
+                    .end_command_buffer(cmd)
+                    .map_err(|e| CoreError::Vulkan("vkEndCommandBuffer", e))?;
                 self.submit_and_wait(cmd)?;
                 Ok(r)
             })();
@@ -506,8 +570,18 @@ impl Drop for Gpu {
     fn drop(&mut self) {
         unsafe {
             let _ = self.device.device_wait_idle();
-            ManuallyDrop::drop(&mut self.allocator);
-            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);
+            let allocator = ManuallyDrop::take(&mut self.allocator);
+            match Arc::try_unwrap(allocator) {
+                Ok(a) => drop(a),
+                Err(still_shared) => {
+                    log::error!("GPU allocator still shared at device destruction: leaking it");
+                    std::mem::forget(still_shared);
+                }
+            }
+            self.device.destroy_command_pool(
+                *self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()),
+                None,
+            );
             self.device.destroy_device(None);
             if let Some((du, m)) = self.debug.take() {
                 du.destroy_debug_utils_messenger(m, None);

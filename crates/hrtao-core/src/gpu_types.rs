@@ -79,7 +79,8 @@ gpu_structs! {
         stale_frames: u32,
         selected_instance: u32,
         filter_iterations: u32,
-        _pad0: u32,
+        /// s_p: target feature size in pixels (eq. 2).
+        s_p: f32,
         background_top: [f32; 4],
         background_bottom: [f32; 4],
         /// Buffer device addresses of the frame's buffers.

@@ -53,13 +53,17 @@ pub fn cell_size(lod: i32) -> f32 {
 /// floor(p / s_wd), clamped to the int range.
 pub fn cell_coord(p: Vec3, lod: i32) -> IVec3 {
     let scale = 2f32.powi(-lod);
-    let q = (p * scale).floor().clamp(Vec3::splat(-2_147_483_520.0), Vec3::splat(2_147_483_520.0));
+    let q = (p * scale)
+        .floor()
+        .clamp(Vec3::splat(-2_147_483_520.0), Vec3::splat(2_147_483_520.0));
     q.as_ivec3()
 }
 
 /// floor(n s_nd) of eq. (5).
 pub fn normal_coord(n: Vec3, s_nd: f32) -> IVec3 {
-    (n.clamp(Vec3::splat(-1.0), Vec3::splat(1.0)) * s_nd).floor().as_ivec3()
+    (n.clamp(Vec3::splat(-1.0), Vec3::splat(1.0)) * s_nd)
+        .floor()
+        .as_ivec3()
 }
 
 /// eq. (4)-(6) chained with one base hash `h`: h(F + H7D), H7D = h(nz + h(ny + h(nx + H4D))),
@@ -82,12 +86,18 @@ pub struct CellKey {
     pub checksum: u32,
 }
 
-pub fn cell_key(p: Vec3, n: Vec3, lod: i32, s_nd: f32, frame: u32, capacity: u32) -> CellKey {
-    let c = cell_coord(p, lod);
-    let nq = normal_coord(n, s_nd);
+/// The key of integer cell `c` at LOD `lod` with quantised normal `nq`.
+pub fn cell_key_at(c: IVec3, lod: i32, nq: IVec3, frame: u32, capacity: u32) -> CellKey {
     let slot = h8d(h_index, c, lod, nq, frame) & (capacity - 1);
     let check = h8d(h_check, c, lod, nq, frame);
-    CellKey { slot, checksum: if check == EMPTY_CELL { 1 } else { check } }
+    CellKey {
+        slot,
+        checksum: if check == EMPTY_CELL { 1 } else { check },
+    }
+}
+
+pub fn cell_key(p: Vec3, n: Vec3, lod: i32, s_nd: f32, frame: u32, capacity: u32) -> CellKey {
+    cell_key_at(cell_coord(p, lod), lod, normal_coord(n, s_nd), frame, capacity)
 }
 
 #[cfg(test)]
@@ -122,11 +132,31 @@ mod tests {
         let p = Vec3::new(1.25, -3.5, 7.0);
         let n = Vec3::Z;
         let base = cell_key(p, n, -2, 3.0, 0, 1 << 20);
-        assert_eq!(base, cell_key(p + Vec3::splat(0.01), n, -2, 3.0, 0, 1 << 20), "same cell");
-        assert_ne!(base.checksum, cell_key(p + Vec3::X, n, -2, 3.0, 0, 1 << 20).checksum, "next cell");
-        assert_ne!(base.checksum, cell_key(p, -n, -2, 3.0, 0, 1 << 20).checksum, "other normal");
-        assert_ne!(base.checksum, cell_key(p, n, -1, 3.0, 0, 1 << 20).checksum, "other LOD");
-        assert_ne!(base.checksum, cell_key(p, n, -2, 3.0, 1, 1 << 20).checksum, "other F");
+        assert_eq!(
+            base,
+            cell_key(p + Vec3::splat(0.01), n, -2, 3.0, 0, 1 << 20),
+            "same cell"
+        );
+        assert_ne!(
+            base.checksum,
+            cell_key(p + Vec3::X, n, -2, 3.0, 0, 1 << 20).checksum,
+            "next cell"
+        );
+        assert_ne!(
+            base.checksum,
+            cell_key(p, -n, -2, 3.0, 0, 1 << 20).checksum,
+            "other normal"
+        );
+        assert_ne!(
+            base.checksum,
+            cell_key(p, n, -1, 3.0, 0, 1 << 20).checksum,
+            "other LOD"
+        );
+        assert_ne!(
+            base.checksum,
+            cell_key(p, n, -2, 3.0, 1, 1 << 20).checksum,
+            "other F"
+        );
         assert!(base.slot < 1 << 20 && base.checksum != EMPTY_CELL);
     }
 }

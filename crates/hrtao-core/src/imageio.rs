@@ -5,7 +5,10 @@ use std::path::Path;
 use crate::error::{CoreError, Result};
 
 fn io_err(path: &Path, e: std::io::Error) -> CoreError {
-    CoreError::Io { path: path.display().to_string(), source: e }
+    CoreError::Io {
+        path: path.display().to_string(),
+        source: e,
+    }
 }
 
 /// Writes a one-channel float image (`data` row 0 = top) as greyscale PFM ("Pf", negative scale).
@@ -23,7 +26,10 @@ pub fn write_pfm(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<(
 
 fn check_len(width: u32, height: u32, len: usize) -> Result<()> {
     if width as usize * height as usize != len {
-        return Err(CoreError::Invalid(format!("image of {width}x{height} needs {} values, got {len}", width * height)));
+        return Err(CoreError::Invalid(format!(
+            "image of {width}x{height} needs {} values, got {len}",
+            width * height
+        )));
     }
     Ok(())
 }
@@ -65,7 +71,11 @@ pub fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
         for x in 0..w as usize {
             let i = pos + ((y * w as usize + x) * channels) * 4;
             let raw = [bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]];
-            let v = if scale < 0.0 { f32::from_le_bytes(raw) } else { f32::from_be_bytes(raw) };
+            let v = if scale < 0.0 {
+                f32::from_le_bytes(raw)
+            } else {
+                f32::from_be_bytes(raw)
+            };
             data[(h as usize - 1 - y) * w as usize + x] = v;
         }
     }
@@ -85,10 +95,18 @@ pub fn write_exr(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<(
 
 /// Writes the AO image as .pfm or .exr, chosen by the extension.
 pub fn write_ao(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<()> {
-    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .as_deref()
+    {
         Some("pfm") => write_pfm(path, width, height, data),
         Some("exr") => write_exr(path, width, height, data),
-        _ => Err(CoreError::Invalid(format!("{}: AO output must end in .pfm or .exr", path.display()))),
+        _ => Err(CoreError::Invalid(format!(
+            "{}: AO output must end in .pfm or .exr",
+            path.display()
+        ))),
     }
 }
 

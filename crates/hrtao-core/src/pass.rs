@@ -86,7 +86,10 @@ pub struct PassSet {
 }
 
 fn spirv_words(bytes: &[u8]) -> Vec<u32> {
-    bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
 }
 
 impl PassSet {
@@ -108,29 +111,55 @@ impl PassSet {
                     .build(),
             ];
             let set_layout = device
-                .create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::builder().bindings(&bindings), None)
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::builder().bindings(&bindings),
+                    None,
+                )
                 .map_err(|e| CoreError::from_vk("vkCreateDescriptorSetLayout", e))?;
-            let push = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::COMPUTE, offset: 0, size: 16 }];
+            let push = [vk::PushConstantRange {
+                stage_flags: vk::ShaderStageFlags::COMPUTE,
+                offset: 0,
+                size: 16,
+            }];
             let set_layouts = [set_layout];
             let layout = device
                 .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::builder().set_layouts(&set_layouts).push_constant_ranges(&push),
+                    &vk::PipelineLayoutCreateInfo::builder()
+                        .set_layouts(&set_layouts)
+                        .push_constant_ranges(&push),
                     None,
                 )
                 .map_err(|e| CoreError::from_vk("vkCreatePipelineLayout", e))?;
             let sizes = [
-                vk::DescriptorPoolSize { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, descriptor_count: 1 },
-                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: 1 },
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
+                    descriptor_count: 1,
+                },
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::STORAGE_BUFFER,
+                    descriptor_count: 1,
+                },
             ];
             let pool = device
-                .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::builder().max_sets(1).pool_sizes(&sizes), None)
+                .create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::builder()
+                        .max_sets(1)
+                        .pool_sizes(&sizes),
+                    None,
+                )
                 .map_err(|e| CoreError::from_vk("vkCreateDescriptorPool", e))?;
             let set = device
                 .allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::builder().descriptor_pool(pool).set_layouts(&set_layouts),
+                    &vk::DescriptorSetAllocateInfo::builder()
+                        .descriptor_pool(pool)
+                        .set_layouts(&set_layouts),
                 )
                 .map_err(|e| CoreError::from_vk("vkAllocateDescriptorSets", e))?[0];
-            let buffer_info = [vk::DescriptorBufferInfo { buffer: globals.raw, offset: 0, range: vk::WHOLE_SIZE }];
+            let buffer_info = [vk::DescriptorBufferInfo {
+                buffer: globals.raw,
+                offset: 0,
+                range: vk::WHOLE_SIZE,
+            }];
             let write = vk::WriteDescriptorSet::builder()
                 .dst_set(set)
                 .dst_binding(1)
@@ -163,7 +192,10 @@ impl PassSet {
                     .module(module)
                     .name(entry)
                     .build();
-                let info = [vk::ComputePipelineCreateInfo::builder().stage(stage).layout(layout).build()];
+                let info = [vk::ComputePipelineCreateInfo::builder()
+                    .stage(stage)
+                    .layout(layout)
+                    .build()];
                 let result = device.create_compute_pipelines(vk::PipelineCache::null(), &info, None);
                 device.destroy_shader_module(module, None);
                 let pipeline = result.map_err(|(_, e)| CoreError::from_vk("vkCreateComputePipelines", e))?[0];
@@ -193,7 +225,11 @@ impl PassSet {
     }
 
     fn pipeline(&self, pass: Pass) -> vk::Pipeline {
-        self.pipelines.iter().find(|(p, _)| *p == pass).map(|(_, p)| *p).unwrap()
+        self.pipelines
+            .iter()
+            .find(|(p, _)| *p == pass)
+            .map(|(_, p)| *p)
+            .unwrap()
     }
 }
 
@@ -220,7 +256,12 @@ pub struct Recorder<'a> {
 }
 
 impl<'a> Recorder<'a> {
-    pub fn new(gpu: &'a Gpu, cmd: vk::CommandBuffer, passes: &'a PassSet, mut timer: Option<&'a mut GpuTimer>) -> Self {
+    pub fn new(
+        gpu: &'a Gpu,
+        cmd: vk::CommandBuffer,
+        passes: &'a PassSet,
+        mut timer: Option<&'a mut GpuTimer>,
+    ) -> Self {
         if let Some(t) = timer.as_deref_mut() {
             t.reset(cmd);
         }
@@ -234,7 +275,12 @@ impl<'a> Recorder<'a> {
                 &[],
             );
         }
-        Recorder { gpu, cmd, passes, timer }
+        Recorder {
+            gpu,
+            cmd,
+            passes,
+            timer,
+        }
     }
 
     /// Dispatches `pass` over a `width` x `height` grid of threads (one per pixel), with push constants `push`,
@@ -245,7 +291,11 @@ impl<'a> Recorder<'a> {
             t.begin(self.cmd, pass.section());
         }
         unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, self.passes.pipeline(pass));
+            d.cmd_bind_pipeline(
+                self.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.passes.pipeline(pass),
+            );
             d.cmd_push_constants(
                 self.cmd,
                 self.passes.layout,
@@ -253,7 +303,12 @@ impl<'a> Recorder<'a> {
                 0,
                 bytemuck::cast_slice(&push),
             );
-            d.cmd_dispatch(self.cmd, width.div_ceil(WORKGROUP_SIZE), height.div_ceil(WORKGROUP_SIZE), 1);
+            d.cmd_dispatch(
+                self.cmd,
+                width.div_ceil(WORKGROUP_SIZE),
+                height.div_ceil(WORKGROUP_SIZE),
+                1,
+            );
         }
         if let Some(t) = self.timer.as_deref_mut() {
             t.end(self.cmd);

@@ -11,7 +11,7 @@ use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::Camera;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
-use crate::gpu::{self, FrameGlobals, FrameStats, GPixel, HashCell, PixelCells};
+use crate::gpu::{self, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelCells};
 use crate::pass::{Pass, PassSet, Recorder};
 use crate::settings::{AoSettings, Mode};
 use crate::timer::GpuTimer;
@@ -32,7 +32,15 @@ struct Targets {
 impl Targets {
     fn new(gpu: &Arc<Gpu>, width: u32, height: u32) -> Result<Targets> {
         let n = width as u64 * height as u64;
-        let b = |name: &str, bytes: u64| Buffer::new(gpu, name, bytes, MemoryLocation::GpuOnly, vk::BufferUsageFlags::empty());
+        let b = |name: &str, bytes: u64| {
+            Buffer::new(
+                gpu,
+                name,
+                bytes,
+                MemoryLocation::GpuOnly,
+                vk::BufferUsageFlags::empty(),
+            )
+        };
         Ok(Targets {
             width,
             height,
@@ -177,7 +185,9 @@ impl Renderer {
             self.hash = Self::create_hash(&self.gpu, settings.hash_capacity)?;
             self.gpu.run_commands(|cmd| unsafe {
                 // The occupancy counter restarts with the empty table.
-                self.gpu.device.cmd_fill_buffer(cmd, self.stats.raw, 0, vk::WHOLE_SIZE, 0);
+                self.gpu
+                    .device
+                    .cmd_fill_buffer(cmd, self.stats.raw, 0, vk::WHOLE_SIZE, 0);
             })?;
         }
         self.settings = settings;
@@ -198,7 +208,11 @@ impl Renderer {
     fn globals_for(&self, camera: &Camera, scene_frame: u32) -> FrameGlobals {
         let s = &self.settings;
         let t = &self.targets;
-        let cam = Camera { width: t.width, height: t.height, ..*camera };
+        let cam = Camera {
+            width: t.width,
+            height: t.height,
+            ..*camera
+        };
         let f = cam.frame();
         // eq. (2): s_w = d tan(max(f / R_x, f R_x / R_y^2) s_p), with f the vertical aperture in radians.
         let aperture = cam.fov_y_deg.to_radians();
@@ -243,7 +257,7 @@ impl Renderer {
             stale_frames: s.stale_frames,
             selected_instance: self.selected_instance,
             filter_iterations: s.filter_iterations,
-            _pad0: 0,
+            s_p: s.s_p,
             background_top: c4(self.background_top),
             background_bottom: c4(self.background_bottom),
             gbuffer: t.gbuffer.address,
@@ -262,9 +276,19 @@ impl Renderer {
 
     /// Prepares the frame's globals and records all passes into `cmd` (the caller submits and then calls
     /// `finish_frame`). The output is left in `output_buffer()`.
-    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, scene: &SceneGpu, scene_frame: u32, camera: &Camera) -> Result<()> {
+    pub fn record_frame(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        scene: &SceneGpu,
+        scene_frame: u32,
+        camera: &Camera,
+    ) -> Result<()> {
         let key = (
-            Camera { width: self.targets.width, height: self.targets.height, ..*camera },
+            Camera {
+                width: self.targets.width,
+                height: self.targets.height,
+                ..*camera
+            },
             self.settings.clone(),
             scene_frame,
             scene.tlas.raw,
@@ -349,9 +373,24 @@ impl Renderer {
 
     fn read_buffer<T: bytemuck::Pod>(&self, src: &Buffer, count: usize) -> Result<Vec<T>> {
         let bytes = (count * std::mem::size_of::<T>()) as u64;
-        let staging = Buffer::new(&self.gpu, "readback", bytes, MemoryLocation::GpuToCpu, vk::BufferUsageFlags::empty())?;
+        let staging = Buffer::new(
+            &self.gpu,
+            "readback",
+            bytes,
+            MemoryLocation::GpuToCpu,
+            vk::BufferUsageFlags::empty(),
+        )?;
         self.gpu.run_commands(|cmd| unsafe {
-            self.gpu.device.cmd_copy_buffer(cmd, src.raw, staging.raw, &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }]);
+            self.gpu.device.cmd_copy_buffer(
+                cmd,
+                src.raw,
+                staging.raw,
+                &[vk::BufferCopy {
+                    src_offset: 0,
+                    dst_offset: 0,
+                    size: bytes,
+                }],
+            );
             host_read_barrier(&self.gpu, cmd);
         })?;
         staging.read(count)
@@ -386,8 +425,62 @@ impl Renderer {
         self.read_buffer(&self.targets.pixel_cells, self.pixel_count())
     }
 
+    /// The G-buffer sample at pixel (x, y) of the last frame (row 0 at the top): what a click picks.
+    /// None outside the image or on the background.
+    pub fn pick(&self, x: u32, y: u32) -> Result<Option<GPixel>> {
+        let (w, h) = self.size();
+        if x >= w || y >= h {
+            return Ok(None);
+        }
+        let size = std::mem::size_of::<GPixel>() as u64;
+        let offset = (y as u64 * w as u64 + x as u64) * size;
+        let staging = Buffer::new(
+            &self.gpu,
+            "pick",
+            size,
+            MemoryLocation::GpuToCpu,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        let src = self.targets.gbuffer.raw;
+        self.gpu.run_commands(|cmd| unsafe {
+            self.gpu.device.cmd_copy_buffer(
+                cmd,
+                src,
+                staging.raw,
+                &[vk::BufferCopy {
+                    src_offset: offset,
+                    dst_offset: 0,
+                    size,
+                }],
+            );
+            host_read_barrier(&self.gpu, cmd);
+        })?;
+        let px: GPixel = staging.read(1)?[0];
+        Ok((px.t >= 0.0 && px.instance != gpu::NO_INSTANCE).then_some(px))
+    }
+
     pub fn read_hash_cells(&self) -> Result<Vec<HashCell>> {
         self.read_buffer(&self.hash.cells, self.hash.capacity as usize)
+    }
+
+    /// Evaluates the shaders' hash on `cases` (for the CPU-mirror test), with this renderer's s_min, s_nd and
+    /// capacity. Needs a scene only for the descriptor set's TLAS binding.
+    pub fn hash_on_gpu(&mut self, scene: &SceneGpu, cases: &[HashTestCase]) -> Result<Vec<HashTestCase>> {
+        let buf = Buffer::from_slice(&self.gpu, "hash test cases", cases, vk::BufferUsageFlags::empty())?;
+        let mut globals = self.globals_for(&Camera::default(), 0);
+        const ROW: u32 = 256;
+        globals.width = ROW;
+        globals.height = (cases.len() as u32).div_ceil(ROW).max(1);
+        self.globals.write(&[globals])?;
+        self.passes.bind_tlas(scene.tlas.raw);
+        let addr = buf.address;
+        let push = [addr as u32, (addr >> 32) as u32, cases.len() as u32, 0];
+        self.gpu.run_commands(|cmd| {
+            let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
+            rec.dispatch(Pass::HashTest, ROW, globals.height, push);
+            host_read_barrier(&self.gpu, cmd);
+        })?;
+        buf.read(cases.len())
     }
 
     pub fn frame_counter(&self) -> u32 {

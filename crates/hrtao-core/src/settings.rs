@@ -36,10 +36,20 @@ impl Mode {
 
     /// True when the hash map passes run (HRTAO and its debug views).
     pub fn uses_hash(self) -> bool {
-        matches!(self, Mode::Hrtao | Mode::DebugCells | Mode::DebugLod | Mode::DebugSamples)
+        matches!(
+            self,
+            Mode::Hrtao | Mode::DebugCells | Mode::DebugLod | Mode::DebugSamples
+        )
     }
 
-    pub const ALL: [Mode; 6] = [Mode::Hrtao, Mode::Rtao, Mode::NoAo, Mode::DebugCells, Mode::DebugLod, Mode::DebugSamples];
+    pub const ALL: [Mode; 6] = [
+        Mode::Hrtao,
+        Mode::Rtao,
+        Mode::NoAo,
+        Mode::DebugCells,
+        Mode::DebugLod,
+        Mode::DebugSamples,
+    ];
 
     pub fn label(self) -> &'static str {
         match self {
@@ -63,7 +73,11 @@ impl std::str::FromStr for Mode {
             "cells" | "debug-cells" => Mode::DebugCells,
             "lod" | "debug-lod" => Mode::DebugLod,
             "samples" | "debug-samples" => Mode::DebugSamples,
-            _ => return Err(format!("unknown mode `{s}` (rtao, hrtao, none, debug-cells, debug-lod, debug-samples)")),
+            _ => {
+                return Err(format!(
+                    "unknown mode `{s}` (rtao, hrtao, none, debug-cells, debug-lod, debug-samples)"
+                ))
+            }
         })
     }
 }
@@ -105,13 +119,13 @@ impl Default for AoSettings {
             mode: Mode::Hrtao,
             ao_radius: 1.0,
             rays_per_pixel: 4,
-            s_p: 8.0,
+            s_p: 3.0,
             s_nd: 3.0,
             s_min: 1e-10,
             max_samples: 1000,
-            min_samples: 32,
+            min_samples: 8,
             filter: true,
-            filter_iterations: 3,
+            filter_iterations: 2,
             hash_capacity: 1 << 20,
             max_probe: 32,
             stale_frames: 240,
@@ -124,7 +138,10 @@ impl AoSettings {
     /// Checks ranges; the message names the setting.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.ao_radius.is_finite() && self.ao_radius > 0.0) {
-            return Err(format!("AO radius must be a positive number, got {}", self.ao_radius));
+            return Err(format!(
+                "AO radius must be a positive number, got {}",
+                self.ao_radius
+            ));
         }
         if !(self.s_p.is_finite() && self.s_p > 0.0) {
             return Err(format!("s_p must be positive, got {}", self.s_p));
@@ -135,11 +152,18 @@ impl AoSettings {
         if !(self.s_min.is_finite() && self.s_min > 0.0) {
             return Err(format!("s_min must be positive, got {}", self.s_min));
         }
-        if !self.hash_capacity.is_power_of_two() || self.hash_capacity < 1024 || self.hash_capacity > 1 << 28 {
-            return Err(format!("hash capacity must be a power of two in 1024..=2^28, got {}", self.hash_capacity));
+        if !self.hash_capacity.is_power_of_two() || self.hash_capacity < 1024 || self.hash_capacity > 1 << 28
+        {
+            return Err(format!(
+                "hash capacity must be a power of two in 1024..=2^28, got {}",
+                self.hash_capacity
+            ));
         }
         if self.rays_per_pixel > 1024 {
-            return Err(format!("ray budget {} is above 1024 rays per pixel", self.rays_per_pixel));
+            return Err(format!(
+                "ray budget {} is above 1024 rays per pixel",
+                self.rays_per_pixel
+            ));
         }
         if self.max_probe == 0 || self.max_probe > 4096 {
             return Err("max probe must be in 1..=4096".into());

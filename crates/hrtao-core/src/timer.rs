@@ -31,12 +31,21 @@ impl GpuTimer {
                 )
                 .map_err(|e| CoreError::from_vk("vkCreateQueryPool", e))?
         };
-        Ok(Some(GpuTimer { gpu: gpu.clone(), pool, sections: Vec::new(), open: false }))
+        Ok(Some(GpuTimer {
+            gpu: gpu.clone(),
+            pool,
+            sections: Vec::new(),
+            open: false,
+        }))
     }
 
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
         self.sections.clear();
-        unsafe { self.gpu.device.cmd_reset_query_pool(cmd, self.pool, 0, MAX_SCOPES * 2) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_reset_query_pool(cmd, self.pool, 0, MAX_SCOPES * 2)
+        };
     }
 
     pub fn begin(&mut self, cmd: vk::CommandBuffer, section: &'static str) {
@@ -47,7 +56,9 @@ impl GpuTimer {
         self.sections.push(section);
         self.open = true;
         unsafe {
-            self.gpu.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, q);
+            self.gpu
+                .device
+                .cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, q);
         }
     }
 
@@ -58,7 +69,9 @@ impl GpuTimer {
         self.open = false;
         let q = (self.sections.len() as u32 - 1) * 2 + 1;
         unsafe {
-            self.gpu.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, q);
+            self.gpu
+                .device
+                .cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, q);
         }
     }
 

@@ -22,7 +22,10 @@ fn open_plane_is_unoccluded() {
     assert!(min >= 0.99, "open plane AO min {min}");
     let gb = r.read_gbuffer().unwrap();
     assert!(gb.iter().all(|p| p.t > 0.0), "the camera sees only the floor");
-    assert!(gb.iter().all(|p| (p.normal[2] - 1.0).abs() < 1e-5), "normals face the camera");
+    assert!(
+        gb.iter().all(|p| (p.normal[2] - 1.0).abs() < 1e-5),
+        "normals face the camera"
+    );
     assert_clean(&gpu);
 }
 
@@ -61,7 +64,10 @@ fn wedge_matches_analytic_value() {
     println!("wedge: {n} floor pixels, mean |AO - analytic| = {mae:.4}");
     assert!(mae < 0.02, "mean absolute error {mae} against the analytic wedge");
     let mean_near = near_wall.iter().sum::<f32>() / near_wall.len().max(1) as f32;
-    assert!((mean_near - 0.5).abs() < 0.06, "AO at the crease {mean_near} ~ 0.5");
+    assert!(
+        (mean_near - 0.5).abs() < 0.06,
+        "AO at the crease {mean_near} ~ 0.5"
+    );
     assert_clean(&gpu);
 }
 
@@ -97,10 +103,15 @@ fn validation_layer_is_live_and_counts_messages() {
     let before = gpu.validation_messages();
     unsafe {
         use ash::vk;
-        let info = vk::BufferCreateInfo::builder().size(0).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+        let info = vk::BufferCreateInfo::builder()
+            .size(0)
+            .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
         if let Ok(b) = gpu.device.create_buffer(&info, None) {
             gpu.device.destroy_buffer(b, None);
         }
     }
-    assert!(gpu.validation_messages() > before, "the invalid call was not reported");
+    assert!(
+        gpu.validation_messages() > before,
+        "the invalid call was not reported"
+    );
 }

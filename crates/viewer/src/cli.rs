@@ -5,7 +5,11 @@ use clap::{Args, Parser, Subcommand};
 use hrtao_core::{AoSettings, Mode};
 
 #[derive(Parser, Debug)]
-#[command(name = "hrtao", version, about = "CAD viewport with noise-free ray-traced ambient occlusion (HRTAO)")]
+#[command(
+    name = "hrtao",
+    version,
+    about = "CAD viewport with noise-free ray-traced ambient occlusion (HRTAO)"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -16,6 +20,10 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Open the interactive viewer (the default with no command).
+    View(crate::view::ViewArgs),
+    /// Benchmark HRTAO against per-pixel RTAO along a camera path (JSON + table).
+    Bench(crate::bench::BenchArgs),
     /// Render a scene headless to PNG (shaded) and PFM/EXR (linear AO).
     Render(RenderArgs),
     /// List Vulkan devices and whether they support ray queries.

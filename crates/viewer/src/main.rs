@@ -1,6 +1,8 @@
 //! `hrtao`: CAD viewport with noise-free ray-traced ambient occlusion (HRTAO), and its headless commands.
+mod bench;
 mod cli;
 mod render_cmd;
+mod view;
 
 use clap::Parser;
 
@@ -13,7 +15,9 @@ fn main() {
     let result = match args.command {
         Some(cli::Command::Render(r)) => render_cmd::run(&r),
         Some(cli::Command::Devices(d)) => render_cmd::list_devices(&d),
-        None => render_cmd::run_default(),
+        Some(cli::Command::View(v)) => view::run(&v),
+        Some(cli::Command::Bench(b)) => bench::run(&b),
+        None => view::run(&view::ViewArgs::default()),
     };
     if let Err(e) = result {
         eprintln!("hrtao: error: {e:#}");

@@ -17,7 +17,12 @@ pub fn open_gpu(d: &DeviceArgs) -> Result<Arc<Gpu>> {
         ..Default::default()
     };
     let gpu = Gpu::new(&opts)?;
-    log::info!("device: {} ({}; {})", gpu.info.name, gpu.info.kind, gpu.info.driver);
+    log::info!(
+        "device: {} ({}; {})",
+        gpu.info.name,
+        gpu.info.kind,
+        gpu.info.driver
+    );
     Ok(gpu)
 }
 
@@ -110,7 +115,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             report.gpu_total_ms,
             report.rays,
             if settings.mode.uses_hash() {
-                format!(", {} cells ({:.1}% load), {} failed inserts", report.occupied_cells, report.load_factor * 100.0, report.failed_inserts)
+                format!(
+                    ", {} cells ({:.1}% load), {} failed inserts",
+                    report.occupied_cells,
+                    report.load_factor * 100.0,
+                    report.failed_inserts
+                )
             } else {
                 String::new()
             }
@@ -163,19 +173,28 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
 
 pub fn list_devices(d: &DeviceArgs) -> Result<()> {
     let gpu = open_gpu(d)?;
-    println!("{} ({}), driver {}, Vulkan {}", gpu.info.name, gpu.info.kind, gpu.info.driver, gpu.info.api_version);
+    println!(
+        "{} ({}), driver {}, Vulkan {}",
+        gpu.info.name, gpu.info.kind, gpu.info.driver, gpu.info.api_version
+    );
     Ok(())
 }
 
 /// The default scene bundled in `assets/`.
 pub fn default_scene_path() -> std::path::PathBuf {
-    let beside_exe = std::env::current_exe().ok().and_then(|p| p.parent().map(|d| d.join("assets")));
+    let beside_exe = std::env::current_exe()
+        .ok()
+        .and_then(|p| p.parent().map(|d| d.join("assets")));
     let candidates = [
         Some(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/default.glb")),
         beside_exe.map(|d| d.join("default.glb")),
         Some(Path::new("assets/default.glb").to_path_buf()),
     ];
-    candidates.into_iter().flatten().find(|p| p.exists()).unwrap_or_else(|| "assets/default.glb".into())
+    candidates
+        .into_iter()
+        .flatten()
+        .find(|p| p.exists())
+        .unwrap_or_else(|| "assets/default.glb".into())
 }
 
 /// No subcommand: render the default scene (the interactive viewer is the `view` command once it lands).
@@ -191,11 +210,11 @@ pub fn run_default() -> Result<()> {
             mode: hrtao_core::Mode::Hrtao,
             radius: Some(8.0),
             rays: 8,
-            sp: 8.0,
+            sp: 3.0,
             snd: 3.0,
             max_samples: 1000,
-            min_samples: 32,
-            filter_iterations: 3,
+            min_samples: 8,
+            filter_iterations: 2,
             hash_capacity: 1 << 20,
             clay: false,
         },
@@ -203,7 +222,10 @@ pub fn run_default() -> Result<()> {
         out: Some("hrtao-default.png".into()),
         ao_out: None,
         stats: None,
-        device: DeviceArgs { device: None, validation: false },
+        device: DeviceArgs {
+            device: None,
+            validation: false,
+        },
     };
     run(&args)?;
     println!("wrote hrtao-default.png");

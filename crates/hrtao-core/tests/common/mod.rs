@@ -9,12 +9,20 @@ use hrtao_scene::{Instance, Mesh, Primitive, Scene};
 /// A GPU context with the Khronos validation layer on (tests fail on any message: see `assert_clean`).
 pub fn gpu() -> Arc<Gpu> {
     let _ = env_logger::builder().is_test(true).try_init();
-    let opts = ContextOptions { validation: true, device: std::env::var("HRTAO_DEVICE").ok(), ..Default::default() };
+    let opts = ContextOptions {
+        validation: true,
+        device: std::env::var("HRTAO_DEVICE").ok(),
+        ..Default::default()
+    };
     Gpu::new(&opts).expect("a Vulkan device with ray queries (run scripts/install-deps.sh)")
 }
 
 pub fn assert_clean(gpu: &Gpu) {
-    assert_eq!(gpu.validation_messages(), 0, "the validation layer reported messages (see the log above)");
+    assert_eq!(
+        gpu.validation_messages(),
+        0,
+        "the validation layer reported messages (see the log above)"
+    );
 }
 
 /// An axis-aligned quad as a mesh: centre, two half-extent edge vectors.
@@ -29,8 +37,16 @@ pub fn quad(center: Vec3, a: Vec3, b: Vec3) -> Primitive {
 
 pub fn scene_of(prims: Vec<Primitive>) -> Scene {
     let mut s = Scene::new("test");
-    s.meshes.push(Mesh { name: "m".into(), primitives: prims });
-    s.instances.push(Instance { mesh: 0, transform: Mat4::IDENTITY, name: "i".into(), visible: true });
+    s.meshes.push(Mesh {
+        name: "m".into(),
+        primitives: prims,
+    });
+    s.instances.push(Instance {
+        mesh: 0,
+        transform: Mat4::IDENTITY,
+        name: "i".into(),
+        visible: true,
+    });
     s
 }
 
@@ -40,19 +56,92 @@ pub fn floor() -> Primitive {
 }
 
 pub fn top_down_camera(height: f32, w: u32, h: u32) -> Camera {
-    Camera { eye: [0.0, 0.0, height], target: [0.0, 0.0, 0.0], up: [0.0, 1.0, 0.0], fov_y_deg: 60.0, width: w, height: h }
+    Camera {
+        eye: [0.0, 0.0, height],
+        target: [0.0, 0.0, 0.0],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 60.0,
+        width: w,
+        height: h,
+    }
 }
 
 pub fn rtao(rays: u32, radius: f32) -> AoSettings {
-    AoSettings { mode: Mode::Rtao, rays_per_pixel: rays, ao_radius: radius, ..Default::default() }
+    AoSettings {
+        mode: Mode::Rtao,
+        rays_per_pixel: rays,
+        ao_radius: radius,
+        ..Default::default()
+    }
 }
 
 /// Renders `frames` frames and returns the renderer (for read-backs).
-pub fn render(gpu: &Arc<Gpu>, scene: &Scene, cam: &Camera, settings: AoSettings, frames: u32) -> (Renderer, SceneGpu) {
+pub fn render(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    cam: &Camera,
+    settings: AoSettings,
+    frames: u32,
+) -> (Renderer, SceneGpu) {
     let sg = SceneGpu::new(gpu, scene).expect("scene upload");
     let mut r = Renderer::new(gpu, cam.width, cam.height, settings).expect("renderer");
     for _ in 0..frames {
         r.render(&sg, scene.frame(), cam).expect("frame");
     }
     (r, sg)
+}
+
+/// `../shared` beside the repository (CI clones the repo with shared/ next to it).
+pub fn shared(rel: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared")
+        .join(rel)
+}
+
+/// A shared scene by its key in shared/refs/index.json, with its reference camera and AO radius.
+pub fn shared_scene(key: &str, w: u32, h: u32) -> (Scene, Camera, f32) {
+    let index: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(shared("refs/index.json")).unwrap()).unwrap();
+    let entry = &index[key];
+    let scene = hrtao_scene::load(
+        shared(entry["scene"].as_str().unwrap()).to_str().unwrap(),
+        &mut |_| {},
+    )
+    .unwrap();
+    let cam = Camera::load(&shared(&format!("refs/{key}_{w}x{h}.camera.json"))).unwrap();
+    (scene, cam, entry["radius"].as_f64().unwrap() as f32)
+}
+
+/// Mean absolute error over pixels not open (AO < 0.999) in both images.
+pub fn mae(a: &[f32], b: &[f32]) -> f32 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (x, y) in a.iter().zip(b) {
+        if *x < 0.999 || *y < 0.999 {
+            sum += (x - y).abs() as f64;
+            n += 1;
+        }
+    }
+    (sum / n.max(1) as f64) as f32
+}
+
+/// A converged per-pixel RTAO reference of the scene (rays x frames samples per pixel).
+pub fn reference(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    cam: &Camera,
+    radius: f32,
+    rays: u32,
+    frames: u32,
+) -> Vec<f32> {
+    let (r, _sg) = render(gpu, scene, cam, rtao(rays, radius), frames);
+    r.read_ao().unwrap()
+}
+
+pub fn hrtao(rays: u32, radius: f32) -> AoSettings {
+    AoSettings {
+        mode: Mode::Hrtao,
+        rays_per_pixel: rays,
+        ao_radius: radius,
+        ..Default::default()
+    }
 }
