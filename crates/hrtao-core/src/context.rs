@@ -530,6 +530,11 @@ impl Gpu {
         }
     }
 
+    /// Bytes of device memory allocated through the allocator (all our buffers and acceleration structures).
+    pub fn device_memory_bytes(&self) -> u64 {
+        self.allocator().generate_report().total_allocated_bytes
+    }
+
     /// Submits one command buffer and waits for it with a fence (bounded wait: a hung device is an error).
     pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {
         unsafe {

@@ -15,6 +15,7 @@ pub mod error;
 pub mod gpu;
 pub mod hash;
 pub mod imageio;
+pub mod metrics;
 pub mod pass;
 pub mod renderer;
 pub mod settings;

@@ -114,14 +114,7 @@ pub fn shared_scene(key: &str, w: u32, h: u32) -> (Scene, Camera, f32) {
 
 /// Mean absolute error over pixels not open (AO < 0.999) in both images.
 pub fn mae(a: &[f32], b: &[f32]) -> f32 {
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for (x, y) in a.iter().zip(b) {
-        if *x < 0.999 || *y < 0.999 {
-            sum += (x - y).abs() as f64;
-            n += 1;
-        }
-    }
-    (sum / n.max(1) as f64) as f32
+    hrtao_core::metrics::ao_error(a, b).mae as f32
 }
 
 /// A converged per-pixel RTAO reference of the scene (rays x frames samples per pixel).
