@@ -80,6 +80,8 @@ pub struct Gpu {
     pub limits: vk::PhysicalDeviceLimits,
     pub scratch_alignment: u64,
     pub validation: Arc<ValidationCounters>,
+    /// Bytes currently allocated by `Buffer`s (kept by buffer.rs).
+    pub(crate) device_bytes: std::sync::atomic::AtomicU64,
     allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
     command_pool: Mutex<vk::CommandPool>,
     debug: Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>,
@@ -480,6 +482,7 @@ impl Gpu {
                 .min_acceleration_structure_scratch_offset_alignment
                 .max(1) as u64,
             validation: counters,
+            device_bytes: Default::default(),
             allocator: ManuallyDrop::new(Arc::new(Mutex::new(allocator))),
             command_pool: Mutex::new(pool),
             debug,
@@ -532,7 +535,7 @@ impl Gpu {
 
     /// Bytes of device memory allocated through the allocator (all our buffers and acceleration structures).
     pub fn device_memory_bytes(&self) -> u64 {
-        self.allocator().generate_report().total_allocated_bytes
+        self.device_bytes.load(Ordering::Relaxed)
     }
 
     /// Submits one command buffer and waits for it with a fence (bounded wait: a hung device is an error).
