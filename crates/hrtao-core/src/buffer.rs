@@ -165,7 +165,9 @@ impl Drop for Buffer {
     fn drop(&mut self) {
         unsafe {
             if let Some(a) = self.allocation.take() {
-                self.gpu.device_bytes.fetch_sub(a.size(), std::sync::atomic::Ordering::Relaxed);
+                self.gpu
+                    .device_bytes
+                    .fetch_sub(a.size(), std::sync::atomic::Ordering::Relaxed);
                 let _ = self.gpu.allocator().free(a);
             }
             self.gpu.device.destroy_buffer(self.raw, None);

@@ -21,7 +21,11 @@ pub fn ao_error(image: &[f32], reference: &[f32]) -> AoError {
     if n == 0 {
         return AoError::default();
     }
-    AoError { mae: abs / n as f64, rmse: (sq / n as f64).sqrt(), pixels: n }
+    AoError {
+        mae: abs / n as f64,
+        rmse: (sq / n as f64).sqrt(),
+        pixels: n,
+    }
 }
 
 #[cfg(test)]

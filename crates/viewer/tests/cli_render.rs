@@ -1,0 +1,156 @@
+//! `hrtao render` end to end: a shared scene with its suggested camera, image outputs, and bad input.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn shared(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared")
+        .join(rel)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hrtao-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn hrtao(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(args)
+        .env("HRTAO_VALIDATION", "1")
+        .output()
+        .expect("run hrtao")
+}
+
+#[test]
+fn render_shared_scene_writes_png_pfm_exr_and_stats() {
+    let png = tmp("rod.png");
+    let pfm = tmp("rod.pfm");
+    let exr = tmp("rod.exr");
+    let stats = tmp("rod.json");
+    let scene = shared("scenes/rod_assembly/rod.glb");
+    let camera = shared("refs/rod_160x90.camera.json");
+    for (mode, ao_out) in [("rtao", &pfm), ("hrtao", &exr)] {
+        let out = hrtao(&[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--camera",
+            camera.to_str().unwrap(),
+            "--radius",
+            "10",
+            "--mode",
+            mode,
+            "--rays",
+            "8",
+            "--frames",
+            "2",
+            "--out",
+            png.to_str().unwrap(),
+            "--ao-out",
+            ao_out.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{mode}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    // PFM round trip: 160x90, non-constant AO in [0, 1], background 1.
+    let (w, h, ao) = hrtao_core::imageio::read_pfm(&pfm).unwrap();
+    assert_eq!((w, h), (160, 90));
+    let min = ao.iter().cloned().fold(f32::MAX, f32::min);
+    assert!(ao.iter().all(|v| (0.0..=1.0).contains(v)));
+    assert!(min < 0.6, "AO varies (min {min})");
+    assert_eq!(ao[0], 1.0, "the top-left corner is background");
+    let img = image::open(&png).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (160, 90));
+    let distinct: std::collections::HashSet<[u8; 4]> = img.pixels().map(|p| p.0).collect();
+    assert!(distinct.len() > 50, "shaded image has {} colours", distinct.len());
+    assert!(std::fs::metadata(&exr).unwrap().len() > 100);
+    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(s["device"]["name"].as_str().unwrap().len() > 2);
+    assert_eq!(s["instances"], 29);
+    assert_eq!(s["frames"].as_array().unwrap().len(), 2);
+    assert!(s["total_rays"].as_u64().unwrap() > 1000);
+    assert_eq!(s["validation_messages"], 0);
+}
+
+fn assert_clean_error(out: &std::process::Output, needle: &str) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "exit code 1 expected; stderr: {err}");
+    assert!(!err.contains("panicked"), "panic: {err}");
+    assert!(
+        err.to_lowercase().contains(&needle.to_lowercase()),
+        "stderr should mention `{needle}`: {err}"
+    );
+}
+
+#[test]
+fn bad_inputs_give_clear_errors() {
+    let out = hrtao(&[
+        "render",
+        "--scene",
+        "/nonexistent/model.glb",
+        "--out",
+        tmp("x.png").to_str().unwrap(),
+    ]);
+    assert_clean_error(&out, "/nonexistent/model.glb");
+
+    let rod = std::fs::read(shared("scenes/rod_assembly/rod.glb")).unwrap();
+    let truncated = tmp("truncated.glb");
+    std::fs::write(&truncated, &rod[..rod.len() / 3]).unwrap();
+    let out = hrtao(&["render", "--scene", truncated.to_str().unwrap()]);
+    assert_clean_error(&out, "truncated.glb");
+
+    // A one-triangle glTF whose first vertex is NaN.
+    let mut bytes = Vec::new();
+    for v in [f32::NAN, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    let b64 = base64_encode(&bytes);
+    let gltf = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":36}}],
+        "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{b64}"}}]}}"#
+    );
+    let nan = tmp("nan.gltf");
+    std::fs::write(&nan, gltf).unwrap();
+    let out = hrtao(&["render", "--scene", nan.to_str().unwrap()]);
+    assert_clean_error(&out, "nan");
+
+    let out = hrtao(&["render", "--scene", "gen:nosuchthing"]);
+    assert_clean_error(&out, "nosuchthing");
+
+    let bad_cam = tmp("bad_camera.json");
+    std::fs::write(&bad_cam, r#"{"eye":[0,0,0],"target":[0,0,0],"up":[0,1,0]}"#).unwrap();
+    let out = hrtao(&[
+        "render",
+        "--scene",
+        shared("scenes/rod_assembly/rod.glb").to_str().unwrap(),
+        "--camera",
+        bad_cam.to_str().unwrap(),
+    ]);
+    assert_clean_error(&out, "bad_camera.json");
+}
+
+fn base64_encode(data: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for chunk in data.chunks(3) {
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for i in 0..4 {
+            if i <= chunk.len() {
+                s.push(T[((n >> (18 - 6 * i)) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
