@@ -87,7 +87,6 @@ pub struct Gpu {
     debug: Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>,
     /// Kept alive until the very end: the loader library must outlive every Vulkan call.
     pub entry: ash::Entry,
-    _validation_box: Option<Box<Arc<ValidationCounters>>>,
 }
 
 const DEVICE_EXTENSIONS: [&CStr; 3] = [
@@ -284,7 +283,6 @@ impl Gpu {
         let mut features =
             vk::ValidationFeaturesEXT::builder().enabled_validation_features(&enabled_features);
         let counters = Arc::new(ValidationCounters::default());
-        let counters_box = Box::new(counters.clone());
         let messenger_info = || {
             vk::DebugUtilsMessengerCreateInfoEXT::builder()
                 .message_severity(
@@ -298,7 +296,7 @@ impl Gpu {
                         | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
                 )
                 .pfn_user_callback(Some(debug_callback))
-                .user_data(&*counters_box as *const Arc<ValidationCounters> as *mut c_void)
+                .user_data(Arc::as_ptr(&counters) as *mut c_void)
                 .build()
         };
         // One messenger info chained into instance creation (covers vkCreateInstance itself), another for the
@@ -487,7 +485,6 @@ impl Gpu {
             command_pool: Mutex::new(pool),
             debug,
             entry,
-            _validation_box: Some(counters_box),
         }))
     }
 
