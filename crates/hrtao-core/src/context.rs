@@ -106,11 +106,8 @@ unsafe extern "system" fn debug_callback(
     } else {
         CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
     };
-    let counters = if user.is_null() {
-        None
-    } else {
-        Some(&*(user as *const Arc<ValidationCounters>))
-    };
+    // `user` points into the Arc held by `Gpu::validation`, alive as long as the messenger.
+    let counters = if user.is_null() { None } else { Some(&*(user as *const ValidationCounters)) };
     if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
         log::error!("[vulkan {kind:?}] {msg}");
         if let Some(c) = counters {

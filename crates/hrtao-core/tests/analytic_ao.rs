@@ -97,7 +97,7 @@ fn slab_below_radius_is_darker_and_matches_analytic() {
 
 #[test]
 fn validation_layer_is_live_and_counts_messages() {
-    // Proves `assert_clean` means something: an invalid call (a zero-sized buffer) must be counted.
+    // Proves `assert_clean` means something: an invalid call (a buffer with no usage flags) must be counted.
     let gpu = gpu();
     assert!(gpu.info.validation);
     let before = gpu.validation_messages();
