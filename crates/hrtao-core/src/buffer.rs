@@ -34,6 +34,17 @@ impl Buffer {
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
             | extra;
+        if let Some(limit) = gpu.memory_limit {
+            let used = gpu.device_bytes.load(std::sync::atomic::Ordering::Relaxed);
+            if used.saturating_add(size) > limit {
+                return Err(CoreError::Memory(format!(
+                    "allocating {} for `{name}` would exceed the device memory limit of {} ({} in use)",
+                    human_bytes(size),
+                    human_bytes(limit),
+                    human_bytes(used)
+                )));
+            }
+        }
         unsafe {
             let raw = gpu
                 .device
@@ -64,6 +75,8 @@ impl Buffer {
                 gpu.device.destroy_buffer(raw, None);
                 return Err(CoreError::from_vk("vkBindBufferMemory", e));
             }
+            gpu.device_bytes
+                .fetch_add(allocation.size(), std::sync::atomic::Ordering::Relaxed);
             let address = gpu
                 .device
                 .get_buffer_device_address(&vk::BufferDeviceAddressInfo::builder().buffer(raw));
@@ -172,6 +185,22 @@ impl Drop for Buffer {
             }
             self.gpu.device.destroy_buffer(self.raw, None);
         }
+    }
+}
+
+/// "12.3 MiB" style sizes for messages.
+pub fn human_bytes(b: u64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} B")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
     }
 }
 

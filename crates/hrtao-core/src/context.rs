@@ -23,6 +23,9 @@ pub struct ContextOptions {
     pub device: Option<String>,
     /// Instance extensions needed for presenting (from ash-window), empty for headless use.
     pub surface_extensions: Vec<&'static CStr>,
+    /// Refuse allocations past this many bytes of device memory (simulates a small GPU; also
+    /// `HRTAO_DEVICE_MEMORY_LIMIT=<MiB>`). None: no limit but the device's own.
+    pub memory_limit: Option<u64>,
 }
 
 impl ContextOptions {
@@ -41,6 +44,14 @@ pub fn validation_requested_by_env() -> bool {
         std::env::var("HRTAO_VALIDATION").as_deref(),
         Ok("1") | Ok("true") | Ok("yes")
     )
+}
+
+/// `HRTAO_DEVICE_MEMORY_LIMIT` in MiB, if set.
+pub fn memory_limit_from_env() -> Option<u64> {
+    std::env::var("HRTAO_DEVICE_MEMORY_LIMIT")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .map(|mib| mib << 20)
 }
 
 /// Validation messages counted by severity since the context was created.
@@ -82,6 +93,7 @@ pub struct Gpu {
     pub validation: Arc<ValidationCounters>,
     /// Bytes currently allocated by `Buffer`s (kept by buffer.rs).
     pub(crate) device_bytes: std::sync::atomic::AtomicU64,
+    pub(crate) memory_limit: Option<u64>,
     allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
     command_pool: Mutex<vk::CommandPool>,
     debug: Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>,
@@ -107,7 +119,11 @@ unsafe extern "system" fn debug_callback(
         CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
     };
     // `user` points into the Arc held by `Gpu::validation`, alive as long as the messenger.
-    let counters = if user.is_null() { None } else { Some(&*(user as *const ValidationCounters)) };
+    let counters = if user.is_null() {
+        None
+    } else {
+        Some(&*(user as *const ValidationCounters))
+    };
     if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
         log::error!("[vulkan {kind:?}] {msg}");
         if let Some(c) = counters {
@@ -478,6 +494,7 @@ impl Gpu {
                 .max(1) as u64,
             validation: counters,
             device_bytes: Default::default(),
+            memory_limit: options.memory_limit.or_else(memory_limit_from_env),
             allocator: ManuallyDrop::new(Arc::new(Mutex::new(allocator))),
             command_pool: Mutex::new(pool),
             debug,

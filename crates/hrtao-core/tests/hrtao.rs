@@ -195,14 +195,25 @@ fn debug_views_show_cells_lods_and_samples() {
     let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, radius)).unwrap();
     r.render(&sg, scene.frame(), &cam).unwrap();
     let mut colours = Vec::new();
-    for mode in [hrtao_core::Mode::DebugCells, hrtao_core::Mode::DebugLod, hrtao_core::Mode::DebugSamples] {
-        r.set_settings(AoSettings { mode, ..r.settings.clone() }).unwrap();
+    for mode in [
+        hrtao_core::Mode::DebugCells,
+        hrtao_core::Mode::DebugLod,
+        hrtao_core::Mode::DebugSamples,
+    ] {
+        r.set_settings(AoSettings {
+            mode,
+            ..r.settings.clone()
+        })
+        .unwrap();
         r.render(&sg, scene.frame(), &cam).unwrap();
         let rgba = r.read_rgba().unwrap();
         let distinct: std::collections::HashSet<&[u8]> = rgba.chunks(4).collect();
         colours.push(distinct.len());
     }
-    println!("distinct colours: cells {}, LOD {}, samples {}", colours[0], colours[1], colours[2]);
+    println!(
+        "distinct colours: cells {}, LOD {}, samples {}",
+        colours[0], colours[1], colours[2]
+    );
     assert!(colours[0] > 200, "hash cells in false colours");
     assert!(colours[1] >= 2, "at least the background and one LOD");
     assert!(colours[2] > 5, "a samples heat map");
@@ -216,13 +227,21 @@ fn stale_cells_are_reclaimed_so_the_map_never_fills() {
     let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     // A small map and a short staleness window; the camera visits new places every frame.
-    let settings = AoSettings { hash_capacity: 8192, stale_frames: 2, ..hrtao(1, radius) };
+    let settings = AoSettings {
+        hash_capacity: 8192,
+        stale_frames: 2,
+        ..hrtao(1, radius)
+    };
     let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
     let (mut reclaimed, mut last_failed) = (0, 0);
     for i in 0..12 {
         let mut c = cam;
         let a = i as f32 * 0.5;
-        c.eye = [cam.eye[0] * a.cos() - cam.eye[1] * a.sin(), cam.eye[0] * a.sin() + cam.eye[1] * a.cos(), cam.eye[2] * (1.0 + 0.2 * (i % 3) as f32)];
+        c.eye = [
+            cam.eye[0] * a.cos() - cam.eye[1] * a.sin(),
+            cam.eye[0] * a.sin() + cam.eye[1] * a.cos(),
+            cam.eye[2] * (1.0 + 0.2 * (i % 3) as f32),
+        ];
         let rep = r.render(&sg, scene.frame(), &c).unwrap();
         reclaimed += rep.reclaimed;
         last_failed = rep.failed_inserts;

@@ -8,6 +8,8 @@ mod aabb;
 mod error;
 mod generate;
 mod gltf_load;
+#[cfg(feature = "hostile-corpus")]
+pub mod hostile;
 mod obj_load;
 mod scene;
 

@@ -14,6 +14,7 @@ pub fn open_gpu(d: &DeviceArgs) -> Result<Arc<Gpu>> {
     let opts = ContextOptions {
         validation: d.validation || hrtao_core::context::validation_requested_by_env(),
         device: d.device.clone(),
+        memory_limit: hrtao_core::context::memory_limit_from_env(),
         ..Default::default()
     };
     let gpu = Gpu::new(&opts)?;
