@@ -171,7 +171,13 @@ impl UpAxis {
 
 impl Camera {
     /// A camera that frames the box `min..max` from an isometric-like direction (front-right-above).
+    /// An empty or non-finite box (a scene with nothing visible) frames the unit cube.
     pub fn fit(min: Vec3, max: Vec3, up: UpAxis, fov_y_deg: f32, width: u32, height: u32) -> Camera {
+        let (min, max) = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
+            (min, max)
+        } else {
+            (Vec3::splat(-0.5), Vec3::splat(0.5))
+        };
         let center = (min + max) * 0.5;
         let radius = ((max - min).length() * 0.5).max(1e-6);
         let upv = up.vector();

@@ -252,6 +252,7 @@ pub fn write_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
     text(
         "zero_scale_only_node",
         gltf(&CORNER, None, r#"[{"mesh":0,"scale":[0,0,0]}]"#, one_scene),
+        // The singular node is skipped with a warning, which leaves nothing to show.
         Expect::Error,
     );
     text(

@@ -81,5 +81,10 @@ fn finish(scene: Scene, source: &str) -> Result<Scene, SceneError> {
     if scene.unique_triangle_count() == 0 {
         return Err(SceneError::Empty(format!("scene {source} has no triangles")));
     }
+    if scene.instances.is_empty() {
+        return Err(SceneError::Empty(format!(
+            "scene {source} places no mesh: it has no node with a mesh (or only nodes with singular transforms)"
+        )));
+    }
     Ok(scene)
 }

@@ -76,6 +76,11 @@ pub struct AoArgs {
 
 impl AoArgs {
     pub fn settings(&self, scene_diagonal: f32) -> AoSettings {
+        let scene_diagonal = if scene_diagonal.is_finite() && scene_diagonal > 0.0 {
+            scene_diagonal
+        } else {
+            1.0
+        };
         AoSettings {
             mode: self.mode,
             ao_radius: self.radius.unwrap_or((scene_diagonal * 0.05).max(1e-6)),
