@@ -313,7 +313,9 @@ impl Renderer {
         if mode == Mode::Rtao {
             rec.dispatch(Pass::Rtao, w, h, [0; 4]);
         } else if mode.uses_hash() {
-            rec.dispatch(Pass::CellFinder, w, h, [0; 4]);
+            for level in (0..gpu::LOD_COUNT).rev() {
+                rec.dispatch(Pass::CellFinder, w, h, [level, 0, 0, 0]);
+            }
             rec.dispatch(Pass::AoUpdate, w, h, [0; 4]);
             rec.dispatch(Pass::Resolve, w, h, [0; 4]);
             if self.settings.filter {
