@@ -44,9 +44,9 @@ void main() {
         // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
         vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
         float diffuse = max(dot(px.normal, key), 0.0);
-        float light = (0.35 + 0.65 * diffuse);
-        vec3 base = (g.flags & FLAG_SHADED) != 0u ? px.color : vec3(0.85);
-        color = base * ao * light * 1.15;
+        float light = 0.4 + 0.6 * diffuse;
+        vec3 base = (g.flags & FLAG_SHADED) != 0u ? px.color : vec3(0.8);
+        color = base * ao * light;
         if ((InstanceRef(g.instances).v[px.instance].flags & INSTANCE_SELECTED) != 0u) {
             color = mix(color, vec3(1.0, 0.55, 0.1), 0.45);
         }
