@@ -89,7 +89,7 @@ fn scaled(v: &[f32], s: f32, offset: f32) -> Vec<f32> {
 
 fn glb(json: &str, bin: Option<&[u8]>) -> Vec<u8> {
     let mut j = json.as_bytes().to_vec();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut chunks = Vec::new();
@@ -98,7 +98,7 @@ fn glb(json: &str, bin: Option<&[u8]>) -> Vec<u8> {
     chunks.extend(&j);
     if let Some(b) = bin {
         let mut b = b.to_vec();
-        while b.len() % 4 != 0 {
+        while !b.len().is_multiple_of(4) {
             b.push(0);
         }
         chunks.extend((b.len() as u32).to_le_bytes());

@@ -197,38 +197,3 @@ pub fn default_scene_path() -> std::path::PathBuf {
         .find(|p| p.exists())
         .unwrap_or_else(|| "assets/default.glb".into())
 }
-
-/// No subcommand: render the default scene (the interactive viewer is the `view` command once it lands).
-pub fn run_default() -> Result<()> {
-    let scene = default_scene_path();
-    let args = RenderArgs {
-        scene: scene.display().to_string(),
-        camera: Some(scene.with_file_name("default.camera.json")),
-        width: None,
-        height: None,
-        up: "z".into(),
-        ao: crate::cli::AoArgs {
-            mode: hrtao_core::Mode::Hrtao,
-            radius: Some(8.0),
-            rays: 8,
-            sp: 3.0,
-            snd: 3.0,
-            max_samples: 1000,
-            min_samples: 8,
-            filter_iterations: 2,
-            hash_capacity: 1 << 20,
-            clay: false,
-        },
-        frames: 8,
-        out: Some("hrtao-default.png".into()),
-        ao_out: None,
-        stats: None,
-        device: DeviceArgs {
-            device: None,
-            validation: false,
-        },
-    };
-    run(&args)?;
-    println!("wrote hrtao-default.png");
-    Ok(())
-}

@@ -1,14 +1,1123 @@
-//! `hrtao view`: the interactive viewer (winit + egui-ash). Placeholder until the viewer lands:
-//! renders the scene headless instead.
-use anyhow::Result;
+//! `hrtao view`: the interactive viewer. A winit window with an egui panel through egui-ash
+//! (`HandleRedraw::Handle`: we record the 3D view into the swapchain image, egui-ash records the UI on top).
+//!
+//! - `nav`: CAD camera maths (pure, unit tested).
+//! - `edits`: scene edits with undo/redo (F increments, TLAS rebuild).
+//! - `prefs`: persisted settings and camera bookmarks.
+//! - `present`: swapchain, the scaled blit of the renderer's output, readback of the presented image.
+//! - `ui`: the panel, navigation and picking input, toasts.
+pub mod edits;
+pub mod nav;
+pub mod prefs;
+pub mod present;
+mod ui;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::mpsc::{self, Receiver};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context, Result};
+use ash::vk;
 use clap::Args;
+use egui_ash::winit;
+use glam::Vec3;
+use gpu_allocator::MemoryLocation;
+use hrtao_core::buffer::Buffer;
+use hrtao_core::camera::UpAxis;
+use hrtao_core::{AoSettings, Camera, ContextOptions, FrameReport, Gpu, Mode, Renderer, SceneGpu};
+use hrtao_scene::Scene;
+
+use edits::EditStack;
+use nav::Nav;
+use prefs::Prefs;
+use present::Presenter;
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct ViewArgs {
-    /// Scene file to open (default: the bundled scene).
+    /// Scene to open: .gltf, .glb, .obj or a generator spec such as gen:city (default: the bundled gearbox).
     pub file: Option<String>,
+    /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// Up axis when fitting a camera: y or z (default: z for the bundled scene, y otherwise).
+    #[arg(long)]
+    pub up: Option<String>,
+    /// Window size, e.g. 1280x720.
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// Internal resolution as a fraction of the 3D view (default: 0.35 on software devices, else 1).
+    #[arg(long)]
+    pub render_scale: Option<f32>,
+    /// AO mode: hrtao, rtao, none, debug-cells, debug-lod, debug-samples.
+    #[arg(long)]
+    pub mode: Option<Mode>,
+    /// Ray budget (rays per pixel per frame).
+    #[arg(long)]
+    pub rays: Option<u32>,
+    /// AO radius in scene units (default: 8 for the bundled scene, else 5% of the bounds diagonal).
+    #[arg(long)]
+    pub radius: Option<f32>,
+    /// Scripted mode: render this many frames once the scene is ready, then take the screenshots.
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Scripted mode: save the 3D view (no UI) at window resolution to this PNG after --frames.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Scripted mode: save the whole window including the UI to this PNG after --frames.
+    #[arg(long)]
+    pub screenshot_ui: Option<PathBuf>,
+    /// Scripted mode: extra frames rendered for --screenshot (the hash map keeps converging).
+    #[arg(long, default_value_t = 4)]
+    pub screenshot_frames: u32,
+    /// Scripted mode: resize the window to WxH after frame K (tests resizing), e.g. `--resize-at-frame 2 320x200`.
+    #[arg(long, num_args = 2, value_names = ["K", "WxH"])]
+    pub resize_at_frame: Vec<String>,
+    /// Scripted mode: exit after --frames (exit status 1 if anything failed or validation reported messages).
+    #[arg(long)]
+    pub exit: bool,
+    /// Scripted mode: fail if the run has not finished after this many seconds.
+    #[arg(long, default_value_t = 600)]
+    pub timeout: u64,
+    /// Settings/bookmarks file (default: ~/.config/hrtao/viewer.json).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Neither read nor write the settings file.
+    #[arg(long)]
+    pub no_config: bool,
+    /// Start with the side panel hidden (Tab toggles it).
+    #[arg(long)]
+    pub no_panel: bool,
+    /// Use the first device whose name contains this text.
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
+    #[arg(long)]
+    pub validation: bool,
 }
 
-pub fn run(_args: &ViewArgs) -> Result<()> {
-    crate::render_cmd::run_default()
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| anyhow!("size `{s}` must look like 1280x720"))?;
+    let (w, h): (u32, u32) = (w.trim().parse()?, h.trim().parse()?);
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        bail!("size `{s}` must be within 1..=16384");
+    }
+    Ok((w, h))
+}
+
+/// The bundled scene's path, normalised for display.
+pub(crate) fn default_spec() -> String {
+    let p = crate::render_cmd::default_scene_path();
+    std::fs::canonicalize(&p).unwrap_or(p).display().to_string()
+}
+
+/// What the process reports when the window closes.
+#[derive(Default)]
+struct Outcome {
+    error: Option<String>,
+    gpu: Option<Arc<Gpu>>,
+}
+
+pub fn run(args: &ViewArgs) -> Result<()> {
+    let size = match &args.size {
+        Some(s) => parse_size(s)?,
+        None => (1280, 800),
+    };
+    let resize = match args.resize_at_frame.as_slice() {
+        [] => None,
+        [k, wh] => Some((k.parse::<u32>().context("--resize-at-frame K")?, parse_size(wh)?)),
+        _ => bail!("--resize-at-frame takes K and WxH"),
+    };
+    if let Some(s) = args.render_scale {
+        if !(0.05..=2.0).contains(&s) {
+            bail!("--render-scale must be within 0.05..=2");
+        }
+    }
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        bail!(
+            "no display: set DISPLAY (e.g. run under `xvfb-run -a`) or use `hrtao render` for headless use"
+        );
+    }
+    let outcome = Arc::new(Mutex::new(Outcome::default()));
+    let creator = Creator {
+        args: args.clone(),
+        resize,
+        outcome: outcome.clone(),
+    };
+    let options = egui_ash::RunOption {
+        viewport_builder: Some(
+            egui::ViewportBuilder::default()
+                .with_title("hrtao")
+                .with_inner_size([size.0 as f32, size.1 as f32])
+                .with_drag_and_drop(true),
+        ),
+        follow_system_theme: false,
+        default_theme: egui_ash::Theme::Dark,
+        present_mode: vk::PresentModeKHR::FIFO,
+        ..Default::default()
+    };
+    let code = egui_ash::run("hrtao", creator, options);
+    let mut out = outcome.lock().unwrap_or_else(|p| p.into_inner());
+    // The last Arc<Gpu> goes here, after egui-ash and the app released everything they held.
+    let gpu = out.gpu.take();
+    let validation = gpu.as_ref().map(|g| g.validation_messages()).unwrap_or(0);
+    drop(gpu);
+    if let Some(e) = out.error.take() {
+        bail!("{e}");
+    }
+    if validation > 0 {
+        bail!("the validation layer reported {validation} messages");
+    }
+    if code != ExitCode::SUCCESS {
+        bail!("the viewer exited with an error");
+    }
+    Ok(())
+}
+
+struct Creator {
+    args: ViewArgs,
+    resize: Option<(u32, (u32, u32))>,
+    outcome: Arc<Mutex<Outcome>>,
+}
+
+type Allocator = Arc<Mutex<gpu_allocator::vulkan::Allocator>>;
+
+impl egui_ash::AppCreator<Allocator> for Creator {
+    type App = App;
+
+    fn create(&self, cc: egui_ash::CreationContext) -> (App, egui_ash::AshRenderState<Allocator>) {
+        // Instance extensions for the window system; ash-window's list is 'static.
+        use egui_ash::raw_window_handle::HasRawDisplayHandle;
+        let exts: Vec<&'static std::ffi::CStr> =
+            ash_window::enumerate_required_extensions(cc.main_window.raw_display_handle())
+                .map(|list| {
+                    list.iter()
+                        .map(|&p| unsafe { std::ffi::CStr::from_ptr(p) })
+                        .collect()
+                })
+                .unwrap_or_default();
+        let opts = ContextOptions {
+            validation: self.args.validation || hrtao_core::context::validation_requested_by_env(),
+            device: self.args.device.clone(),
+            surface_extensions: exts,
+            ..Default::default()
+        };
+        let gpu = match Gpu::new(&opts) {
+            Ok(g) => g,
+            Err(e) => {
+                eprintln!("hrtao: error: {e}");
+                std::process::exit(1);
+            }
+        };
+        self.outcome.lock().unwrap().gpu = Some(gpu.clone());
+        let presenter = match Presenter::new(&gpu, cc.main_window) {
+            Ok(p) => p,
+            Err(e) => {
+                eprintln!("hrtao: error: {e:#}");
+                std::process::exit(1);
+            }
+        };
+        let state = AshState {
+            entry: gpu.entry.clone(),
+            instance: gpu.instance.clone(),
+            physical: gpu.physical,
+            device: gpu.device.clone(),
+            surface_loader: presenter.surface_loader.clone(),
+            swapchain_loader: presenter.swapchain_loader.clone(),
+            queue: gpu.queue,
+            queue_family: gpu.queue_family,
+            pool: presenter.pool,
+            allocator: gpu.allocator_arc(),
+        };
+        let viewer = Viewer::new(
+            gpu,
+            presenter,
+            &self.args,
+            self.resize,
+            cc.exit_signal,
+            self.outcome.clone(),
+            cc.context.clone(),
+        );
+        let render_state = egui_ash::AshRenderState {
+            entry: state.entry,
+            instance: state.instance,
+            physical_device: state.physical,
+            device: state.device,
+            surface_loader: state.surface_loader,
+            swapchain_loader: state.swapchain_loader,
+            queue: state.queue,
+            queue_family_index: state.queue_family,
+            command_pool: state.pool,
+            allocator: state.allocator,
+        };
+        (
+            App {
+                viewer: Arc::new(Mutex::new(viewer)),
+            },
+            render_state,
+        )
+    }
+}
+
+struct AshState {
+    entry: ash::Entry,
+    instance: ash::Instance,
+    physical: vk::PhysicalDevice,
+    device: ash::Device,
+    surface_loader: ash::extensions::khr::Surface,
+    swapchain_loader: ash::extensions::khr::Swapchain,
+    queue: vk::Queue,
+    queue_family: u32,
+    pool: vk::CommandPool,
+    allocator: Allocator,
+}
+
+pub struct App {
+    viewer: Arc<Mutex<Viewer>>,
+}
+
+impl App {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Viewer> {
+        self.viewer.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+impl egui_ash::App for App {
+    fn ui(&mut self, ctx: &egui::Context) {
+        self.lock().ui(ctx);
+    }
+
+    fn handle_event(&mut self, event: egui_ash::event::Event) {
+        use egui_ash::event::{AppEvent, Event};
+        match event {
+            Event::AppEvent {
+                event: AppEvent::LoopExiting,
+            } => self.lock().shutdown(),
+            Event::ViewportEvent {
+                event: winit::event::WindowEvent::Resized(_),
+                ..
+            } => self.lock().presenter.dirty = true,
+            _ => {}
+        }
+    }
+
+    fn request_redraw(&mut self, _viewport_id: egui::ViewportId) -> egui_ash::HandleRedraw {
+        let viewer = self.viewer.clone();
+        egui_ash::HandleRedraw::Handle(Box::new(move |size, egui_cmd| {
+            let mut v = viewer.lock().unwrap_or_else(|p| p.into_inner());
+            if let Err(e) = v.draw(size, egui_cmd) {
+                v.fatal(format!("{e:#}"));
+            }
+        }))
+    }
+}
+
+/// Messages from the background loader.
+enum LoadMsg {
+    Progress(String),
+    Done(std::result::Result<Scene, String>, Duration),
+}
+
+struct Loading {
+    spec: String,
+    rx: Receiver<LoadMsg>,
+    progress: String,
+    started: Instant,
+}
+
+pub(crate) struct Toast {
+    text: String,
+    error: bool,
+    until: Instant,
+}
+
+/// Scripted-mode state.
+struct Script {
+    frames: Option<u32>,
+    screenshot: Option<PathBuf>,
+    screenshot_ui: Option<PathBuf>,
+    screenshot_frames: u32,
+    resize: Option<(u32, (u32, u32))>,
+    exit: bool,
+    deadline: Option<Instant>,
+    rendered: u32,
+    done: bool,
+    ui_capture_pending: bool,
+}
+
+/// A screenshot asked for by F12/the button, taken before the next frame.
+struct ShotRequest {
+    size: Option<(u32, u32)>,
+    frames: u32,
+    path: PathBuf,
+}
+
+pub(crate) struct Viewer {
+    gpu: Arc<Gpu>,
+    presenter: Presenter,
+    egui_ctx: egui::Context,
+    exit_signal: egui_ash::ExitSignal,
+    outcome: Arc<Mutex<Outcome>>,
+    // Scene and rendering.
+    scene: Option<Scene>,
+    scene_spec: String,
+    scene_gpu: Option<SceneGpu>,
+    renderer: Option<Renderer>,
+    settings: AoSettings,
+    nav: Nav,
+    home: Camera,
+    default_radius: f32,
+    selected: u32,
+    edits: EditStack,
+    loading: Option<Loading>,
+    load_error: Option<String>,
+    open_path: String,
+    initial_camera: Option<PathBuf>,
+    forced_up: Option<UpAxis>,
+    args_radius: Option<f32>,
+    // View.
+    render_scale: f32,
+    view_rect: [i32; 4],
+    laid_out: bool,
+    last_report: Option<FrameReport>,
+    frame_ms_avg: f64,
+    interval_ms_avg: f64,
+    last_frame_at: Option<Instant>,
+    bookmark_name: String,
+    show_panel: bool,
+    // Persistence.
+    prefs: Prefs,
+    prefs_path: Option<PathBuf>,
+    prefs_saved: Prefs,
+    prefs_saved_at: Instant,
+    // Messages.
+    toasts: Vec<Toast>,
+    shot: Option<ShotRequest>,
+    script: Script,
+    pending_ui_readback: Option<(PathBuf, Buffer, u32, u32, bool)>,
+    shut_down: bool,
+}
+
+impl Viewer {
+    fn new(
+        gpu: Arc<Gpu>,
+        presenter: Presenter,
+        args: &ViewArgs,
+        resize: Option<(u32, (u32, u32))>,
+        exit_signal: egui_ash::ExitSignal,
+        outcome: Arc<Mutex<Outcome>>,
+        egui_ctx: egui::Context,
+    ) -> Viewer {
+        let prefs_path = (!args.no_config).then(|| args.config.clone().unwrap_or_else(prefs::default_path));
+        let (mut prefs, prefs_msg) = match &prefs_path {
+            Some(p) => prefs::load(p),
+            None => (Prefs::default(), None),
+        };
+        let prefs_saved = prefs.clone();
+        let mut settings = prefs.settings.clone();
+        if let Some(m) = args.mode {
+            settings.mode = m;
+        }
+        if let Some(r) = args.rays {
+            settings.rays_per_pixel = r;
+            prefs.auto_budget = false;
+        }
+        let default_scale = if gpu.info.is_software { 0.35 } else { 1.0 };
+        let render_scale = args
+            .render_scale
+            .or(prefs.render_scale)
+            .unwrap_or(default_scale)
+            .clamp(0.05, 2.0);
+        egui_ctx.set_visuals(if prefs.dark_theme {
+            egui::Visuals::dark()
+        } else {
+            egui::Visuals::light()
+        });
+        let forced_up = match args.up.as_deref().map(str::to_ascii_lowercase).as_deref() {
+            Some("z") => Some(UpAxis::Z),
+            Some("y") => Some(UpAxis::Y),
+            _ => None,
+        };
+        let spec = args.file.clone().unwrap_or_else(default_spec);
+        let mut v = Viewer {
+            gpu,
+            presenter,
+            egui_ctx,
+            exit_signal,
+            outcome,
+            scene: None,
+            scene_spec: String::new(),
+            scene_gpu: None,
+            renderer: None,
+            settings,
+            nav: Nav {
+                cam: Camera::default(),
+                pivot: Vec3::ZERO,
+                world_up: UpAxis::Y,
+            },
+            home: Camera::default(),
+            default_radius: 1.0,
+            selected: u32::MAX,
+            edits: EditStack::default(),
+            loading: None,
+            load_error: None,
+            open_path: spec.clone(),
+            initial_camera: args.camera.clone(),
+            forced_up,
+            args_radius: args.radius,
+            render_scale,
+            view_rect: [0, 0, 1, 1],
+            laid_out: false,
+            last_report: None,
+            frame_ms_avg: 0.0,
+            interval_ms_avg: 0.0,
+            last_frame_at: None,
+            bookmark_name: String::new(),
+            show_panel: !args.no_panel,
+            prefs,
+            prefs_path,
+            prefs_saved,
+            prefs_saved_at: Instant::now(),
+            toasts: Vec::new(),
+            shot: None,
+            script: Script {
+                frames: args.frames,
+                screenshot: args.screenshot.clone(),
+                screenshot_ui: args.screenshot_ui.clone(),
+                screenshot_frames: args.screenshot_frames,
+                resize,
+                exit: args.exit,
+                deadline: (args.exit && args.timeout > 0)
+                    .then(|| Instant::now() + Duration::from_secs(args.timeout)),
+                rendered: 0,
+                done: false,
+                ui_capture_pending: false,
+            },
+            pending_ui_readback: None,
+            shut_down: false,
+        };
+        if let Some(m) = prefs_msg {
+            v.toast(m, true);
+        }
+        v.start_loading(spec);
+        v
+    }
+
+    pub(crate) fn toast(&mut self, text: impl Into<String>, error: bool) {
+        let text = text.into();
+        if error {
+            log::warn!("{text}");
+        } else {
+            log::info!("{text}");
+        }
+        self.toasts.push(Toast {
+            text,
+            error,
+            until: Instant::now() + Duration::from_secs(if error { 8 } else { 4 }),
+        });
+    }
+
+    /// An unrecoverable error: remembered for the exit status, shown, and in scripted mode the app exits.
+    fn fatal(&mut self, msg: String) {
+        log::error!("{msg}");
+        let mut o = self.outcome.lock().unwrap_or_else(|p| p.into_inner());
+        if o.error.is_none() {
+            o.error = Some(msg.clone());
+        }
+        drop(o);
+        self.toast(msg, true);
+        if self.script.exit {
+            self.exit_signal.send(ExitCode::FAILURE);
+        }
+    }
+
+    /// Starts loading `spec` on a background thread (the window keeps running; the old scene stays).
+    pub(crate) fn start_loading(&mut self, spec: String) {
+        let (tx, rx) = mpsc::channel();
+        let s = spec.clone();
+        std::thread::spawn(move || {
+            let t0 = Instant::now();
+            let mut last = Instant::now() - Duration::from_secs(1);
+            let ptx = tx.clone();
+            let result = hrtao_scene::load(&s, &mut |p| {
+                if last.elapsed() > Duration::from_millis(100) {
+                    last = Instant::now();
+                    let pct = if p.total > 0 {
+                        format!(" {:.0}%", 100.0 * p.done as f64 / p.total as f64)
+                    } else {
+                        String::new()
+                    };
+                    let _ = ptx.send(LoadMsg::Progress(format!("{}{pct}", p.stage)));
+                }
+            })
+            .map_err(|e| format!("cannot open `{s}`: {e}"));
+            let _ = tx.send(LoadMsg::Done(result, t0.elapsed()));
+        });
+        self.loading = Some(Loading {
+            spec,
+            rx,
+            progress: "starting".into(),
+            started: Instant::now(),
+        });
+        self.load_error = None;
+    }
+
+    /// Polls the loader; installs a loaded scene (GPU build, camera, radius).
+    fn poll_loading(&mut self) {
+        let Some(loading) = &mut self.loading else {
+            return;
+        };
+        if !self.laid_out {
+            // The first UI pass has not laid out the 3D view yet (its aspect frames the camera).
+            return;
+        }
+        let mut done = None;
+        while let Ok(msg) = loading.rx.try_recv() {
+            match msg {
+                LoadMsg::Progress(p) => loading.progress = p,
+                LoadMsg::Done(r, t) => done = Some((r, t)),
+            }
+        }
+        let Some((result, took)) = done else {
+            return;
+        };
+        let spec = loading.spec.clone();
+        self.loading = None;
+        match result.and_then(|scene| {
+            self.install_scene(scene, &spec)
+                .map_err(|e| format!("cannot open `{spec}`: {e:#}"))
+        }) {
+            Ok(()) => self.toast(format!("opened {spec} in {:.1} s", took.as_secs_f64()), false),
+            Err(e) => {
+                self.load_error = Some(e.clone());
+                self.toast(e, true);
+                if self.scene.is_none() && self.script.exit {
+                    self.fatal("no scene could be opened".into());
+                }
+            }
+        }
+    }
+
+    fn install_scene(&mut self, scene: Scene, spec: &str) -> Result<()> {
+        let bounds = scene.bounds();
+        if bounds.is_empty() {
+            bail!("the scene is empty");
+        }
+        self.gpu.wait_idle();
+        let mut scene_gpu = SceneGpu::new(&self.gpu, &scene)?;
+        scene_gpu.update_instances(&scene, u32::MAX)?;
+        let is_default = std::fs::canonicalize(spec).ok() == std::fs::canonicalize(default_spec()).ok();
+        // Camera: --camera for the first scene, else NAME.camera.json beside the file, else fit.
+        let beside = Path::new(spec).with_extension("camera.json");
+        let cam_file = self
+            .initial_camera
+            .take()
+            .or_else(|| beside.is_file().then_some(beside));
+        let up = self
+            .forced_up
+            .unwrap_or(if is_default { UpAxis::Z } else { UpAxis::Y });
+        let cam = match &cam_file {
+            Some(p) => Camera::load(p).with_context(|| format!("camera {}", p.display()))?,
+            None => Camera::fit(bounds.min, bounds.max, up, 40.0, 640, 360),
+        };
+        let world_up = if cam_file.is_some() {
+            nav::up_axis_of(&cam)
+        } else {
+            up
+        };
+        let diag = bounds.diagonal().length();
+        self.default_radius = if is_default { 8.0 } else { (diag * 0.05).max(1e-6) };
+        let mut settings = self.settings.clone();
+        settings.ao_radius = self.args_radius.take().unwrap_or(self.default_radius);
+        // Orient the camera with a true up vector (nav keeps it orthogonal).
+        let mut cam = nav::orbit(&cam, nav::target(&cam), world_up.vector(), 0.0, 0.0);
+        // A camera file framed for a wider image: back off so the 3D view shows the same horizontal extent.
+        let file_aspect = cam.width as f32 / cam.height.max(1) as f32;
+        let view_aspect = self.view_rect[2].max(1) as f32 / self.view_rect[3].max(1) as f32;
+        if cam_file.is_some() && self.view_rect[2] > 1 && view_aspect < file_aspect {
+            let t = nav::target(&cam);
+            let e = t + (nav::eye(&cam) - t) * (file_aspect / view_aspect);
+            cam.eye = e.to_array();
+        }
+        self.nav = Nav {
+            cam,
+            pivot: nav::target(&cam),
+            world_up,
+        };
+        self.home = cam;
+        self.selected = u32::MAX;
+        self.edits.clear();
+        match &mut self.renderer {
+            Some(r) => {
+                r.set_settings(settings.clone())?;
+                r.selected_instance = u32::MAX;
+                // A different scene: the cached AO belongs to the old geometry.
+                r.clear_cache()?;
+            }
+            None => {
+                let (w, h) = self.internal_size();
+                self.renderer = Some(Renderer::new(&self.gpu, w, h, settings.clone())?);
+            }
+        }
+        self.settings = settings;
+        self.scene_gpu = Some(scene_gpu);
+        self.scene = Some(scene);
+        self.scene_spec = spec.to_string();
+        self.open_path = spec.to_string();
+        let title = format!(
+            "hrtao — {}",
+            Path::new(spec)
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_else(|| spec.to_string())
+        );
+        self.egui_ctx
+            .send_viewport_cmd(egui::ViewportCommand::Title(title));
+        Ok(())
+    }
+
+    /// Internal resolution: the 3D view rectangle times the render scale.
+    fn internal_size(&self) -> (u32, u32) {
+        let scale = if self.presenter.blit_ok || self.presenter.images.is_empty() {
+            self.render_scale
+        } else {
+            1.0
+        };
+        let w = ((self.view_rect[2].max(1) as f32) * scale).round().max(1.0) as u32;
+        let h = ((self.view_rect[3].max(1) as f32) * scale).round().max(1.0) as u32;
+        (w.min(16384), h.min(16384))
+    }
+
+    /// Updates the selection highlight (TLAS instance flags) after a selection change.
+    pub(crate) fn set_selected(&mut self, sel: u32) {
+        self.selected = sel;
+        if let Some(r) = &mut self.renderer {
+            r.selected_instance = sel;
+        }
+        if let (Some(sg), Some(scene)) = (&mut self.scene_gpu, &self.scene) {
+            self.gpu.wait_idle();
+            if let Err(e) = sg.update_instances(scene, sel) {
+                let msg = format!("selection: {e}");
+                self.toast(msg, true);
+            }
+        }
+    }
+
+    /// Applies an edit / undo / redo through the edit stack (F increments, TLAS rebuilt).
+    pub(crate) fn edit(&mut self, action: edits::Action) {
+        let (Some(scene), Some(sg)) = (&mut self.scene, &mut self.scene_gpu) else {
+            return;
+        };
+        self.gpu.wait_idle();
+        let result = edits::run_action(&mut self.edits, scene, sg, self.selected, action);
+        match result {
+            Ok(Some(label)) => {
+                // Deletes shift later ids: keep the selection valid.
+                let n = scene.instances.len() as u32;
+                log::debug!("{label}: F = {}", scene.frame());
+                if self.selected != u32::MAX && self.selected >= n {
+                    self.set_selected(u32::MAX);
+                }
+            }
+            Ok(None) => {}
+            Err(e) => self.toast(format!("edit failed: {e:#}"), true),
+        }
+    }
+
+    /// Renders `frames` frames of the current view at `size` with the main renderer (its world-space cache is
+    /// warm and survives the resize), reads the image back and restores the view resolution.
+    fn render_offscreen(&mut self, size: (u32, u32), frames: u32) -> Result<Vec<u8>> {
+        let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) else {
+            bail!("no scene is open");
+        };
+        let old = r.size();
+        let bgra = r.output_bgra;
+        r.output_bgra = false;
+        let cam = Camera {
+            width: size.0,
+            height: size.1,
+            ..self.nav.cam
+        };
+        let result = (|| -> Result<Vec<u8>> {
+            r.resize(size.0, size.1)?;
+            for _ in 0..frames.max(1) {
+                r.render(sg, scene.frame(), &cam)?;
+            }
+            Ok(r.read_rgba()?)
+        })();
+        r.output_bgra = bgra;
+        r.resize(old.0, old.1)?;
+        result
+    }
+
+    /// Takes a screenshot of the 3D view without UI and writes the PNG on a background thread.
+    fn take_screenshot(&mut self, req: ShotRequest) -> Result<PathBuf> {
+        let size = req
+            .size
+            .unwrap_or((self.view_rect[2].max(1) as u32, self.view_rect[3].max(1) as u32));
+        let rgba = self.render_offscreen(size, req.frames)?;
+        if let Some(dir) = req.path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        hrtao_core::imageio::write_png(&req.path, size.0, size.1, &rgba)
+            .with_context(|| format!("cannot write {}", req.path.display()))?;
+        Ok(req.path)
+    }
+
+    /// A timestamped screenshot path in the configured folder.
+    pub(crate) fn screenshot_path(&self) -> PathBuf {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        let secs = now.as_secs();
+        let (days, rem) = (secs / 86400, secs % 86400);
+        let (y, m, d) = civil_from_days(days as i64);
+        let name = format!(
+            "hrtao-{y:04}{m:02}{d:02}-{:02}{:02}{:02}-{:03}.png",
+            rem / 3600,
+            rem / 60 % 60,
+            rem % 60,
+            now.subsec_millis()
+        );
+        self.prefs.screenshot_dir.join(name)
+    }
+
+    pub(crate) fn request_screenshot(&mut self) {
+        let size = self
+            .prefs
+            .screenshot_custom
+            .then_some((self.prefs.screenshot_width, self.prefs.screenshot_height));
+        let frames = if size.is_some() {
+            self.prefs.screenshot_frames
+        } else {
+            self.prefs.screenshot_frames.min(4)
+        };
+        self.shot = Some(ShotRequest {
+            size,
+            frames,
+            path: self.screenshot_path(),
+        });
+    }
+
+    /// The per-frame work: swapchain upkeep, the renderer's passes, the blit, egui, present, statistics.
+    fn draw(
+        &mut self,
+        size: winit::dpi::PhysicalSize<u32>,
+        mut egui_cmd: egui_ash::EguiCommand,
+    ) -> Result<()> {
+        if self.shut_down {
+            return Ok(());
+        }
+        if size.width == 0 || size.height == 0 {
+            // Minimised: nothing to present; don't spin.
+            std::thread::sleep(Duration::from_millis(30));
+            return Ok(());
+        }
+        if let Some(req) = self.shot.take() {
+            match self.take_screenshot(req) {
+                Ok(p) => self.toast(format!("screenshot saved: {}", p.display()), false),
+                Err(e) => self.toast(format!("screenshot failed: {e:#}"), true),
+            }
+        }
+        let p = &mut self.presenter;
+        if p.dirty
+            || p.extent.width != size.width
+            || p.extent.height != size.height
+            || egui_cmd.swapchain_recreate_required()
+        {
+            if !p.recreate(size.width, size.height)? {
+                std::thread::sleep(Duration::from_millis(30));
+                return Ok(());
+            }
+            egui_cmd.update_swapchain(egui_ash::SwapchainUpdateInfo {
+                width: p.extent.width,
+                height: p.extent.height,
+                swapchain_images: p.images.clone(),
+                surface_format: p.format,
+            });
+        }
+        let Some(index) = self.presenter.acquire()? else {
+            return Ok(());
+        };
+        // The 3D view rectangle (clamped to the swapchain) and the renderer's resolution.
+        let ext = self.presenter.extent;
+        let mut rect = self.view_rect;
+        rect[0] = rect[0].clamp(0, ext.width as i32 - 1);
+        rect[1] = rect[1].clamp(0, ext.height as i32 - 1);
+        rect[2] = rect[2].clamp(1, ext.width as i32 - rect[0]);
+        rect[3] = rect[3].clamp(1, ext.height as i32 - rect[1]);
+        self.view_rect = rect;
+        let (iw, ih) = self.internal_size();
+        let bgra_direct = !self.presenter.blit_ok && self.presenter.is_bgra();
+        let gpu = self.gpu.clone();
+        let cmd = self.presenter.cmd;
+        let t0 = Instant::now();
+        unsafe {
+            gpu.device
+                .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
+            gpu.device.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::builder().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )?;
+        }
+        let mut src = None;
+        let mut rendered = false;
+        if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
+            r.resize(iw, ih)?;
+            r.output_bgra = bgra_direct;
+            let cam = Camera {
+                width: iw,
+                height: ih,
+                ..self.nav.cam
+            };
+            r.record_frame(cmd, sg, scene.frame(), &cam)?;
+            src = Some((r.output_buffer().raw, iw, ih));
+            rendered = true;
+        }
+        if self.presenter.blit_ok && src.is_some() {
+            self.presenter.ensure_internal(iw, ih)?;
+        }
+        let bg = if self.egui_ctx.style().visuals.dark_mode {
+            [0.11, 0.11, 0.12, 1.0]
+        } else {
+            [0.93, 0.93, 0.94, 1.0]
+        };
+        self.presenter.record_view(cmd, index, src, rect, bg);
+        egui_cmd.record(cmd, index as usize);
+        // Scripted UI capture: copy the presented image (3D view + UI).
+        let mut readback = None;
+        if self.script.ui_capture_pending && self.presenter.readback_ok {
+            if let Some(path) = self.script.screenshot_ui.clone() {
+                let (w, h) = (self.presenter.extent.width, self.presenter.extent.height);
+                let buf = Buffer::new(
+                    &gpu,
+                    "window readback",
+                    w as u64 * h as u64 * 4,
+                    MemoryLocation::GpuToCpu,
+                    vk::BufferUsageFlags::empty(),
+                )?;
+                self.presenter.record_readback(cmd, index, buf.raw);
+                readback = Some((path, buf, w, h, self.presenter.is_bgra()));
+            }
+            self.script.ui_capture_pending = false;
+        }
+        unsafe {
+            gpu.device.end_command_buffer(cmd)?;
+        }
+        self.presenter.submit_and_present(index)?;
+        let gpu_wall = t0.elapsed().as_secs_f64() * 1e3;
+        if let Some((path, buf, w, h, bgra)) = readback {
+            let mut px: Vec<u8> = buf.read((w * h * 4) as usize)?;
+            if bgra {
+                for p in px.chunks_exact_mut(4) {
+                    p.swap(0, 2);
+                }
+            }
+            for p in px.chunks_exact_mut(4) {
+                p[3] = 255;
+            }
+            match hrtao_core::imageio::write_png(&path, w, h, &px) {
+                Ok(()) => self.toast(format!("window captured: {}", path.display()), false),
+                Err(e) => self.fatal(format!("cannot write {}: {e}", path.display())),
+            }
+        } else if self.script.ui_capture_pending {
+            self.fatal("this surface cannot be read back (no TRANSFER_SRC)".into());
+        }
+        if rendered {
+            let now = Instant::now();
+            if let Some(last) = self.last_frame_at {
+                let dt = now.duration_since(last).as_secs_f64() * 1e3;
+                self.interval_ms_avg = ema(self.interval_ms_avg, dt);
+            }
+            self.last_frame_at = Some(now);
+            let (r, scene) = (self.renderer.as_mut().unwrap(), self.scene.as_ref().unwrap());
+            let report = r.finish_frame(scene.frame(), gpu_wall)?;
+            self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
+            self.last_report = Some(report);
+            self.auto_budget(gpu_wall);
+            self.script_step();
+        }
+        self.maybe_save_prefs(false);
+        Ok(())
+    }
+
+    /// Target frame time → ray budget (the paper: "the ray budget can be adjusted to match a target rendering
+    /// speed"): multiplicative decrease when too slow, additive increase when there is slack.
+    fn auto_budget(&mut self, ms: f64) {
+        if !self.prefs.auto_budget || !self.settings.mode.uses_hash() && self.settings.mode != Mode::Rtao {
+            return;
+        }
+        let target = self.prefs.target_ms.max(1.0) as f64;
+        let b = self.settings.rays_per_pixel;
+        let nb = next_budget(b, ms, target);
+        if nb != b {
+            self.settings.rays_per_pixel = nb;
+            if let Some(r) = &mut self.renderer {
+                let _ = r.set_settings(self.settings.clone());
+            }
+        }
+    }
+
+    /// Scripted mode: count frames, resize, take the screenshots, exit.
+    fn script_step(&mut self) {
+        let Some(frames) = self.script.frames else {
+            return;
+        };
+        if self.script.done {
+            return;
+        }
+        self.script.rendered += 1;
+        let n = self.script.rendered;
+        if let Some((k, (w, h))) = self.script.resize {
+            if n == k {
+                log::info!("scripted resize to {w}x{h}");
+                self.egui_ctx
+                    .send_viewport_cmd(egui::ViewportCommand::InnerSize(egui::vec2(
+                        w as f32 / self.egui_ctx.pixels_per_point(),
+                        h as f32 / self.egui_ctx.pixels_per_point(),
+                    )));
+            }
+        }
+        if n == frames && self.script.screenshot_ui.is_some() {
+            // Captured with the next presented frame.
+            self.script.ui_capture_pending = true;
+            return;
+        }
+        if n >= frames {
+            self.script.done = true;
+            if let Some(path) = self.script.screenshot.clone() {
+                let req = ShotRequest {
+                    size: None,
+                    frames: self.script.screenshot_frames,
+                    path,
+                };
+                match self.take_screenshot(req) {
+                    Ok(p) => log::info!("screenshot saved: {}", p.display()),
+                    Err(e) => self.fatal(format!("screenshot failed: {e:#}")),
+                }
+            }
+            if let Some(rep) = &self.last_report {
+                log::info!(
+                    "scripted run: {n} frames, last {:.1} ms ({:.1} ms GPU), {} rays, view {}x{}, internal {:?}",
+                    rep.wall_ms,
+                    rep.gpu_total_ms,
+                    rep.rays,
+                    self.view_rect[2],
+                    self.view_rect[3],
+                    self.renderer.as_ref().map(|r| r.size())
+                );
+            }
+            if self.script.exit {
+                let bad = self.gpu.validation_messages() > 0
+                    || self.outcome.lock().map(|o| o.error.is_some()).unwrap_or(true);
+                self.exit_signal
+                    .send(if bad { ExitCode::FAILURE } else { ExitCode::SUCCESS });
+            }
+        }
+    }
+
+    fn maybe_save_prefs(&mut self, force: bool) {
+        let Some(path) = self.prefs_path.clone() else {
+            return;
+        };
+        self.prefs.settings = self.settings.clone();
+        self.prefs.render_scale = Some(self.render_scale);
+        if self.prefs == self.prefs_saved {
+            return;
+        }
+        if !force && self.prefs_saved_at.elapsed() < Duration::from_secs(1) {
+            return;
+        }
+        self.prefs_saved_at = Instant::now();
+        match prefs::save(&path, &self.prefs) {
+            Ok(()) => self.prefs_saved = self.prefs.clone(),
+            Err(e) => {
+                self.prefs_saved = self.prefs.clone();
+                self.toast(format!("cannot save settings to {}: {e:#}", path.display()), true);
+            }
+        }
+    }
+
+    /// The event loop is exiting: save, release every Vulkan object while the window still exists.
+    fn shutdown(&mut self) {
+        if self.shut_down {
+            return;
+        }
+        self.shut_down = true;
+        self.maybe_save_prefs(true);
+        self.gpu.wait_idle();
+        self.pending_ui_readback = None;
+        self.renderer = None;
+        self.scene_gpu = None;
+        self.presenter.destroy();
+    }
+}
+
+impl Drop for Viewer {
+    fn drop(&mut self) {
+        self.shutdown();
+    }
+}
+
+fn ema(avg: f64, x: f64) -> f64 {
+    if avg == 0.0 {
+        x
+    } else {
+        avg * 0.9 + x * 0.1
+    }
+}
+
+/// One step of the automatic ray budget controller.
+pub fn next_budget(budget: u32, frame_ms: f64, target_ms: f64) -> u32 {
+    if frame_ms > target_ms * 1.15 {
+        ((budget as f64 * 0.8).floor() as u32).max(1)
+    } else if frame_ms < target_ms * 0.8 {
+        (budget + 1).min(64)
+    } else {
+        budget
+    }
+}
+
+/// Days since 1970-01-01 → (year, month, day) (Howard Hinnant's algorithm).
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719468;
+    let era = z.div_euclid(146097);
+    let doe = z.rem_euclid(146097);
+    let yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+    let y = yoe + era * 400;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (if m <= 2 { y + 1 } else { y }, m, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budget_controller_converges_to_the_target() {
+        assert_eq!(next_budget(10, 200.0, 100.0), 8);
+        assert_eq!(next_budget(1, 500.0, 100.0), 1);
+        assert_eq!(next_budget(4, 50.0, 100.0), 5);
+        assert_eq!(next_budget(4, 100.0, 100.0), 4);
+        // A frame time proportional to the budget settles near the target.
+        let mut b = 32;
+        for _ in 0..100 {
+            b = next_budget(b, 10.0 + 8.0 * b as f64, 60.0);
+        }
+        assert!((5..=7).contains(&b), "{b}");
+    }
+
+    #[test]
+    fn dates_and_sizes() {
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(19723), (2024, 1, 1));
+        assert_eq!(parse_size("480x270").unwrap(), (480, 270));
+        assert!(parse_size("0x10").is_err() && parse_size("abc").is_err());
+    }
 }

@@ -1,0 +1,293 @@
+//! CAD camera navigation as pure functions on [`Camera`] (no GPU): orbit around a pivot, pan, zoom toward the
+//! cursor, fly, fit all and the standard views (F3D's 1/3/7/9 keys).
+//!
+//! The camera's `up` is always kept as the true camera up vector (orthogonal to the view direction), so views
+//! looking straight down an axis stay valid; orbiting yaws around the scene's world up axis.
+use glam::{Quat, Vec3};
+use hrtao_core::camera::UpAxis;
+use hrtao_core::Camera;
+
+/// The camera plus the point it orbits around.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Nav {
+    pub cam: Camera,
+    pub pivot: Vec3,
+    pub world_up: UpAxis,
+}
+
+/// Standard views (F3D numpad conventions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StdView {
+    Front,
+    Right,
+    Top,
+    Iso,
+}
+
+pub fn eye(c: &Camera) -> Vec3 {
+    Vec3::from(c.eye)
+}
+pub fn target(c: &Camera) -> Vec3 {
+    Vec3::from(c.target)
+}
+pub fn forward(c: &Camera) -> Vec3 {
+    (target(c) - eye(c)).normalize()
+}
+pub fn right(c: &Camera) -> Vec3 {
+    forward(c).cross(Vec3::from(c.up)).normalize()
+}
+/// The orthogonalised camera up vector.
+pub fn cam_up(c: &Camera) -> Vec3 {
+    right(c).cross(forward(c)).normalize()
+}
+pub fn distance(c: &Camera) -> f32 {
+    (target(c) - eye(c)).length()
+}
+
+fn set(c: &Camera, eye: Vec3, target: Vec3, up: Vec3) -> Camera {
+    let fwd = (target - eye).normalize();
+    let r = fwd.cross(up).normalize();
+    let up = r.cross(fwd).normalize();
+    Camera {
+        eye: eye.to_array(),
+        target: target.to_array(),
+        up: up.to_array(),
+        ..*c
+    }
+}
+
+/// Orbit by `yaw` radians around the world up axis through `pivot`, then `pitch` radians around the camera's
+/// right axis through `pivot`. Distances to the pivot are preserved.
+pub fn orbit(c: &Camera, pivot: Vec3, world_up: Vec3, yaw: f32, pitch: f32) -> Camera {
+    let q = Quat::from_axis_angle(right(c), pitch);
+    let q = Quat::from_axis_angle(world_up.normalize(), yaw) * q;
+    let e = pivot + q * (eye(c) - pivot);
+    let t = pivot + q * (target(c) - pivot);
+    set(c, e, t, q * cam_up(c))
+}
+
+/// World units per pixel at the target distance for an image `height` pixels tall.
+pub fn world_per_pixel(c: &Camera, height: f32) -> f32 {
+    2.0 * distance(c) * (c.fov_y_deg.to_radians() * 0.5).tan() / height.max(1.0)
+}
+
+/// Pan so that content under the cursor follows a drag of (`dx`, `dy`) pixels (x right, y down) in a view
+/// `height` pixels tall.
+pub fn pan(c: &Camera, dx: f32, dy: f32, height: f32) -> Camera {
+    let s = world_per_pixel(c, height);
+    let delta = (-dx * right(c) + dy * cam_up(c)) * s;
+    set(c, eye(c) + delta, target(c) + delta, cam_up(c))
+}
+
+/// Zoom toward the point under the cursor: scales eye and target about the point where the cursor ray
+/// (`ray_dir`, unit) meets the target plane, by `factor` (< 1 zooms in). That point stays under the cursor.
+pub fn zoom_to(c: &Camera, ray_dir: Vec3, factor: f32) -> Camera {
+    let f = forward(c);
+    let cos = ray_dir.dot(f).max(1e-3);
+    let p = eye(c) + ray_dir * (distance(c) / cos);
+    zoom_about(c, p, factor)
+}
+
+/// Scales eye and target about `p` by `factor` (the view direction is unchanged).
+pub fn zoom_about(c: &Camera, p: Vec3, factor: f32) -> Camera {
+    let factor = factor.clamp(1e-3, 1e3);
+    let e = p + (eye(c) - p) * factor;
+    let t = p + (target(c) - p) * factor;
+    set(c, e, t, cam_up(c))
+}
+
+/// Fly: move eye and target by `local` = (right, up, forward) in world units.
+pub fn fly_move(c: &Camera, local: Vec3) -> Camera {
+    let d = right(c) * local.x + cam_up(c) * local.y + forward(c) * local.z;
+    set(c, eye(c) + d, target(c) + d, cam_up(c))
+}
+
+/// Fly: turn the view direction around the eye (yaw around world up, pitch around the right axis).
+pub fn fly_look(c: &Camera, world_up: Vec3, yaw: f32, pitch: f32) -> Camera {
+    let q = Quat::from_axis_angle(world_up.normalize(), yaw) * Quat::from_axis_angle(right(c), pitch);
+    let e = eye(c);
+    set(c, e, e + q * (target(c) - e), q * cam_up(c))
+}
+
+/// Distance at which a sphere of `radius` fills the smaller of the view's angular extents.
+pub fn fit_distance(c: &Camera, radius: f32) -> f32 {
+    let aspect = c.width as f32 / c.height.max(1) as f32;
+    let half_v = (c.fov_y_deg.to_radians() * 0.5).tan();
+    let half = half_v.min(half_v * aspect).atan();
+    radius.max(1e-6) / half.sin()
+}
+
+/// Keeps the view direction and frames the box `min..max`; returns the camera and the new pivot (the centre).
+pub fn fit(c: &Camera, min: Vec3, max: Vec3) -> (Camera, Vec3) {
+    let centre = (min + max) * 0.5;
+    let radius = (max - min).length() * 0.5;
+    let d = fit_distance(c, radius);
+    let cam = set(c, centre - forward(c) * d, centre, cam_up(c));
+    (cam, centre)
+}
+
+/// View direction (eye → target) and up vector of a standard view.
+pub fn std_view_dirs(view: StdView, up: UpAxis) -> (Vec3, Vec3) {
+    match up {
+        UpAxis::Z => match view {
+            StdView::Front => (Vec3::Y, Vec3::Z),
+            StdView::Right => (-Vec3::X, Vec3::Z),
+            StdView::Top => (-Vec3::Z, Vec3::Y),
+            StdView::Iso => (Vec3::new(-1.0, 1.0, -1.0).normalize(), Vec3::Z),
+        },
+        UpAxis::Y => match view {
+            StdView::Front => (-Vec3::Z, Vec3::Y),
+            StdView::Right => (-Vec3::X, Vec3::Y),
+            StdView::Top => (-Vec3::Y, -Vec3::Z),
+            StdView::Iso => (Vec3::new(-1.0, -1.0, -1.0).normalize(), Vec3::Y),
+        },
+    }
+}
+
+/// A standard view framing the box `min..max`; returns the camera and pivot.
+pub fn std_view(c: &Camera, view: StdView, up: UpAxis, min: Vec3, max: Vec3) -> (Camera, Vec3) {
+    let (dir, upv) = std_view_dirs(view, up);
+    let centre = (min + max) * 0.5;
+    let oriented = set(c, centre - dir, centre, upv);
+    fit(&oriented, min, max)
+}
+
+/// Guesses the up axis of a scene from its camera's up vector.
+pub fn up_axis_of(c: &Camera) -> UpAxis {
+    let u = Vec3::from(c.up);
+    if u.z.abs() > u.y.abs() {
+        UpAxis::Z
+    } else {
+        UpAxis::Y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam() -> Camera {
+        Camera {
+            eye: [0.0, -10.0, 0.0],
+            target: [0.0, 0.0, 0.0],
+            up: [0.0, 0.0, 1.0],
+            fov_y_deg: 60.0,
+            width: 200,
+            height: 100,
+        }
+    }
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-4
+    }
+
+    #[test]
+    fn orbit_keeps_distance_to_pivot_and_turns() {
+        let c = cam();
+        let pivot = Vec3::new(1.0, 0.0, 0.0);
+        let d0 = (eye(&c) - pivot).length();
+        let o = orbit(&c, pivot, Vec3::Z, std::f32::consts::FRAC_PI_2, 0.0);
+        assert!(((eye(&o) - pivot).length() - d0).abs() < 1e-4);
+        // A quarter turn around +Z moves the eye from -Y to +X of the pivot.
+        assert!(close(eye(&o) - pivot, Vec3::new(10.0, -1.0, 0.0)));
+        // Pitch up over the top stays valid (up is kept orthogonal) and preserves the distance.
+        let p = orbit(&c, Vec3::ZERO, Vec3::Z, 0.0, std::f32::consts::FRAC_PI_2);
+        assert!(p.validate().is_ok(), "{p:?}");
+        assert!((distance(&p) - 10.0).abs() < 1e-4);
+        assert!(forward(&p).z.abs() > 0.999, "looking straight down or up");
+        // Full turn returns to the start.
+        let mut r = c;
+        for _ in 0..8 {
+            r = orbit(&r, pivot, Vec3::Z, std::f32::consts::FRAC_PI_4, 0.0);
+        }
+        assert!(close(eye(&r), eye(&c)) && close(target(&r), target(&c)));
+    }
+
+    #[test]
+    fn pan_moves_eye_and_target_together_by_pixel_scale() {
+        let c = cam();
+        let p = pan(&c, 50.0, 0.0, 100.0);
+        let wpp = world_per_pixel(&c, 100.0);
+        assert!(close(eye(&p) - eye(&c), target(&p) - target(&c)));
+        // Dragging right moves the camera left (content follows the cursor).
+        assert!(close(target(&p), Vec3::new(-50.0 * wpp, 0.0, 0.0)));
+        let p = pan(&c, 0.0, 10.0, 100.0);
+        assert!(target(&p).z > 0.0, "dragging down moves the camera up");
+        assert!(close(forward(&p), forward(&c)));
+    }
+
+    #[test]
+    fn zoom_toward_cursor_keeps_the_cursor_point_fixed() {
+        let c = cam();
+        // A ray to the right of centre: pixel (150, 50).
+        let dir = c.ray_dir(150.0, 50.0);
+        let z = zoom_to(&c, dir, 0.5);
+        assert!((distance(&z) - 5.0).abs() < 1e-4, "distance halves");
+        assert!(close(forward(&z), forward(&c)));
+        // The point under the cursor on the target plane projects to the same pixel.
+        let p = eye(&c) + dir * (distance(&c) / dir.dot(forward(&c)));
+        let d2 = (p - eye(&z)).normalize();
+        assert!(
+            close(d2, z.ray_dir(150.0, 50.0)),
+            "{d2} vs {}",
+            z.ray_dir(150.0, 50.0)
+        );
+        // Zoom at the centre moves straight along the view direction.
+        let zc = zoom_to(&c, forward(&c), 2.0);
+        assert!(close(target(&zc), target(&c)));
+        assert!((distance(&zc) - 20.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn fit_frames_the_box_and_keeps_direction() {
+        let c = cam();
+        let (f, pivot) = fit(&c, Vec3::new(10.0, 10.0, 10.0), Vec3::new(12.0, 12.0, 12.0));
+        assert!(close(pivot, Vec3::splat(11.0)));
+        assert!(close(target(&f), pivot));
+        assert!(close(forward(&f), forward(&c)));
+        let r = 3f32.sqrt();
+        // The bounding sphere touches the vertical field of view (aspect 2: vertical is the limit).
+        let half = (30f32).to_radians();
+        assert!((distance(&f) - r / half.sin()).abs() < 1e-3);
+        // Every box corner is in front of the camera and inside the frustum.
+        for corner in [Vec3::splat(10.0), Vec3::splat(12.0), Vec3::new(10.0, 12.0, 10.0)] {
+            let v = corner - eye(&f);
+            let z = v.dot(forward(&f));
+            assert!(z > 0.0);
+            assert!((v.dot(cam_up(&f)) / z).abs() <= half.tan() + 1e-4);
+        }
+    }
+
+    #[test]
+    fn standard_views_look_along_axes() {
+        let c = cam();
+        let (min, max) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        let (top, _) = std_view(&c, StdView::Top, UpAxis::Z, min, max);
+        assert!(top.validate().is_ok());
+        assert!(close(forward(&top), -Vec3::Z));
+        let (front, _) = std_view(&c, StdView::Front, UpAxis::Z, min, max);
+        assert!(close(forward(&front), Vec3::Y) && close(cam_up(&front), Vec3::Z));
+        let (right_v, _) = std_view(&c, StdView::Right, UpAxis::Y, min, max);
+        assert!(close(forward(&right_v), -Vec3::X) && close(cam_up(&right_v), Vec3::Y));
+        let (iso, pivot) = std_view(&c, StdView::Iso, UpAxis::Y, min, max);
+        assert!(close(pivot, Vec3::ZERO));
+        let f = forward(&iso);
+        assert!((f.x - f.y).abs() < 1e-5 && (f.y - f.z).abs() < 1e-5);
+        for v in [StdView::Front, StdView::Right, StdView::Top, StdView::Iso] {
+            for up in [UpAxis::Y, UpAxis::Z] {
+                assert!(std_view(&c, v, up, min, max).0.validate().is_ok());
+            }
+        }
+    }
+
+    #[test]
+    fn fly_moves_and_looks() {
+        let c = cam();
+        let m = fly_move(&c, Vec3::new(0.0, 0.0, 2.0));
+        assert!(close(eye(&m), Vec3::new(0.0, -8.0, 0.0)));
+        assert!(close(forward(&m), forward(&c)));
+        let l = fly_look(&c, Vec3::Z, std::f32::consts::FRAC_PI_2, 0.0);
+        assert!(close(eye(&l), eye(&c)));
+        assert!(close(forward(&l), -Vec3::X));
+    }
+}

@@ -1,0 +1,135 @@
+//! Viewer preferences persisted between runs as a small JSON file: AO settings, render scale, the automatic ray
+//! budget, screenshot options and camera bookmarks. A missing file gives defaults; a corrupt one gives defaults
+//! plus a message for the UI (the file is only overwritten when the user changes something).
+use std::path::{Path, PathBuf};
+
+use hrtao_core::{AoSettings, Camera};
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bookmark {
+    pub name: String,
+    /// The scene the bookmark was taken in (shown; bookmarks work in any scene).
+    pub scene: String,
+    pub camera: Camera,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Prefs {
+    /// AO settings (the radius is reset to the scene's default when a scene is opened).
+    pub settings: AoSettings,
+    /// Internal resolution as a fraction of the window (None: pick by device: 0.35 on software devices).
+    pub render_scale: Option<f32>,
+    /// Adjust the ray budget automatically to meet `target_ms`.
+    pub auto_budget: bool,
+    pub target_ms: f32,
+    pub screenshot_dir: PathBuf,
+    pub screenshot_custom: bool,
+    pub screenshot_width: u32,
+    pub screenshot_height: u32,
+    /// Frames rendered for an offscreen screenshot (the hash map keeps converging over them).
+    pub screenshot_frames: u32,
+    pub bookmarks: Vec<Bookmark>,
+    pub dark_theme: bool,
+}
+
+impl Default for Prefs {
+    fn default() -> Self {
+        Prefs {
+            settings: AoSettings::default(),
+            render_scale: None,
+            auto_budget: false,
+            target_ms: 100.0,
+            screenshot_dir: PathBuf::from("screenshots"),
+            screenshot_custom: false,
+            screenshot_width: 3840,
+            screenshot_height: 2160,
+            screenshot_frames: 16,
+            bookmarks: Vec::new(),
+            dark_theme: true,
+        }
+    }
+}
+
+/// `$XDG_CONFIG_HOME/hrtao/viewer.json`, else `~/.config/hrtao/viewer.json`, else `./hrtao-viewer.json`.
+pub fn default_path() -> PathBuf {
+    if let Some(x) = std::env::var_os("XDG_CONFIG_HOME").filter(|v| !v.is_empty()) {
+        return PathBuf::from(x).join("hrtao/viewer.json");
+    }
+    if let Some(h) = std::env::var_os("HOME").filter(|v| !v.is_empty()) {
+        return PathBuf::from(h).join(".config/hrtao/viewer.json");
+    }
+    PathBuf::from("hrtao-viewer.json")
+}
+
+/// Loads the preferences; on a corrupt file returns defaults and the error message.
+pub fn load(path: &Path) -> (Prefs, Option<String>) {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return (Prefs::default(), None),
+        Err(e) => {
+            return (
+                Prefs::default(),
+                Some(format!("cannot read {}: {e}", path.display())),
+            )
+        }
+    };
+    match serde_json::from_str::<Prefs>(&text) {
+        Ok(mut p) => {
+            if let Err(e) = p.settings.validate() {
+                p.settings = AoSettings::default();
+                return (
+                    p,
+                    Some(format!(
+                        "{}: invalid AO settings ({e}); using defaults",
+                        path.display()
+                    )),
+                );
+            }
+            p.bookmarks.retain(|b| b.camera.validate().is_ok());
+            (p, None)
+        }
+        Err(e) => (
+            Prefs::default(),
+            Some(format!("{} is corrupt ({e}); using defaults", path.display())),
+        ),
+    }
+}
+
+pub fn save(path: &Path, prefs: &Prefs) -> anyhow::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let tmp = path.with_extension("json.tmp");
+    std::fs::write(&tmp, serde_json::to_string_pretty(prefs)?)?;
+    std::fs::rename(&tmp, path)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_missing_and_corrupt() {
+        let dir = std::env::temp_dir().join(format!("hrtao-prefs-{}", std::process::id()));
+        let path = dir.join("viewer.json");
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(load(&path), (Prefs::default(), None));
+        let mut p = Prefs::default();
+        p.settings.rays_per_pixel = 9;
+        p.bookmarks.push(Bookmark {
+            name: "a".into(),
+            scene: "s".into(),
+            camera: Camera::default(),
+        });
+        save(&path, &p).unwrap();
+        assert_eq!(load(&path), (p, None));
+        std::fs::write(&path, "{ not json").unwrap();
+        let (d, msg) = load(&path);
+        assert_eq!(d, Prefs::default());
+        assert!(msg.unwrap().contains("corrupt"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

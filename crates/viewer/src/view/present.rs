@@ -1,0 +1,673 @@
+//! The window's swapchain and the per-frame copy of the renderer's output into it: output buffer → internal
+//! image (render-scale resolution) → scaled blit into the swapchain image's 3D-view rectangle → egui on top.
+//! One frame in flight: every frame waits for its fence, which keeps synchronisation trivially correct.
+use std::sync::Arc;
+
+use anyhow::{anyhow, bail, Context, Result};
+use ash::extensions::khr;
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use hrtao_core::Gpu;
+
+/// The internal (render-resolution) image the output buffer is copied into before the scaled blit.
+struct Internal {
+    image: vk::Image,
+    allocation: Option<Allocation>,
+    width: u32,
+    height: u32,
+}
+
+pub struct Presenter {
+    gpu: Arc<Gpu>,
+    pub surface_loader: khr::Surface,
+    pub swapchain_loader: khr::Swapchain,
+    surface: vk::SurfaceKHR,
+    swapchain: vk::SwapchainKHR,
+    pub images: Vec<vk::Image>,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    /// The swapchain must be recreated before the next frame (resize, out of date, suboptimal).
+    pub dirty: bool,
+    /// Swapchain images support blits (else the output is copied 1:1 and the render scale is forced to 1).
+    pub blit_ok: bool,
+    pub linear_filter: bool,
+    pub readback_ok: bool,
+    acquire: vk::Semaphore,
+    render_done: Vec<vk::Semaphore>,
+    fence: vk::Fence,
+    pub pool: vk::CommandPool,
+    pub cmd: vk::CommandBuffer,
+    internal: Option<Internal>,
+}
+
+impl Presenter {
+    pub fn new(gpu: &Arc<Gpu>, window: &egui_ash::winit::window::Window) -> Result<Presenter> {
+        use egui_ash::raw_window_handle::{HasRawDisplayHandle, HasRawWindowHandle};
+        unsafe {
+            let surface = ash_window::create_surface(
+                &gpu.entry,
+                &gpu.instance,
+                window.raw_display_handle(),
+                window.raw_window_handle(),
+                None,
+            )
+            .context("cannot create the window surface")?;
+            let surface_loader = khr::Surface::new(&gpu.entry, &gpu.instance);
+            let supported = surface_loader
+                .get_physical_device_surface_support(gpu.physical, gpu.queue_family, surface)
+                .unwrap_or(false);
+            if !supported {
+                surface_loader.destroy_surface(surface, None);
+                bail!("the device's queue cannot present to this window");
+            }
+            let swapchain_loader = khr::Swapchain::new(&gpu.instance, &gpu.device);
+            let pool = gpu.device.create_command_pool(
+                &vk::CommandPoolCreateInfo::builder()
+                    .queue_family_index(gpu.queue_family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )?;
+            let cmd = gpu.device.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::builder()
+                    .command_pool(pool)
+                    .command_buffer_count(1),
+            )?[0];
+            let acquire = gpu
+                .device
+                .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)?;
+            let fence = gpu.device.create_fence(&vk::FenceCreateInfo::default(), None)?;
+            Ok(Presenter {
+                gpu: gpu.clone(),
+                surface_loader,
+                swapchain_loader,
+                surface,
+                swapchain: vk::SwapchainKHR::null(),
+                images: Vec::new(),
+                format: vk::Format::UNDEFINED,
+                extent: vk::Extent2D::default(),
+                dirty: true,
+                blit_ok: false,
+                linear_filter: false,
+                readback_ok: false,
+                acquire,
+                render_done: Vec::new(),
+                fence,
+                pool,
+                cmd,
+                internal: None,
+            })
+        }
+    }
+
+    /// (Re)creates the swapchain for a window of `width`×`height`. Returns false when the surface has a zero
+    /// extent (minimised): nothing can be presented then.
+    pub fn recreate(&mut self, width: u32, height: u32) -> Result<bool> {
+        let gpu = self.gpu.clone();
+        unsafe {
+            gpu.wait_idle();
+            let caps = self
+                .surface_loader
+                .get_physical_device_surface_capabilities(gpu.physical, self.surface)?;
+            let extent = if caps.current_extent.width != u32::MAX {
+                caps.current_extent
+            } else {
+                vk::Extent2D {
+                    width: width.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+                    height: height.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+                }
+            };
+            if extent.width == 0 || extent.height == 0 {
+                return Ok(false);
+            }
+            let formats = self
+                .surface_loader
+                .get_physical_device_surface_formats(gpu.physical, self.surface)?;
+            let chosen = formats
+                .iter()
+                .find(|f| {
+                    matches!(f.format, vk::Format::B8G8R8A8_UNORM | vk::Format::R8G8B8A8_UNORM)
+                        && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR
+                })
+                .or(formats.first())
+                .copied()
+                .ok_or_else(|| anyhow!("the surface reports no formats"))?;
+            let props = gpu
+                .instance
+                .get_physical_device_format_properties(gpu.physical, chosen.format);
+            let feats = props.optimal_tiling_features;
+            let mut usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_DST;
+            self.readback_ok = caps
+                .supported_usage_flags
+                .contains(vk::ImageUsageFlags::TRANSFER_SRC);
+            if self.readback_ok {
+                usage |= vk::ImageUsageFlags::TRANSFER_SRC;
+            }
+            if !caps
+                .supported_usage_flags
+                .contains(vk::ImageUsageFlags::TRANSFER_DST)
+            {
+                bail!("the surface does not support transfer destinations");
+            }
+            self.blit_ok = feats.contains(vk::FormatFeatureFlags::BLIT_DST);
+            let rgba_props = gpu
+                .instance
+                .get_physical_device_format_properties(gpu.physical, vk::Format::R8G8B8A8_UNORM);
+            self.linear_filter = rgba_props
+                .optimal_tiling_features
+                .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
+            let modes = self
+                .surface_loader
+                .get_physical_device_surface_present_modes(gpu.physical, self.surface)?;
+            let mode = [vk::PresentModeKHR::MAILBOX, vk::PresentModeKHR::FIFO]
+                .into_iter()
+                .find(|m| modes.contains(m))
+                .unwrap_or(vk::PresentModeKHR::FIFO);
+            let mut count = caps.min_image_count + 1;
+            if caps.max_image_count != 0 {
+                count = count.min(caps.max_image_count);
+            }
+            let old = self.swapchain;
+            let info = vk::SwapchainCreateInfoKHR::builder()
+                .surface(self.surface)
+                .min_image_count(count)
+                .image_format(chosen.format)
+                .image_color_space(chosen.color_space)
+                .image_extent(extent)
+                .image_array_layers(1)
+                .image_usage(usage)
+                .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
+                .pre_transform(caps.current_transform)
+                .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
+                .present_mode(mode)
+                .clipped(true)
+                .old_swapchain(old);
+            let swapchain = self.swapchain_loader.create_swapchain(&info, None)?;
+            if old != vk::SwapchainKHR::null() {
+                self.swapchain_loader.destroy_swapchain(old, None);
+            }
+            self.swapchain = swapchain;
+            self.images = self.swapchain_loader.get_swapchain_images(swapchain)?;
+            self.format = chosen.format;
+            self.extent = extent;
+            for s in self.render_done.drain(..) {
+                gpu.device.destroy_semaphore(s, None);
+            }
+            for _ in 0..self.images.len() {
+                self.render_done.push(
+                    gpu.device
+                        .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)?,
+                );
+            }
+            self.dirty = false;
+            log::debug!(
+                "swapchain {}x{} {:?}, {} images, {mode:?}, blit {}",
+                extent.width,
+                extent.height,
+                chosen.format,
+                self.images.len(),
+                self.blit_ok
+            );
+            Ok(true)
+        }
+    }
+
+    /// True when the swapchain stores blue first (the renderer can write BGRA directly for 1:1 copies).
+    pub fn is_bgra(&self) -> bool {
+        matches!(
+            self.format,
+            vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB
+        )
+    }
+
+    /// Acquires the next image; None when the swapchain is out of date (marked dirty).
+    pub fn acquire(&mut self) -> Result<Option<u32>> {
+        unsafe {
+            match self.swapchain_loader.acquire_next_image(
+                self.swapchain,
+                u64::MAX,
+                self.acquire,
+                vk::Fence::null(),
+            ) {
+                Ok((i, suboptimal)) => {
+                    if suboptimal {
+                        self.dirty = true;
+                    }
+                    Ok(Some(i))
+                }
+                Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
+                    self.dirty = true;
+                    Ok(None)
+                }
+                Err(e) => Err(anyhow!("vkAcquireNextImageKHR: {e}")),
+            }
+        }
+    }
+
+    /// Makes sure the internal image has the renderer's size.
+    pub fn ensure_internal(&mut self, width: u32, height: u32) -> Result<()> {
+        if let Some(i) = &self.internal {
+            if i.width == width && i.height == height {
+                return Ok(());
+            }
+        }
+        self.destroy_internal();
+        let gpu = self.gpu.clone();
+        unsafe {
+            let image = gpu.device.create_image(
+                &vk::ImageCreateInfo::builder()
+                    .image_type(vk::ImageType::TYPE_2D)
+                    .format(vk::Format::R8G8B8A8_UNORM)
+                    .extent(vk::Extent3D {
+                        width,
+                        height,
+                        depth: 1,
+                    })
+                    .mip_levels(1)
+                    .array_layers(1)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .tiling(vk::ImageTiling::OPTIMAL)
+                    .usage(vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC)
+                    .initial_layout(vk::ImageLayout::UNDEFINED),
+                None,
+            )?;
+            let requirements = gpu.device.get_image_memory_requirements(image);
+            let allocation = gpu.allocator().allocate(&AllocationCreateDesc {
+                name: "viewer internal image",
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+            let allocation = match allocation {
+                Ok(a) => a,
+                Err(e) => {
+                    gpu.device.destroy_image(image, None);
+                    bail!("allocating the internal image: {e}");
+                }
+            };
+            gpu.device
+                .bind_image_memory(image, allocation.memory(), allocation.offset())?;
+            self.internal = Some(Internal {
+                image,
+                allocation: Some(allocation),
+                width,
+                height,
+            });
+        }
+        Ok(())
+    }
+
+    fn destroy_internal(&mut self) {
+        if let Some(mut i) = self.internal.take() {
+            unsafe {
+                self.gpu.wait_idle();
+                self.gpu.device.destroy_image(i.image, None);
+            }
+            if let Some(a) = i.allocation.take() {
+                let _ = self.gpu.allocator().free(a);
+            }
+        }
+    }
+
+    /// Records: output buffer → internal image → blit into `dst` (x, y, w, h) of swapchain image `index`,
+    /// cleared to `clear` first; leaves the image in COLOR_ATTACHMENT_OPTIMAL for egui. `src` is None when there
+    /// is nothing to show yet (loading).
+    pub fn record_view(
+        &self,
+        cmd: vk::CommandBuffer,
+        index: u32,
+        src: Option<(vk::Buffer, u32, u32)>,
+        dst: [i32; 4],
+        clear: [f32; 4],
+    ) {
+        let d = &self.gpu.device;
+        let target = self.images[index as usize];
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let barrier = |image, old, new, src_access, dst_access| {
+            vk::ImageMemoryBarrier::builder()
+                .image(image)
+                .old_layout(old)
+                .new_layout(new)
+                .src_access_mask(src_access)
+                .dst_access_mask(dst_access)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .subresource_range(range)
+                .build()
+        };
+        unsafe {
+            // The renderer's compute writes → transfer reads of the output buffer.
+            let mem = [vk::MemoryBarrier::builder()
+                .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE)
+                .build()];
+            let mut images = vec![barrier(
+                target,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::AccessFlags::empty(),
+                vk::AccessFlags::TRANSFER_WRITE,
+            )];
+            let internal = self.internal.as_ref().filter(|_| self.blit_ok);
+            if let (Some(_), Some(i)) = (src, internal) {
+                images.push(barrier(
+                    i.image,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::AccessFlags::TRANSFER_READ,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ));
+            }
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &mem,
+                &[],
+                &images,
+            );
+            let color = vk::ClearColorValue { float32: clear };
+            d.cmd_clear_color_image(
+                cmd,
+                target,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &color,
+                &[range],
+            );
+            let after_clear = [vk::MemoryBarrier::builder()
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ)
+                .build()];
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &after_clear,
+                &[],
+                &[],
+            );
+            if let Some((buffer, w, h)) = src {
+                let copy = || vk::BufferImageCopy {
+                    buffer_offset: 0,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: layers,
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: w,
+                        height: h,
+                        depth: 1,
+                    },
+                };
+                match internal {
+                    Some(i) => {
+                        d.cmd_copy_buffer_to_image(
+                            cmd,
+                            buffer,
+                            i.image,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            &[copy()],
+                        );
+                        let b = [barrier(
+                            i.image,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                            vk::AccessFlags::TRANSFER_READ,
+                        )];
+                        d.cmd_pipeline_barrier(
+                            cmd,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::DependencyFlags::empty(),
+                            &[],
+                            &[],
+                            &b,
+                        );
+                        let blit = vk::ImageBlit {
+                            src_subresource: layers,
+                            src_offsets: [
+                                vk::Offset3D::default(),
+                                vk::Offset3D {
+                                    x: w as i32,
+                                    y: h as i32,
+                                    z: 1,
+                                },
+                            ],
+                            dst_subresource: layers,
+                            dst_offsets: [
+                                vk::Offset3D {
+                                    x: dst[0],
+                                    y: dst[1],
+                                    z: 0,
+                                },
+                                vk::Offset3D {
+                                    x: dst[0] + dst[2],
+                                    y: dst[1] + dst[3],
+                                    z: 1,
+                                },
+                            ],
+                        };
+                        let filter = if self.linear_filter {
+                            vk::Filter::LINEAR
+                        } else {
+                            vk::Filter::NEAREST
+                        };
+                        d.cmd_blit_image(
+                            cmd,
+                            i.image,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            target,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            &[blit],
+                            filter,
+                        );
+                    }
+                    None => {
+                        // 1:1 copy (no blit support): the renderer wrote the swapchain's channel order.
+                        let mut c = copy();
+                        c.image_offset = vk::Offset3D {
+                            x: dst[0],
+                            y: dst[1],
+                            z: 0,
+                        };
+                        c.image_extent.width = w.min(self.extent.width.saturating_sub(dst[0] as u32));
+                        c.image_extent.height = h.min(self.extent.height.saturating_sub(dst[1] as u32));
+                        c.buffer_row_length = w;
+                        if c.image_extent.width > 0 && c.image_extent.height > 0 {
+                            d.cmd_copy_buffer_to_image(
+                                cmd,
+                                buffer,
+                                target,
+                                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                                &[c],
+                            );
+                        }
+                    }
+                }
+            }
+            let b = [barrier(
+                target,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::AccessFlags::TRANSFER_WRITE,
+                vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            )];
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &b,
+            );
+        }
+    }
+
+    /// Records a copy of the presented image (after egui, in PRESENT_SRC) into `buffer` (tightly packed).
+    pub fn record_readback(&self, cmd: vk::CommandBuffer, index: u32, buffer: vk::Buffer) {
+        let d = &self.gpu.device;
+        let image = self.images[index as usize];
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let b = |old, new, sa, da| {
+            [vk::ImageMemoryBarrier::builder()
+                .image(image)
+                .old_layout(old)
+                .new_layout(new)
+                .src_access_mask(sa)
+                .dst_access_mask(da)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .subresource_range(range)
+                .build()]
+        };
+        unsafe {
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &b(
+                    vk::ImageLayout::PRESENT_SRC_KHR,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                    vk::AccessFlags::TRANSFER_READ,
+                ),
+            );
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer,
+                &[vk::BufferImageCopy {
+                    buffer_offset: 0,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    },
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: self.extent.width,
+                        height: self.extent.height,
+                        depth: 1,
+                    },
+                }],
+            );
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &b(
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::ImageLayout::PRESENT_SRC_KHR,
+                    vk::AccessFlags::empty(),
+                    vk::AccessFlags::empty(),
+                ),
+            );
+            hrtao_core::buffer::host_read_barrier(&self.gpu, cmd);
+        }
+    }
+
+    /// Submits `cmd` (waiting for the acquired image), waits for it, then presents image `index`.
+    pub fn submit_and_present(&mut self, index: u32) -> Result<()> {
+        let d = &self.gpu.device;
+        unsafe {
+            let waits = [self.acquire];
+            let stages = [vk::PipelineStageFlags::TRANSFER];
+            let signals = [self.render_done[index as usize]];
+            let cmds = [self.cmd];
+            let submit = [vk::SubmitInfo::builder()
+                .wait_semaphores(&waits)
+                .wait_dst_stage_mask(&stages)
+                .command_buffers(&cmds)
+                .signal_semaphores(&signals)
+                .build()];
+            d.queue_submit(self.gpu.queue, &submit, self.fence)
+                .map_err(|e| anyhow!("vkQueueSubmit: {e}"))?;
+            d.wait_for_fences(&[self.fence], true, 600_000_000_000)
+                .map_err(|e| anyhow!("vkWaitForFences: {e}"))?;
+            d.reset_fences(&[self.fence])?;
+            let swapchains = [self.swapchain];
+            let indices = [index];
+            let present = vk::PresentInfoKHR::builder()
+                .wait_semaphores(&signals)
+                .swapchains(&swapchains)
+                .image_indices(&indices);
+            match self.swapchain_loader.queue_present(self.gpu.queue, &present) {
+                Ok(false) => {}
+                Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => self.dirty = true,
+                Err(e) => bail!("vkQueuePresentKHR: {e}"),
+            }
+        }
+        Ok(())
+    }
+
+    /// Destroys the swapchain and surface (before the window goes away).
+    pub fn destroy(&mut self) {
+        let gpu = self.gpu.clone();
+        gpu.wait_idle();
+        self.destroy_internal();
+        unsafe {
+            for s in self.render_done.drain(..) {
+                gpu.device.destroy_semaphore(s, None);
+            }
+            if self.swapchain != vk::SwapchainKHR::null() {
+                self.swapchain_loader.destroy_swapchain(self.swapchain, None);
+                self.swapchain = vk::SwapchainKHR::null();
+            }
+            if self.surface != vk::SurfaceKHR::null() {
+                self.surface_loader.destroy_surface(self.surface, None);
+                self.surface = vk::SurfaceKHR::null();
+            }
+            if self.acquire != vk::Semaphore::null() {
+                gpu.device.destroy_semaphore(self.acquire, None);
+                self.acquire = vk::Semaphore::null();
+            }
+            if self.fence != vk::Fence::null() {
+                gpu.device.destroy_fence(self.fence, None);
+                self.fence = vk::Fence::null();
+            }
+            if self.pool != vk::CommandPool::null() {
+                gpu.device.destroy_command_pool(self.pool, None);
+                self.pool = vk::CommandPool::null();
+            }
+        }
+    }
+}
+
+impl Drop for Presenter {
+    fn drop(&mut self) {
+        self.destroy();
+    }
+}

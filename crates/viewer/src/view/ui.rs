@@ -1,0 +1,948 @@
+//! The panel (settings with the paper's references, statistics, selection, camera, screenshots), the 3D view's
+//! mouse/keyboard navigation and picking, and the toasts.
+use std::time::Instant;
+
+use egui::{Key, PointerButton};
+use glam::{Mat4, Vec3};
+use hrtao_core::{Camera, Mode};
+
+use super::edits::{Action, Edit};
+use super::nav::{self, StdView};
+use super::prefs::Bookmark;
+use super::Viewer;
+
+const ORBIT_RAD_PER_PX: f32 = 0.008;
+const LOOK_RAD_PER_PX: f32 = 0.004;
+
+/// The key/mouse bindings, shown in the help section (and in the README).
+pub const BINDINGS: &[(&str, &str)] = &[
+    ("Left drag", "orbit around the pivot"),
+    ("Middle drag / Shift+left drag", "pan"),
+    ("Wheel", "zoom toward the cursor"),
+    ("Right drag", "fly: look around"),
+    (
+        "W A S D / Q E (Shift: faster)",
+        "fly: forward, left, back, right / down, up",
+    ),
+    (
+        "Double-click",
+        "set the orbit pivot on the surface under the cursor",
+    ),
+    ("F / Home", "fit all"),
+    ("1 / 3 / 7 / 9", "front / right / top / isometric view"),
+    ("Enter", "reset to the initial camera"),
+    ("Click", "select an instance (click background: deselect)"),
+    (
+        "Ctrl+left drag",
+        "move the selection along the world axis closest to the drag",
+    ),
+    (
+        "Arrow keys / PgUp PgDn (Shift: x10)",
+        "move the selection by 1% of the scene size",
+    ),
+    ("H", "hide / show the selection"),
+    ("Delete", "delete the selection"),
+    ("Esc", "deselect"),
+    ("Ctrl+Z / Ctrl+Y (Ctrl+Shift+Z)", "undo / redo"),
+    ("F12", "screenshot of the 3D view (PNG, no UI)"),
+    ("Tab", "show / hide the panel"),
+];
+
+impl Viewer {
+    pub(crate) fn ui(&mut self, ctx: &egui::Context) {
+        self.poll_loading();
+        if let Some(d) = self.script.deadline {
+            if Instant::now() > d {
+                self.script.deadline = None;
+                self.fatal("scripted run timed out (--timeout)".into());
+            }
+        }
+        // Dropped files open like the Open button.
+        let dropped: Vec<_> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .filter_map(|f| f.path.clone())
+                .collect()
+        });
+        if let Some(p) = dropped.into_iter().next() {
+            self.start_loading(p.display().to_string());
+        }
+        if self.show_panel {
+            egui::SidePanel::right("panel")
+                .resizable(true)
+                .default_width(320.0)
+                .show(ctx, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| self.panel(ui));
+                });
+        }
+        egui::CentralPanel::default()
+            .frame(egui::Frame::none())
+            .show(ctx, |ui| {
+                let rect = ui.max_rect();
+                let ppp = ctx.pixels_per_point();
+                self.view_rect = [
+                    (rect.min.x * ppp).round() as i32,
+                    (rect.min.y * ppp).round() as i32,
+                    (rect.width() * ppp).round().max(1.0) as i32,
+                    (rect.height() * ppp).round().max(1.0) as i32,
+                ];
+                self.laid_out = true;
+                let resp = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+                self.view_input(ctx, &resp, rect);
+                if let Some(l) = &self.loading {
+                    ui.put(
+                        egui::Rect::from_center_size(rect.center(), egui::vec2(400.0, 40.0)),
+                        egui::Label::new(
+                            egui::RichText::new(format!(
+                                "Loading {} … {} ({:.0} s)",
+                                l.spec,
+                                l.progress,
+                                l.started.elapsed().as_secs_f32()
+                            ))
+                            .heading(),
+                        ),
+                    );
+                }
+            });
+        self.keyboard(ctx);
+        self.draw_toasts(ctx);
+    }
+
+    fn panel(&mut self, ui: &mut egui::Ui) {
+        let software = self.gpu.info.is_software;
+        ui.heading("hrtao");
+        ui.label(format!("Device: {} ({})", self.gpu.info.name, self.gpu.info.kind))
+            .on_hover_text(format!("driver {}", self.gpu.info.driver));
+        if software {
+            ui.colored_label(
+                egui::Color32::from_rgb(230, 160, 40),
+                "software device: render scale starts low",
+            );
+        }
+
+        egui::CollapsingHeader::new("Scene")
+            .default_open(true)
+            .show(ui, |ui| self.scene_section(ui));
+        egui::CollapsingHeader::new("Ambient occlusion")
+            .default_open(true)
+            .show(ui, |ui| self.ao_section(ui));
+        egui::CollapsingHeader::new("Statistics")
+            .default_open(true)
+            .show(ui, |ui| self.stats_section(ui));
+        egui::CollapsingHeader::new("Selection")
+            .default_open(true)
+            .show(ui, |ui| self.selection_section(ui));
+        egui::CollapsingHeader::new("Camera")
+            .default_open(false)
+            .show(ui, |ui| self.camera_section(ui));
+        egui::CollapsingHeader::new("Screenshot")
+            .default_open(false)
+            .show(ui, |ui| self.screenshot_section(ui));
+        egui::CollapsingHeader::new("Keys and mouse")
+            .default_open(false)
+            .show(ui, |ui| {
+                egui::Grid::new("bindings").striped(true).show(ui, |ui| {
+                    for (k, v) in BINDINGS {
+                        ui.label(*k);
+                        ui.label(*v);
+                        ui.end_row();
+                    }
+                });
+            });
+    }
+
+    fn scene_section(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let edit = ui.add(
+                egui::TextEdit::singleline(&mut self.open_path)
+                    .hint_text("file.glb / .gltf / .obj / gen:city")
+                    .desired_width(200.0),
+            );
+            let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+            if (ui.button("Open").clicked() || enter) && self.loading.is_none() {
+                let p = self.open_path.trim().to_string();
+                self.start_loading(p);
+            }
+        })
+        .response
+        .on_hover_text(
+            "Open a glTF/GLB/OBJ file or a generator spec (drag & drop a file onto the window too)",
+        );
+        if ui.button("Open the bundled scene").clicked() && self.loading.is_none() {
+            self.start_loading(super::default_spec());
+        }
+        if let Some(l) = &self.loading {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(format!("loading: {}", l.progress));
+            });
+        }
+        if let Some(e) = &self.load_error {
+            ui.colored_label(egui::Color32::from_rgb(230, 80, 70), e);
+        }
+        if let Some(scene) = &self.scene {
+            ui.label(format!("{}  ({})", scene.name, self.scene_spec));
+        }
+    }
+
+    fn ao_section(&mut self, ui: &mut egui::Ui) {
+        let mut s = self.settings.clone();
+        egui::ComboBox::from_label("mode")
+            .selected_text(s.mode.label())
+            .show_ui(ui, |ui| {
+                for m in Mode::ALL {
+                    ui.selectable_value(&mut s.mode, m, m.label());
+                }
+            })
+            .response
+            .on_hover_text(
+                "HRTAO: the paper's hashed ray-traced AO (§1-§5). Per-pixel RTAO: the brute-force baseline \
+                 (accumulates while nothing moves). Debug views: hash cells (Fig. 3), LOD used (§4), samples \
+                 per cell.",
+            );
+        ui.add_enabled(
+            !self.prefs.auto_budget,
+            egui::Slider::new(&mut s.rays_per_pixel, 1..=64).text("ray budget"),
+        )
+        .on_hover_text(
+            "Ray budget (§3, §6): rays traced per pixel per frame, shared between the hash cells visible in \
+             the image (collaborative ray tracing). Higher: faster convergence, slower frames.",
+        );
+        ui.add(
+            egui::Slider::new(&mut s.s_p, 0.5..=32.0)
+                .logarithmic(true)
+                .text("s_p"),
+        )
+        .on_hover_text(
+            "s_p (eq. 2): target size in pixels of a hash cell's footprint; the cell size s_w grows with \
+                 distance. Larger: coarser cells, fewer rays per cell needed, blurrier AO.",
+        );
+        ui.add(egui::Slider::new(&mut s.s_nd, 0.5..=16.0).text("s_nd"))
+            .on_hover_text(
+                "s_nd (eq. 5): normal discretisation; cells are keyed by position and quantised normal so \
+                 surfaces with different orientations don't share AO.",
+            );
+        let r0 = self.default_radius;
+        ui.horizontal(|ui| {
+            ui.add(
+                egui::Slider::new(&mut s.ao_radius, r0 * 0.01..=r0 * 20.0)
+                    .logarithmic(true)
+                    .text("AO radius"),
+            )
+            .on_hover_text(
+                "AO radius R (§1): occlusion rays longer than this count as unoccluded. Default: 8 mm for the \
+                 bundled gearbox, 5% of the bounding-box diagonal otherwise.",
+            );
+            if ui.small_button("↺").on_hover_text("scene default").clicked() {
+                s.ao_radius = r0;
+            }
+        });
+        ui.add(
+            egui::Slider::new(&mut s.max_samples, 16..=10000)
+                .logarithmic(true)
+                .text("max samples"),
+        )
+        .on_hover_text(
+            "Maximum samples per cell (§6, 1000 in the paper): a converged cell stops receiving rays, \
+                 freeing the budget for the others.",
+        );
+        ui.add(egui::Slider::new(&mut s.min_samples, 0..=256).text("min samples"))
+            .on_hover_text(
+                "Minimum samples (§4): a cell with fewer samples is replaced by its coarser LOD (eq. 3) \
+                 until it has gathered enough.",
+            );
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut s.filter, "filter").on_hover_text(
+                "Adaptive à-trous filter (§5): smooths the remaining cell quantisation with a footprint \
+                 proportional to the cell size.",
+            );
+            ui.add_enabled(
+                s.filter,
+                egui::Slider::new(&mut s.filter_iterations, 1..=8).text("iterations"),
+            )
+            .on_hover_text("À-trous iterations (§5); each doubles the filter's reach.");
+        });
+        let mut log2 = s.hash_capacity.trailing_zeros();
+        ui.add(
+            egui::Slider::new(&mut log2, 10..=26)
+                .text("hash capacity (log2)")
+                .custom_formatter(|v, _| format!("2^{v} = {}", 1u64 << v as u32)),
+        )
+        .on_hover_text(
+            "Hash map capacity in cells (§1, §6): the world-space cache of AO values. Changing it empties the \
+             cache. Watch the load factor and failed inserts in the statistics.",
+        );
+        s.hash_capacity = 1 << log2;
+        ui.checkbox(&mut s.shaded, "base colours")
+            .on_hover_text("Use the materials' base colours (off: uniform grey clay)");
+        ui.separator();
+        let blit = self.presenter.blit_ok || self.presenter.images.is_empty();
+        ui.add_enabled(
+            blit,
+            egui::Slider::new(&mut self.render_scale, 0.1..=1.0).text("render scale"),
+        )
+        .on_hover_text(
+            "Internal resolution as a fraction of the 3D view (blitted to the window). Note s_p is in \
+             internal pixels.",
+        );
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.prefs.auto_budget, "auto budget").on_hover_text(
+                "§6: \"the ray budget can be adjusted to match a target rendering speed\": the ray budget is \
+                 adapted every frame to reach the target frame time.",
+            );
+            ui.add_enabled(
+                self.prefs.auto_budget,
+                egui::DragValue::new(&mut self.prefs.target_ms)
+                    .clamp_range(5.0..=2000.0)
+                    .suffix(" ms target"),
+            );
+        });
+        ui.horizontal(|ui| {
+            if ui
+                .button("Clear cache")
+                .on_hover_text("Forget all cached AO (the hash map restarts empty)")
+                .clicked()
+            {
+                if let Some(r) = &mut self.renderer {
+                    if let Err(e) = r.clear_cache() {
+                        self.toasts.push(super::Toast {
+                            text: format!("{e}"),
+                            error: true,
+                            until: Instant::now() + std::time::Duration::from_secs(6),
+                        });
+                    }
+                }
+            }
+            if ui
+                .button("Defaults")
+                .on_hover_text("AoSettings::default() with the scene's radius")
+                .clicked()
+            {
+                s = hrtao_core::AoSettings {
+                    ao_radius: self.default_radius,
+                    ..Default::default()
+                };
+            }
+        });
+        if s != self.settings {
+            match s.validate() {
+                Ok(()) => {
+                    self.settings = s.clone();
+                    if let Some(r) = &mut self.renderer {
+                        if let Err(e) = r.set_settings(s) {
+                            let msg = format!("settings: {e}");
+                            self.toast(msg, true);
+                        }
+                    }
+                }
+                Err(e) => self.toast(format!("settings: {e}"), true),
+            }
+        }
+    }
+
+    fn stats_section(&mut self, ui: &mut egui::Ui) {
+        let Some(rep) = &self.last_report else {
+            ui.label("no frame yet");
+            return;
+        };
+        let (iw, ih) = self.renderer.as_ref().map(|r| r.size()).unwrap_or((0, 0));
+        egui::Grid::new("stats").striped(true).show(ui, |ui| {
+            let mut row = |k: &str, v: String| {
+                ui.label(k);
+                ui.label(v);
+                ui.end_row();
+            };
+            row(
+                "frame",
+                format!(
+                    "{:.1} ms render, {:.1} ms interval ({:.1} fps)",
+                    self.frame_ms_avg,
+                    self.interval_ms_avg,
+                    1000.0 / self.interval_ms_avg.max(1e-3)
+                ),
+            );
+            row("GPU total", format!("{:.2} ms", rep.gpu_total_ms));
+            for (name, ms) in &rep.gpu_ms {
+                row(&format!("  {name}"), format!("{ms:.2} ms"));
+            }
+            row(
+                "resolution",
+                format!("{iw}×{ih} internal ({:.0}%)", self.render_scale * 100.0),
+            );
+            row(
+                "rays",
+                format!(
+                    "{} ({:.2}/px)",
+                    rep.rays,
+                    rep.rays as f64 / (iw * ih).max(1) as f64
+                ),
+            );
+            if self.settings.mode.uses_hash() {
+                row(
+                    "hash cells",
+                    format!(
+                        "{} / {} ({:.1}% load)",
+                        rep.occupied_cells,
+                        self.settings.hash_capacity,
+                        rep.load_factor * 100.0
+                    ),
+                );
+                row("failed inserts", rep.failed_inserts.to_string());
+                row("longest probe", rep.longest_probe.to_string());
+            } else if self.settings.mode == Mode::Rtao {
+                row("accumulated", format!("{} frames", rep.accumulated_frames));
+            }
+            if let Some(scene) = &self.scene {
+                row("F (scene frame)", scene.frame().to_string());
+                row("instances", scene.instances.len().to_string());
+                row(
+                    "triangles",
+                    format!("{} unique", fmt_count(scene.unique_triangle_count())),
+                );
+                row(
+                    "",
+                    format!("{} instanced", fmt_count(scene.instanced_triangle_count())),
+                );
+            }
+            row(
+                "validation",
+                format!("{} messages", self.gpu.validation_messages()),
+            );
+        });
+    }
+
+    fn selection_section(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let undo = self.edits.undo_label();
+            if ui
+                .add_enabled(undo.is_some(), egui::Button::new("Undo"))
+                .on_hover_text(undo.unwrap_or_default())
+                .clicked()
+            {
+                self.edit(Action::Undo);
+            }
+            let redo = self.edits.redo_label();
+            if ui
+                .add_enabled(redo.is_some(), egui::Button::new("Redo"))
+                .on_hover_text(redo.unwrap_or_default())
+                .clicked()
+            {
+                self.edit(Action::Redo);
+            }
+        });
+        let sel = self.selected;
+        let Some(inst) = self
+            .scene
+            .as_ref()
+            .and_then(|s| s.instances.get(sel as usize))
+            .cloned()
+        else {
+            ui.label("click an instance to select it");
+            return;
+        };
+        ui.label(format!(
+            "#{sel} {}",
+            if inst.name.is_empty() {
+                "(unnamed)"
+            } else {
+                &inst.name
+            }
+        ));
+        let mut visible = inst.visible;
+        if ui.checkbox(&mut visible, "visible").changed() {
+            self.edit(Action::Apply(Edit::Visibility {
+                instance: sel,
+                visible,
+            }));
+        }
+        let pos = inst.transform.w_axis.truncate();
+        let mut p = pos;
+        let step = self.move_step();
+        ui.horizontal(|ui| {
+            ui.label("position");
+            for (c, name) in [(&mut p.x, "x"), (&mut p.y, "y"), (&mut p.z, "z")] {
+                ui.add(
+                    egui::DragValue::new(c)
+                        .speed(step * 0.1)
+                        .prefix(format!("{name} ")),
+                );
+            }
+        });
+        if p != pos {
+            self.move_selected(p - pos);
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Delete").clicked() {
+                self.edit(Action::Apply(Edit::Delete {
+                    instance: sel,
+                    removed: None,
+                }));
+                self.set_selected(u32::MAX);
+            }
+            if ui.button("Deselect").clicked() {
+                self.set_selected(u32::MAX);
+            }
+        });
+    }
+
+    fn camera_section(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            if ui.button("Fit (F)").clicked() {
+                self.fit_all();
+            }
+            for (label, v) in [
+                ("Front", StdView::Front),
+                ("Right", StdView::Right),
+                ("Top", StdView::Top),
+                ("Iso", StdView::Iso),
+            ] {
+                if ui.button(label).clicked() {
+                    self.std_view(v);
+                }
+            }
+            if ui.button("Reset").clicked() {
+                self.reset_view();
+            }
+        });
+        ui.add(egui::Slider::new(&mut self.nav.cam.fov_y_deg, 5.0..=120.0).text("field of view"));
+        ui.horizontal(|ui| {
+            ui.add(
+                egui::TextEdit::singleline(&mut self.bookmark_name)
+                    .hint_text("bookmark name")
+                    .desired_width(160.0),
+            );
+            if ui.button("Save view").clicked() {
+                let name = if self.bookmark_name.trim().is_empty() {
+                    format!("view {}", self.prefs.bookmarks.len() + 1)
+                } else {
+                    self.bookmark_name.trim().to_string()
+                };
+                self.prefs.bookmarks.push(Bookmark {
+                    name,
+                    scene: self.scene_spec.clone(),
+                    camera: self.nav.cam,
+                });
+                self.bookmark_name.clear();
+            }
+        });
+        let mut go = None;
+        let mut remove = None;
+        for (i, b) in self.prefs.bookmarks.iter().enumerate() {
+            ui.horizontal(|ui| {
+                if ui.button(&b.name).on_hover_text(&b.scene).clicked() {
+                    go = Some(b.camera);
+                }
+                if ui.small_button("✖").on_hover_text("remove").clicked() {
+                    remove = Some(i);
+                }
+            });
+        }
+        if let Some(c) = go {
+            self.nav.cam = c;
+            self.nav.pivot = nav::target(&c);
+        }
+        if let Some(i) = remove {
+            self.prefs.bookmarks.remove(i);
+        }
+        if ui.button("Copy camera JSON").clicked() {
+            let mut cam: Camera = self.nav.cam;
+            cam.width = self.view_rect[2].max(1) as u32;
+            cam.height = self.view_rect[3].max(1) as u32;
+            let text = serde_json::to_string_pretty(&cam).unwrap_or_default();
+            ui.output_mut(|o| o.copied_text = text);
+        }
+    }
+
+    fn screenshot_section(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("folder");
+            let mut dir = self.prefs.screenshot_dir.display().to_string();
+            if ui.text_edit_singleline(&mut dir).changed() {
+                self.prefs.screenshot_dir = dir.into();
+            }
+        });
+        ui.checkbox(&mut self.prefs.screenshot_custom, "custom resolution")
+            .on_hover_text("Rendered offscreen at this size (else the 3D view's window resolution)");
+        ui.add_enabled_ui(self.prefs.screenshot_custom, |ui| {
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut self.prefs.screenshot_width).clamp_range(16..=16384));
+                ui.label("×");
+                ui.add(egui::DragValue::new(&mut self.prefs.screenshot_height).clamp_range(16..=16384));
+            });
+        });
+        ui.add(egui::Slider::new(&mut self.prefs.screenshot_frames, 1..=256).text("frames"))
+            .on_hover_text(
+                "Frames rendered for the screenshot: finer cells at higher resolution need more samples to \
+                 converge (window-resolution shots use at most 4; the cache is already warm).",
+            );
+        if ui.button("Take screenshot (F12)").clicked() {
+            self.request_screenshot();
+        }
+    }
+
+    fn draw_toasts(&mut self, ctx: &egui::Context) {
+        let now = Instant::now();
+        self.toasts.retain(|t| t.until > now);
+        if self.toasts.is_empty() {
+            return;
+        }
+        egui::Area::new("toasts")
+            .anchor(egui::Align2::LEFT_BOTTOM, [10.0, -10.0])
+            .interactable(false)
+            .show(ctx, |ui| {
+                for t in &self.toasts {
+                    egui::Frame::popup(ui.style()).show(ui, |ui| {
+                        let color = if t.error {
+                            egui::Color32::from_rgb(240, 90, 80)
+                        } else {
+                            ui.visuals().text_color()
+                        };
+                        ui.colored_label(color, &t.text);
+                    });
+                }
+            });
+    }
+
+    /// Mouse input over the 3D view.
+    fn view_input(&mut self, ctx: &egui::Context, resp: &egui::Response, rect: egui::Rect) {
+        if self.scene.is_none() {
+            return;
+        }
+        let ppp = ctx.pixels_per_point();
+        let (shift, ctrl) = ctx.input(|i| (i.modifiers.shift, i.modifiers.command));
+        let delta = resp.drag_delta() * ppp;
+        let world_up = self.nav.world_up.vector();
+        let view_h = self.view_rect[3].max(1) as f32;
+        if resp.dragged_by(PointerButton::Primary) && ctrl && self.selected != u32::MAX {
+            self.drag_move(delta);
+        } else if resp.dragged_by(PointerButton::Middle) || (resp.dragged_by(PointerButton::Primary) && shift)
+        {
+            // Pan moves the pivot with the view.
+            let wpp = nav::world_per_pixel(&self.nav.cam, view_h);
+            let d = (-delta.x * nav::right(&self.nav.cam) + delta.y * nav::cam_up(&self.nav.cam)) * wpp;
+            self.nav.pivot += d;
+            self.nav.cam = nav::pan(&self.nav.cam, delta.x, delta.y, view_h);
+        } else if resp.dragged_by(PointerButton::Primary) {
+            self.nav.cam = nav::orbit(
+                &self.nav.cam,
+                self.nav.pivot,
+                world_up,
+                -delta.x * ORBIT_RAD_PER_PX,
+                -delta.y * ORBIT_RAD_PER_PX,
+            );
+        } else if resp.dragged_by(PointerButton::Secondary) {
+            self.nav.cam = nav::fly_look(
+                &self.nav.cam,
+                world_up,
+                -delta.x * LOOK_RAD_PER_PX,
+                -delta.y * LOOK_RAD_PER_PX,
+            );
+            self.nav.pivot = nav::target(&self.nav.cam);
+        }
+        let scroll = ctx.input(|i| i.scroll_delta.y);
+        if resp.hovered() && scroll != 0.0 {
+            if let Some(pos) = resp.hover_pos() {
+                let dir = self.view_ray(pos, rect, ppp);
+                let factor = (-scroll * 0.0025).exp();
+                self.nav.cam = nav::zoom_to(&self.nav.cam, dir, factor);
+            }
+        }
+        if resp.double_clicked() {
+            if let Some(p) = resp.interact_pointer_pos().and_then(|p| self.pick(p, rect, ppp)) {
+                let pos = Vec3::from(p.0);
+                self.nav.pivot = pos;
+                // Same view; the focal distance becomes the pivot's depth (zoom speed follows).
+                let c = self.nav.cam;
+                let f = nav::forward(&c);
+                let depth = (pos - nav::eye(&c)).dot(f).max(1e-4);
+                self.nav.cam.target = (nav::eye(&c) + f * depth).to_array();
+                self.toast(
+                    format!("pivot set to ({:.2}, {:.2}, {:.2})", pos.x, pos.y, pos.z),
+                    false,
+                );
+            }
+        } else if resp.clicked() {
+            let hit = resp.interact_pointer_pos().and_then(|p| self.pick(p, rect, ppp));
+            let sel = hit.map(|h| h.1).unwrap_or(u32::MAX);
+            if sel != self.selected {
+                self.set_selected(sel);
+            }
+        }
+    }
+
+    /// World-space ray direction through a point of the view (egui points).
+    fn view_ray(&self, pos: egui::Pos2, rect: egui::Rect, ppp: f32) -> Vec3 {
+        let cam = Camera {
+            width: self.view_rect[2].max(1) as u32,
+            height: self.view_rect[3].max(1) as u32,
+            ..self.nav.cam
+        };
+        let x = (pos.x - rect.min.x) * ppp;
+        let y = (pos.y - rect.min.y) * ppp;
+        cam.ray_dir(x - 0.5, y - 0.5)
+    }
+
+    /// Picks the surface under a view point from the last frame's G-buffer: (position, instance).
+    fn pick(&mut self, pos: egui::Pos2, rect: egui::Rect, ppp: f32) -> Option<([f32; 3], u32)> {
+        let r = self.renderer.as_ref()?;
+        let (iw, ih) = r.size();
+        let fx = (pos.x - rect.min.x) * ppp / self.view_rect[2].max(1) as f32;
+        let fy = (pos.y - rect.min.y) * ppp / self.view_rect[3].max(1) as f32;
+        if !(0.0..1.0).contains(&fx) || !(0.0..1.0).contains(&fy) {
+            return None;
+        }
+        let (x, y) = ((fx * iw as f32) as u32, (fy * ih as f32) as u32);
+        self.gpu.wait_idle();
+        match r.pick(x, y) {
+            Ok(Some(px)) => Some(([px.position[0], px.position[1], px.position[2]], px.instance)),
+            Ok(None) => None,
+            Err(e) => {
+                self.toast(format!("pick failed: {e}"), true);
+                None
+            }
+        }
+    }
+
+    fn move_step(&self) -> f32 {
+        self.scene
+            .as_ref()
+            .map(|s| s.bounds().diagonal().length() * 0.01)
+            .unwrap_or(1.0)
+            .max(1e-6)
+    }
+
+    /// Moves the selection by a world offset (an edit: F increments, TLAS rebuilt; drags merge in undo).
+    fn move_selected(&mut self, d: Vec3) {
+        let Some(inst) = self
+            .scene
+            .as_ref()
+            .and_then(|s| s.instances.get(self.selected as usize))
+        else {
+            return;
+        };
+        let before = inst.transform;
+        let after = Mat4::from_translation(d) * before;
+        self.edit(Action::Apply(Edit::Transform {
+            instance: self.selected,
+            before,
+            after,
+        }));
+    }
+
+    /// Ctrl+drag: move along the world axis whose screen projection best matches the drag.
+    fn drag_move(&mut self, delta: egui::Vec2) {
+        if delta == egui::Vec2::ZERO {
+            return;
+        }
+        let c = self.nav.cam;
+        let (r, u) = (nav::right(&c), nav::cam_up(&c));
+        let drag = glam::Vec2::new(delta.x, -delta.y);
+        let mut best = (0.0f32, Vec3::X, glam::Vec2::X);
+        for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+            let s = glam::Vec2::new(axis.dot(r), axis.dot(u));
+            if s.length() < 0.2 {
+                continue;
+            }
+            let score = s.normalize().dot(drag.normalize()).abs();
+            if score > best.0 {
+                best = (score, axis, s);
+            }
+        }
+        let (_, axis, s) = best;
+        let wpp = nav::world_per_pixel(&c, self.view_rect[3].max(1) as f32);
+        let amount = drag.dot(s.normalize()) * wpp / s.length();
+        self.move_selected(axis * amount);
+    }
+
+    fn fit_all(&mut self) {
+        if let Some(s) = &self.scene {
+            let b = s.bounds();
+            let (c, p) = nav::fit(&self.view_cam(), b.min, b.max);
+            self.nav.cam = Camera {
+                width: self.nav.cam.width,
+                height: self.nav.cam.height,
+                ..c
+            };
+            self.nav.pivot = p;
+        }
+    }
+
+    fn std_view(&mut self, v: StdView) {
+        if let Some(s) = &self.scene {
+            let b = s.bounds();
+            let (c, p) = nav::std_view(&self.view_cam(), v, self.nav.world_up, b.min, b.max);
+            self.nav.cam = Camera {
+                width: self.nav.cam.width,
+                height: self.nav.cam.height,
+                ..c
+            };
+            self.nav.pivot = p;
+        }
+    }
+
+    fn reset_view(&mut self) {
+        self.nav.cam = self.home;
+        self.nav.pivot = nav::target(&self.home);
+    }
+
+    /// The camera with the 3D view's aspect (for fitting).
+    fn view_cam(&self) -> Camera {
+        Camera {
+            width: self.view_rect[2].max(1) as u32,
+            height: self.view_rect[3].max(1) as u32,
+            ..self.nav.cam
+        }
+    }
+
+    fn keyboard(&mut self, ctx: &egui::Context) {
+        if ctx.wants_keyboard_input() {
+            return;
+        }
+        let (pressed, down, mods, dt) = ctx.input(|i| {
+            let keys = [
+                Key::F,
+                Key::Home,
+                Key::Num1,
+                Key::Num3,
+                Key::Num7,
+                Key::Num9,
+                Key::Enter,
+                Key::Delete,
+                Key::H,
+                Key::Escape,
+                Key::Z,
+                Key::Y,
+                Key::F12,
+                Key::Tab,
+                Key::ArrowLeft,
+                Key::ArrowRight,
+                Key::ArrowUp,
+                Key::ArrowDown,
+                Key::PageUp,
+                Key::PageDown,
+            ];
+            let pressed: Vec<Key> = keys.into_iter().filter(|k| i.key_pressed(*k)).collect();
+            let down: Vec<Key> = [Key::W, Key::A, Key::S, Key::D, Key::Q, Key::E]
+                .into_iter()
+                .filter(|k| i.key_down(*k))
+                .collect();
+            (pressed, down, i.modifiers, i.stable_dt.min(0.25))
+        });
+        for k in pressed {
+            match k {
+                Key::F | Key::Home => self.fit_all(),
+                Key::Num1 => self.std_view(StdView::Front),
+                Key::Num3 => self.std_view(StdView::Right),
+                Key::Num7 => self.std_view(StdView::Top),
+                Key::Num9 => self.std_view(StdView::Iso),
+                Key::Enter => self.reset_view(),
+                Key::Escape => self.set_selected(u32::MAX),
+                Key::Tab => self.show_panel = !self.show_panel,
+                Key::F12 => self.request_screenshot(),
+                Key::Z if mods.command && mods.shift => self.edit(Action::Redo),
+                Key::Z if mods.command => self.edit(Action::Undo),
+                Key::Y if mods.command => self.edit(Action::Redo),
+                Key::Delete if self.selected != u32::MAX => {
+                    let sel = self.selected;
+                    self.set_selected(u32::MAX);
+                    self.edit(Action::Apply(Edit::Delete {
+                        instance: sel,
+                        removed: None,
+                    }));
+                }
+                Key::H if self.selected != u32::MAX => {
+                    let sel = self.selected;
+                    let visible = self
+                        .scene
+                        .as_ref()
+                        .and_then(|s| s.instances.get(sel as usize))
+                        .map(|i| i.visible)
+                        .unwrap_or(true);
+                    self.edit(Action::Apply(Edit::Visibility {
+                        instance: sel,
+                        visible: !visible,
+                    }));
+                }
+                Key::ArrowLeft
+                | Key::ArrowRight
+                | Key::ArrowUp
+                | Key::ArrowDown
+                | Key::PageUp
+                | Key::PageDown
+                    if self.selected != u32::MAX =>
+                {
+                    let step = self.move_step() * if mods.shift { 10.0 } else { 1.0 };
+                    let c = self.nav.cam;
+                    let dir = match k {
+                        Key::ArrowLeft => -nav::right(&c),
+                        Key::ArrowRight => nav::right(&c),
+                        Key::ArrowUp => nav::cam_up(&c),
+                        Key::ArrowDown => -nav::cam_up(&c),
+                        Key::PageUp => nav::forward(&c),
+                        _ => -nav::forward(&c),
+                    };
+                    self.move_selected(dominant_axis(dir) * step);
+                }
+                _ => {}
+            }
+        }
+        if !down.is_empty() && self.scene.is_some() {
+            let speed = self.move_step() * 25.0 * if mods.shift { 4.0 } else { 1.0 } * dt;
+            let mut local = Vec3::ZERO;
+            for k in down {
+                match k {
+                    Key::W => local.z += 1.0,
+                    Key::S => local.z -= 1.0,
+                    Key::A => local.x -= 1.0,
+                    Key::D => local.x += 1.0,
+                    Key::Q => local.y -= 1.0,
+                    _ => local.y += 1.0,
+                }
+            }
+            self.nav.cam = nav::fly_move(&self.nav.cam, local * speed);
+            self.nav.pivot = nav::target(&self.nav.cam);
+        }
+    }
+}
+
+/// The signed world axis closest to `v`.
+fn dominant_axis(v: Vec3) -> Vec3 {
+    let a = v.abs();
+    if a.x >= a.y && a.x >= a.z {
+        Vec3::X * v.x.signum()
+    } else if a.y >= a.z {
+        Vec3::Y * v.y.signum()
+    } else {
+        Vec3::Z * v.z.signum()
+    }
+}
+
+fn fmt_count(n: u64) -> String {
+    let s = n.to_string();
+    let head = s.len() % 3;
+    let mut parts: Vec<&str> = Vec::new();
+    if head > 0 {
+        parts.push(&s[..head]);
+    }
+    parts.extend(
+        s.as_bytes()[head..]
+            .chunks(3)
+            .map(|c| std::str::from_utf8(c).unwrap_or("")),
+    );
+    parts.join(",")
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn counts_and_axes() {
+        assert_eq!(super::fmt_count(0), "0");
+        assert_eq!(super::fmt_count(1234567), "1,234,567");
+        assert_eq!(super::fmt_count(123456), "123,456");
+        assert_eq!(
+            super::dominant_axis(glam::Vec3::new(0.2, -0.9, 0.1)),
+            -glam::Vec3::Y
+        );
+    }
+}
