@@ -132,3 +132,88 @@ fn a_bad_file_fails_cleanly_in_scripted_mode() {
     assert!(!out.status.success(), "a missing file must fail the scripted run");
     assert!(stderr.contains("nonexistent"), "{stderr}");
 }
+
+/// A user opening a broken file keeps the model they had: the load error is shown, the old scene stays on
+/// screen, nothing panics. Representative files of the hostile corpus (crates/scene/src/hostile.rs).
+#[test]
+fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
+    if !display_available() {
+        eprintln!("skipped: no DISPLAY (the test command runs under xvfb-run)");
+        return;
+    }
+    let dir = out_dir("hostile");
+    let cases = hrtao_scene::hostile::write_corpus(&dir.join("corpus")).unwrap();
+    let pick = [
+        "truncated_glb",
+        "json_garbage",
+        "nan_position",
+        "cyclic_nodes",
+        "buffer_claims_gigabytes",
+        "obj_bad_index",
+    ];
+    for case in cases.iter().filter(|c| pick.contains(&c.name)) {
+        let shot = dir.join(format!("{}.png", case.name));
+        let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+            .args([
+                "view",
+                "--size",
+                "320x200",
+                "--no-panel",
+                "--frames",
+                "3",
+                "--open-at-frame",
+                "1",
+            ])
+            .arg(&case.path)
+            .arg("--screenshot")
+            .arg(&shot)
+            .args(["--no-config", "--exit"])
+            .env("HRTAO_VALIDATION", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{}: panic\n{err}", case.name);
+        assert!(
+            out.status.success(),
+            "{}: the viewer must go on with the old scene\n{err}",
+            case.name
+        );
+        assert!(
+            err.contains("cannot open"),
+            "{}: the load error is reported\n{err}",
+            case.name
+        );
+        check_image(&shot, 320, 200);
+    }
+}
+
+/// Screenshots to an unwritable place or a full disk give an error message and a clean exit status.
+#[test]
+fn screenshot_to_unwritable_or_full_destination_fails_cleanly() {
+    if !display_available() {
+        eprintln!("skipped: no DISPLAY (the test command runs under xvfb-run)");
+        return;
+    }
+    // (The tests run as root, so "unwritable" is a path under a regular file.)
+    for dest in ["/dev/null/shot.png", "/dev/full"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+            .args([
+                "view",
+                "--size",
+                "240x160",
+                "--no-panel",
+                "--frames",
+                "2",
+                "--screenshot",
+                dest,
+            ])
+            .args(["--no-config", "--exit"])
+            .env("HRTAO_VALIDATION", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{dest}: panic\n{err}");
+        assert_eq!(out.status.code(), Some(1), "{dest}: exit 1\n{err}");
+        assert!(err.contains("screenshot failed"), "{dest}: message\n{err}");
+    }
+}

@@ -74,6 +74,10 @@ pub struct ViewArgs {
     /// Scripted mode: resize the window to WxH after frame K (tests resizing), e.g. `--resize-at-frame 2 320x200`.
     #[arg(long, num_args = 2, value_names = ["K", "WxH"])]
     pub resize_at_frame: Vec<String>,
+    /// Scripted mode: open FILE after frame K, as a user would from the panel (tests that a bad file leaves the
+    /// current scene in place), e.g. `--open-at-frame 1 broken.glb`.
+    #[arg(long, num_args = 2, value_names = ["K", "FILE"])]
+    pub open_at_frame: Vec<String>,
     /// Scripted mode: exit after --frames (exit status 1 if anything failed or validation reported messages).
     #[arg(long)]
     pub exit: bool,
@@ -341,6 +345,7 @@ struct Script {
     screenshot_ui: Option<PathBuf>,
     screenshot_frames: u32,
     resize: Option<(u32, (u32, u32))>,
+    open: Option<(u32, String)>,
     exit: bool,
     deadline: Option<Instant>,
     rendered: u32,
@@ -489,6 +494,10 @@ impl Viewer {
                 screenshot_ui: args.screenshot_ui.clone(),
                 screenshot_frames: args.screenshot_frames,
                 resize,
+                open: match args.open_at_frame.as_slice() {
+                    [k, file] => k.parse::<u32>().ok().map(|k| (k, file.clone())),
+                    _ => None,
+                },
                 exit: args.exit,
                 deadline: (args.exit && args.timeout > 0)
                     .then(|| Instant::now() + Duration::from_secs(args.timeout)),
@@ -980,6 +989,16 @@ impl Viewer {
                         h as f32 / self.egui_ctx.pixels_per_point(),
                     )));
             }
+        }
+        if let Some((k, file)) = self.script.open.clone() {
+            if n == k {
+                log::info!("scripted open of {file}");
+                self.start_loading(file);
+            }
+        }
+        if n >= frames && self.loading.is_some() {
+            // Let a scripted open finish (success or error) before the screenshots.
+            return;
         }
         if n == frames && self.script.screenshot_ui.is_some() {
             // Captured with the next presented frame.
