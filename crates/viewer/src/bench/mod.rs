@@ -1,0 +1,979 @@
+//! `hrtao bench`: the paper's Tables 1 and 2 on this device, HRTAO against per-pixel RTAO in the same run, error
+//! against a converged reference, and (with `--report`) the markdown + PNG plots of `docs/benchmarks.md`.
+//!
+//! One run: load + build (timed), warm-up, then
+//! 1. timing: HRTAO first frame (`--repeat` times from an empty cache, medians) and navigation frames along
+//!    `--path` or an orbit; per-pixel RTAO at the same B over the same cameras (its first frame is the raw
+//!    AO-ray throughput measure: primary + B AO rays, no hashing);
+//! 2. quality (unless `--no-quality`): one progressive per-pixel RTAO run of `step` rays per frame; its first
+//!    `max_rays` samples give the RTAO error curve and the samples after them form the converged reference (no
+//!    sample shared with the estimates); HRTAO from an empty cache for `--hrtao-frames` static frames gives its
+//!    curve; the per-pixel rays matching HRTAO's one-frame error are interpolated on the RTAO curve.
+pub mod plot;
+pub mod report;
+pub mod stats;
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use hrtao_core::camera::UpAxis;
+use hrtao_core::metrics::{ao_error, AoError};
+use hrtao_core::{imageio, AoSettings, Camera, FrameReport, Mode, Renderer, SceneGpu};
+use serde::{Deserialize, Serialize};
+
+use crate::cli::{AoArgs, DeviceArgs};
+use crate::render_cmd::{load_scene, open_gpu, write_json};
+use stats::{
+    median, rays_to_reach, section_sum, segment_mean, CurvePoint, Match, HRTAO_PASSES, NON_RAY_PASSES,
+};
+
+pub const SCHEMA: &str = "hrtao-bench/1";
+
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
+    #[arg(long, required_unless_present = "report")]
+    pub scene: Option<String>,
+    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"} (default: fit the scene).
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// Navigation path: a JSON array of cameras (or {"cameras": [...]}); sizes come from --width/--height.
+    #[arg(long, conflicts_with = "orbit")]
+    pub path: Option<PathBuf>,
+    /// Navigation: N frames orbiting the camera target by --orbit-step degrees per frame (default 16).
+    #[arg(long)]
+    pub orbit: Option<u32>,
+    /// Degrees per orbit frame (a walking-speed camera move at 60 frames per second).
+    #[arg(long, default_value_t = 0.25)]
+    pub orbit_step: f32,
+    /// Image width (default: the camera file's, else 320).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: the camera file's, else 180).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Up axis for the automatic camera: y or z (default z for gen: scenes, else y).
+    #[arg(long)]
+    pub up: Option<String>,
+    /// At most this many static frames after the first frame and before the navigation, letting cells fill as
+    /// they would during the first fraction of a second on a GPU (the paper's navigation is with a warm map).
+    #[arg(long, default_value_t = 128)]
+    pub settle: u32,
+    /// Stop settling once a frame traces fewer than this fraction of the first frame's rays.
+    #[arg(long, default_value_t = 0.1)]
+    pub settle_until: f64,
+    /// Automatic camera (no --camera): "fit" frames the whole scene from outside; "corner" stands at a corner of
+    /// the bounds at 80 % of their height and looks across the scene (inside a room: depth complexity grows with
+    /// its size).
+    #[arg(long, default_value = "fit")]
+    pub auto_camera: String,
+    /// First-frame repetitions (each from an empty hash map); the summary takes medians.
+    #[arg(long, default_value_t = 3)]
+    pub repeat: u32,
+    /// Skip the error measurements (reference, curves, search over B): timing and memory only.
+    #[arg(long)]
+    pub no_quality: bool,
+    /// Rays per pixel per frame of the progressive per-pixel RTAO run (resolution of the search over B).
+    #[arg(long, default_value_t = 4)]
+    pub step: u32,
+    /// Cap of the search over per-pixel rays (0: 64 × B, at least 64).
+    #[arg(long, default_value_t = 0)]
+    pub max_rays: u32,
+    /// Rays per pixel of the converged per-pixel RTAO reference (disjoint from the searched samples).
+    #[arg(long, default_value_t = 1024)]
+    pub ref_rays: u32,
+    /// Static HRTAO frames for HRTAO's error-versus-rays curve.
+    #[arg(long, default_value_t = 8)]
+    pub hrtao_frames: u32,
+    /// Optional independent reference AO image (.pfm, e.g. the Cycles references of ../shared/refs).
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Name in reports (default: the scene file stem or spec).
+    #[arg(long)]
+    pub label: Option<String>,
+    /// Group in reports: "scenes" (default) or "scale".
+    #[arg(long, default_value = "scenes")]
+    pub group: String,
+    /// Write the results here (schema hrtao-bench/1).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Report mode: read every *.json bench result in this directory and write --markdown and plots beside it.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Report mode: markdown output (default: DIR/../benchmarks.md).
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
+    /// AO settings (--mode is ignored: the bench runs both HRTAO and per-pixel RTAO).
+    #[command(flatten)]
+    pub ao: AoArgs,
+    #[command(flatten)]
+    pub device: DeviceArgs,
+}
+
+/// One rendered frame.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FrameRecord {
+    pub index: usize,
+    /// "first" (from an empty hash map / no accumulation) or "nav".
+    pub kind: String,
+    pub wall_ms: f64,
+    pub gpu_total_ms: f64,
+    /// GPU ms per section (timestamp queries).
+    pub passes: BTreeMap<String, f64>,
+    /// Sum of the paper's Table 2 passes (cell finder, ray-tracing update, per-pixel AO, filtering).
+    pub hrtao_passes_ms: f64,
+    pub rays: u64,
+    pub occupied_cells: u32,
+    pub load_factor: f64,
+    pub cells_inserted: u32,
+    pub failed_inserts: u32,
+}
+
+impl FrameRecord {
+    fn new(index: usize, kind: &str, r: &FrameReport) -> FrameRecord {
+        let mut passes = BTreeMap::new();
+        for (name, ms) in &r.gpu_ms {
+            *passes.entry(name.clone()).or_insert(0.0) += ms;
+        }
+        FrameRecord {
+            index,
+            kind: kind.into(),
+            wall_ms: r.wall_ms,
+            gpu_total_ms: r.gpu_total_ms,
+            hrtao_passes_ms: section_sum(&r.gpu_ms, &HRTAO_PASSES),
+            passes,
+            rays: r.rays,
+            occupied_cells: r.occupied_cells,
+            load_factor: r.load_factor,
+            cells_inserted: r.cells_inserted,
+            failed_inserts: r.failed_inserts,
+        }
+    }
+}
+
+/// Medians of a set of frames.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct FrameStats {
+    pub frames: usize,
+    pub wall_ms: f64,
+    pub gpu_total_ms: f64,
+    pub hrtao_passes_ms: f64,
+    pub rays: f64,
+    pub passes: BTreeMap<String, f64>,
+}
+
+impl FrameStats {
+    pub fn of(frames: &[FrameRecord]) -> FrameStats {
+        let m = |f: &dyn Fn(&FrameRecord) -> f64| median(&frames.iter().map(f).collect::<Vec<_>>());
+        let mut names: Vec<&String> = frames.iter().flat_map(|f| f.passes.keys()).collect();
+        names.sort();
+        names.dedup();
+        let passes = names
+            .into_iter()
+            .map(|n| {
+                let v: Vec<f64> = frames.iter().map(|f| *f.passes.get(n).unwrap_or(&0.0)).collect();
+                (n.clone(), median(&v))
+            })
+            .collect();
+        FrameStats {
+            frames: frames.len(),
+            wall_ms: m(&|f| f.wall_ms),
+            gpu_total_ms: m(&|f| f.gpu_total_ms),
+            hrtao_passes_ms: m(&|f| f.hrtao_passes_ms),
+            rays: m(&|f| f.rays as f64),
+            passes,
+        }
+    }
+
+    pub fn pass(&self, name: &str) -> f64 {
+        *self.passes.get(name).unwrap_or(&0.0)
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModeRun {
+    /// Repetitions of the first frame.
+    pub first: Vec<FrameRecord>,
+    /// Static frames between the first frame and the navigation (the map fills; rays per frame fall).
+    #[serde(default)]
+    pub settle: Vec<FrameRecord>,
+    /// Navigation frames along the path.
+    pub nav: Vec<FrameRecord>,
+    pub first_stats: FrameStats,
+    pub nav_stats: FrameStats,
+    /// Medians over the second half of the navigation (the cache has settled).
+    pub nav_late_stats: FrameStats,
+}
+
+impl ModeRun {
+    fn new(first: Vec<FrameRecord>, settle: Vec<FrameRecord>, nav: Vec<FrameRecord>) -> ModeRun {
+        let late = &nav[nav.len() / 2..];
+        ModeRun {
+            settle,
+            first_stats: FrameStats::of(&first),
+            nav_stats: FrameStats::of(&nav),
+            nav_late_stats: FrameStats::of(late),
+            first,
+            nav,
+        }
+    }
+}
+
+/// Table 1, Table 2 and the throughput ratios.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Summary {
+    /// Table 1 "HRTAO 0s": sum of the four HRTAO passes of the first frame (GPU ms, median).
+    pub first_ms: f64,
+    /// Table 1 "HRTAO nav.": median over the navigation frames of the same sum.
+    pub nav_ms: f64,
+    pub nav_over_first: f64,
+    /// The same with whole frames (primary visibility, clear and composite included).
+    pub first_frame_gpu_ms: f64,
+    pub nav_frame_gpu_ms: f64,
+    pub nav_over_first_frame: f64,
+    pub first_wall_ms: f64,
+    pub nav_wall_ms: f64,
+    /// Table 2: the first frame's HRTAO passes (GPU ms, medians).
+    pub cell_finder_ms: f64,
+    pub ray_tracing_update_ms: f64,
+    pub per_pixel_ao_ms: f64,
+    pub filtering_ms: f64,
+    pub primary_visibility_ms: f64,
+    /// (cell finder + per-pixel AO + filtering) / HRTAO passes of the first frame.
+    pub non_ray_share: f64,
+    /// Non-ray part of the whole first frame: everything but primary visibility and the ray-tracing update.
+    pub non_ray_share_frame: f64,
+    /// Per-pixel RTAO at the same B: first frame and navigation, whole frame GPU ms.
+    pub rtao_frame_gpu_ms: f64,
+    pub rtao_nav_frame_gpu_ms: f64,
+    /// Raw AO-ray throughput (rays/ms): per-pixel RTAO rays / (primary visibility + per-pixel RTAO).
+    pub raw_rays_per_ms: f64,
+    /// Raw AO-ray throughput of the AO pass alone: rays / per-pixel RTAO.
+    pub raw_pass_rays_per_ms: f64,
+    /// HRTAO ray pass throughput: first-frame rays / ray-tracing update.
+    pub hrtao_rays_per_ms: f64,
+    pub hrtao_fraction_of_raw: f64,
+    pub hrtao_fraction_of_raw_pass: f64,
+    pub hrtao_first_rays: f64,
+    pub rtao_first_rays: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HrtaoPoint {
+    pub frame: usize,
+    pub rays_per_pixel: f64,
+    pub mae: f64,
+    pub rmse: f64,
+    /// Per-pixel RTAO error at the same cumulated rays (log-log interpolation on its curve; NaN outside).
+    pub rtao_mae_same_rays: f64,
+    pub rtao_rmse_same_rays: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Quality {
+    /// Pixels with geometry (per-pixel RTAO traces B rays on each).
+    pub covered_pixels: u64,
+    pub step: u32,
+    pub max_rays: u32,
+    /// The reference: per-pixel RTAO samples max_rays..max_rays+ref_rays of each pixel's sequence.
+    pub ref_rays: u32,
+    /// MAE between the reference's two halves / 2: the reference's own noise.
+    pub ref_noise_mae: f64,
+    /// Per-pixel RTAO: error after N rays per pixel (N = step, 2 step, ... max_rays).
+    pub rtao_curve: Vec<CurvePoint>,
+    /// Per-pixel RTAO, one frame at the bench's B.
+    pub rtao_same_b: CurvePoint,
+    /// HRTAO from an empty map, static camera, frame by frame.
+    pub hrtao_curve: Vec<HrtaoPoint>,
+    /// Per-pixel rays needed to match HRTAO's one-frame MAE / RMSE, and their ratio to HRTAO's rays.
+    pub match_mae: Match,
+    pub match_rmse: Match,
+    pub rays_ratio_mae: f64,
+    pub rays_ratio_rmse: f64,
+    /// Against the independent --reference image, when given: [converged RTAO, RTAO at B, HRTAO 1 frame,
+    /// HRTAO last frame].
+    pub external: Option<ExternalErrors>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ExternalErrors {
+    pub path: String,
+    pub reference_vs_external: ImageError,
+    pub rtao_same_b: ImageError,
+    pub hrtao_first: ImageError,
+    pub hrtao_last: ImageError,
+}
+
+/// An image error (the core's `AoError`, serialisable both ways).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct ImageError {
+    pub mae: f64,
+    pub rmse: f64,
+    pub pixels: usize,
+}
+
+impl From<AoError> for ImageError {
+    fn from(e: AoError) -> Self {
+        ImageError {
+            mae: e.mae,
+            rmse: e.rmse,
+            pixels: e.pixels,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SceneInfo {
+    pub spec: String,
+    pub label: String,
+    pub group: String,
+    pub meshes: usize,
+    pub instances: usize,
+    pub unique_triangles: u64,
+    pub instanced_triangles: u64,
+    pub load_ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Memory {
+    pub host_rss_bytes: u64,
+    pub host_peak_bytes: u64,
+    /// Device memory allocated after the scene upload and acceleration structures.
+    pub device_scene_bytes: u64,
+    /// Device memory with the renderer (targets, hash map) too.
+    pub device_total_bytes: u64,
+    /// "allocator" (`Gpu::device_memory_bytes`) or "estimate" (sizes summed here when the counter is unusable).
+    #[serde(default)]
+    pub device_bytes_source: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HostInfo {
+    pub cpu_cores: usize,
+    pub cpu_model: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BenchResult {
+    pub schema: String,
+    pub date: String,
+    pub unix_time: u64,
+    pub host: HostInfo,
+    pub device: serde_json::Value,
+    pub scene: SceneInfo,
+    pub build: serde_json::Value,
+    pub memory: Memory,
+    pub width: u32,
+    pub height: u32,
+    pub camera: Camera,
+    pub settings: serde_json::Value,
+    /// "orbit" or "path", and the navigation frame count.
+    pub navigation: String,
+    pub nav_frames: usize,
+    pub hrtao: ModeRun,
+    pub rtao: ModeRun,
+    pub summary: Summary,
+    pub quality: Option<Quality>,
+    pub validation_messages: u32,
+    pub total_bench_s: f64,
+}
+
+fn parse_up(s: &str) -> Result<UpAxis> {
+    match s.to_ascii_lowercase().as_str() {
+        "y" => Ok(UpAxis::Y),
+        "z" => Ok(UpAxis::Z),
+        _ => bail!("--up must be y or z, got `{s}`"),
+    }
+}
+
+/// Navigation cameras from a path file: a JSON array of cameras or {"cameras": [...]}.
+pub fn load_path(path: &std::path::Path, width: u32, height: u32) -> Result<Vec<Camera>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+    let list = match &v {
+        serde_json::Value::Array(_) => v.clone(),
+        serde_json::Value::Object(o) => o
+            .get("cameras")
+            .or_else(|| o.get("frames"))
+            .cloned()
+            .context("path file: expected an array of cameras or {\"cameras\": [...]}")?,
+        _ => bail!("path file: expected an array of cameras"),
+    };
+    let cams: Vec<Camera> =
+        serde_json::from_value(list).with_context(|| format!("{}: bad camera entries", path.display()))?;
+    if cams.is_empty() {
+        bail!("{}: the path has no camera", path.display());
+    }
+    cams.into_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let c = Camera { width, height, ..c };
+            c.validate()
+                .map_err(|e| anyhow::anyhow!("{}: camera {i}: {e}", path.display()))?;
+            Ok(c)
+        })
+        .collect()
+}
+
+/// A camera at the `min` corner of the box (outside it by 2 % of the diagonal), at 80 % of its height, looking at
+/// the middle of the far half.
+pub fn corner_camera(min: glam::Vec3, max: glam::Vec3, up: UpAxis) -> Camera {
+    let upv = up.vector();
+    let d = max - min;
+    let along = d - upv * d.dot(upv);
+    let base_min = min - upv * min.dot(upv);
+    let h = |f: f32| upv * (min.dot(upv) + f * d.dot(upv));
+    let eye = base_min - along.normalize_or_zero() * d.length() * 0.02 + h(0.8);
+    let target = base_min + along * 0.6 + h(0.3);
+    Camera {
+        eye: eye.to_array(),
+        target: target.to_array(),
+        up: upv.to_array(),
+        fov_y_deg: 50.0,
+        width: 320,
+        height: 180,
+    }
+}
+
+/// `n` cameras orbiting `cam.target` about `cam.up`, `step_deg` apart, starting one step after `cam`.
+pub fn orbit_path(cam: &Camera, n: u32, step_deg: f32) -> Vec<Camera> {
+    (1..=n)
+        .map(|i| Camera {
+            eye: stats::orbit_eye(cam.eye, cam.target, cam.up, step_deg * i as f32),
+            ..*cam
+        })
+        .collect()
+}
+
+/// A byte count from the allocator counter that is not 0 and has not wrapped below zero.
+fn sane_bytes(b: u64) -> bool {
+    b > 0 && b < 1 << 48
+}
+
+/// Scene memory from the build statistics: geometry, BLAS, and ~128 bytes per TLAS instance (instance record,
+/// per-instance info and the TLAS nodes).
+pub fn scene_device_estimate(s: &hrtao_core::accel::BuildStats) -> u64 {
+    s.geometry_bytes + s.blas_bytes + s.tlas_instances as u64 * 128
+}
+
+/// The renderer's buffers: per-pixel targets and the hash map.
+pub fn renderer_device_estimate(w: u32, h: u32, hash_capacity: u32) -> u64 {
+    use hrtao_core::gpu::{GPixel, HashCell, PixelCells};
+    let n = w as u64 * h as u64;
+    n * (std::mem::size_of::<GPixel>() + std::mem::size_of::<PixelCells>() + 5 * 4) as u64
+        + hash_capacity as u64 * std::mem::size_of::<HashCell>() as u64
+}
+
+fn proc_status_kb(key: &str) -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with(key))
+                .and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse().ok()))
+        })
+        .unwrap_or(0)
+}
+
+pub fn host_info() -> HostInfo {
+    let cpu_model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1).map(|v| v.trim().to_string()))
+        })
+        .unwrap_or_else(|| "unknown".into());
+    HostInfo {
+        cpu_cores: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        cpu_model,
+    }
+}
+
+fn label_of(spec: &str) -> String {
+    if spec.starts_with("gen:") {
+        return spec.to_string();
+    }
+    std::path::Path::new(spec)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| spec.to_string())
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    if let Some(dir) = &args.report {
+        return report::run(dir, args.markdown.as_deref());
+    }
+    let spec = args.scene.as_deref().context("--scene is required")?;
+    if args.repeat == 0 {
+        bail!("--repeat must be at least 1");
+    }
+    if args.step == 0 {
+        bail!("--step must be at least 1");
+    }
+    let t_bench = std::time::Instant::now();
+    let (scene, load_ms) = load_scene(spec)?;
+    let bounds = scene.bounds();
+    if bounds.is_empty() {
+        bail!("scene `{spec}` has no visible geometry");
+    }
+    let up = match &args.up {
+        Some(u) => parse_up(u)?,
+        None if spec.starts_with("gen:") => UpAxis::Z,
+        None => UpAxis::Y,
+    };
+    let mut camera = match &args.camera {
+        Some(p) => Camera::load(p)?,
+        None => match args.auto_camera.as_str() {
+            "fit" => Camera::fit(bounds.min, bounds.max, up, 40.0, 320, 180),
+            "corner" => corner_camera(bounds.min, bounds.max, up),
+            other => bail!("--auto-camera must be fit or corner, got `{other}`"),
+        },
+    };
+    if let Some(w) = args.width {
+        camera.width = w;
+    }
+    if let Some(h) = args.height {
+        camera.height = h;
+    }
+    camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
+    let (w, h) = (camera.width, camera.height);
+    let (nav_cams, navigation) = match &args.path {
+        Some(p) => (load_path(p, w, h)?, "path".to_string()),
+        None => (
+            orbit_path(&camera, args.orbit.unwrap_or(16), args.orbit_step),
+            "orbit".to_string(),
+        ),
+    };
+    if nav_cams.is_empty() {
+        bail!("no navigation frame (--orbit 0)");
+    }
+    let mut hrtao_settings = args.ao.settings(bounds.diagonal().length());
+    hrtao_settings.mode = Mode::Hrtao;
+    hrtao_settings.validate().map_err(|e| anyhow::anyhow!(e))?;
+    if hrtao_settings.rays_per_pixel == 0 {
+        bail!("--rays must be at least 1 for a benchmark");
+    }
+    if args.ao.mode != Mode::Hrtao {
+        log::warn!("--mode is ignored: the bench runs HRTAO and per-pixel RTAO side by side");
+    }
+    let rtao_settings = AoSettings {
+        mode: Mode::Rtao,
+        ..hrtao_settings.clone()
+    };
+
+    let gpu = open_gpu(&args.device)?;
+    if !gpu.info.timestamps {
+        log::warn!("the device has no timestamp queries: GPU times will be zero");
+    }
+    let scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    let device_scene_bytes = gpu.device_memory_bytes();
+    let scene_estimate = scene_device_estimate(&scene_gpu.stats);
+    log::info!(
+        "acceleration structures: {} BLAS in {:.0} ms, TLAS of {} instances in {:.1} ms",
+        scene_gpu.stats.blas_count,
+        scene_gpu.stats.blas_ms,
+        scene_gpu.stats.tlas_instances,
+        scene_gpu.stats.tlas_ms
+    );
+    let mut r = Renderer::new(&gpu, w, h, hrtao_settings.clone())?;
+    let device_total_bytes = gpu.device_memory_bytes();
+    let (device_scene_bytes, device_total_bytes, device_bytes_source) =
+        if sane_bytes(device_scene_bytes) && sane_bytes(device_total_bytes) {
+            (device_scene_bytes, device_total_bytes, "allocator")
+        } else {
+            log::warn!("the allocator's device byte count is not usable: reporting an estimate");
+            let total = scene_estimate + renderer_device_estimate(w, h, hrtao_settings.hash_capacity);
+            (scene_estimate, total, "estimate")
+        };
+    let sf = scene.frame();
+
+    // Warm-up (pipeline compilation, caches) for both modes.
+    r.render(&scene_gpu, sf, &camera)?;
+    r.set_settings(rtao_settings.clone())?;
+    r.render(&scene_gpu, sf, &camera)?;
+
+    // 1. Timing: HRTAO.
+    r.set_settings(hrtao_settings.clone())?;
+    let mut first = Vec::new();
+    for i in 0..args.repeat {
+        r.clear_cache()?;
+        let rep = r.render(&scene_gpu, sf, &camera)?;
+        first.push(FrameRecord::new(i as usize, "first", &rep));
+    }
+    let mut settle = Vec::new();
+    let first_rays = first.last().map(|f| f.rays).unwrap_or(0) as f64;
+    for i in 0..args.settle {
+        let rep = r.render(&scene_gpu, sf, &camera)?;
+        settle.push(FrameRecord::new(i as usize + 1, "settle", &rep));
+        if (rep.rays as f64) < args.settle_until * first_rays {
+            break;
+        }
+    }
+    let mut nav = Vec::new();
+    for (i, cam) in nav_cams.iter().enumerate() {
+        let rep = r.render(&scene_gpu, sf, cam)?;
+        nav.push(FrameRecord::new(i + 1, "nav", &rep));
+    }
+    let hrtao = ModeRun::new(first, settle, nav);
+    log::info!(
+        "HRTAO: first {:.1} ms (passes {:.1} ms), nav {:.1} ms (passes {:.1} ms), GPU medians",
+        hrtao.first_stats.gpu_total_ms,
+        hrtao.first_stats.hrtao_passes_ms,
+        hrtao.nav_stats.gpu_total_ms,
+        hrtao.nav_stats.hrtao_passes_ms
+    );
+
+    // Per-pixel RTAO at the same B over the same cameras (no accumulation: each first frame after a reset).
+    r.set_settings(rtao_settings.clone())?;
+    let mut first = Vec::new();
+    for i in 0..args.repeat {
+        // Repetitions accumulate (same camera), at the same cost per frame: B rays per covered pixel.
+        let rep = r.render(&scene_gpu, sf, &camera)?;
+        first.push(FrameRecord::new(i as usize, "first", &rep));
+    }
+    let mut nav = Vec::new();
+    for (i, cam) in nav_cams.iter().enumerate() {
+        let rep = r.render(&scene_gpu, sf, cam)?;
+        nav.push(FrameRecord::new(i + 1, "nav", &rep));
+    }
+    let rtao = ModeRun::new(first, Vec::new(), nav);
+    log::info!(
+        "per-pixel RTAO: first {:.1} ms, nav {:.1} ms (GPU medians)",
+        rtao.first_stats.gpu_total_ms,
+        rtao.nav_stats.gpu_total_ms
+    );
+    let summary = summarize(&hrtao, &rtao);
+
+    // 2. Quality.
+    let quality = if args.no_quality {
+        None
+    } else {
+        Some(measure_quality(
+            args,
+            &mut r,
+            &scene_gpu,
+            sf,
+            &camera,
+            &hrtao_settings,
+        )?)
+    };
+
+    let validation_messages = gpu.validation_messages();
+    let unix_time = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let result = BenchResult {
+        schema: SCHEMA.into(),
+        date: stats::utc_date(unix_time),
+        unix_time,
+        host: host_info(),
+        device: serde_json::to_value(&gpu.info)?,
+        scene: SceneInfo {
+            spec: spec.to_string(),
+            label: args.label.clone().unwrap_or_else(|| label_of(spec)),
+            group: args.group.clone(),
+            meshes: scene.meshes.len(),
+            instances: scene.instances.len(),
+            unique_triangles: scene.unique_triangle_count(),
+            instanced_triangles: scene.instanced_triangle_count(),
+            load_ms,
+        },
+        build: serde_json::to_value(&scene_gpu.stats)?,
+        memory: Memory {
+            host_rss_bytes: proc_status_kb("VmRSS:") * 1024,
+            host_peak_bytes: proc_status_kb("VmHWM:") * 1024,
+            device_scene_bytes,
+            device_total_bytes,
+            device_bytes_source: device_bytes_source.into(),
+        },
+        width: w,
+        height: h,
+        camera,
+        settings: serde_json::to_value(&hrtao_settings)?,
+        navigation,
+        nav_frames: nav_cams.len(),
+        hrtao,
+        rtao,
+        summary,
+        quality,
+        validation_messages,
+        total_bench_s: t_bench.elapsed().as_secs_f64(),
+    };
+    print_summary(&result);
+    if let Some(path) = &args.json {
+        write_json(path, &result)?;
+        log::info!("wrote {}", path.display());
+    }
+    if validation_messages > 0 {
+        log::warn!("the validation layer reported {validation_messages} messages");
+    }
+    Ok(())
+}
+
+pub fn summarize(hrtao: &ModeRun, rtao: &ModeRun) -> Summary {
+    let hf = &hrtao.first_stats;
+    let hn = &hrtao.nav_stats;
+    let rf = &rtao.first_stats;
+    let div = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
+    let rt_update = hf.pass("ray-tracing update");
+    let non_ray: f64 = NON_RAY_PASSES.iter().map(|p| hf.pass(p)).sum();
+    let raw_ms = rf.pass("primary visibility") + rf.pass("per-pixel RTAO");
+    let raw = div(rf.rays, raw_ms);
+    let raw_pass = div(rf.rays, rf.pass("per-pixel RTAO"));
+    let hr = div(hf.rays, rt_update);
+    Summary {
+        first_ms: hf.hrtao_passes_ms,
+        nav_ms: hn.hrtao_passes_ms,
+        nav_over_first: div(hn.hrtao_passes_ms, hf.hrtao_passes_ms),
+        first_frame_gpu_ms: hf.gpu_total_ms,
+        nav_frame_gpu_ms: hn.gpu_total_ms,
+        nav_over_first_frame: div(hn.gpu_total_ms, hf.gpu_total_ms),
+        first_wall_ms: hf.wall_ms,
+        nav_wall_ms: hn.wall_ms,
+        cell_finder_ms: hf.pass("cell finder"),
+        ray_tracing_update_ms: rt_update,
+        per_pixel_ao_ms: hf.pass("per-pixel AO"),
+        filtering_ms: hf.pass("filtering"),
+        primary_visibility_ms: hf.pass("primary visibility"),
+        non_ray_share: div(non_ray, hf.hrtao_passes_ms),
+        non_ray_share_frame: div(
+            hf.gpu_total_ms - rt_update - hf.pass("primary visibility"),
+            hf.gpu_total_ms,
+        ),
+        rtao_frame_gpu_ms: rf.gpu_total_ms,
+        rtao_nav_frame_gpu_ms: rtao.nav_stats.gpu_total_ms,
+        raw_rays_per_ms: raw,
+        raw_pass_rays_per_ms: raw_pass,
+        hrtao_rays_per_ms: hr,
+        hrtao_fraction_of_raw: div(hr, raw),
+        hrtao_fraction_of_raw_pass: div(hr, raw_pass),
+        hrtao_first_rays: hf.rays,
+        rtao_first_rays: rf.rays,
+    }
+}
+
+fn err_point(rays_per_pixel: f64, e: AoError) -> CurvePoint {
+    CurvePoint {
+        rays_per_pixel,
+        mae: e.mae,
+        rmse: e.rmse,
+    }
+}
+
+/// Frame counts of the progressive run at which the RTAO error is measured: 1, 2, 3, 4, 6, 8, 12, ... up to `max`.
+pub fn checkpoints(max: u32) -> Vec<u32> {
+    let mut out = Vec::new();
+    let mut p = 1u32;
+    while p <= max {
+        out.push(p);
+        let mid = p + p / 2;
+        if p >= 2 && mid <= max {
+            out.push(mid);
+        }
+        p = p.saturating_mul(2);
+    }
+    if out.last() != Some(&max) && max > 0 {
+        out.push(max);
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+fn measure_quality(
+    args: &BenchArgs,
+    r: &mut Renderer,
+    scene_gpu: &SceneGpu,
+    sf: u32,
+    camera: &Camera,
+    hrtao_settings: &AoSettings,
+) -> Result<Quality> {
+    let b = hrtao_settings.rays_per_pixel;
+    let step = args.step;
+    let max_rays = if args.max_rays == 0 {
+        (64 * b).max(64)
+    } else {
+        args.max_rays
+    };
+    let search_frames = max_rays.div_ceil(step).max(1);
+    let ref_frames = args.ref_rays.div_ceil(step).max(2);
+    let total_frames = search_frames + ref_frames;
+    let marks = checkpoints(search_frames);
+    let half = search_frames + ref_frames / 2;
+
+    // Progressive per-pixel RTAO, `step` rays per frame, one accumulation.
+    r.set_settings(hrtao_settings.clone())?;
+    r.set_settings(AoSettings {
+        mode: Mode::Rtao,
+        rays_per_pixel: step,
+        ..hrtao_settings.clone()
+    })?;
+    log::info!(
+        "quality: progressive per-pixel RTAO, {total_frames} frames of {step} rays (search up to {} rays, reference {} rays)",
+        search_frames * step,
+        ref_frames * step
+    );
+    let mut avgs: BTreeMap<u32, Vec<f32>> = BTreeMap::new();
+    let mut covered = 0u64;
+    for f in 1..=total_frames {
+        let rep = r.render(scene_gpu, sf, camera)?;
+        if rep.accumulated_frames != f {
+            bail!(
+                "per-pixel RTAO accumulation restarted at frame {f} (accumulated {})",
+                rep.accumulated_frames
+            );
+        }
+        if f == 1 {
+            covered = rep.rays / step as u64;
+        }
+        if marks.contains(&f) || f == half || f == total_frames {
+            avgs.insert(f, r.read_ao()?);
+        }
+    }
+    let n = |frames: u32| frames as u64 * step as u64;
+    let reference = segment_mean(
+        &avgs[&search_frames],
+        n(search_frames),
+        &avgs[&total_frames],
+        n(total_frames),
+    );
+    let ref_a = segment_mean(&avgs[&search_frames], n(search_frames), &avgs[&half], n(half));
+    let ref_b = segment_mean(&avgs[&half], n(half), &avgs[&total_frames], n(total_frames));
+    let ref_noise_mae = ao_error(&ref_a, &ref_b).mae / 2.0;
+    let rtao_curve: Vec<CurvePoint> = marks
+        .iter()
+        .map(|&f| err_point(n(f) as f64, ao_error(&avgs[&f], &reference)))
+        .collect();
+    drop(avgs);
+
+    // Per-pixel RTAO, one frame at B (samples 0..B, disjoint from the reference when B <= max_rays).
+    r.set_settings(hrtao_settings.clone())?;
+    r.set_settings(AoSettings {
+        mode: Mode::Rtao,
+        ..hrtao_settings.clone()
+    })?;
+    r.render(scene_gpu, sf, camera)?;
+    let rtao_b_img = r.read_ao()?;
+    let rtao_same_b = err_point(b as f64, ao_error(&rtao_b_img, &reference));
+
+    // HRTAO from an empty map, static camera.
+    r.set_settings(hrtao_settings.clone())?;
+    r.clear_cache()?;
+    let mae_curve: Vec<(f64, f64)> = rtao_curve.iter().map(|p| (p.rays_per_pixel, p.mae)).collect();
+    let rmse_curve: Vec<(f64, f64)> = rtao_curve.iter().map(|p| (p.rays_per_pixel, p.rmse)).collect();
+    let mut hrtao_curve = Vec::new();
+    let mut cum_rays = 0u64;
+    let mut hrtao_first_img = Vec::new();
+    let mut hrtao_last_img = Vec::new();
+    for f in 1..=args.hrtao_frames.max(1) {
+        let rep = r.render(scene_gpu, sf, camera)?;
+        cum_rays += rep.rays;
+        let img = r.read_ao()?;
+        let e = ao_error(&img, &reference);
+        let rpp = cum_rays as f64 / covered.max(1) as f64;
+        hrtao_curve.push(HrtaoPoint {
+            frame: f as usize,
+            rays_per_pixel: rpp,
+            mae: e.mae,
+            rmse: e.rmse,
+            rtao_mae_same_rays: stats::error_at(&mae_curve, rpp),
+            rtao_rmse_same_rays: stats::error_at(&rmse_curve, rpp),
+        });
+        if f == 1 {
+            hrtao_first_img = img.clone();
+        }
+        hrtao_last_img = img;
+    }
+    let first = &hrtao_curve[0];
+    let match_mae = rays_to_reach(&mae_curve, first.mae);
+    let match_rmse = rays_to_reach(&rmse_curve, first.rmse);
+    let ratio = |m: &Match| m.rays_per_pixel / first.rays_per_pixel.max(1e-9);
+
+    let external = match &args.reference {
+        None => None,
+        Some(p) => {
+            let (ew, eh, ext) = imageio::read_pfm(p)?;
+            let (w, h) = r.size();
+            if (ew, eh) != (w, h) {
+                bail!(
+                    "--reference {} is {ew}x{eh}, the bench renders {w}x{h}",
+                    p.display()
+                );
+            }
+            Some(ExternalErrors {
+                path: p.display().to_string(),
+                reference_vs_external: ao_error(&reference, &ext).into(),
+                rtao_same_b: ao_error(&rtao_b_img, &ext).into(),
+                hrtao_first: ao_error(&hrtao_first_img, &ext).into(),
+                hrtao_last: ao_error(&hrtao_last_img, &ext).into(),
+            })
+        }
+    };
+    Ok(Quality {
+        covered_pixels: covered,
+        step,
+        max_rays: search_frames * step,
+        ref_rays: ref_frames * step,
+        ref_noise_mae,
+        rays_ratio_mae: ratio(&match_mae),
+        rays_ratio_rmse: ratio(&match_rmse),
+        match_mae,
+        match_rmse,
+        rtao_curve,
+        rtao_same_b,
+        hrtao_curve,
+        external,
+    })
+}
+
+fn print_summary(r: &BenchResult) {
+    let s = &r.summary;
+    println!(
+        "{} ({}x{}, B = {}): {} instances, {} instanced triangles",
+        r.scene.label,
+        r.width,
+        r.height,
+        r.settings["rays_per_pixel"],
+        r.scene.instances,
+        r.scene.instanced_triangles
+    );
+    println!(
+        "  Table 1 (HRTAO passes, GPU ms): first {:.2}, nav {:.2}, nav/first {:.3} (whole frames {:.2} / {:.2} = {:.3})",
+        s.first_ms, s.nav_ms, s.nav_over_first, s.first_frame_gpu_ms, s.nav_frame_gpu_ms, s.nav_over_first_frame
+    );
+    println!(
+        "  Table 2 (first frame, GPU ms): cell finder {:.2}, ray-tracing update {:.2}, per-pixel AO {:.2}, filtering {:.2}; non-ray share {:.1}%",
+        s.cell_finder_ms,
+        s.ray_tracing_update_ms,
+        s.per_pixel_ao_ms,
+        s.filtering_ms,
+        s.non_ray_share * 100.0
+    );
+    println!(
+        "  throughput (rays/ms): raw {:.0} (AO pass alone {:.0}), HRTAO ray pass {:.0} = {:.1}% of raw ({:.1}% of the AO pass)",
+        s.raw_rays_per_ms,
+        s.raw_pass_rays_per_ms,
+        s.hrtao_rays_per_ms,
+        s.hrtao_fraction_of_raw * 100.0,
+        s.hrtao_fraction_of_raw_pass * 100.0
+    );
+    if let Some(q) = &r.quality {
+        let h = &q.hrtao_curve[0];
+        println!(
+            "  error vs per-pixel RTAO reference ({} rays, noise {:.4}): HRTAO 1 frame MAE {:.4} at {:.1} rays/px; RTAO at B MAE {:.4}; RTAO needs {:.0} rays/px ({:?}) = {:.1}x",
+            q.ref_rays, q.ref_noise_mae, h.mae, h.rays_per_pixel, q.rtao_same_b.mae, q.match_mae.rays_per_pixel, q.match_mae.kind, q.rays_ratio_mae
+        );
+    }
+    println!(
+        "  load {:.0} ms, host peak {:.0} MiB, device {:.0} MiB, bench {:.0} s",
+        r.scene.load_ms,
+        r.memory.host_peak_bytes as f64 / 1048576.0,
+        r.memory.device_total_bytes as f64 / 1048576.0,
+        r.total_bench_s
+    );
+}

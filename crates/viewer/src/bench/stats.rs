@@ -1,0 +1,213 @@
+//! The bench's pure maths: medians, disjoint reference segments from progressive averages, error-curve
+//! interpolation, orbit cameras, dates. No GPU here (unit-tested in `tests/bench_math.rs`).
+
+/// Median of the finite values (NaN when there are none).
+pub fn median(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Mean over samples `n_a..n_b` of a sequence, given the running means `avg_a` of its first `n_a` samples and
+/// `avg_b` of its first `n_b` samples (per pixel). This turns one progressive per-pixel RTAO run into estimates
+/// over disjoint sample ranges, so the reference shares no sample with the estimates it judges.
+pub fn segment_mean(avg_a: &[f32], n_a: u64, avg_b: &[f32], n_b: u64) -> Vec<f32> {
+    assert!(n_b > n_a, "segment_mean needs n_b > n_a");
+    assert_eq!(avg_a.len(), avg_b.len());
+    let (na, nb) = (n_a as f64, n_b as f64);
+    avg_a
+        .iter()
+        .zip(avg_b)
+        .map(|(&a, &b)| {
+            let m = (nb * b as f64 - na * a as f64) / (nb - na);
+            m.clamp(0.0, 1.0) as f32
+        })
+        .collect()
+}
+
+/// One point of an error-versus-rays curve.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CurvePoint {
+    /// Rays traced per covered pixel, cumulated.
+    pub rays_per_pixel: f64,
+    pub mae: f64,
+    pub rmse: f64,
+}
+
+/// Where a target error falls on a curve.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MatchKind {
+    /// Between two measured points (log-log interpolation).
+    Interpolated,
+    /// Already reached at the first point: the number is an upper bound (extrapolated below it).
+    BelowFirst,
+    /// Not reached within the measured range: extrapolated along the power-law tail (a lower bound at least
+    /// equal to the last measured rays).
+    BeyondLast,
+    /// The curve has fewer than two usable points.
+    Unknown,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Match {
+    pub rays_per_pixel: f64,
+    pub kind: MatchKind,
+}
+
+/// Rays per pixel at which a decreasing error curve `(rays, err)` reaches `target`: the first crossing,
+/// interpolated linearly in log(rays)-log(err); beyond the ends, the power law of the end segments (the tail fits
+/// its last half) extrapolates. Points with non-positive rays or error are ignored.
+pub fn rays_to_reach(curve: &[(f64, f64)], target: f64) -> Match {
+    let pts: Vec<(f64, f64)> = curve
+        .iter()
+        .copied()
+        .filter(|(n, e)| *n > 0.0 && *e > 0.0 && n.is_finite() && e.is_finite())
+        .map(|(n, e)| (n.ln(), e.ln()))
+        .collect();
+    let unknown = Match {
+        rays_per_pixel: f64::NAN,
+        kind: MatchKind::Unknown,
+    };
+    if pts.len() < 2 || target.is_nan() || target <= 0.0 || !target.is_finite() {
+        return unknown;
+    }
+    let t = target.ln();
+    if t >= pts[0].1 {
+        let slope = fit_slope(&pts[..2]);
+        let n = if slope < 0.0 {
+            pts[0].0 + (t - pts[0].1) / slope
+        } else {
+            pts[0].0
+        };
+        return Match {
+            rays_per_pixel: n.min(pts[0].0).exp(),
+            kind: MatchKind::BelowFirst,
+        };
+    }
+    for w in pts.windows(2) {
+        let ((n0, e0), (n1, e1)) = (w[0], w[1]);
+        if e1 <= t && t <= e0 {
+            let f = if e0 == e1 { 0.0 } else { (e0 - t) / (e0 - e1) };
+            return Match {
+                rays_per_pixel: (n0 + f * (n1 - n0)).exp(),
+                kind: MatchKind::Interpolated,
+            };
+        }
+    }
+    let tail = &pts[pts.len() / 2..];
+    let tail = if tail.len() < 2 {
+        &pts[pts.len() - 2..]
+    } else {
+        tail
+    };
+    let slope = fit_slope(tail);
+    let (nl, el) = *pts.last().unwrap();
+    if slope >= 0.0 {
+        return Match {
+            rays_per_pixel: f64::INFINITY,
+            kind: MatchKind::BeyondLast,
+        };
+    }
+    Match {
+        rays_per_pixel: (nl + (t - el) / slope).max(nl).exp(),
+        kind: MatchKind::BeyondLast,
+    }
+}
+
+/// Least-squares slope of y over x.
+pub fn fit_slope(pts: &[(f64, f64)]) -> f64 {
+    let n = pts.len() as f64;
+    if pts.len() < 2 {
+        return f64::NAN;
+    }
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    if sxx == 0.0 {
+        f64::NAN
+    } else {
+        sxy / sxx
+    }
+}
+
+/// The error of a curve at `rays` (log-log interpolation, clamped to the measured range; NaN when outside).
+pub fn error_at(curve: &[(f64, f64)], rays: f64) -> f64 {
+    let pts: Vec<(f64, f64)> = curve
+        .iter()
+        .copied()
+        .filter(|(n, e)| *n > 0.0 && *e > 0.0)
+        .collect();
+    if pts.is_empty() || rays.is_nan() || rays <= 0.0 {
+        return f64::NAN;
+    }
+    for w in pts.windows(2) {
+        let ((n0, e0), (n1, e1)) = (w[0], w[1]);
+        if n0 <= rays && rays <= n1 {
+            let f = if n1 == n0 {
+                0.0
+            } else {
+                (rays.ln() - n0.ln()) / (n1.ln() - n0.ln())
+            };
+            return (e0.ln() + f * (e1.ln() - e0.ln())).exp();
+        }
+    }
+    if (rays - pts[0].0).abs() <= 1e-9 * rays {
+        return pts[0].1;
+    }
+    f64::NAN
+}
+
+/// Rotates `eye` about the axis through `target` along `up` by `deg` degrees (right-handed).
+pub fn orbit_eye(eye: [f32; 3], target: [f32; 3], up: [f32; 3], deg: f32) -> [f32; 3] {
+    let axis = glam::Vec3::from(up).normalize_or_zero();
+    if axis == glam::Vec3::ZERO {
+        return eye;
+    }
+    let q = glam::Quat::from_axis_angle(axis, deg.to_radians());
+    let t = glam::Vec3::from(target);
+    (t + q * (glam::Vec3::from(eye) - t)).to_array()
+}
+
+/// `YYYY-MM-DD HH:MM UTC` for seconds since the Unix epoch (civil-from-days, proleptic Gregorian).
+pub fn utc_date(unix_secs: u64) -> String {
+    let days = (unix_secs / 86_400) as i64;
+    let secs = unix_secs % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + if m <= 2 { 1 } else { 0 };
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02} UTC",
+        secs / 3600,
+        (secs % 3600) / 60
+    )
+}
+
+/// Sums the milliseconds of the named sections.
+pub fn section_sum(sections: &[(String, f64)], names: &[&str]) -> f64 {
+    sections
+        .iter()
+        .filter(|(n, _)| names.contains(&n.as_str()))
+        .map(|(_, ms)| ms)
+        .sum()
+}
+
+/// The paper's Table 2 columns (HRTAO's own passes; Table 1 times are their sum).
+pub const HRTAO_PASSES: [&str; 4] = ["cell finder", "ray-tracing update", "per-pixel AO", "filtering"];
+/// HRTAO passes that trace no ray.
+pub const NON_RAY_PASSES: [&str; 3] = ["cell finder", "per-pixel AO", "filtering"];

@@ -1,0 +1,218 @@
+//! `hrtao bench` end to end on a tiny run (64×36, 3 navigation frames, validation on): the JSON schema, the
+//! self-consistency of its numbers (no timing assertion), and the `--report` markdown + plots.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn scene() -> String {
+    let rod = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/rod_assembly/rod.glb");
+    if rod.exists() {
+        rod.display().to_string()
+    } else {
+        "gen:racks?rows=1&cols=2&units=4&detail=64".to_string()
+    }
+}
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("hrtao-bench-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn hrtao(args: &[&str]) -> std::process::Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(args)
+        .env("HRTAO_VALIDATION", "1")
+        .env("MESA_SHADER_CACHE_DISABLE", "true")
+        .output()
+        .expect("run hrtao");
+    assert!(
+        out.status.success(),
+        "hrtao {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn num(v: &serde_json::Value, path: &str) -> f64 {
+    let mut cur = v;
+    for k in path.split('.') {
+        cur = match k.parse::<usize>() {
+            Ok(i) => &cur[i],
+            Err(_) => &cur[k],
+        };
+    }
+    cur.as_f64()
+        .unwrap_or_else(|| panic!("{path} is not a number: {cur}"))
+}
+
+#[test]
+fn tiny_bench_writes_the_schema_and_a_report() {
+    let dir = tmp_dir("schema");
+    let json = dir.join("tiny.json");
+    let scene = scene();
+    hrtao(&[
+        "bench",
+        "--scene",
+        &scene,
+        "--width",
+        "64",
+        "--height",
+        "36",
+        "--orbit",
+        "3",
+        "--repeat",
+        "1",
+        "--settle",
+        "2",
+        "--rays",
+        "4",
+        "--step",
+        "4",
+        "--max-rays",
+        "8",
+        "--ref-rays",
+        "16",
+        "--hrtao-frames",
+        "2",
+        "--label",
+        "tiny",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["schema"], "hrtao-bench/1");
+    for key in [
+        "date", "host", "device", "scene", "build", "memory", "camera", "settings", "hrtao", "rtao",
+        "summary", "quality",
+    ] {
+        assert!(!v[key].is_null(), "missing {key}");
+    }
+    assert_eq!(num(&v, "width"), 64.0);
+    assert_eq!(num(&v, "height"), 36.0);
+    assert_eq!(
+        v["validation_messages"], 0,
+        "validation messages in the bench run"
+    );
+    assert!(num(&v, "host.cpu_cores") >= 1.0);
+
+    // Frames: one first frame per repetition, 3 navigation frames, each with GPU sections and rays.
+    for mode in ["hrtao", "rtao"] {
+        assert_eq!(v[mode]["first"].as_array().unwrap().len(), 1);
+        let nav = v[mode]["nav"].as_array().unwrap();
+        assert_eq!(nav.len(), 3);
+        for f in nav.iter().chain(v[mode]["first"].as_array().unwrap()) {
+            for k in [
+                "wall_ms",
+                "gpu_total_ms",
+                "hrtao_passes_ms",
+                "rays",
+                "occupied_cells",
+                "failed_inserts",
+            ] {
+                assert!(f[k].is_number(), "{mode} frame lacks {k}: {f}");
+            }
+            assert!(f["passes"].is_object());
+        }
+    }
+    let first = &v["hrtao"]["first"][0];
+    if v["device"]["timestamps"] == true {
+        for s in [
+            "cell finder",
+            "ray-tracing update",
+            "per-pixel AO",
+            "filtering",
+            "primary visibility",
+        ] {
+            assert!(
+                first["passes"][s].is_number(),
+                "HRTAO first frame lacks section {s}"
+            );
+        }
+        assert!(v["rtao"]["first"][0]["passes"]["per-pixel RTAO"].is_number());
+        let sum: f64 = ["cell finder", "ray-tracing update", "per-pixel AO", "filtering"]
+            .iter()
+            .map(|s| first["passes"][*s].as_f64().unwrap())
+            .sum();
+        assert!((sum - num(first, "hrtao_passes_ms")).abs() < 1e-6);
+    }
+    let rays = num(first, "rays");
+    assert!(rays > 0.0, "the first frame traced no ray");
+    // Rays: B per covered pixel at most, and per-pixel RTAO traces exactly B on each covered pixel.
+    let covered = num(&v, "quality.covered_pixels");
+    assert!(covered > 0.0 && covered <= 64.0 * 36.0);
+    assert_eq!(num(&v["rtao"]["first"][0], "rays"), 4.0 * covered);
+    assert!(rays <= 4.0 * covered);
+
+    let s = &v["summary"];
+    for k in [
+        "first_ms",
+        "nav_ms",
+        "nav_over_first",
+        "non_ray_share",
+        "raw_rays_per_ms",
+        "hrtao_rays_per_ms",
+        "hrtao_fraction_of_raw",
+        "cell_finder_ms",
+        "ray_tracing_update_ms",
+        "per_pixel_ao_ms",
+        "filtering_ms",
+    ] {
+        assert!(s[k].is_number() || s[k].is_null(), "summary.{k}: {}", s[k]);
+    }
+    let share = s["non_ray_share"].as_f64().unwrap_or(0.0);
+    assert!((0.0..=1.0).contains(&share));
+
+    // Quality: curves with increasing rays, errors in [0, 1], a match on the RTAO curve.
+    let q = &v["quality"];
+    let curve = q["rtao_curve"].as_array().unwrap();
+    let xs: Vec<f64> = curve.iter().map(|p| num(p, "rays_per_pixel")).collect();
+    assert_eq!(xs, vec![4.0, 8.0]);
+    assert_eq!(num(q, "ref_rays"), 16.0);
+    for p in curve.iter().chain(q["hrtao_curve"].as_array().unwrap()) {
+        let (mae, rmse) = (num(p, "mae"), num(p, "rmse"));
+        assert!((0.0..=1.0).contains(&mae) && mae <= rmse + 1e-12, "{p}");
+    }
+    assert_eq!(q["hrtao_curve"].as_array().unwrap().len(), 2);
+    assert!(q["match_mae"]["kind"].is_string());
+    assert!(num(&v, "memory.host_peak_bytes") > 0.0);
+    assert!(num(&v, "memory.device_total_bytes") >= num(&v, "memory.device_scene_bytes"));
+
+    // Report mode: markdown with the tables and plots beside it.
+    let md = dir.join("bench.md");
+    hrtao(&[
+        "bench",
+        "--report",
+        dir.to_str().unwrap(),
+        "--markdown",
+        md.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&md).unwrap();
+    for needle in [
+        "# Benchmarks",
+        "Table 1",
+        "Table 2",
+        "Targets of issue 5",
+        "tiny",
+        "error_tiny.png",
+    ] {
+        assert!(text.contains(needle), "report lacks {needle}");
+    }
+    assert!(dir.join("error_tiny.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bench_rejects_bad_arguments() {
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(["bench", "--scene", "gen:box", "--orbit", "2", "--path", "x.json"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success(), "--orbit and --path together must fail");
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(["bench", "--report", "/nonexistent-hrtao-dir"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+}

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Builds hrtao (release), benchmarks the shared scenes and generated server rooms with `hrtao bench`, and writes
+# docs/benchmarks.md plus PNG plots in docs/bench/ (`hrtao bench --report`). Needs ../shared beside the repo.
+# About 10-15 minutes on Mesa lavapipe with 2 cores. Environment:
+#   BENCH_SIZE=WxH (320x180)   BENCH_RAYS=B (10, the paper's budget)   BENCH_SCENES="rod cycloidal ..."
+#   BENCH_SCALE="rows:cols ..." (racks sizes)   BENCH_QUICK=1 (tiny settings, to check the script itself)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SHARED=${SHARED:-../shared}
+OUT=docs/bench
+SIZE=${BENCH_SIZE:-320x180}
+W=${SIZE%x*}
+H=${SIZE#*x}
+RAYS=${BENCH_RAYS:-10}
+# key:scene file:AO radius (radii from $SHARED/refs/index.json)
+ALL_SCENES="rod:scenes/rod_assembly/rod.glb:10 cycloidal:scenes/cycloidal_gearbox/cycloidal.glb:8 \
+engine:scenes/2CylinderEngine/2CylinderEngine.gltf:40 duplex:scenes/duplex_apartment/duplex.glb:1 \
+sf:scenes/san_francisco/san_francisco.glb:15"
+SCENES=${BENCH_SCENES:-rod cycloidal engine duplex sf}
+# racks rows:cols (40 servers per rack of 2500 triangles): ~1e3 to ~4e5 instances, 2.5M to 1e9 triangles.
+SCALE=${BENCH_SCALE:-"5:5 10:25 25:40 50:50 100:100"}
+QUALITY="--max-rays 384 --ref-rays 768 --hrtao-frames 8"
+NAV="--orbit 16 --repeat 3"
+if [ -n "${BENCH_QUICK:-}" ]; then
+  QUALITY="--max-rays 16 --ref-rays 32 --hrtao-frames 2"
+  NAV="--orbit 3 --repeat 1 --settle 4"
+fi
+
+export MESA_SHADER_CACHE_DISABLE=${MESA_SHADER_CACHE_DISABLE:-true}
+cargo build --release -p hrtao-viewer
+BIN=${CARGO_TARGET_DIR:-target}/release/hrtao
+mkdir -p "$OUT"
+rm -f "$OUT"/*.json "$OUT"/*.png
+start=$(date +%s)
+
+for key in $SCENES; do
+  entry=$(tr ' ' '\n' <<<"$ALL_SCENES" | grep "^$key:" || true)
+  [ -n "$entry" ] || { echo "unknown scene key $key" >&2; exit 1; }
+  IFS=: read -r _ file radius <<<"$entry"
+  cam="$SHARED/refs/${key}_${W}x${H}.camera.json"
+  ref="$SHARED/refs/${key}_${W}x${H}.cycles.pfm"
+  args=(--scene "$SHARED/$file" --radius "$radius" --rays "$RAYS" --width "$W" --height "$H" --label "$key")
+  [ -f "$cam" ] && args+=(--camera "$cam")
+  [ -f "$ref" ] && [ -f "$cam" ] && args+=(--reference "$ref")
+  echo "== $key"
+  # shellcheck disable=SC2086
+  "$BIN" bench "${args[@]}" $NAV $QUALITY --json "$OUT/scene_$key.json"
+done
+
+for rc in $SCALE; do
+  rows=${rc%:*}
+  cols=${rc#*:}
+  spec="gen:racks?rows=$rows&cols=$cols&units=40&detail=2500"
+  echo "== $spec"
+  # shellcheck disable=SC2086
+  "$BIN" bench --scene "$spec" --auto-camera corner --rays "$RAYS" --width "$W" --height "$H" \
+    --group scale --label "racks ${rows}x${cols}" --no-quality $NAV \
+    --json "$OUT/scale_racks_${rows}x${cols}.json"
+done
+
+"$BIN" bench --report "$OUT" --markdown docs/benchmarks.md
+echo "bench-docs: done in $(( $(date +%s) - start )) s"
