@@ -217,7 +217,8 @@ pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
                 | vk::AccessFlags::SHADER_WRITE
                 | vk::AccessFlags::TRANSFER_READ
                 | vk::AccessFlags::TRANSFER_WRITE
-                | vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR,
+                | vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR
+                | vk::AccessFlags::INDIRECT_COMMAND_READ,
         )
         .build()];
     let stages = vk::PipelineStageFlags::COMPUTE_SHADER
@@ -227,7 +228,7 @@ pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
         gpu.device.cmd_pipeline_barrier(
             cmd,
             stages,
-            stages,
+            stages | vk::PipelineStageFlags::DRAW_INDIRECT,
             vk::DependencyFlags::empty(),
             &barrier,
             &[],

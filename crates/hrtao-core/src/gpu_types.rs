@@ -38,11 +38,13 @@ gpu_consts! {
     STAT_RECLAIMED: u32 = 4;
     STAT_BOUNDS_VIOLATIONS: u32 = 5;
     STAT_CAPPED_PIXELS: u32 = 6;
-    /// Live cells in the table: persistent (not reset per frame), incremented on insert, decremented on reclaim.
-    STAT_OCCUPIED: u32 = 7;
-    STAT_COUNT: u32 = 8;
+    /// Pixels queued for the ray-tracing update this frame (compacted, see ao_select.comp).
+    STAT_RAY_QUEUE: u32 = 7;
+    /// Live cells in the table: persistent (not reset per frame), incremented on insert.
+    STAT_OCCUPIED: u32 = 11;
+    STAT_COUNT: u32 = 12;
     /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 7;
+    STAT_PER_FRAME: u32 = 11;
 }
 
 gpu_structs! {
@@ -95,6 +97,9 @@ gpu_structs! {
         hash_cells: u64,
         pixel_cells: u64,
         stats: u64,
+        /// Pixel indices that trace rays this frame (STAT_RAY_QUEUE of them), and the indirect dispatch size.
+        ray_queue: u64,
+        dispatch_args: u64,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -165,6 +170,6 @@ gpu_structs! {
 
     /// Counters read back after every frame.
     struct FrameStats {
-        counters: [u32; 8],
+        counters: [u32; 12],
     }
 }

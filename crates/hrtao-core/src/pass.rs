@@ -24,6 +24,8 @@ pub enum Pass {
     Rtao,
     CellFinder,
     AoUpdate,
+    AoSelect,
+    QueueArgs,
     Resolve,
     Filter,
     Composite,
@@ -31,11 +33,13 @@ pub enum Pass {
 }
 
 impl Pass {
-    pub const ALL: [Pass; 9] = [
+    pub const ALL: [Pass; 11] = [
         Pass::Clear,
         Pass::Primary,
         Pass::Rtao,
         Pass::CellFinder,
+        Pass::AoSelect,
+        Pass::QueueArgs,
         Pass::AoUpdate,
         Pass::Resolve,
         Pass::Filter,
@@ -50,6 +54,8 @@ impl Pass {
             Pass::Primary => "primary",
             Pass::Rtao => "rtao",
             Pass::CellFinder => "cell_finder",
+            Pass::AoSelect => "ao_select",
+            Pass::QueueArgs => "queue_args",
             Pass::AoUpdate => "ao_update",
             Pass::Resolve => "resolve",
             Pass::Filter => "filter",
@@ -65,7 +71,7 @@ impl Pass {
             Pass::Primary => "primary visibility",
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
-            Pass::AoUpdate => "ray-tracing update",
+            Pass::AoSelect | Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
             Pass::Resolve => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",
@@ -309,6 +315,33 @@ impl<'a> Recorder<'a> {
                 height.div_ceil(WORKGROUP_SIZE),
                 1,
             );
+        }
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.end(self.cmd);
+        }
+        full_barrier(self.gpu, self.cmd);
+    }
+
+    /// Dispatches `pass` with the work-group counts a previous pass wrote into `args` (VkDispatchIndirectCommand).
+    pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, push: [u32; 4]) {
+        let d = &self.gpu.device;
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.begin(self.cmd, pass.section());
+        }
+        unsafe {
+            d.cmd_bind_pipeline(
+                self.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.passes.pipeline(pass),
+            );
+            d.cmd_push_constants(
+                self.cmd,
+                self.passes.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::cast_slice(&push),
+            );
+            d.cmd_dispatch_indirect(self.cmd, args, 0);
         }
         if let Some(t) = self.timer.as_deref_mut() {
             t.end(self.cmd);

@@ -27,6 +27,7 @@ struct Targets {
     filter_tmp: Buffer,
     output: Buffer,
     pixel_cells: Buffer,
+    ray_queue: Buffer,
 }
 
 impl Targets {
@@ -51,6 +52,7 @@ impl Targets {
             filter_tmp: b("filter ping-pong", n * 4)?,
             output: b("output RGBA8", n * 4)?,
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
+            ray_queue: b("ray queue", n * 4)?,
         })
     }
 }
@@ -89,6 +91,8 @@ pub struct Renderer {
     timer: Option<GpuTimer>,
     globals: Buffer,
     stats: Buffer,
+    /// VkDispatchIndirectCommand of the ray-tracing update, written by queue_args.comp.
+    dispatch_args: Buffer,
     targets: Targets,
     hash: HashMapGpu,
     frame_counter: u32,
@@ -118,6 +122,13 @@ impl Renderer {
             MemoryLocation::GpuToCpu,
             vk::BufferUsageFlags::empty(),
         )?;
+        let dispatch_args = Buffer::new(
+            gpu,
+            "dispatch args",
+            16,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::INDIRECT_BUFFER,
+        )?;
         let passes = PassSet::new(gpu, &globals)?;
         let hash = Self::create_hash(gpu, settings.hash_capacity)?;
         let r = Renderer {
@@ -126,6 +137,7 @@ impl Renderer {
             passes,
             globals,
             stats,
+            dispatch_args,
             targets: Targets::new(gpu, width.max(1), height.max(1))?,
             hash,
             settings,
@@ -271,6 +283,8 @@ impl Renderer {
             hash_cells: self.hash.cells.address,
             pixel_cells: t.pixel_cells.address,
             stats: self.stats.address,
+            ray_queue: t.ray_queue.address,
+            dispatch_args: self.dispatch_args.address,
         }
     }
 
@@ -316,7 +330,10 @@ impl Renderer {
             for level in (0..gpu::LOD_COUNT).rev() {
                 rec.dispatch(Pass::CellFinder, w, h, [level, 0, 0, 0]);
             }
-            rec.dispatch(Pass::AoUpdate, w, h, [0; 4]);
+            // Compaction: only pixels whose cell still takes rays are traced, packed densely (no idle lanes).
+            rec.dispatch(Pass::AoSelect, w, h, [0; 4]);
+            rec.dispatch(Pass::QueueArgs, 1, 1, [0; 4]);
+            rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [0; 4]);
             rec.dispatch(Pass::Resolve, w, h, [0; 4]);
             if self.settings.filter {
                 // Ping-pong: iteration i reads one buffer and writes the other; an even count ends in `ao`.
