@@ -172,7 +172,7 @@ fn overloaded_map_stays_finite_and_falls_back_to_coarser_levels() {
     };
     let mut roomy = Renderer::new(&gpu, cam.width, cam.height, base.clone()).unwrap();
     let need = roomy.render(&sg, scene.frame(), &cam).unwrap().occupied_cells;
-    let capacity = ((need / 10) as u32 + 1).next_power_of_two() / 2;
+    let capacity = (need / 10 + 1).next_power_of_two() / 2;
     let overload = need as f32 / capacity as f32;
     let settings = AoSettings {
         hash_capacity: capacity,
