@@ -142,6 +142,20 @@ fn geometry_triangles(
         .build()
 }
 
+/// A BLAS build of `geoms`: fast trace, compactable.
+fn blas_build_info(
+    geoms: &[vk::AccelerationStructureGeometryKHR],
+) -> vk::AccelerationStructureBuildGeometryInfoKHRBuilder<'_> {
+    vk::AccelerationStructureBuildGeometryInfoKHR::builder()
+        .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+        .flags(
+            vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
+                | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION,
+        )
+        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+        .geometries(geoms)
+}
+
 impl SceneGpu {
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene) -> Result<SceneGpu> {
         if scene.instances.len() > MAX_INSTANCES {
@@ -238,14 +252,7 @@ impl SceneGpu {
                         })
                         .collect();
                     let counts: Vec<u32> = geos.iter().map(|g| g.triangles).collect();
-                    let info = vk::AccelerationStructureBuildGeometryInfoKHR::builder()
-                        .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
-                        .flags(
-                            vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
-                                | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION,
-                        )
-                        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-                        .geometries(&geoms);
+                    let info = blas_build_info(&geoms);
                     let sizes = unsafe {
                         gpu.accel.get_acceleration_structure_build_sizes(
                             vk::AccelerationStructureBuildTypeKHR::DEVICE,
@@ -286,15 +293,8 @@ impl SceneGpu {
                     .cmd_reset_query_pool(cmd, query_pool, 0, batch.len() as u32);
                 let mut offset = 0u64;
                 for ((_, geoms, counts, sizes), dst) in batch.iter().zip(&built) {
-                    let info = vk::AccelerationStructureBuildGeometryInfoKHR::builder()
-                        .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
-                        .flags(
-                            vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
-                                | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION,
-                        )
-                        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+                    let info = blas_build_info(geoms)
                         .dst_acceleration_structure(dst.raw)
-                        .geometries(geoms)
                         .scratch_data(vk::DeviceOrHostAddressKHR {
                             device_address: scratch.base + offset,
                         })

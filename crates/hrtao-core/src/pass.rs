@@ -292,38 +292,21 @@ impl<'a> Recorder<'a> {
     /// Dispatches `pass` over a `width` x `height` grid of threads (one per pixel), with push constants `push`,
     /// then a barrier so the next pass sees its writes.
     pub fn dispatch(&mut self, pass: Pass, width: u32, height: u32, push: [u32; 4]) {
-        let d = &self.gpu.device;
-        if let Some(t) = self.timer.as_deref_mut() {
-            t.begin(self.cmd, pass.section());
-        }
-        unsafe {
-            d.cmd_bind_pipeline(
-                self.cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.passes.pipeline(pass),
-            );
-            d.cmd_push_constants(
-                self.cmd,
-                self.passes.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
-                bytemuck::cast_slice(&push),
-            );
-            d.cmd_dispatch(
-                self.cmd,
-                width.div_ceil(WORKGROUP_SIZE),
-                height.div_ceil(WORKGROUP_SIZE),
-                1,
-            );
-        }
-        if let Some(t) = self.timer.as_deref_mut() {
-            t.end(self.cmd);
-        }
-        full_barrier(self.gpu, self.cmd);
+        let groups = (width.div_ceil(WORKGROUP_SIZE), height.div_ceil(WORKGROUP_SIZE));
+        self.record(pass, push, |d, cmd| unsafe {
+            d.cmd_dispatch(cmd, groups.0, groups.1, 1)
+        });
     }
 
     /// Dispatches `pass` with the work-group counts a previous pass wrote into `args` (VkDispatchIndirectCommand).
     pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, push: [u32; 4]) {
+        self.record(pass, push, |d, cmd| unsafe {
+            d.cmd_dispatch_indirect(cmd, args, 0)
+        });
+    }
+
+    /// Binds `pass`, pushes its constants, records the dispatch under its timing section, then the barrier.
+    fn record(&mut self, pass: Pass, push: [u32; 4], dispatch: impl FnOnce(&ash::Device, vk::CommandBuffer)) {
         let d = &self.gpu.device;
         if let Some(t) = self.timer.as_deref_mut() {
             t.begin(self.cmd, pass.section());
@@ -341,8 +324,8 @@ impl<'a> Recorder<'a> {
                 0,
                 bytemuck::cast_slice(&push),
             );
-            d.cmd_dispatch_indirect(self.cmd, args, 0);
         }
+        dispatch(d, self.cmd);
         if let Some(t) = self.timer.as_deref_mut() {
             t.end(self.cmd);
         }

@@ -105,24 +105,7 @@ fn bad_inputs_give_clear_errors() {
     let out = hrtao(&["render", "--scene", truncated.to_str().unwrap()]);
     assert_clean_error(&out, "truncated.glb");
 
-    // A one-triangle glTF whose first vertex is NaN.
-    let mut bytes = Vec::new();
-    for v in [f32::NAN, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
-        bytes.extend_from_slice(&v.to_le_bytes());
-    }
-    let b64 = base64_encode(&bytes);
-    let gltf = format!(
-        r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
-        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
-        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}}],
-        "bufferViews":[{{"buffer":0,"byteLength":36}}],
-        "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{b64}"}}]}}"#
-    );
-    let nan = tmp("nan.gltf");
-    std::fs::write(&nan, gltf).unwrap();
-    let out = hrtao(&["render", "--scene", nan.to_str().unwrap()]);
-    assert_clean_error(&out, "nan");
-
+    // NaN vertices, lying chunk lengths and the rest: see hostile_inputs.rs (the generated corpus).
     let out = hrtao(&["render", "--scene", "gen:nosuchthing"]);
     assert_clean_error(&out, "nosuchthing");
 
@@ -136,21 +119,4 @@ fn bad_inputs_give_clear_errors() {
         bad_cam.to_str().unwrap(),
     ]);
     assert_clean_error(&out, "bad_camera.json");
-}
-
-fn base64_encode(data: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for chunk in data.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for i in 0..4 {
-            if i <= chunk.len() {
-                s.push(T[((n >> (18 - 6 * i)) & 63) as usize] as char);
-            } else {
-                s.push('=');
-            }
-        }
-    }
-    s
 }

@@ -304,13 +304,13 @@ fn render_markdown(
             "**Navigation ≤ 0.15 × first: missed on {} of {} runs, worst {} ({:.1}× the target).** Navigation frames \
              trace {}–{} of the first frame's rays (the orbit starts after the static frames brought a frame \
              below 10 % of them; new cells appear at silhouettes and where eq. 2 changes LOD), yet their ray-tracing \
-             update costs {}–{} of the first frame's: on lavapipe a pixel group runs in SIMD lock-step, so a group \
-             pays for BVH traversal as long as any of its pixels still traces, and the pass reads every pixel's \
-             cell even when capped. The non-ray passes do not shrink at all (cell finder, per-pixel AO and \
-             filtering run on every pixel every frame) and alone are {}–{} of the first frame, so the ratio can \
-             only get under 0.15 where the non-ray share is well below it. What closes it: compacting the pixels \
-             that still need rays into a dense list before tracing (no idle lanes), skipping the cell finder for \
-             pixels whose cells are capped and unchanged, and on a real GPU the first frame's ray cost grows \
+             update costs {}–{} of the first frame's (the update already runs only over a dense queue of the \
+             pixels whose cells still take rays; the rest is the rays themselves, in newly visible or LOD-changed \
+             cells, and the per-pixel selection). The non-ray passes do not shrink at all (cell finder, per-pixel \
+             AO and filtering run on every pixel every frame) and alone are {}–{} of the first frame, so the ratio \
+             can only get under 0.15 where the non-ray share is well below it. What closes it: skipping the cell \
+             finder and per-pixel AO for pixels whose cells are capped and unchanged (reprojection of last frame's \
+             cells), fewer filter iterations while moving, and on a real GPU the first frame's ray cost grows \
              relative to the fixed passes at 1080p × 10 rays.",
             navs.len() - met,
             navs.len(),
