@@ -1,7 +1,7 @@
 #version 460
-// Ray-tracing update, step 1: queue the pixels whose target cell still takes rays (paper §6: cells full at
-// max_samples stop receiving rays). The queue is dense, so step 3 runs no idle lanes where most cells are full
-// (navigation frames).
+// Ray-tracing update, step 1: queue the pixels that trace rays this frame (paper §6: cells full at max_samples
+// stop receiving rays; in still-camera refinement frames every pixel traces). The queue is dense, so step 3
+// runs no idle lanes where most cells are full (navigation frames). Clears every pixel's own-ray counts.
 #include "common.glsl"
 #include "ray_target.glsl"
 
@@ -9,10 +9,14 @@ void main() {
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
+    PixelRays none;
+    none.traced = 0u;
+    none.unoccluded = 0u;
+    PixelRaysRef(g.pixel_rays).v[index] = none;
     GPixel px = GBufferRef(g.gbuffer).px[index];
     if (px.t < 0.0) return;
     uint first;
-    if (ray_target(index, px, PixelCellRef(g.pixel_cells).v[index], first)) {
+    if (pixel_traces(px, PixelCellRef(g.pixel_cells).v[index], first)) {
         uint slot = atomicAdd(StatsRef(g.stats).counters[STAT_RAY_QUEUE], 1u);
         UintRef(g.ray_queue).v[slot] = index;
     } else if (first < LOD_COUNT && g.rays_per_pixel > 0u) {

@@ -1,41 +1,75 @@
 #version 460
-// Collaborative ray tracing (paper §3, §6), step 3, over the queued pixels (dispatched indirectly): each traces
-// up to `rays_per_pixel` AO rays from its hit point into its target cell. Every ray takes the next index of the
-// cell's QMC sequence (one R2 sequence per cell, scrambled by the cell's checksum), cosine-weighted around the
-// pixel's normal. Results go to the target cell and propagate to the coarser cells (§4).
+// Collaborative ray tracing (paper §3, §6), step 3, over the queued pixels (dispatched indirectly, 2-D groups).
+// A pixel whose target cell still takes rays traces up to `rays_per_pixel` AO rays from its hit point, each
+// taking the next index of the cell's QMC sequence (one R2 sequence per cell, scrambled by the cell's
+// checksum), cosine-weighted around the pixel's normal. In still-camera refinement frames (ours) every pixel
+// traces its own R2 sequence instead, continued across the still frames; its rays also count for its cells.
+// Results go to the target cell (up to max_samples) and propagate to the coarser cells (§4, up to SAMPLE_CAP).
 #include "common.glsl"
 #include "ray_target.glsl"
 
+void add_rays(CellRef cells, uint c, uint traced, uint open) {
+    atomicAdd(cells.v[c].samples, traced);
+    atomicAdd(cells.v[c].unoccluded, open);
+}
+
 void main() {
-    uint q = gl_WorkGroupID.x * (WORKGROUP_SIZE * WORKGROUP_SIZE) + gl_LocalInvocationIndex;
+    uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    uint q = group * (WORKGROUP_SIZE * WORKGROUP_SIZE) + gl_LocalInvocationIndex;
     if (q >= StatsRef(g.stats).counters[STAT_RAY_QUEUE]) return;
     uint index = UintRef(g.ray_queue).v[q];
     if (index >= g.width * g.height) return;
     GPixel px = GBufferRef(g.gbuffer).px[index];
     PixelCells pc = PixelCellRef(g.pixel_cells).v[index];
     uint first;
-    if (!ray_target(index, px, pc, first)) return;
+    bool cell_takes = ray_target(px, pc, first);
+    bool own = refine_frame();
+    if (!cell_takes && !own) return;
     CellRef cells = CellRef(g.hash_cells);
-    uint target = pc.cells[first];
-    uint check = cells.v[target].checksum;
-    vec2 shift = vec2(uint_to_unit(h_check(check)), uint_to_unit(h_index(check ^ 0x5bd1e995u)));
-    vec3 origin = offset_ray(px.position, px.normal);
-    uint traced = 0u;
-    uint open = 0u;
-    for (uint r = 0u; r < g.rays_per_pixel; ++r) {
-        uint qi = atomicAdd(cells.v[target].qmc_index, 1u);
-        if (qi >= g.max_samples) break;
-        vec3 dir = cosine_direction(px.normal, r2_point(qi, shift));
-        if (ray_unoccluded(origin, dir, g.ao_radius)) open++;
-        traced++;
+    // Rays claimed from the target cell's QMC sequence (a block of rays_per_pixel, cut at max_samples).
+    uint qmc0 = 0u;
+    uint claimed = 0u;
+    if (cell_takes) {
+        qmc0 = atomicAdd(cells.v[pc.cells[first]].qmc_index, g.rays_per_pixel);
+        claimed = qmc0 < g.max_samples ? min(g.rays_per_pixel, g.max_samples - qmc0) : 0u;
     }
-    if (traced == 0u) return;
-    stat_add(STAT_RAYS, traced);
-    // Bottom-up propagation: the target and every coarser level receive the rays.
-    for (uint l = first; l < LOD_COUNT; ++l) {
+    uint rays = own ? g.rays_per_pixel : claimed;
+    uvec2 shift;
+    uint seq0;
+    if (own) {
+        shift = pixel_shift(index);
+        seq0 = g.still_index * g.rays_per_pixel;
+    } else {
+        uint check = stamp_checksum(cells.v[pc.cells[first]].stamp);
+        shift = uvec2(h_check(check), h_index(check ^ 0x5bd1e995u));
+        seq0 = qmc0;
+    }
+    vec3 origin = offset_ray(px.position, px.normal);
+    uint open = 0u;
+    uint open_claimed = 0u;   // among the first `claimed` rays (those the target cell takes)
+    for (uint r = 0u; r < rays; ++r) {
+        vec3 dir = cosine_direction(px.normal, r2_point(seq0 + r, shift));
+        if (ray_unoccluded(origin, dir, g.ao_radius)) {
+            open++;
+            if (r < claimed) open_claimed++;
+        }
+    }
+    if (rays == 0u) return;
+    stat_add(STAT_RAYS, rays);
+    if (own) {
+        stat_add(STAT_REFINE_RAYS, rays);
+        PixelRays pr;
+        pr.traced = rays;
+        pr.unoccluded = open;
+        PixelRaysRef(g.pixel_rays).v[index] = pr;
+    }
+    if (first >= LOD_COUNT) return;
+    // The target cell takes the rays it granted; bottom-up propagation (§4): every coarser level takes all of
+    // them until it holds SAMPLE_CAP.
+    if (claimed > 0u) add_rays(cells, pc.cells[first], claimed, open_claimed);
+    for (uint l = first + 1u; l < LOD_COUNT; ++l) {
         uint c = pc.cells[l];
         if (c == INVALID_CELL || !slot_in_bounds(c)) continue;
-        atomicAdd(cells.v[c].samples, traced);
-        atomicAdd(cells.v[c].unoccluded, open);
+        if (cells.v[c].samples < SAMPLE_CAP) add_rays(cells, c, rays, open);
     }
 }

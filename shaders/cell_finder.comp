@@ -16,15 +16,12 @@ void main() {
     if (level == LOD_COUNT - 1u) {
         PixelCells pc;
         pc.cells = uvec4(INVALID_CELL);
-        pc.lod = 0u;
-        pc._pad = uvec3(0u);
         cells.v[index] = pc;
     }
     if (px.t < 0.0) return;
     // A failed coarser level means the table is full here: finer cells would fail too.
     if (level < LOD_COUNT - 1u && cells.v[index].cells[level + 1u] == INVALID_CELL) return;
     int lod = pixel_lod(px.t);
-    if (level == 0u) cells.v[index].lod = uint(lod - g.log2_s_min);
-    CellKey key = cell_key(px.position, px.normal, lod + int(level), g.s_nd, g.scene_frame, g.hash_capacity);
+    CellKey key = cell_key(px.position, px.normal, lod + int(level), g.s_nd, g.scene_f, g.hash_capacity);
     cells.v[index].cells[level] = find_or_insert(key);
 }

@@ -8,8 +8,10 @@
 #extension GL_EXT_buffer_reference2 : require
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
 
 #include "gpu_types.glsl"
+#include "hash.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE, local_size_y = WORKGROUP_SIZE, local_size_z = 1) in;
 
@@ -27,8 +29,12 @@ layout(buffer_reference, scalar) buffer UintRef { uint v[]; };
 layout(buffer_reference, scalar) buffer CellRef { HashCell v[]; };
 layout(buffer_reference, scalar) buffer PixelCellRef { PixelCells v[]; };
 layout(buffer_reference, scalar) buffer StatsRef { uint counters[STAT_COUNT]; };
+layout(buffer_reference, scalar) buffer PixelRaysRef { PixelRays v[]; };
+layout(buffer_reference, scalar) buffer PixelAccumRef { PixelAccum v[]; };
 
 const float PI = 3.14159265358979;
+
+void stat_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).counters[which], v); }
 
 // The pixel of this invocation, or false when it lies outside the image.
 bool pixel_coords(out uvec2 pix, out uint index) {
@@ -37,9 +43,10 @@ bool pixel_coords(out uvec2 pix, out uint index) {
     return pix.x < g.width && pix.y < g.height;
 }
 
-// Pinhole camera through the pixel centre; the vertical field of view spans the image height.
+// Pinhole camera through the pixel centre moved by this frame's jitter; the vertical field of view spans the
+// image height.
 vec3 camera_dir(uvec2 pix) {
-    vec2 ndc = (vec2(pix) + 0.5) / vec2(g.width, g.height) * 2.0 - 1.0;
+    vec2 ndc = (vec2(pix) + 0.5 + g.jitter) / vec2(g.width, g.height) * 2.0 - 1.0;
     return normalize(g.cam_w.xyz + ndc.x * g.cam_u.xyz - ndc.y * g.cam_v.xyz);
 }
 
@@ -76,19 +83,19 @@ vec3 cosine_direction(vec3 n, vec2 u) {
     return normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - u.x)) * n);
 }
 
-// PCG-style integer hash for per-pixel random rotations.
-uint pcg_hash(uint v) {
-    uint state = v * 747796405u + 2891336453u;
-    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-
 float uint_to_unit(uint v) { return float(v >> 8) * (1.0 / 16777216.0); }
 
-// The R2 low-discrepancy sequence (Roberts 2018), point i, rotated by `shift` (Cranley-Patterson).
-vec2 r2_point(uint i, vec2 shift) {
-    const vec2 alpha = vec2(0.7548776662466927, 0.5698402909980532);
-    return fract(shift + alpha * float(i));
+// The R2 low-discrepancy sequence (Roberts 2018), point i, rotated by `shift` (Cranley-Patterson), in 0.32
+// fixed point: exact for every i (a float alpha * i loses precision past about 2^16 points).
+vec2 r2_point(uint i, uvec2 shift) {
+    const uvec2 alpha = uvec2(3242174889u, 2447445414u);   // round(2^32 * (0.7548776662..., 0.5698402909...))
+    uvec2 x = shift + alpha * i;
+    return vec2(uint_to_unit(x.x), uint_to_unit(x.y));
+}
+
+// The Cranley-Patterson rotation of a pixel's own R2 sequence (per-pixel RTAO and still-camera refinement).
+uvec2 pixel_shift(uint index) {
+    return uvec2(h_check(index * 2u + 0x9e3779b9u), h_index(index * 2u + 1u + 0x7f4a7c15u));
 }
 
 // True when the ray from p along dir hits nothing within tmax.

@@ -1,5 +1,13 @@
 #version 460
-// Composite: base colour x AO with a soft key light, over a background gradient, sRGB-encoded RGBA8.
+// Composite: base colour x AO with a soft key light, over a background gradient, sRGB-encoded RGBA8; and the
+// accumulation over still frames (ours, docs/algorithm.md), which anti-aliases (each still frame's primary
+// sample is jittered) and, in HRTAO, moves each pixel from its cell estimate c (paper §4-5) to its own rays:
+//
+//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)),   k = prior_rays,
+//
+// the cell estimate counting as k of the pixel's own rays. Colours weigh each sample's shade the same way.
+// Per-pixel RTAO is the same with k -> 0; the paper's behaviour (no refinement) shows the current frame's c.
+// The final AO is written back to `ao` (what read_ao and --ao-out see).
 #include "common.glsl"
 
 vec3 linear_to_srgb(vec3 c) {
@@ -8,7 +16,7 @@ vec3 linear_to_srgb(vec3 c) {
 }
 
 vec3 false_color(uint v) {
-    uint h = pcg_hash(v);
+    uint h = h_check(v);
     return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
 }
 
@@ -17,41 +25,92 @@ vec3 heat(float x) {
     return clamp(vec3(1.5 - abs(4.0 * x - 3.0), 1.5 - abs(4.0 * x - 2.0), 1.5 - abs(4.0 * x - 1.0)), 0.0, 1.0);
 }
 
+// Debug views (paper Fig. 3 and ours): false colours of the finest cell, LOD used, samples per cell.
+vec3 debug_color(uint index) {
+    PixelCells pc = PixelCellRef(g.pixel_cells).v[index];
+    if (g.mode == MODE_DEBUG_CELLS) return false_color(pc.cells[0]);
+    if (g.mode == MODE_DEBUG_LOD) {
+        uint used = UintRef(g.lod_used).v[index];
+        return used >= LOD_COUNT ? vec3(0.0) : heat(float(used) / float(LOD_COUNT - 1u));
+    }
+    uint cell = pc.cells[0];
+    uint s = cell < g.hash_capacity ? CellRef(g.hash_cells).v[cell].samples : 0u;
+    return heat(log2(1.0 + float(s)) / log2(1.0 + float(max(g.max_samples, 1u))));
+}
+
+// Base colour x key light of the pixel's sample (the background gradient on a miss).
+vec3 shade(uvec2 pix, GPixel px) {
+    if (px.t < 0.0) {
+        float y = (float(pix.y) + 0.5) / float(g.height);
+        return mix(g.background_top.rgb, g.background_bottom.rgb, y);
+    }
+    vec3 view = normalize(px.position - g.eye.xyz);
+    // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
+    vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
+    float diffuse = max(dot(px.normal, key), 0.0);
+    float light = 0.4 + 0.6 * diffuse;
+    vec3 base = (g.flags & FLAG_SHADED) != 0u ? px.color : vec3(0.8);
+    vec3 color = base * light;
+    if ((InstanceRef(g.instances).v[px.instance].flags & INSTANCE_SELECTED) != 0u) {
+        color = mix(color, vec3(1.0, 0.55, 0.1), 0.45);
+    }
+    return color;
+}
+
 void main() {
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
     GPixel px = GBufferRef(g.gbuffer).px[index];
-    float ao = g.mode == MODE_NO_AO ? 1.0 : clamp(FloatRef(g.ao).v[index], 0.0, 1.0);
     vec3 color;
-    if (px.t < 0.0) {
-        float y = (float(pix.y) + 0.5) / float(g.height);
-        color = mix(g.background_top.rgb, g.background_bottom.rgb, y);
-    } else if (g.mode == MODE_DEBUG_CELLS || g.mode == MODE_DEBUG_LOD || g.mode == MODE_DEBUG_SAMPLES) {
-        PixelCells pc = PixelCellRef(g.pixel_cells).v[index];
-        if (g.mode == MODE_DEBUG_CELLS) {
-            color = false_color(pc.cells[0]);
-        } else if (g.mode == MODE_DEBUG_LOD) {
-            uint used = UintRef(g.ao_lod).v[index];
-            color = used >= LOD_COUNT ? vec3(0.0) : heat(float(used) / float(LOD_COUNT - 1u));
-        } else {
-            uint cell = pc.cells[0];
-            uint s = cell < g.hash_capacity ? CellRef(g.hash_cells).v[cell].samples : 0u;
-            color = heat(log2(1.0 + float(s)) / log2(1.0 + float(max(g.max_samples, 1u))));
-        }
+    if (px.t >= 0.0 && (g.mode == MODE_DEBUG_CELLS || g.mode == MODE_DEBUG_LOD || g.mode == MODE_DEBUG_SAMPLES)) {
+        color = debug_color(index);
     } else {
-        vec3 view = normalize(px.position - g.eye.xyz);
-        // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
-        vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
-        float diffuse = max(dot(px.normal, key), 0.0);
-        float light = 0.4 + 0.6 * diffuse;
-        vec3 base = (g.flags & FLAG_SHADED) != 0u ? px.color : vec3(0.8);
-        color = base * ao * light;
-        if ((InstanceRef(g.instances).v[px.instance].flags & INSTANCE_SELECTED) != 0u) {
-            color = mix(color, vec3(1.0, 0.55, 0.1), 0.45);
+        bool hashed = g.mode == MODE_HRTAO;
+        vec3 s = shade(pix, px);
+        // This sample: its cell estimate and its own rays (a miss counts as rays_per_pixel open rays, so
+        // partly covered pixels weigh background and surface by coverage).
+        float c = hashed && px.t >= 0.0 ? clamp(FloatRef(g.ao).v[index], 0.0, 1.0) : 1.0;
+        PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
+        float traced = float(pr.traced);
+        float open = float(pr.unoccluded);
+        if (px.t < 0.0 && (g.mode == MODE_RTAO || (hashed && g.still_index > 0u))) {
+            traced = float(g.rays_per_pixel);
+            open = traced;
         }
+        // As AoSettings::accumulates: per-pixel RTAO, and HRTAO or AO off with refinement.
+        bool accumulates = g.mode == MODE_RTAO || ((g.flags & FLAG_REFINE) != 0u && (hashed || g.mode == MODE_NO_AO));
+        PixelAccumRef accum = PixelAccumRef(g.accum);
+        PixelAccum a;
+        if (!accumulates || g.still_index == 0u) {
+            a.shade_cell = vec3(0.0);
+            a.cell = 0.0;
+            a.shade_open = vec3(0.0);
+            a.open = 0.0;
+            a.rays = 0.0;
+            a.frames = 0.0;
+        } else {
+            a = accum.v[index];
+        }
+        a.shade_cell += s * c;
+        a.cell += c;
+        a.shade_open += s * open;
+        a.open += open;
+        a.rays += traced;
+        a.frames += 1.0;
+        accum.v[index] = a;
+        // k: the cell estimate's weight in rays (HRTAO), a vanishing weight otherwise (used only when the
+        // pixel has no rays at all: AO off, a zero budget).
+        float k = hashed ? max(g.prior_rays, 1e-6) : 1e-6;
+        float ao = (k * a.cell / a.frames + a.open) / (k + a.rays);
+        color = (k * a.shade_cell / a.frames + a.shade_open) / (k + a.rays);
+        if (g.mode == MODE_NO_AO) {
+            ao = 1.0;
+            color = a.shade_cell / a.frames;
+        }
+        FloatRef(g.ao).v[index] = clamp(ao, 0.0, 1.0);
     }
-    uvec3 c = uvec3(linear_to_srgb(color) * 255.0 + 0.5);
-    if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c = c.bgr;
-    UintRef(g.output_rgba).v[index] = c.r | (c.g << 8) | (c.b << 16) | (255u << 24);
+    uvec3 c8 = uvec3(linear_to_srgb(color) * 255.0 + 0.5);
+    if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c8 = c8.bgr;
+    UintRef(g.output_rgba).v[index] = c8.r | (c8.g << 8) | (c8.b << 16) | (255u << 24);
 }

@@ -21,7 +21,7 @@ void main() {
     GBufferRef gb = GBufferRef(g.gbuffer);
     GPixel px = gb.px[index];
     float center = src.v[index];
-    uint used = UintRef(g.ao_lod).v[index];
+    uint used = UintRef(g.lod_used).v[index];
     if (px.t < 0.0 || used >= LOD_COUNT) {
         dst.v[index] = center;
         return;
@@ -29,7 +29,8 @@ void main() {
     // World size of the cell the AO came from, and of one pixel at this distance.
     int lod = pixel_lod(px.t) + int(used);
     float cell = exp2(float(lod));
-    float pixel_size = px.t * g.s_w_per_distance / max(g.s_p, 1.0);
+    // World width of one (internal) pixel at this distance: cam_v spans half the image height.
+    float pixel_size = px.t * 2.0 * length(g.cam_v.xyz) / float(g.height);
     float footprint = cell / max(pixel_size, 1e-30);   // cell width in pixels
     int step = 1 << iteration;
     if (float(2 * step) > footprint) {
@@ -44,7 +45,7 @@ void main() {
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             uint qi = uint(q.y) * g.width + uint(q.x);
             GPixel qp = gb.px[qi];
-            if (qp.t < 0.0 || UintRef(g.ao_lod).v[qi] >= LOD_COUNT) continue;
+            if (qp.t < 0.0 || UintRef(g.lod_used).v[qi] >= LOD_COUNT) continue;
             float k = KERNEL[abs(dx)] * KERNEL[abs(dy)];
             vec3 delta = qp.position - px.position;
             float w_pos = exp(-dot(delta, delta) / (cell * cell));

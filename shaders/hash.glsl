@@ -40,9 +40,12 @@ ivec3 cell_coord(vec3 p, int lod) {
     return ivec3(q);
 }
 
-// eq. (5)'s normal quantisation floor(n s_nd).
+// eq. (5)'s normal quantisation, with bins centred on the integers: floor(n s_nd + 1/2). The paper's
+// floor(n s_nd) puts bin edges exactly on axis-aligned normals, the most common normals in CAD, so a face
+// whose normal is a rounding error off an axis would flip between bins.
 ivec3 normal_coord(vec3 n, float s_nd) {
-    return ivec3(floor(clamp(n, -1.0, 1.0) * s_nd));
+    precise vec3 q = clamp(n, -1.0, 1.0) * s_nd + 0.5;   // precise: no fused multiply-add (CPU mirror)
+    return ivec3(floor(q));
 }
 
 // eq. (4)-(6) with one base hash: H8D = h(F + h(nz + h(ny + h(nx + h(lod + h(pz + h(py + h(px)))))))).

@@ -1,11 +1,14 @@
-// The world-space hash map (paper §1): find-or-insert with linear probing on atomicCompSwap of the checksum,
-// bounded probe length, every slot wrapped into the table, lazy removal of cells of an old F (eq. 6) or
-// untouched for `stale_frames` frames.
+// The world-space hash map (paper §1): find-or-insert with linear probing, bounded probe length, every slot
+// wrapped into the table, lazy removal of cells of an old F (eq. 6) or untouched for `stale_frames` frames.
+//
+// A cell's checksum and its "last used" frame share one 64-bit word (`HashCell::stamp`), so claiming a cell
+// (free or reclaimable) and re-stamping a found one are each a single atomicCompSwap: no thread can take over
+// a cell between another thread's claim and its stamp. Within a dispatch the frame is fixed, so a cell only
+// ever goes from reclaimable to live, never back: the candidate a probe picks can be lost only to a claim.
+// Modelled on the CPU and checked under every interleaving in tests/hash_map_model.rs.
 #ifndef HRTAO_HASH_MAP_GLSL
 #define HRTAO_HASH_MAP_GLSL
 #include "hash.glsl"
-
-void stat_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).counters[which], v); }
 
 // Records an out-of-range slot in assertion mode (FLAG_CHECK_BOUNDS); returns true when `slot` is usable.
 bool slot_in_bounds(uint slot) {
@@ -14,71 +17,121 @@ bool slot_in_bounds(uint slot) {
     return ok;
 }
 
-// A cell may be reused for another key when it belongs to an old F or has not been touched for a while.
-bool cell_reclaimable(HashCell c) {
-    return c.scene_frame != g.scene_frame || (g.frame_counter - c.last_frame) > g.stale_frames;
+uint64_t make_stamp(uint checksum, uint frame) { return packUint2x32(uvec2(checksum, frame)); }
+uint stamp_checksum(uint64_t s) { return unpackUint2x32(s).x; }
+uint stamp_frame(uint64_t s) { return unpackUint2x32(s).y; }
+
+// Atomic read of a cell's stamp (another thread may claim it in the same dispatch).
+uint64_t load_stamp(CellRef cells, uint slot) { return atomicAdd(cells.v[slot].stamp, uint64_t(0)); }
+
+// eq. (6)'s lazy removal: a cell may go to another key when it was last used before the first frame of the
+// current F (its F is old: no key of the current F can reach it) or more than `stale_frames` frames ago.
+// Frame numbers wrap: ages are unsigned differences.
+bool stamp_reclaimable(uint64_t s) {
+    uint age = g.frame_index - stamp_frame(s);
+    return age > g.frame_index - g.f_start_frame || age > g.stale_frames;
 }
 
-void reset_cell(CellRef cells, uint slot) {
+void note_probe(uint length) { atomicMax(StatsRef(g.stats).counters[STAT_MAX_PROBE], length); }
+
+// Empties the counters of a cell this thread has just claimed (its stamp already names the new key).
+void reset_counters(CellRef cells, uint slot) {
     atomicExchange(cells.v[slot].samples, 0u);
     atomicExchange(cells.v[slot].unoccluded, 0u);
     atomicExchange(cells.v[slot].qmc_index, 0u);
-    cells.v[slot].last_frame = g.frame_counter;
-    cells.v[slot].scene_frame = g.scene_frame;
 }
 
+// How many times a probe restarts after losing its candidate slot to another key (bounded work per thread).
+const uint PROBE_ATTEMPTS = 4u;
+
 // Returns the slot holding `key`, inserting it when absent; INVALID_CELL when the probe limit is reached.
+// The whole probe run is scanned first (to a free slot or max_probe): a key that lives further down the run
+// is found and kept, and a reclaimable slot met on the way is taken over only when the key is absent.
 uint find_or_insert(CellKey key) {
     CellRef cells = CellRef(g.hash_cells);
     uint mask = g.hash_capacity - 1u;
-    for (uint i = 0u; i < g.max_probe; ++i) {
-        uint slot = (key.slot + i) & mask;
-        if (!slot_in_bounds(slot)) return INVALID_CELL;
-        uint prev = atomicCompSwap(cells.v[slot].checksum, EMPTY_CELL, key.checksum);
-        if (prev == EMPTY_CELL) {
-            reset_cell(cells, slot);
-            stat_add(STAT_CELLS_INSERTED, 1u);
-            stat_add(STAT_OCCUPIED, 1u);
-            atomicMax(StatsRef(g.stats).counters[STAT_MAX_PROBE], i + 1u);
-            return slot;
-        }
-        if (prev == key.checksum) {
-            cells.v[slot].last_frame = g.frame_counter;
-            atomicMax(StatsRef(g.stats).counters[STAT_MAX_PROBE], i + 1u);
-            return slot;
-        }
-        if (cell_reclaimable(cells.v[slot])) {
-            // Take the stale cell over, unless another thread changed it first.
-            if (atomicCompSwap(cells.v[slot].checksum, prev, key.checksum) == prev) {
-                reset_cell(cells, slot);
-                stat_add(STAT_RECLAIMED, 1u);
-                atomicMax(StatsRef(g.stats).counters[STAT_MAX_PROBE], i + 1u);
-                return slot;
+    uint64_t mine = make_stamp(key.checksum, g.frame_index);
+    for (uint attempt = 0u; attempt < PROBE_ATTEMPTS; ++attempt) {
+        uint candidate = INVALID_CELL;   // first reclaimable slot, else the free slot ending the run
+        uint64_t expected = uint64_t(0);
+        uint length = 0u;
+        bool lost = false;
+        for (uint i = 0u; i < g.max_probe; ++i) {
+            uint slot = (key.slot + i) & mask;
+            if (!slot_in_bounds(slot)) return INVALID_CELL;
+            uint64_t s = load_stamp(cells, slot);
+            uint c = stamp_checksum(s);
+            if (c == key.checksum) {
+                // Found: re-stamp it as used this frame, unless another key has just reclaimed it.
+                while (stamp_frame(s) != g.frame_index) {
+                    uint64_t prev = atomicCompSwap(cells.v[slot].stamp, s, mine);
+                    if (prev == s) break;
+                    s = prev;
+                }
+                if (stamp_checksum(s) == key.checksum) {
+                    note_probe(i + 1u);
+                    return slot;
+                }
+                lost = true;   // reclaimed by another key between our read and our stamp: probe again
+                break;
+            }
+            if (c == EMPTY_CELL) {
+                if (candidate == INVALID_CELL) {
+                    candidate = slot;
+                    expected = s;
+                    length = i + 1u;
+                }
+                break;   // no deletions: a free slot ends the key's probe run
+            }
+            if (candidate == INVALID_CELL && stamp_reclaimable(s)) {
+                candidate = slot;
+                expected = s;
+                length = i + 1u;
             }
         }
+        if (lost) continue;
+        if (candidate == INVALID_CELL) break;
+        uint64_t prev = atomicCompSwap(cells.v[candidate].stamp, expected, mine);
+        if (prev == expected) {
+            reset_counters(cells, candidate);
+            if (stamp_checksum(expected) == EMPTY_CELL) {
+                stat_add(STAT_CELLS_INSERTED, 1u);
+                stat_add(STAT_OCCUPIED, 1u);
+            } else {
+                stat_add(STAT_RECLAIMED, 1u);
+            }
+            note_probe(length);
+            return candidate;
+        }
+        if (stamp_checksum(prev) == key.checksum) {
+            // Another thread inserted the same key there first: share its cell.
+            note_probe(length);
+            return candidate;
+        }
+        // Another key took the candidate: probe again (the table only gained live cells).
     }
     stat_add(STAT_FAILED_INSERTS, 1u);
     return INVALID_CELL;
 }
 
 // Returns the slot holding `key`, or INVALID_CELL when absent (read only; stops at the first free slot,
-// which linear probing without deletions guarantees ends the key's run).
+// which ends the key's run since slots are reclaimed but never emptied).
 uint find_cell(CellKey key) {
     CellRef cells = CellRef(g.hash_cells);
     uint mask = g.hash_capacity - 1u;
     for (uint i = 0u; i < g.max_probe; ++i) {
         uint slot = (key.slot + i) & mask;
         if (!slot_in_bounds(slot)) return INVALID_CELL;
-        uint c = cells.v[slot].checksum;
+        uint c = stamp_checksum(cells.v[slot].stamp);
         if (c == key.checksum) return slot;
         if (c == EMPTY_CELL) return INVALID_CELL;
     }
     return INVALID_CELL;
 }
 
-// The LOD of pixel with hit distance d (eq. 2-3).
+// The LOD of a pixel with hit distance d (eq. 2-3): s_w = d * s_w_per_distance, bounded by s_w_max.
 int pixel_lod(float d) {
-    return lod_of(d * g.s_w_per_distance, g.log2_s_min);
+    return lod_of(min(d * g.s_w_per_distance, g.s_w_max), g.log2_s_min);
 }
 
 #endif

@@ -48,7 +48,7 @@ void main() {
                 vec3 wv = mix(1.0 - f, f, vec3(o));
                 float w = wv.x * wv.y * wv.z;
                 if (w <= 0.0) continue;
-                uint c = find_cell(cell_key_at(b + o, lod, nq, g.scene_frame, g.hash_capacity));
+                uint c = find_cell(cell_key_at(b + o, lod, nq, g.scene_f, g.hash_capacity));
                 if (c == INVALID_CELL) continue;
                 uint s = cells.v[c].samples;
                 if (s == 0u) continue;
@@ -64,5 +64,5 @@ void main() {
     uint iterations = (g.flags & FLAG_FILTER) != 0u ? g.filter_iterations : 0u;
     FloatRef dst = FloatRef((iterations & 1u) == 1u ? g.filter_tmp : g.ao);
     dst.v[index] = clamp(ao, 0.0, 1.0);
-    UintRef(g.ao_lod).v[index] = used;
+    UintRef(g.lod_used).v[index] = used;
 }

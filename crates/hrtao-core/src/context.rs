@@ -232,6 +232,10 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
     if f2.features.shader_int64 == 0 {
         lacking.push("shaderInt64");
     }
+    if v12.shader_buffer_int64_atomics == 0 {
+        // The hash map claims and stamps a cell with one 64-bit compare-and-swap (hash_map.glsl).
+        lacking.push("shaderBufferInt64Atomics");
+    }
     if !lacking.is_empty() {
         cand.problem = Some(format!("lacks features {}", lacking.join(", ")));
         return cand;
@@ -411,7 +415,7 @@ impl Gpu {
             .buffer_device_address(true)
             .scalar_block_layout(true)
             .host_query_reset(supported_v12.host_query_reset == vk::TRUE)
-            .shader_buffer_int64_atomics(supported_v12.shader_buffer_int64_atomics == vk::TRUE);
+            .shader_buffer_int64_atomics(true);
         let base = vk::PhysicalDeviceFeatures::builder().shader_int64(true).build();
         let mut features2 = vk::PhysicalDeviceFeatures2::builder()
             .features(base)

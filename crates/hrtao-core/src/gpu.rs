@@ -20,6 +20,19 @@ macro_rules! gpu_structs {
 
 include!("gpu_types.rs");
 
+impl HashCell {
+    /// The checksum half of the stamp (`EMPTY_CELL` for a free cell).
+    pub fn checksum(&self) -> u32 {
+        self.stamp as u32
+    }
+
+    /// The `frame_index` of the last frame that used the cell.
+    pub fn last_frame(&self) -> u32 {
+        (self.stamp >> 32) as u32
+    }
+}
+
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,6 +8,8 @@
 gpu_consts! {
     /// Compute work-group edge (threads are WORKGROUP_SIZE x WORKGROUP_SIZE).
     WORKGROUP_SIZE: u32 = 8;
+    /// Work groups per dimension of an indirect dispatch (the portable minimum of maxComputeWorkGroupCount).
+    MAX_GROUPS_X: u32 = 65535;
     /// Levels of detail allocated per pixel: the target s_wd and 3 successively coarser ones (paper §4).
     LOD_COUNT: u32 = 4;
     /// `FrameGlobals::mode` values.
@@ -22,6 +24,9 @@ gpu_consts! {
     FLAG_FILTER: u32 = 2;
     FLAG_CHECK_BOUNDS: u32 = 4;
     FLAG_SHADED: u32 = 8;
+    /// Still-camera refinement (ours, docs/algorithm.md): from the second still frame every pixel traces its own
+    /// rays, which also feed its cells, and its AO moves from the cell estimate to its own ray-traced estimate.
+    FLAG_REFINE: u32 = 16;
     /// `InstanceInfo::flags` bits.
     INSTANCE_SELECTED: u32 = 1;
     /// `GPixel::instance` of a pixel whose primary ray hit nothing.
@@ -30,6 +35,11 @@ gpu_consts! {
     EMPTY_CELL: u32 = 0;
     /// A pixel cell index meaning "no cell" (miss, or the insert failed).
     INVALID_CELL: u32 = 0xffff_ffff;
+    /// Rays a cell accumulates at most (coarser levels stop receiving propagated rays there): far from u32
+    /// overflow, and the ratio unoccluded / samples stays exact in a float.
+    SAMPLE_CAP: u32 = 0x0100_0000;
+    /// Largest `max_samples`: the QMC index plus one frame's block claims stays far from u32 overflow.
+    MAX_SAMPLES_LIMIT: u32 = 0x0010_0000;
     /// Indices into `FrameStats::counters`.
     STAT_RAYS: u32 = 0;
     STAT_CELLS_INSERTED: u32 = 1;
@@ -40,11 +50,13 @@ gpu_consts! {
     STAT_CAPPED_PIXELS: u32 = 6;
     /// Pixels queued for the ray-tracing update this frame (compacted, see ao_select.comp).
     STAT_RAY_QUEUE: u32 = 7;
-    /// Live cells in the table: persistent (not reset per frame), incremented on insert.
-    STAT_OCCUPIED: u32 = 11;
-    STAT_COUNT: u32 = 12;
+    /// Rays traced by the still-camera refinement (included in STAT_RAYS).
+    STAT_REFINE_RAYS: u32 = 8;
+    /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
+    STAT_OCCUPIED: u32 = 9;
+    STAT_COUNT: u32 = 10;
     /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 11;
+    STAT_PER_FRAME: u32 = 9;
 }
 
 gpu_structs! {
@@ -56,20 +68,28 @@ gpu_structs! {
         cam_u: [f32; 4],
         cam_v: [f32; 4],
         cam_w: [f32; 4],
+        /// Sub-pixel offset of this frame's primary samples, in pixels from the pixel centre (0 = centre).
+        jitter: [f32; 2],
         width: u32,
         height: u32,
-        /// Index of this frame in the current accumulation (per-pixel RTAO averages frames 0..=accum_index).
-        accum_index: u32,
+        /// Frames since the camera, the scene or the settings last changed (0 = a new view): the accumulation
+        /// index of per-pixel RTAO and of the still-camera refinement.
+        still_index: u32,
         /// The paper's F (eq. 6): bumped on every scene edit.
-        scene_frame: u32,
-        /// Monotonic count of rendered frames (hash cell "last touched").
-        frame_counter: u32,
+        scene_f: u32,
+        /// Monotonic count of rendered frames (a hash cell's "last used" stamp).
+        frame_index: u32,
+        /// `frame_index` of the first frame rendered with the current F: cells last used before it are free.
+        f_start_frame: u32,
         mode: u32,
         flags: u32,
         rays_per_pixel: u32,
         ao_radius: f32,
-        /// eq. (2): tan(max(f/R_x, f R_x / R_y^2) s_p) precomputed on the CPU, so s_w = d * s_w_per_distance.
+        /// eq. (2) as we read it (docs/algorithm.md): the world size of s_p view pixels per unit of distance,
+        /// so s_w = d * s_w_per_distance.
         s_w_per_distance: f32,
+        /// Upper bound of the finest s_w (a fraction of the AO radius), so cells never smear contact shadows.
+        s_w_max: f32,
         /// eq. (3): log2 of the smallest world feature s_min (rounded to a power of two, see hash.glsl).
         log2_s_min: i32,
         /// eq. (5): normal discretisation.
@@ -79,20 +99,22 @@ gpu_structs! {
         min_samples: u32,
         max_probe: u32,
         stale_frames: u32,
-        selected_instance: u32,
         filter_iterations: u32,
-        /// s_p: target feature size in pixels (eq. 2).
-        s_p: f32,
+        /// Still-camera refinement: the cell estimate counts as this many of the pixel's own rays.
+        prior_rays: f32,
+        _pad: u32,
         background_top: [f32; 4],
         background_bottom: [f32; 4],
         /// Buffer device addresses of the frame's buffers.
         gbuffer: u64,
         instances: u64,
         geometries: u64,
-        ao_accum: u64,
         ao: u64,
-        ao_lod: u64,
+        lod_used: u64,
         filter_tmp: u64,
+        /// Per pixel: this frame's own rays (`PixelRays`), and the still-camera accumulation (`PixelAccum`).
+        pixel_rays: u64,
+        accum: u64,
         output_rgba: u64,
         hash_cells: u64,
         pixel_cells: u64,
@@ -132,18 +154,19 @@ gpu_structs! {
 
     /// One cell of the world-space hash map (paper §1).
     struct HashCell {
-        /// Second, independent hash of the cell key; `EMPTY_CELL` marks a free cell.
-        checksum: u32,
-        /// Rays accumulated in the cell.
+        /// The cell's key and age in one 64-bit word, claimed and re-stamped by a single atomic compare-and-swap:
+        /// low 32 bits the checksum (the second, independent hash of the key; `EMPTY_CELL` marks a free cell),
+        /// high 32 bits the `frame_index` of the last frame that used the cell (lazy removal, eq. 6).
+        stamp: u64,
+        /// Rays accumulated in the cell (at most `max_samples` at the level that traces into it; coarser levels
+        /// stop receiving propagated rays at `SAMPLE_CAP`).
         samples: u32,
         /// Rays that escaped (hit nothing within the AO radius).
         unoccluded: u32,
-        /// Next index into the cell's QMC sequence (paper §3).
+        /// Next index into the cell's QMC sequence (paper §3); rays are claimed from it in blocks, so it exceeds
+        /// `max_samples` by at most one block per pixel of one frame.
         qmc_index: u32,
-        /// `frame_counter` of the last frame that used the cell (lazy removal of stale cells).
-        last_frame: u32,
-        /// The scene's F (eq. 6) when the cell was created: cells of an older F are free to reclaim at once.
-        scene_frame: u32,
+        _pad: u32,
     }
 
     /// One CPU-vs-GPU hash test case: inputs, then the GPU's outputs (hash_test.comp).
@@ -152,7 +175,7 @@ gpu_structs! {
         /// Target world feature size s_w (eq. 2) for the point.
         s_w: f32,
         normal: [f32; 3],
-        scene_frame: u32,
+        scene_f: u32,
         /// LOD offset added to the point's level (0..LOD_COUNT).
         lod_offset: u32,
         index: u32,
@@ -163,13 +186,29 @@ gpu_structs! {
     /// Per pixel, the hash cell indices at the LOD_COUNT levels (cell finder output).
     struct PixelCells {
         cells: [u32; 4],
-        /// Finest level's LOD index (log2(s_wd/s_min)), for debug views.
-        lod: u32,
-        _pad: [u32; 3],
+    }
+
+    /// Per pixel, the rays it traced itself this frame (per-pixel RTAO, still-camera refinement).
+    struct PixelRays {
+        traced: u32,
+        unoccluded: u32,
+    }
+
+    /// Per pixel, the accumulation over still frames (composite.comp). With shade = base colour x light of
+    /// each frame's (jittered) sample and c = its cell estimate: the sum of shade x c, the sum of shade x the
+    /// unoccluded count of the pixel's own rays, the sums of c and of unoccluded counts (the AO alone), and
+    /// the pixel's own rays.
+    struct PixelAccum {
+        shade_cell: [f32; 3],
+        cell: f32,
+        shade_open: [f32; 3],
+        open: f32,
+        rays: f32,
+        frames: f32,
     }
 
     /// Counters read back after every frame.
     struct FrameStats {
-        counters: [u32; 12],
+        counters: [u32; 10],
     }
 }

@@ -28,9 +28,12 @@ pub fn log2_s_min(s_min: f32) -> i32 {
     (s_min.max(f32::MIN_POSITIVE) as f64).log2().round() as i32
 }
 
-/// eq. (2): s_w = d tan(max(f / R_x, f R_x / R_y²) s_p), with f the vertical aperture (radians).
-pub fn feature_size(d: f32, aperture: f32, rx: f32, ry: f32, s_p: f32) -> f32 {
-    d * ((aperture / rx).max(aperture * rx / (ry * ry)) * s_p).tan()
+/// eq. (2) as we read it: s_w = d · s_p · (2 tan(f_y / 2) / R_y), the world width of s_p pixels at distance d
+/// for a pinhole camera of vertical aperture f_y spanning R_y view pixels (square pixels). Returned per unit
+/// of d. The paper's max(f/R_x, f R_x/R_y²) with f the vertical aperture gives cells R_x/R_y (1.8 at 16:9)
+/// times too large; see docs/algorithm.md.
+pub fn feature_size_per_distance(fov_y_radians: f32, view_height: u32, s_p: f32) -> f32 {
+    s_p * 2.0 * (0.5 * fov_y_radians).tan() / view_height.max(1) as f32
 }
 
 /// eq. (3) as an integer LOD: floor(log2(s_w)), at least log2(s_min); the cell size is s_wd = 2^lod.
@@ -43,6 +46,11 @@ pub fn lod_of(s_w: f32, log2_s_min: i32) -> i32 {
         return log2_s_min; // subnormal: far below any s_min
     }
     (biased - 127).max(log2_s_min)
+}
+
+/// The LOD of a pixel at hit distance d (hash_map.glsl `pixel_lod`): s_w = d s_w_per_distance, at most s_w_max.
+pub fn pixel_lod(d: f32, s_w_per_distance: f32, s_w_max: f32, log2_s_min: i32) -> i32 {
+    lod_of((d * s_w_per_distance).min(s_w_max), log2_s_min)
 }
 
 /// s_wd of eq. (3) for a LOD.
@@ -59,9 +67,9 @@ pub fn cell_coord(p: Vec3, lod: i32) -> IVec3 {
     q.as_ivec3()
 }
 
-/// floor(n s_nd) of eq. (5).
+/// eq. (5)'s normal quantisation with bins centred on the integers: floor(n s_nd + 1/2) (see hash.glsl).
 pub fn normal_coord(n: Vec3, s_nd: f32) -> IVec3 {
-    (n.clamp(Vec3::splat(-1.0), Vec3::splat(1.0)) * s_nd)
+    (n.clamp(Vec3::splat(-1.0), Vec3::splat(1.0)) * s_nd + Vec3::splat(0.5))
         .floor()
         .as_ivec3()
 }
@@ -112,7 +120,7 @@ mod tests {
         let mut last = None;
         for i in 0..20 {
             let d = 0.37 * 2f32.powi(i);
-            let s_w = feature_size(d, aperture, 320.0, 180.0, 8.0);
+            let s_w = d * feature_size_per_distance(aperture, 180, 8.0);
             let lod = lod_of(s_w, l2);
             let s_wd = cell_size(lod);
             // s_wd = 2^floor(log2(s_w / s_min)) s_min, with s_min a power of two: s_wd <= s_w < 2 s_wd.
@@ -125,6 +133,39 @@ mod tests {
         assert_eq!(lod_of(0.0, l2), l2);
         assert_eq!(lod_of(f32::NAN, l2), l2);
         assert_eq!(lod_of(1e-30, l2), l2);
+    }
+
+    #[test]
+    fn a_finest_cell_spans_half_to_all_of_s_p_view_pixels() {
+        // 640x360, 40° vertical aperture: one pixel at distance d is d 2 tan(20°) / 360 wide.
+        let aperture = 40f32.to_radians();
+        let pixel = 2.0 * (0.5 * aperture).tan() / 360.0;
+        for d in [0.3f32, 1.0, 7.7, 150.0, 4000.0] {
+            let s_w = d * feature_size_per_distance(aperture, 360, 3.0);
+            let cell = cell_size(lod_of(s_w, -33));
+            let pixels = cell / (d * pixel);
+            assert!(
+                (1.5..=3.0001).contains(&pixels),
+                "d={d}: a cell spans {pixels} pixels"
+            );
+        }
+        // s_w is capped (a fraction of the AO radius): far away, cells stop growing.
+        assert_eq!(pixel_lod(1e6, 0.01, 0.25, -33), lod_of(0.25, -33));
+    }
+
+    #[test]
+    fn axis_aligned_normals_sit_mid_bin() {
+        // A normal a rounding error off an axis stays in the axis's bin (bins centred on the integers).
+        for s_nd in [1.0, 2.0, 3.0, 4.5] {
+            for n in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Z] {
+                let off = (n + Vec3::new(1e-6, -1e-6, 1e-6)).normalize();
+                assert_eq!(
+                    normal_coord(n, s_nd),
+                    normal_coord(off, s_nd),
+                    "{n} at s_nd {s_nd}"
+                );
+            }
+        }
     }
 
     #[test]

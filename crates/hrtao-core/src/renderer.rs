@@ -11,7 +11,9 @@ use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::Camera;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
-use crate::gpu::{self, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelCells};
+use crate::gpu::{
+    self, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells, PixelRays,
+};
 use crate::pass::{Pass, PassSet, Recorder};
 use crate::settings::{AoSettings, Mode};
 use crate::timer::GpuTimer;
@@ -21,10 +23,11 @@ struct Targets {
     width: u32,
     height: u32,
     gbuffer: Buffer,
-    ao_accum: Buffer,
     ao: Buffer,
-    ao_lod: Buffer,
+    lod_used: Buffer,
     filter_tmp: Buffer,
+    pixel_rays: Buffer,
+    accum: Buffer,
     output: Buffer,
     pixel_cells: Buffer,
     ray_queue: Buffer,
@@ -46,15 +49,30 @@ impl Targets {
             width,
             height,
             gbuffer: b("G-buffer", n * std::mem::size_of::<GPixel>() as u64)?,
-            ao_accum: b("AO accumulation", n * 4)?,
             ao: b("AO", n * 4)?,
-            ao_lod: b("AO LOD used", n * 4)?,
+            lod_used: b("LOD used", n * 4)?,
             filter_tmp: b("filter ping-pong", n * 4)?,
+            pixel_rays: b("pixel rays", n * std::mem::size_of::<PixelRays>() as u64)?,
+            accum: b("still accumulation", n * std::mem::size_of::<PixelAccum>() as u64)?,
             output: b("output RGBA8", n * 4)?,
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
             ray_queue: b("ray queue", n * 4)?,
         })
     }
+}
+
+/// Still frames with jitter before an image counts as anti-aliased.
+pub const AA_FRAMES: u32 = 16;
+
+/// What must stay equal for frames to accumulate into one still image.
+#[derive(Clone, PartialEq)]
+struct StillKey {
+    camera: Camera,
+    settings: AoSettings,
+    scene_f: u32,
+    tlas: vk::AccelerationStructureKHR,
+    view_height: u32,
+    jitter: bool,
 }
 
 /// The world-space hash map (paper §1), persistent across frames.
@@ -79,9 +97,14 @@ pub struct FrameReport {
     pub capped_pixels: u32,
     pub occupied_cells: u32,
     pub load_factor: f64,
-    /// F of the scene when the frame was rendered.
-    pub scene_frame: u32,
+    /// F of the scene when the frame was rendered (eq. 6).
+    pub scene_f: u32,
+    /// Frames accumulated for the current view (1 = a new view).
     pub accumulated_frames: u32,
+    /// Rays of the still-camera refinement (included in `rays`).
+    pub refine_rays: u64,
+    /// The image of this view is final: rendering more frames would not change it (see `Renderer::converged`).
+    pub converged: bool,
 }
 
 pub struct Renderer {
@@ -95,10 +118,19 @@ pub struct Renderer {
     dispatch_args: Buffer,
     targets: Targets,
     hash: HashMapGpu,
-    frame_counter: u32,
-    accum_index: u32,
-    accum_key: Option<(Camera, AoSettings, u32, vk::AccelerationStructureKHR)>,
-    pub selected_instance: u32,
+    /// Monotonic count of rendered frames (a hash cell's "last used" stamp).
+    frame_index: u32,
+    /// Frames since the view last changed (0 = new view).
+    still_index: u32,
+    still_key: Option<StillKey>,
+    /// F of the previous frame, and the frame_index of the first frame rendered with it (eq. 6).
+    last_f: Option<u32>,
+    f_start_frame: u32,
+    /// Jitter the primary samples of still frames (anti-aliasing). `hrtao render` keeps pixel centres.
+    pub jitter: bool,
+    /// Height of the view in pixels when the renderer works at a reduced internal resolution (0 = the internal
+    /// height): s_p is measured in view pixels, so cells do not change with the render scale.
+    pub view_height: u32,
     pub background_top: [f32; 3],
     pub background_bottom: [f32; 3],
     pub output_bgra: bool,
@@ -141,10 +173,13 @@ impl Renderer {
             targets: Targets::new(gpu, width.max(1), height.max(1))?,
             hash,
             settings,
-            frame_counter: 0,
-            accum_index: 0,
-            accum_key: None,
-            selected_instance: u32::MAX,
+            frame_index: 0,
+            still_index: 0,
+            still_key: None,
+            last_f: None,
+            f_start_frame: 0,
+            jitter: false,
+            view_height: 0,
             background_top: [0.62, 0.68, 0.76],
             background_bottom: [0.93, 0.94, 0.95],
             output_bgra: false,
@@ -184,7 +219,7 @@ impl Renderer {
         if (w, h) != self.size() {
             self.gpu.wait_idle();
             self.targets = Targets::new(&self.gpu, w, h)?;
-            self.accum_key = None;
+            self.still_key = None;
         }
         Ok(())
     }
@@ -217,7 +252,7 @@ impl Renderer {
         Ok(())
     }
 
-    fn globals_for(&self, camera: &Camera, scene_frame: u32) -> FrameGlobals {
+    fn globals_for(&self, camera: &Camera, scene_f: u32) -> FrameGlobals {
         let s = &self.settings;
         let t = &self.targets;
         let cam = Camera {
@@ -226,10 +261,11 @@ impl Renderer {
             ..*camera
         };
         let f = cam.frame();
-        // eq. (2): s_w = d tan(max(f / R_x, f R_x / R_y^2) s_p), with f the vertical aperture in radians.
-        let aperture = cam.fov_y_deg.to_radians();
-        let (rx, ry) = (t.width as f32, t.height as f32);
-        let angle = (aperture / rx).max(aperture * rx / (ry * ry)) * s.s_p;
+        let view_height = if self.view_height > 0 {
+            self.view_height
+        } else {
+            t.height
+        };
         let mut flags = 0;
         if self.output_bgra {
             flags |= gpu::FLAG_OUTPUT_BGRA;
@@ -243,6 +279,19 @@ impl Renderer {
         if s.shaded {
             flags |= gpu::FLAG_SHADED;
         }
+        if s.refine {
+            flags |= gpu::FLAG_REFINE;
+        }
+        let jitter = if self.jitter && s.accumulates() && self.still_index > 0 {
+            // R2 points in the pixel, frame after frame (the centre first).
+            let i = self.still_index as f64;
+            [
+                ((0.7548776662466927 * i).fract() - 0.5) as f32,
+                ((0.5698402909980532 * i).fract() - 0.5) as f32,
+            ]
+        } else {
+            [0.0, 0.0]
+        };
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
         FrameGlobals {
@@ -250,16 +299,23 @@ impl Renderer {
             cam_u: v4(f.u),
             cam_v: v4(f.v),
             cam_w: v4(f.w),
+            jitter,
             width: t.width,
             height: t.height,
-            accum_index: self.accum_index,
-            scene_frame,
-            frame_counter: self.frame_counter,
+            still_index: self.still_index,
+            scene_f,
+            frame_index: self.frame_index,
+            f_start_frame: self.f_start_frame,
             mode: s.mode.gpu_value(),
             flags,
             rays_per_pixel: s.rays_per_pixel,
             ao_radius: s.ao_radius,
-            s_w_per_distance: angle.tan(),
+            s_w_per_distance: crate::hash::feature_size_per_distance(
+                cam.fov_y_deg.to_radians(),
+                view_height,
+                s.s_p,
+            ),
+            s_w_max: s.ao_radius * s.max_cell_fraction,
             log2_s_min: crate::hash::log2_s_min(s.s_min),
             s_nd: s.s_nd,
             hash_capacity: self.hash.capacity,
@@ -267,18 +323,19 @@ impl Renderer {
             min_samples: s.min_samples,
             max_probe: s.max_probe,
             stale_frames: s.stale_frames,
-            selected_instance: self.selected_instance,
             filter_iterations: s.filter_iterations,
-            s_p: s.s_p,
+            prior_rays: s.prior_rays,
+            _pad: 0,
             background_top: c4(self.background_top),
             background_bottom: c4(self.background_bottom),
             gbuffer: t.gbuffer.address,
             instances: 0,
             geometries: 0,
-            ao_accum: t.ao_accum.address,
             ao: t.ao.address,
-            ao_lod: t.ao_lod.address,
+            lod_used: t.lod_used.address,
             filter_tmp: t.filter_tmp.address,
+            pixel_rays: t.pixel_rays.address,
+            accum: t.accum.address,
             output_rgba: t.output.address,
             hash_cells: self.hash.cells.address,
             pixel_cells: t.pixel_cells.address,
@@ -294,26 +351,32 @@ impl Renderer {
         &mut self,
         cmd: vk::CommandBuffer,
         scene: &SceneGpu,
-        scene_frame: u32,
+        scene_f: u32,
         camera: &Camera,
     ) -> Result<()> {
-        let key = (
-            Camera {
+        let key = StillKey {
+            camera: Camera {
                 width: self.targets.width,
                 height: self.targets.height,
                 ..*camera
             },
-            self.settings.clone(),
-            scene_frame,
-            scene.tlas.raw,
-        );
-        if self.accum_key.as_ref() == Some(&key) {
-            self.accum_index = self.accum_index.saturating_add(1);
+            settings: self.settings.clone(),
+            scene_f,
+            tlas: scene.tlas.raw,
+            view_height: self.view_height,
+            jitter: self.jitter,
+        };
+        if self.still_key.as_ref() == Some(&key) {
+            self.still_index = self.still_index.saturating_add(1);
         } else {
-            self.accum_index = 0;
-            self.accum_key = Some(key);
+            self.still_index = 0;
+            self.still_key = Some(key);
         }
-        let mut globals = self.globals_for(camera, scene_frame);
+        if self.last_f != Some(scene_f) {
+            self.last_f = Some(scene_f);
+            self.f_start_frame = self.frame_index;
+        }
+        let mut globals = self.globals_for(camera, scene_f);
         globals.instances = scene.instance_info.address;
         globals.geometries = scene.geometries.address;
         self.globals.write(&[globals])?;
@@ -349,8 +412,8 @@ impl Renderer {
     }
 
     /// Reads the statistics of the frame just completed.
-    pub fn finish_frame(&mut self, scene_frame: u32, wall_ms: f64) -> Result<FrameReport> {
-        self.frame_counter = self.frame_counter.wrapping_add(1);
+    pub fn finish_frame(&mut self, scene_f: u32, wall_ms: f64) -> Result<FrameReport> {
+        self.frame_index = self.frame_index.wrapping_add(1);
         let c: Vec<u32> = self.stats.read(gpu::STAT_COUNT as usize)?;
         let gpu_ms = match &self.timer {
             Some(t) => t.read()?,
@@ -370,19 +433,37 @@ impl Renderer {
             capped_pixels: c[gpu::STAT_CAPPED_PIXELS as usize],
             occupied_cells: occupied,
             load_factor: occupied as f64 / self.hash.capacity as f64,
-            scene_frame,
-            accumulated_frames: self.accum_index + 1,
+            scene_f,
+            accumulated_frames: self.still_index + 1,
+            refine_rays: c[gpu::STAT_REFINE_RAYS as usize] as u64,
+            converged: self.converged(c[gpu::STAT_RAYS as usize]),
         })
     }
 
     /// Renders one frame headless and waits for it.
-    pub fn render(&mut self, scene: &SceneGpu, scene_frame: u32, camera: &Camera) -> Result<FrameReport> {
+    pub fn render(&mut self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> Result<FrameReport> {
         let t0 = Instant::now();
         let gpu = self.gpu.clone();
         let mut recorded = Ok(());
-        gpu.run_commands(|cmd| recorded = self.record_frame(cmd, scene, scene_frame, camera))?;
+        gpu.run_commands(|cmd| recorded = self.record_frame(cmd, scene, scene_f, camera))?;
         recorded?;
-        self.finish_frame(scene_frame, t0.elapsed().as_secs_f64() * 1e3)
+        self.finish_frame(scene_f, t0.elapsed().as_secs_f64() * 1e3)
+    }
+
+    /// Whether the frame just rendered (`still_index` frames into its view, `rays` traced) is final:
+    /// per-pixel RTAO and HRTAO with refinement once each pixel has `still_samples` of its own rays (and, with
+    /// jitter, `AA_FRAMES` samples); the paper's HRTAO once no cell takes rays; other modes once anti-aliased.
+    fn converged(&self, rays: u32) -> bool {
+        let s = &self.settings;
+        let frames = self.still_index + 1;
+        let aa = !self.jitter || frames >= AA_FRAMES;
+        let own_rays = |frames: u32| frames as u64 * s.rays_per_pixel as u64 >= s.still_samples as u64;
+        match s.mode {
+            Mode::Rtao => aa && (s.rays_per_pixel == 0 || own_rays(frames)),
+            Mode::Hrtao if s.refine => aa && (s.rays_per_pixel == 0 || own_rays(self.still_index)),
+            Mode::Hrtao => rays == 0 && frames > 1,
+            _ => aa,
+        }
     }
 
     /// The RGBA8 output buffer (for copying to a swapchain image).
@@ -437,7 +518,7 @@ impl Renderer {
 
     /// The LOD index used per pixel by the last HRTAO frame (0 = finest, LOD_COUNT = none).
     pub fn read_lod_used(&self) -> Result<Vec<u32>> {
-        self.read_buffer(&self.targets.ao_lod, self.pixel_count())
+        self.read_buffer(&self.targets.lod_used, self.pixel_count())
     }
 
     pub fn read_pixel_cells(&self) -> Result<Vec<PixelCells>> {
@@ -502,7 +583,25 @@ impl Renderer {
         buf.read(cases.len())
     }
 
-    pub fn frame_counter(&self) -> u32 {
-        self.frame_counter
+    /// The keys of the cells the cell finder gives a G-buffer sample at each level (a CPU mirror of
+    /// cell_finder.comp for tests of the map).
+    pub fn pixel_cell_keys(&self, camera: &Camera, scene_f: u32, px: &GPixel) -> [crate::hash::CellKey; 4] {
+        let g = self.globals_for(camera, scene_f);
+        let lod = crate::hash::pixel_lod(px.t, g.s_w_per_distance, g.s_w_max, g.log2_s_min);
+        std::array::from_fn(|level| {
+            crate::hash::cell_key(
+                px.position.into(),
+                px.normal.into(),
+                lod + level as i32,
+                g.s_nd,
+                scene_f,
+                g.hash_capacity,
+            )
+        })
+    }
+
+    /// Frames rendered so far (the hash map's clock).
+    pub fn frame_index(&self) -> u32 {
+        self.frame_index
     }
 }

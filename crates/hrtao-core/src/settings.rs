@@ -111,6 +111,17 @@ pub struct AoSettings {
     pub stale_frames: u32,
     /// Use base colours (else a uniform grey clay look).
     pub shaded: bool,
+    /// Still-camera refinement (ours, docs/algorithm.md): while the view rests, every pixel traces its own rays
+    /// and its AO converges from the cell estimate to the ray-traced value; primary samples are jittered when
+    /// the renderer allows it. Off: the paper's behaviour (the cell estimate only).
+    pub refine: bool,
+    /// Weight of the cell estimate in the refinement, in rays of the pixel's own (the k of composite.comp).
+    pub prior_rays: f32,
+    /// A still image is final once every pixel has this many rays of its own (HRTAO refinement, per-pixel RTAO).
+    pub still_samples: u32,
+    /// The finest cell size s_w is at most this fraction of the AO radius R (eq. 2-3), so cells stay small
+    /// against the contact shadows they store.
+    pub max_cell_fraction: f32,
 }
 
 impl Default for AoSettings {
@@ -119,7 +130,7 @@ impl Default for AoSettings {
             mode: Mode::Hrtao,
             ao_radius: 1.0,
             rays_per_pixel: 4,
-            s_p: 3.0,
+            s_p: 4.0,
             s_nd: 3.0,
             s_min: 1e-10,
             max_samples: 1000,
@@ -130,11 +141,25 @@ impl Default for AoSettings {
             max_probe: 32,
             stale_frames: 240,
             shaded: true,
+            refine: true,
+            prior_rays: 32.0,
+            still_samples: 256,
+            max_cell_fraction: 0.25,
         }
     }
 }
 
 impl AoSettings {
+    /// Whether still frames accumulate (per-pixel RTAO; HRTAO and AO off with refinement). Must agree with
+    /// composite.comp.
+    pub fn accumulates(&self) -> bool {
+        match self.mode {
+            Mode::Rtao => true,
+            Mode::Hrtao | Mode::NoAo => self.refine,
+            _ => false,
+        }
+    }
+
     /// Checks ranges; the message names the setting.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.ao_radius.is_finite() && self.ao_radius > 0.0) {
@@ -167,6 +192,25 @@ impl AoSettings {
         }
         if self.max_probe == 0 || self.max_probe > 4096 {
             return Err("max probe must be in 1..=4096".into());
+        }
+        if self.max_samples > gpu::MAX_SAMPLES_LIMIT {
+            return Err(format!(
+                "max samples {} is above {}",
+                self.max_samples,
+                gpu::MAX_SAMPLES_LIMIT
+            ));
+        }
+        if !(self.prior_rays.is_finite() && self.prior_rays >= 0.0) {
+            return Err(format!(
+                "prior rays must be a number >= 0, got {}",
+                self.prior_rays
+            ));
+        }
+        if !(self.max_cell_fraction.is_finite() && self.max_cell_fraction > 0.0) {
+            return Err(format!(
+                "max cell fraction must be positive, got {}",
+                self.max_cell_fraction
+            ));
         }
         if self.filter_iterations > 8 {
             return Err("at most 8 filter iterations".into());

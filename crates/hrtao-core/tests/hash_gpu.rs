@@ -52,7 +52,7 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
             position: p.to_array(),
             s_w,
             normal: n.to_array(),
-            scene_frame: frame,
+            scene_f: frame,
             lod_offset: i % 4,
             ..Default::default()
         });
@@ -67,7 +67,7 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
             Vec3::from(c.normal),
             lod,
             settings.s_nd,
-            c.scene_frame,
+            c.scene_f,
             settings.hash_capacity,
         );
         if (g.lod, g.index, g.checksum) != (lod, key.slot, key.checksum) {

@@ -138,3 +138,109 @@ pub fn hrtao(rays: u32, radius: f32) -> AoSettings {
         ..Default::default()
     }
 }
+
+/// What `check_map` found: cells stamped in the last frame and pixels whose keys were checked.
+#[derive(Debug, Default)]
+pub struct MapCheck {
+    pub live_cells: usize,
+    pub checked_pixels: usize,
+}
+
+/// Checks the hash map after the last frame rendered by `r` with `cam` and F = `scene_f`, against the CPU
+/// mirror of the hash (not against what holds by construction):
+/// - every cell a pixel uses holds that pixel's key (CPU `cell_key`, the current F) and was stamped this frame;
+/// - no key is held twice within its probe run (no duplicates);
+/// - counters stay within their bounds (target cells at most max_samples + one frame's claims, every cell at
+///   most SAMPLE_CAP + one frame's rays, unoccluded <= samples);
+/// - if `before` (the map before the frame) is given: no cell used this frame lost samples (a reset of a live
+///   cell), unless its key changed.
+pub fn check_map(
+    r: &Renderer,
+    cam: &Camera,
+    scene_f: u32,
+    before: Option<&[hrtao_core::gpu::HashCell]>,
+) -> MapCheck {
+    use hrtao_core::gpu;
+    let cells = r.read_hash_cells().unwrap();
+    let gbuf = r.read_gbuffer().unwrap();
+    let pcs = r.read_pixel_cells().unwrap();
+    let now = r.frame_index().wrapping_sub(1);
+    let s = &r.settings;
+    let slack = (gbuf.len() as u32) * s.rays_per_pixel;
+    let mut used = std::collections::HashSet::new();
+    let mut out = MapCheck::default();
+    for (px, pc) in gbuf.iter().zip(&pcs) {
+        if px.t < 0.0 {
+            continue;
+        }
+        let keys = r.pixel_cell_keys(cam, scene_f, px);
+        for (level, &c) in pc.cells.iter().enumerate() {
+            if c == gpu::INVALID_CELL {
+                continue;
+            }
+            let cell = &cells[c as usize];
+            assert_eq!(
+                cell.checksum(),
+                keys[level].checksum,
+                "pixel cell {c} at level {level} holds another key"
+            );
+            let dist = c.wrapping_sub(keys[level].slot) & (s.hash_capacity - 1);
+            assert!(
+                dist < s.max_probe,
+                "cell {c} lies {dist} slots from its key's home"
+            );
+            assert_eq!(cell.last_frame(), now, "a cell used this frame was not stamped");
+            used.insert(c);
+        }
+        out.checked_pixels += 1;
+    }
+    // Duplicates: a cell stamped this frame and another slot of its probe window holding the same checksum
+    // that is still live (used within stale_frames; the checksum includes F, so both are of the current F):
+    // the second copy's samples would be orphaned.
+    let cap = s.hash_capacity as usize;
+    for (i, a) in cells.iter().enumerate() {
+        if a.checksum() == gpu::EMPTY_CELL {
+            continue;
+        }
+        assert!(
+            a.unoccluded <= a.samples,
+            "cell {i}: {} unoccluded of {} samples",
+            a.unoccluded,
+            a.samples
+        );
+        assert!(
+            a.samples <= gpu::SAMPLE_CAP + slack,
+            "cell {i}: {} samples",
+            a.samples
+        );
+        assert!(a.qmc_index <= s.max_samples.max(gpu::SAMPLE_CAP) + slack);
+        if a.last_frame() != now {
+            continue;
+        }
+        out.live_cells += 1;
+        for d in 1..s.max_probe as usize {
+            for j in [(i + d) % cap, (i + cap - d) % cap] {
+                let b = &cells[j];
+                let live = now.wrapping_sub(b.last_frame()) <= s.stale_frames;
+                assert!(
+                    !(b.checksum() == a.checksum() && live),
+                    "key {:#x} held twice, in slots {i} and {j}",
+                    a.checksum()
+                );
+            }
+        }
+        if let Some(before) = before {
+            let old = &before[i];
+            if old.checksum() == a.checksum() {
+                assert!(
+                    a.samples >= old.samples,
+                    "live cell {i} was reset: {} -> {} samples",
+                    old.samples,
+                    a.samples
+                );
+            }
+        }
+    }
+    out.live_cells = out.live_cells.max(used.len());
+    out
+}

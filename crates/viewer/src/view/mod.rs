@@ -662,7 +662,6 @@ impl Viewer {
         match &mut self.renderer {
             Some(r) => {
                 r.set_settings(settings.clone())?;
-                r.selected_instance = u32::MAX;
                 // A different scene: the cached AO belongs to the old geometry.
                 r.clear_cache()?;
             }
@@ -703,9 +702,6 @@ impl Viewer {
     /// Updates the selection highlight (TLAS instance flags) after a selection change.
     pub(crate) fn set_selected(&mut self, sel: u32) {
         self.selected = sel;
-        if let Some(r) = &mut self.renderer {
-            r.selected_instance = sel;
-        }
         if let (Some(sg), Some(scene)) = (&mut self.scene_gpu, &self.scene) {
             self.gpu.wait_idle();
             if let Err(e) = sg.update_instances(scene, sel) {

@@ -1,0 +1,132 @@
+//! Image quality of HRTAO against the Blender Cycles references of `../shared/refs` (a development tool; the
+//! published figures come from `hrtao bench`).
+//!
+//! `cargo run --release -p hrtao-core --example quality -- [--size 640x360] [--rays 8] [--frames 32]
+//! [--set '{"refine": false}'] KEY...` (`--set` overrides AoSettings fields, e.g. the paper's behaviour).
+//!
+//! Per scene: MAE of one frame from an empty map (per-pixel RTAO and HRTAO), MAE after N still frames (HRTAO,
+//! and per-pixel RTAO with the same total rays), and HRTAO's flicker (mean |ΔAO| between consecutive still
+//! frames after frame 4).
+use std::path::PathBuf;
+
+use hrtao_core::{metrics, AoSettings, Camera, ContextOptions, Gpu, Mode, Renderer, SceneGpu};
+
+fn shared(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared")
+        .join(rel)
+}
+
+fn main() -> anyhow::Result<()> {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut take = |flag: &str, default: &str| -> String {
+        match args.iter().position(|a| a == flag) {
+            Some(i) => {
+                let v = args.remove(i + 1);
+                args.remove(i);
+                v
+            }
+            None => default.to_string(),
+        }
+    };
+    let size = take("--size", "640x360");
+    let rays: u32 = take("--rays", "8").parse()?;
+    let frames: u32 = take("--frames", "32").parse()?;
+    let extra = take("--set", "{}");
+    let keys = if args.is_empty() {
+        vec!["rod", "duplex", "cycloidal", "engine", "sf"]
+            .into_iter()
+            .map(String::from)
+            .collect()
+    } else {
+        args
+    };
+    let gpu = Gpu::new(&ContextOptions::default())?;
+    let index: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(shared("refs/index.json"))?)?;
+    println!("| scene | RTAO 1f | HRTAO 1f | ratio | RTAO eq. rays | HRTAO {frames}f | ratio | HRTAO rays/px | flicker | ms/frame 1st, still |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for key in keys {
+        let entry = &index[key.as_str()];
+        let scene = hrtao_scene::load(
+            shared(entry["scene"].as_str().unwrap()).to_str().unwrap(),
+            &mut |_| {},
+        )?;
+        let radius = entry["radius"].as_f64().unwrap() as f32;
+        let cam = Camera::load(&shared(&format!("refs/{key}_{size}.camera.json")))?;
+        let (_, _, reference) =
+            hrtao_core::imageio::read_pfm(&shared(&format!("refs/{key}_{size}.cycles.pfm")))?;
+        let sg = SceneGpu::new(&gpu, &scene)?;
+        let base = AoSettings {
+            ao_radius: radius,
+            rays_per_pixel: rays,
+            ..Default::default()
+        };
+        let mut settings: AoSettings = serde_json::from_value({
+            let mut v = serde_json::to_value(&base)?;
+            for (k, x) in serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&extra)? {
+                v[k] = x;
+            }
+            v
+        })?;
+        settings.mode = Mode::Hrtao;
+        // HRTAO: one frame, then still frames.
+        let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone())?;
+        let mut total_rays = 0u64;
+        let mut hrtao_1 = 0.0;
+        let mut prev: Vec<f32> = Vec::new();
+        let (mut flicker, mut flicker_n) = (0.0f64, 0u32);
+        let mut ms = (0.0, 0.0);
+        for f in 0..frames {
+            let rep = r.render(&sg, scene.frame(), &cam)?;
+            total_rays += rep.rays;
+            if f == 0 {
+                ms.0 = rep.wall_ms;
+            } else {
+                ms.1 += rep.wall_ms / (frames - 1).max(1) as f64;
+            }
+            let ao = r.read_ao()?;
+            if f == 0 {
+                hrtao_1 = metrics::ao_error(&ao, &reference).mae;
+            }
+            if f >= 4 {
+                let d: f64 = ao
+                    .iter()
+                    .zip(&prev)
+                    .map(|(a, b)| (a - b).abs() as f64)
+                    .sum::<f64>();
+                flicker += d / ao.len() as f64;
+                flicker_n += 1;
+            }
+            prev = ao;
+        }
+        let hrtao_n = metrics::ao_error(&prev, &reference).mae;
+        let gbuf = r.read_gbuffer()?;
+        let geometry = gbuf.iter().filter(|p| p.t >= 0.0).count().max(1) as f64;
+        let rays_px = total_rays as f64 / geometry;
+        // Per-pixel RTAO: one frame, and the frame count that matches HRTAO's total rays.
+        let rt_settings = AoSettings {
+            mode: Mode::Rtao,
+            ..settings.clone()
+        };
+        let mut rt = Renderer::new(&gpu, cam.width, cam.height, rt_settings)?;
+        let eq_frames = ((rays_px / rays as f64).round() as u32).max(1);
+        let mut rtao_1 = 0.0;
+        for f in 0..eq_frames {
+            rt.render(&sg, scene.frame(), &cam)?;
+            if f == 0 {
+                rtao_1 = metrics::ao_error(&rt.read_ao()?, &reference).mae;
+            }
+        }
+        let rtao_eq = metrics::ao_error(&rt.read_ao()?, &reference).mae;
+        println!(
+            "| {key} | {rtao_1:.4} | {hrtao_1:.4} | {:.2} | {rtao_eq:.4} ({eq_frames}f) | {hrtao_n:.4} | {:.2} | {rays_px:.0} | {:.5} | {:.0}, {:.0} |",
+            rtao_1 / hrtao_1,
+            hrtao_n / rtao_eq,
+            flicker / flicker_n.max(1) as f64,
+            ms.0,
+            ms.1
+        );
+    }
+    Ok(())
+}
