@@ -51,16 +51,45 @@ pub struct CameraFrame {
 }
 
 impl Camera {
-    pub fn load(path: &std::path::Path) -> Result<Camera> {
+    /// Loads CAMERA.json, whose eye and target are in the scene file's own coordinates, into the coordinates of
+    /// a scene re-centred at `origin` (`Scene::origin`; zero for most files). The file's values are read in
+    /// f64, so a camera 10^6 units from the file's origin keeps its precision.
+    pub fn load_in(path: &std::path::Path, origin: [f64; 3]) -> Result<Camera> {
+        #[derive(Deserialize)]
+        struct FileCamera {
+            eye: [f64; 3],
+            target: [f64; 3],
+            up: [f32; 3],
+            #[serde(default = "default_fov")]
+            fov_y_deg: f32,
+            #[serde(default = "default_width")]
+            width: u32,
+            #[serde(default = "default_height")]
+            height: u32,
+        }
         let text = std::fs::read_to_string(path).map_err(|e| CoreError::Io {
             path: path.display().to_string(),
             source: e,
         })?;
-        let cam: Camera = serde_json::from_str(&text)
+        let f: FileCamera = serde_json::from_str(&text)
             .map_err(|e| CoreError::Invalid(format!("camera file {}: {e}", path.display())))?;
+        let local = |p: [f64; 3]| std::array::from_fn(|i| (p[i] - origin[i]) as f32);
+        let cam = Camera {
+            eye: local(f.eye),
+            target: local(f.target),
+            up: f.up,
+            fov_y_deg: f.fov_y_deg,
+            width: f.width,
+            height: f.height,
+        };
         cam.validate()
             .map_err(|e| CoreError::Invalid(format!("camera file {}: {e}", path.display())))?;
         Ok(cam)
+    }
+
+    /// Loads CAMERA.json for a scene in the file's own coordinates (origin zero).
+    pub fn load(path: &std::path::Path) -> Result<Camera> {
+        Self::load_in(path, [0.0; 3])
     }
 
     pub fn validate(&self) -> std::result::Result<(), String> {

@@ -32,7 +32,6 @@ impl HashCell {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

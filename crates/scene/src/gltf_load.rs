@@ -6,13 +6,16 @@
 
 use std::path::Path;
 
-use glam::Mat4;
+use glam::{DMat4, DVec3, Mat4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::Semantic;
 
 use crate::error::SceneError;
-use crate::scene::{transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
+use crate::scene::{
+    recentre_origin, relative_transform, transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene,
+    DEFAULT_BASE_COLOR,
+};
 
 /// Maximum node nesting depth.
 const MAX_DEPTH: usize = 256;
@@ -93,10 +96,23 @@ pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<
         });
     }
 
-    scene.instances = flatten_nodes(&document).map_err(|e| match e {
+    let placed = flatten_nodes(&document).map_err(|e| match e {
         Flatten::Invalid(m) => err(m),
         Flatten::TooLarge(m) => SceneError::TooLarge(format!("{}: {m}", path.display())),
     })?;
+    // World transforms are composed in f64; far from the file's origin the scene is re-centred.
+    let centre = placed_centre(&scene.meshes, &placed);
+    let origin = recentre_origin(centre);
+    scene.origin = origin.to_array();
+    scene.instances = placed
+        .into_iter()
+        .map(|p| Instance {
+            mesh: p.mesh,
+            transform: relative_transform(&p.world, origin),
+            name: p.name,
+            visible: true,
+        })
+        .collect();
     progress(LoadProgress {
         stage: "nodes",
         done: scene.instances.len() as u64,
@@ -531,8 +547,44 @@ fn check_acyclic(doc: &gltf::Document) -> Result<(), String> {
     Ok(())
 }
 
+/// A mesh instance with its world transform in f64 (file coordinates).
+struct Placed {
+    mesh: u32,
+    world: DMat4,
+    name: String,
+}
+
+/// The centre of the instances' world bounds (file coordinates, f64).
+fn placed_centre(meshes: &[Mesh], placed: &[Placed]) -> DVec3 {
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for p in placed {
+        let Some(mesh) = meshes.get(p.mesh as usize) else {
+            continue;
+        };
+        let b = mesh.local_bounds();
+        if !(b.min.is_finite() && b.max.is_finite()) {
+            continue;
+        }
+        for i in 0..8 {
+            let c = DVec3::new(
+                if i & 1 == 0 { b.min.x } else { b.max.x } as f64,
+                if i & 2 == 0 { b.min.y } else { b.max.y } as f64,
+                if i & 4 == 0 { b.min.z } else { b.max.z } as f64,
+            );
+            let w = p.world.transform_point3(c);
+            lo = lo.min(w);
+            hi = hi.max(w);
+        }
+    }
+    if lo.x > hi.x {
+        DVec3::ZERO
+    } else {
+        (lo + hi) * 0.5
+    }
+}
+
 /// Flattens the default scene (else scene 0, else all root nodes) into instances.
-fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Instance>, Flatten> {
+fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Placed>, Flatten> {
     check_acyclic(doc).map_err(Flatten::Invalid)?;
     let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(s) => s.nodes().map(|n| n.index()).collect(),
@@ -555,7 +607,7 @@ fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Instance>, Flatten> {
         out: Vec::new(),
     };
     for r in roots {
-        w.visit(r, Mat4::IDENTITY, 0)?;
+        w.visit(r, DMat4::IDENTITY, 0)?;
     }
     Ok(w.out)
 }
@@ -565,11 +617,11 @@ struct Walker<'a, 'd> {
     on_path: Vec<bool>,
     seen: Vec<bool>,
     visits: u64,
-    out: Vec<Instance>,
+    out: Vec<Placed>,
 }
 
 impl Walker<'_, '_> {
-    fn visit(&mut self, idx: usize, parent: Mat4, depth: usize) -> Result<(), Flatten> {
+    fn visit(&mut self, idx: usize, parent: DMat4, depth: usize) -> Result<(), Flatten> {
         if depth > MAX_DEPTH {
             return Err(Flatten::Invalid(format!(
                 "node {idx}: node hierarchy deeper than {MAX_DEPTH}"
@@ -591,7 +643,7 @@ impl Walker<'_, '_> {
         }
         self.seen[idx] = true;
         let node = &self.nodes[idx];
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
         let world = parent * local;
         if !world.is_finite() {
             return Err(Flatten::Invalid(format!(
@@ -600,15 +652,16 @@ impl Walker<'_, '_> {
             )));
         }
         if let Some(mesh) = node.mesh() {
-            if transform_ok(&world) {
-                self.out.push(Instance {
+            // The linear part decides singularity (the translation may be far from the origin).
+            let linear = DMat4::from_mat3(glam::DMat3::from_mat4(world)).as_mat4();
+            if transform_ok(&linear) {
+                self.out.push(Placed {
                     mesh: mesh.index() as u32,
-                    transform: world,
+                    world,
                     name: node
                         .name()
                         .map(str::to_owned)
                         .unwrap_or_else(|| format!("node {idx}")),
-                    visible: true,
                 });
             } else {
                 log::warn!("node {idx}: singular world transform; skipping its mesh instance");

@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use glam::Mat4;
+use glam::{DVec3, Mat4};
 
 use crate::error::SceneError;
-use crate::scene::{Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
+use crate::scene::{recentre_origin, Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
 
 pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
     // tobj reports a missing file only as "open file failed"; give the real io error.
@@ -44,6 +44,23 @@ pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<S
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let mut scene = Scene::new(name);
+    // Positions are parsed in f64 (tobj's use_f64); far from the file's origin they are re-centred.
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for m in &models {
+        for c in m.mesh.positions.chunks_exact(3) {
+            let p = DVec3::new(c[0], c[1], c[2]);
+            if p.is_finite() {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+    }
+    let origin = if lo.x <= hi.x {
+        recentre_origin((lo + hi) * 0.5)
+    } else {
+        DVec3::ZERO
+    };
+    scene.origin = origin.to_array();
     let total = models.len() as u64;
     for (mi, model) in models.into_iter().enumerate() {
         let m = model.mesh;
@@ -53,12 +70,16 @@ pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<S
                 message: format!("model {mi} ({}): position array is not xyz triples", model.name),
             });
         }
-        let positions: Vec<[f32; 3]> = m.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let positions: Vec<[f32; 3]> = m
+            .positions
+            .chunks_exact(3)
+            .map(|c| (DVec3::new(c[0], c[1], c[2]) - origin).as_vec3().to_array())
+            .collect();
         let base_color = m
             .material_id
             .and_then(|id| materials.get(id))
             .and_then(|mat| mat.diffuse)
-            .map(|d| [d[0], d[1], d[2], 1.0])
+            .map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 1.0])
             .unwrap_or(DEFAULT_BASE_COLOR);
         let mesh_id = scene.meshes.len() as u32;
         scene.meshes.push(Mesh {

@@ -3,7 +3,7 @@
 //! Every successful edit bumps the animation frame identifier `F` (paper eq. 6) so the
 //! renderer can tell that cached per-frame data (TLAS, AO history) is stale.
 
-use glam::{Mat4, Vec3};
+use glam::{DMat4, DVec3, Mat4, Vec3};
 
 use crate::aabb::Aabb;
 use crate::error::SceneError;
@@ -77,8 +77,33 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     pub instances: Vec<Instance>,
     pub name: String,
+    /// Where the scene's coordinates start in the file's own coordinates: a point p of the scene is
+    /// `origin + p` in the file. Zero unless the file's geometry lies far from its origin (BIM and GIS models
+    /// sit 10^5-10^7 units away): loaders then compose transforms in f64 and re-centre (`recentre`), so the
+    /// GPU works near zero in f32. Cameras, picks and reported positions convert with it.
+    pub origin: [f64; 3],
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     frame: u32,
+}
+
+/// Geometry whose centre lies farther than this from the file's origin is re-centred (see [`Scene::origin`]).
+pub const RECENTRE_DISTANCE: f64 = 1.0e4;
+/// The re-centring origin is rounded to a multiple of this power of two, so hash cells up to this size keep
+/// their boundaries in the file's coordinates.
+pub const ORIGIN_GRID: f64 = 1024.0;
+
+/// The origin for geometry centred at `centre` (file coordinates): zero near the file's origin, else the
+/// centre rounded to [`ORIGIN_GRID`].
+pub fn recentre_origin(centre: DVec3) -> DVec3 {
+    if !centre.is_finite() || centre.abs().max_element() <= RECENTRE_DISTANCE {
+        return DVec3::ZERO;
+    }
+    (centre / ORIGIN_GRID).round() * ORIGIN_GRID
+}
+
+/// World transforms composed in f64 (file coordinates) made relative to `origin`, in f32.
+pub fn relative_transform(world: &DMat4, origin: DVec3) -> Mat4 {
+    (DMat4::from_translation(-origin) * *world).as_mat4()
 }
 
 impl std::fmt::Debug for Scene {
@@ -119,8 +144,19 @@ impl Scene {
             meshes: Vec::new(),
             instances: Vec::new(),
             name: name.into(),
+            origin: [0.0; 3],
             frame: 0,
         }
+    }
+
+    /// A point of the scene in the file's own coordinates.
+    pub fn to_file(&self, p: Vec3) -> DVec3 {
+        DVec3::from(self.origin) + p.as_dvec3()
+    }
+
+    /// A point in the file's own coordinates in the scene's (GPU) coordinates.
+    pub fn from_file(&self, p: DVec3) -> Vec3 {
+        (p - DVec3::from(self.origin)).as_vec3()
     }
 
     /// The animation frame identifier `F`.

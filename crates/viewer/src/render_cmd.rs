@@ -83,7 +83,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let (scene, load_ms) = load_scene(&args.scene)?;
     let bounds = scene.bounds();
     let mut camera = match &args.camera {
-        Some(p) => Camera::load(p)?,
+        Some(p) => Camera::load_in(p, scene.origin)?,
         None => Camera::fit(bounds.min, bounds.max, parse_up(&args.up)?, 40.0, 640, 360),
     };
     if let Some(w) = args.width {

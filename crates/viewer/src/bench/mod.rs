@@ -526,7 +526,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         None => UpAxis::Y,
     };
     let mut camera = match &args.camera {
-        Some(p) => Camera::load(p)?,
+        Some(p) => Camera::load_in(p, scene.origin)?,
         None => match args.auto_camera.as_str() {
             "fit" => Camera::fit(bounds.min, bounds.max, up, 40.0, 320, 180),
             "corner" => corner_camera(bounds.min, bounds.max, up),

@@ -629,7 +629,7 @@ impl Viewer {
             .forced_up
             .unwrap_or(if is_default { UpAxis::Z } else { UpAxis::Y });
         let cam = match &cam_file {
-            Some(p) => Camera::load(p).with_context(|| format!("camera {}", p.display()))?,
+            Some(p) => Camera::load_in(p, scene.origin).with_context(|| format!("camera {}", p.display()))?,
             None => Camera::fit(bounds.min, bounds.max, up, 40.0, 640, 360),
         };
         let world_up = if cam_file.is_some() {
