@@ -156,3 +156,26 @@ fn hidden_instances_vanish_from_both_primaries() {
     assert!(g.iter().all(|p| p.t < 0.0));
     assert_clean(&gpu);
 }
+
+/// A resize recreates the visibility targets; switching back to ray queries keeps working on the same renderer.
+#[test]
+fn raster_follows_resizes_and_mode_switches() {
+    let gpu = gpu();
+    let scene = hrtao_scene::generate("gen:slab?h=1&size=10&ground=100", &mut |_| {}).unwrap();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, 64, 48, rtao(1, 1.0)).unwrap();
+    r.primary = Primary::Raster;
+    for (w, h) in [(64, 48), (81, 59)] {
+        r.resize(w, h).unwrap();
+        let cam = top_down_camera(20.0, w, h);
+        r.primary = Primary::Raster;
+        r.render(&sg, scene.frame(), &cam).unwrap();
+        let raster = r.read_gbuffer().unwrap();
+        r.primary = Primary::RayQuery;
+        r.render(&sg, scene.frame(), &cam).unwrap();
+        let rq = r.read_gbuffer().unwrap();
+        assert_eq!(raster.len(), (w * h) as usize);
+        assert!(compare(&format!("slab {w}x{h}"), &rq, &raster) >= 0.995);
+    }
+    assert_clean(&gpu);
+}
