@@ -1,4 +1,4 @@
-//! Generates `gpu_types.glsl` from `src/gpu_types.rs` and compiles every `shaders/*.comp` to SPIR-V with glslc.
+//! Generates `gpu_types.glsl` from `src/gpu_types.rs` and compiles every `shaders/*.comp`, `*.vert` and `*.frag` to SPIR-V with glslc.
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -83,9 +83,15 @@ fn main() {
     for entry in std::fs::read_dir(&shader_dir).unwrap() {
         let path = entry.unwrap().path();
         println!("cargo:rerun-if-changed={}", path.display());
-        if path.extension().and_then(|e| e.to_str()) == Some("comp") {
-            compile(&path, &shader_dir, &out_dir);
-            names.push(path.file_stem().unwrap().to_str().unwrap().to_string());
+        // Compute shaders are named by their stem, graphics stages by their file name (`visibility.vert`).
+        let name = match path.extension().and_then(|e| e.to_str()) {
+            Some("comp") => path.file_stem(),
+            Some("vert" | "frag") => path.file_name(),
+            _ => None,
+        };
+        if let Some(name) = name.and_then(|n| n.to_str()) {
+            compile(&path, name, &shader_dir, &out_dir);
+            names.push(name.to_string());
         }
     }
     names.sort();
@@ -102,9 +108,8 @@ fn main() {
     std::fs::write(out_dir.join("shaders.rs"), table).unwrap();
 }
 
-fn compile(src: &Path, include: &Path, out_dir: &Path) {
-    let stem = src.file_stem().unwrap().to_str().unwrap();
-    let dst = out_dir.join(format!("{stem}.spv"));
+fn compile(src: &Path, name: &str, include: &Path, out_dir: &Path) {
+    let dst = out_dir.join(format!("{name}.spv"));
     let result = Command::new("glslc")
         .arg("--target-env=vulkan1.2")
         .arg("-O")

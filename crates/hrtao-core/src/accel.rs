@@ -11,6 +11,7 @@ use crate::buffer::{full_barrier, Buffer};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{GeometryInfo, InstanceInfo};
+use crate::raster::RasterScene;
 
 /// An acceleration structure with its backing buffer; destroyed on drop.
 pub struct AccelStruct {
@@ -111,6 +112,8 @@ pub struct SceneGpu {
     pub instance_info: Buffer,
     tlas_instances: Buffer,
     pub tlas: AccelStruct,
+    /// Draw list of the rasterised primary visibility (the TLAS's instances), updated with the TLAS.
+    pub raster: RasterScene,
     pub stats: BuildStats,
 }
 
@@ -219,6 +222,20 @@ impl SceneGpu {
         }
         let geometries =
             Buffer::device_local_from_slice(gpu, "geometry table", &table, vk::BufferUsageFlags::empty())?;
+        let raster = RasterScene::new(
+            gpu,
+            per_mesh
+                .iter()
+                .zip(&geometry_base)
+                .map(|(geos, base)| {
+                    let base = base.unwrap_or(0);
+                    geos.iter()
+                        .enumerate()
+                        .map(|(k, g)| (base + k as u32, g.triangles))
+                        .collect()
+                })
+                .collect(),
+        )?;
 
         // 2. BLAS per mesh, in batches bounded by scratch memory, then compacted.
         let t0 = Instant::now();
@@ -412,6 +429,7 @@ impl SceneGpu {
             instance_info,
             tlas_instances,
             tlas: placeholder,
+            raster,
             stats: BuildStats {
                 blas_count: per_mesh.iter().filter(|g| !g.is_empty()).count(),
                 geometry_count: table.len(),
@@ -517,6 +535,7 @@ impl SceneGpu {
             infos.push(InstanceInfo::default());
         }
         self.instance_info.write(&infos)?;
+        self.raster.update(&gpu, scene)?;
         self.tlas_instances.write_bytes(0, &raw)?;
 
         let t0 = Instant::now();

@@ -152,6 +152,32 @@ gpu_structs! {
         color: [f32; 4],
     }
 
+    /// One visible instance drawn by the rasterised primary visibility (raster.rs): its object-to-world
+    /// transform as three rows (`world = row_i · (p, 1)`) and its scene instance id.
+    struct RasterInstance {
+        row0: [f32; 4],
+        row1: [f32; 4],
+        row2: [f32; 4],
+        instance: u32,
+        _pad: [u32; 3],
+    }
+
+    /// Push constants of the visibility draw (visibility.vert): the camera, in clip form, and the tables.
+    struct RasterPush {
+        /// xyz: eye; w: the near plane distance (depth = near / view distance, reversed).
+        eye: [f32; 4],
+        /// `cam_u / |cam_u|^2` and `cam_v / |cam_v|^2` (see `FrameGlobals`): clip x, y = dot(p - eye, ·).
+        cam_u: [f32; 4],
+        cam_v: [f32; 4],
+        /// Unit forward vector: clip w = dot(p - eye, cam_w).
+        cam_w: [f32; 4],
+        geometries: u64,
+        instances: u64,
+        /// The geometry of this draw (index into the geometry table).
+        geometry: u32,
+        _pad: u32,
+    }
+
     /// One cell of the world-space hash map (paper §1).
     struct HashCell {
         /// The cell's key and age in one 64-bit word, claimed and re-stamped by a single atomic compare-and-swap:

@@ -4,6 +4,7 @@
 //! - `buffer`, `accel`: GPU memory and acceleration structures (`SceneGpu`).
 //! - `gpu`: the GPU-visible structs shared with GLSL (generated header).
 //! - `pass`, `timer`: the one way to declare and record a compute pass, and its timing.
+//! - `raster`: rasterised primary visibility (the ray-query pass's G-buffer from instanced draws).
 //! - `renderer`: the frame (primary visibility, per-pixel RTAO, HRTAO passes, composite).
 //! - `hash`: CPU mirror of the shaders' hash functions (paper eq. 1-6).
 //! - `camera`, `settings`, `imageio`, `headless`: inputs and outputs.
@@ -17,6 +18,7 @@ pub mod hash;
 pub mod imageio;
 pub mod metrics;
 pub mod pass;
+pub mod raster;
 pub mod renderer;
 pub mod settings;
 pub mod timer;
@@ -25,5 +27,6 @@ pub use accel::SceneGpu;
 pub use camera::Camera;
 pub use context::{ContextOptions, DeviceInfo, Gpu};
 pub use error::{CoreError, Result};
+pub use raster::Primary;
 pub use renderer::{FrameReport, Renderer};
 pub use settings::{AoSettings, Mode};

@@ -21,6 +21,7 @@ include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 pub enum Pass {
     Clear,
     Primary,
+    GbufferFromVis,
     Rtao,
     CellFinder,
     AoUpdate,
@@ -33,9 +34,10 @@ pub enum Pass {
 }
 
 impl Pass {
-    pub const ALL: [Pass; 11] = [
+    pub const ALL: [Pass; 12] = [
         Pass::Clear,
         Pass::Primary,
+        Pass::GbufferFromVis,
         Pass::Rtao,
         Pass::CellFinder,
         Pass::AoSelect,
@@ -52,6 +54,7 @@ impl Pass {
         match self {
             Pass::Clear => "clear",
             Pass::Primary => "primary",
+            Pass::GbufferFromVis => "gbuffer_from_vis",
             Pass::Rtao => "rtao",
             Pass::CellFinder => "cell_finder",
             Pass::AoSelect => "ao_select",
@@ -68,7 +71,7 @@ impl Pass {
     pub fn section(self) -> &'static str {
         match self {
             Pass::Clear => "clear",
-            Pass::Primary => "primary visibility",
+            Pass::Primary | Pass::GbufferFromVis => "primary visibility",
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
             Pass::AoSelect | Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
@@ -96,6 +99,21 @@ fn spirv_words(bytes: &[u8]) -> Vec<u32> {
         .chunks_exact(4)
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
+}
+
+/// A shader module of the compiled shader `name` (see build.rs); the caller destroys it.
+pub(crate) fn shader_module(gpu: &Gpu, name: &str) -> Result<vk::ShaderModule> {
+    let spirv = SHADERS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .ok_or_else(|| CoreError::Invalid(format!("shader {name} was not compiled")))?
+        .1;
+    let words = spirv_words(spirv);
+    unsafe {
+        gpu.device
+            .create_shader_module(&vk::ShaderModuleCreateInfo::builder().code(&words), None)
+            .map_err(|e| CoreError::from_vk("vkCreateShaderModule", e))
+    }
 }
 
 impl PassSet {
@@ -183,15 +201,7 @@ impl PassSet {
                 bound_tlas: vk::AccelerationStructureKHR::null(),
             };
             for pass in Pass::ALL {
-                let spirv = SHADERS
-                    .iter()
-                    .find(|(n, _)| *n == pass.shader())
-                    .ok_or_else(|| CoreError::Invalid(format!("shader {} was not compiled", pass.shader())))?
-                    .1;
-                let words = spirv_words(spirv);
-                let module = device
-                    .create_shader_module(&vk::ShaderModuleCreateInfo::builder().code(&words), None)
-                    .map_err(|e| CoreError::from_vk("vkCreateShaderModule", e))?;
+                let module = shader_module(gpu, pass.shader())?;
                 let entry = c"main";
                 let stage = vk::PipelineShaderStageCreateInfo::builder()
                     .stage(vk::ShaderStageFlags::COMPUTE)
@@ -303,6 +313,19 @@ impl<'a> Recorder<'a> {
         self.record(pass, push, |d, cmd| unsafe {
             d.cmd_dispatch_indirect(cmd, args, 0)
         });
+    }
+
+    /// Records commands that are not a compute pass (the rasterised visibility) under the timing section
+    /// `section`, then the barrier after them.
+    pub fn commands(&mut self, section: &'static str, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) {
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.begin(self.cmd, section);
+        }
+        record(&self.gpu.device, self.cmd);
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.end(self.cmd);
+        }
+        full_barrier(self.gpu, self.cmd);
     }
 
     /// Binds `pass`, pushes its constants, records the dispatch under its timing section, then the barrier.

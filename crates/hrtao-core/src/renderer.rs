@@ -15,6 +15,7 @@ use crate::gpu::{
     self, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells, PixelRays,
 };
 use crate::pass::{Pass, PassSet, Recorder};
+use crate::raster::{Primary, Rasterizer};
 use crate::settings::{AoSettings, Mode};
 use crate::timer::GpuTimer;
 
@@ -135,6 +136,10 @@ pub struct Renderer {
     pub background_bottom: [f32; 3],
     pub output_bgra: bool,
     pub check_bounds: bool,
+    /// How primary visibility is found (ray queries by default).
+    pub primary: Primary,
+    /// Created on the first rasterised frame.
+    raster: Option<Rasterizer>,
 }
 
 impl Renderer {
@@ -184,6 +189,8 @@ impl Renderer {
             background_bottom: [0.93, 0.94, 0.95],
             output_bgra: false,
             check_bounds: false,
+            primary: Primary::default(),
+            raster: None,
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
@@ -383,10 +390,25 @@ impl Renderer {
         self.passes.bind_tlas(scene.tlas.raw);
 
         let (w, h) = self.size();
+        if self.primary == Primary::Raster {
+            let raster = match &mut self.raster {
+                Some(r) => r,
+                None => self.raster.insert(Rasterizer::new(&self.gpu)?),
+            };
+            raster.prepare(w, h)?;
+        }
         let mode = self.settings.mode;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
-        rec.dispatch(Pass::Primary, w, h, [0; 4]);
+        match (self.primary, &self.raster) {
+            (Primary::Raster, Some(raster)) => {
+                let near = Rasterizer::near_plane(
+                    (glam::Vec3::from(camera.target) - glam::Vec3::from(camera.eye)).length(),
+                );
+                raster.record(&mut rec, &scene.raster, &globals, near);
+            }
+            _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
+        }
         if mode == Mode::Rtao {
             rec.dispatch(Pass::Rtao, w, h, [0; 4]);
         } else if mode.uses_hash() {

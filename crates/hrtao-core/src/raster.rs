@@ -1,0 +1,666 @@
+//! Rasterised primary visibility: the same G-buffer as the ray-query pass (`primary.comp`), found by drawing
+//! every visible instance into a visibility buffer and intersecting each pixel's camera ray with the triangle
+//! it holds.
+//!
+//! - `RasterScene` (owned by `SceneGpu`): per unique mesh, its geometries and the transforms of its visible
+//!   instances; one instanced draw per geometry.
+//! - `Rasterizer` (owned by `Renderer`): the render pass and pipeline, and `VisTargets`, the per-resolution
+//!   visibility image (instance, geometry, primitive, instance slot per pixel), depth image and their copy in a
+//!   buffer, which `gbuffer_from_vis.comp` turns into the G-buffer.
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use hrtao_scene::Scene;
+
+use crate::buffer::Buffer;
+use crate::context::Gpu;
+use crate::error::{CoreError, Result};
+use crate::gpu::{FrameGlobals, RasterInstance, RasterPush, NO_INSTANCE};
+use crate::pass::{shader_module, Pass, Recorder};
+
+/// How the renderer finds the surface seen through each pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Primary {
+    /// One ray query per pixel (`primary.comp`): cost grows with pixels, barely with triangles.
+    #[default]
+    RayQuery,
+    /// Instanced draws into a visibility buffer, then one ray-triangle test per pixel: cost grows with the
+    /// drawn triangles.
+    Raster,
+}
+
+const VIS_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// Bytes per pixel of the visibility buffer (one uvec4).
+const VIS_TEXEL: u64 = 16;
+/// Near plane as a fraction of the eye-target distance (depth is reversed and infinite: precision does not
+/// depend on it; geometry nearer than this is clipped).
+const NEAR_FRACTION: f32 = 1e-5;
+
+/// One instanced draw: every visible instance of a mesh, one geometry of it.
+#[derive(Clone, Copy, Debug)]
+struct Draw {
+    geometry: u32,
+    vertex_count: u32,
+    first_instance: u32,
+    instance_count: u32,
+}
+
+/// The scene's draw list and visible-instance transforms (rebuilt with the TLAS).
+pub struct RasterScene {
+    /// Per unique mesh: its geometries (index into the geometry table, triangle count).
+    mesh_geometries: Vec<Vec<(u32, u32)>>,
+    instances: Buffer,
+    draws: Vec<Draw>,
+}
+
+impl RasterScene {
+    pub(crate) fn new(gpu: &Arc<Gpu>, mesh_geometries: Vec<Vec<(u32, u32)>>) -> Result<RasterScene> {
+        for (m, geos) in mesh_geometries.iter().enumerate() {
+            if let Some((_, tris)) = geos.iter().find(|(_, t)| t.checked_mul(3).is_none()) {
+                return Err(CoreError::Invalid(format!(
+                    "mesh {m} has a primitive of {tris} triangles: at most {} can be drawn",
+                    u32::MAX / 3
+                )));
+            }
+        }
+        Ok(RasterScene {
+            mesh_geometries,
+            instances: Self::instance_buffer(gpu, 1)?,
+            draws: Vec::new(),
+        })
+    }
+
+    fn instance_buffer(gpu: &Arc<Gpu>, count: usize) -> Result<Buffer> {
+        Buffer::new(
+            gpu,
+            "raster instances",
+            (count.max(1) * std::mem::size_of::<RasterInstance>()) as u64,
+            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::empty(),
+        )
+    }
+
+    /// Collects the visible instances of meshes with triangles (those the TLAS holds), grouped by mesh.
+    /// Must not be called while a frame using the scene is in flight.
+    pub(crate) fn update(&mut self, gpu: &Arc<Gpu>, scene: &Scene) -> Result<()> {
+        let mut by_mesh: Vec<Vec<u32>> = vec![Vec::new(); self.mesh_geometries.len()];
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let m = inst.mesh as usize;
+            if inst.visible && self.mesh_geometries.get(m).is_some_and(|g| !g.is_empty()) {
+                by_mesh[m].push(i as u32);
+            }
+        }
+        let mut table = Vec::new();
+        self.draws.clear();
+        for (m, ids) in by_mesh.iter().enumerate() {
+            if ids.is_empty() {
+                continue;
+            }
+            let first_instance = table.len() as u32;
+            for &i in ids {
+                let t = scene.instances[i as usize].transform;
+                let row = |r: usize| [t.col(0)[r], t.col(1)[r], t.col(2)[r], t.col(3)[r]];
+                table.push(RasterInstance {
+                    row0: row(0),
+                    row1: row(1),
+                    row2: row(2),
+                    instance: i,
+                    _pad: [0; 3],
+                });
+            }
+            for &(geometry, tris) in &self.mesh_geometries[m] {
+                self.draws.push(Draw {
+                    geometry,
+                    vertex_count: tris * 3,
+                    first_instance,
+                    instance_count: ids.len() as u32,
+                });
+            }
+        }
+        let bytes = (table.len() * std::mem::size_of::<RasterInstance>()) as u64;
+        if self.instances.size < bytes {
+            self.instances = Self::instance_buffer(gpu, table.len())?;
+        }
+        self.instances.write(&table)
+    }
+
+    /// Triangles drawn per frame (every visible instance's).
+    pub fn triangles(&self) -> u64 {
+        self.draws
+            .iter()
+            .map(|d| d.vertex_count as u64 / 3 * d.instance_count as u64)
+            .sum()
+    }
+}
+
+/// A 2D image with its memory and one view, destroyed together.
+struct Image {
+    gpu: Arc<Gpu>,
+    raw: vk::Image,
+    allocation: Option<Allocation>,
+    view: vk::ImageView,
+}
+
+impl Image {
+    fn new(
+        gpu: &Arc<Gpu>,
+        name: &str,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        aspect: vk::ImageAspectFlags,
+        (width, height): (u32, u32),
+    ) -> Result<Image> {
+        unsafe {
+            let raw = gpu
+                .device
+                .create_image(
+                    &vk::ImageCreateInfo::builder()
+                        .image_type(vk::ImageType::TYPE_2D)
+                        .format(format)
+                        .extent(vk::Extent3D {
+                            width,
+                            height,
+                            depth: 1,
+                        })
+                        .mip_levels(1)
+                        .array_layers(1)
+                        .samples(vk::SampleCountFlags::TYPE_1)
+                        .tiling(vk::ImageTiling::OPTIMAL)
+                        .usage(usage)
+                        .initial_layout(vk::ImageLayout::UNDEFINED),
+                    None,
+                )
+                .map_err(|e| CoreError::from_vk("vkCreateImage", e))?;
+            // From here on, Drop releases whatever exists.
+            let mut image = Image {
+                gpu: gpu.clone(),
+                raw,
+                allocation: None,
+                view: vk::ImageView::null(),
+            };
+            let requirements = gpu.device.get_image_memory_requirements(raw);
+            let allocation = gpu
+                .allocator()
+                .allocate(&AllocationCreateDesc {
+                    name,
+                    requirements,
+                    location: MemoryLocation::GpuOnly,
+                    linear: false,
+                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+                })
+                .map_err(|e| CoreError::Memory(format!("image `{name}` ({width}x{height}): {e}")))?;
+            let (memory, offset) = (allocation.memory(), allocation.offset());
+            gpu.device_bytes
+                .fetch_add(allocation.size(), std::sync::atomic::Ordering::Relaxed);
+            image.allocation = Some(allocation);
+            gpu.device
+                .bind_image_memory(raw, memory, offset)
+                .map_err(|e| CoreError::from_vk("vkBindImageMemory", e))?;
+            image.view = gpu
+                .device
+                .create_image_view(
+                    &vk::ImageViewCreateInfo::builder()
+                        .image(raw)
+                        .view_type(vk::ImageViewType::TYPE_2D)
+                        .format(format)
+                        .subresource_range(subresource_range(aspect)),
+                    None,
+                )
+                .map_err(|e| CoreError::from_vk("vkCreateImageView", e))?;
+            Ok(image)
+        }
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        unsafe {
+            self.gpu.device.destroy_image_view(self.view, None);
+            self.gpu.device.destroy_image(self.raw, None);
+            if let Some(a) = self.allocation.take() {
+                self.gpu
+                    .device_bytes
+                    .fetch_sub(a.size(), std::sync::atomic::Ordering::Relaxed);
+                let _ = self.gpu.allocator().free(a);
+            }
+        }
+    }
+}
+
+fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange {
+        aspect_mask: aspect,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: 1,
+    }
+}
+
+/// The per-resolution visibility targets: images, their framebuffer and the visibility buffer.
+struct VisTargets {
+    gpu: Arc<Gpu>,
+    size: (u32, u32),
+    vis: Image,
+    _depth: Image,
+    framebuffer: vk::Framebuffer,
+    /// The visibility image copied out, read by gbuffer_from_vis.comp through its address.
+    vis_buffer: Buffer,
+}
+
+impl VisTargets {
+    fn new(gpu: &Arc<Gpu>, render_pass: vk::RenderPass, size: (u32, u32)) -> Result<VisTargets> {
+        let vis = Image::new(
+            gpu,
+            "visibility",
+            VIS_FORMAT,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            vk::ImageAspectFlags::COLOR,
+            size,
+        )?;
+        let depth = Image::new(
+            gpu,
+            "visibility depth",
+            DEPTH_FORMAT,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            vk::ImageAspectFlags::DEPTH,
+            size,
+        )?;
+        let vis_buffer = Buffer::new(
+            gpu,
+            "visibility buffer",
+            size.0 as u64 * size.1 as u64 * VIS_TEXEL,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        let views = [vis.view, depth.view];
+        let framebuffer = unsafe {
+            gpu.device
+                .create_framebuffer(
+                    &vk::FramebufferCreateInfo::builder()
+                        .render_pass(render_pass)
+                        .attachments(&views)
+                        .width(size.0)
+                        .height(size.1)
+                        .layers(1),
+                    None,
+                )
+                .map_err(|e| CoreError::from_vk("vkCreateFramebuffer", e))?
+        };
+        Ok(VisTargets {
+            gpu: gpu.clone(),
+            size,
+            vis,
+            _depth: depth,
+            framebuffer,
+            vis_buffer,
+        })
+    }
+}
+
+impl Drop for VisTargets {
+    fn drop(&mut self) {
+        unsafe { self.gpu.device.destroy_framebuffer(self.framebuffer, None) }
+    }
+}
+
+/// The visibility render pass and pipeline, and the targets of the current resolution.
+pub struct Rasterizer {
+    gpu: Arc<Gpu>,
+    render_pass: vk::RenderPass,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    targets: Option<VisTargets>,
+}
+
+impl Rasterizer {
+    pub fn new(gpu: &Arc<Gpu>) -> Result<Rasterizer> {
+        let depth_features = unsafe {
+            gpu.instance
+                .get_physical_device_format_properties(gpu.physical, DEPTH_FORMAT)
+                .optimal_tiling_features
+        };
+        if !depth_features.contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT) {
+            return Err(CoreError::Invalid(format!(
+                "{}: no {DEPTH_FORMAT:?} depth attachment, rasterised primary visibility is unavailable",
+                gpu.info.name
+            )));
+        }
+        let mut r = Rasterizer {
+            gpu: gpu.clone(),
+            render_pass: vk::RenderPass::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+            targets: None,
+        };
+        r.render_pass = create_render_pass(gpu)?;
+        let push = [vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::VERTEX,
+            offset: 0,
+            size: std::mem::size_of::<RasterPush>() as u32,
+        }];
+        r.layout = unsafe {
+            gpu.device
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::builder().push_constant_ranges(&push),
+                    None,
+                )
+                .map_err(|e| CoreError::from_vk("vkCreatePipelineLayout", e))?
+        };
+        r.pipeline = create_pipeline(gpu, r.render_pass, r.layout)?;
+        Ok(r)
+    }
+
+    /// Makes the targets match the image size (call outside a frame in flight).
+    pub fn prepare(&mut self, width: u32, height: u32) -> Result<()> {
+        if self.targets.as_ref().map(|t| t.size) != Some((width, height)) {
+            self.targets = None;
+            self.targets = Some(VisTargets::new(&self.gpu, self.render_pass, (width, height))?);
+        }
+        Ok(())
+    }
+
+    /// Records the visibility draws, the copy of the visibility image and the G-buffer resolve, all timed as
+    /// primary visibility. `globals` are the frame's (camera and size); `near` is the near plane distance.
+    /// Panics if `prepare` was not called for this size.
+    pub fn record(&self, rec: &mut Recorder, scene: &RasterScene, globals: &FrameGlobals, near: f32) {
+        let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
+        let (w, h) = t.size;
+        assert_eq!(
+            (w, h),
+            (globals.width, globals.height),
+            "visibility targets of another size"
+        );
+        let scaled = |v: [f32; 4]| {
+            let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            [v[0] / len2, v[1] / len2, v[2] / len2, 0.0]
+        };
+        let mut push = RasterPush {
+            eye: [globals.eye[0], globals.eye[1], globals.eye[2], near],
+            cam_u: scaled(globals.cam_u),
+            cam_v: scaled(globals.cam_v),
+            cam_w: globals.cam_w,
+            geometries: globals.geometries,
+            instances: scene.instances.address,
+            geometry: 0,
+            _pad: 0,
+        };
+        let extent = vk::Extent2D { width: w, height: h };
+        rec.commands(Pass::Primary.section(), |d, cmd| unsafe {
+            let clear = [
+                vk::ClearValue {
+                    color: vk::ClearColorValue {
+                        uint32: [NO_INSTANCE, 0, 0, 0],
+                    },
+                },
+                vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: 0.0,
+                        stencil: 0,
+                    },
+                },
+            ];
+            d.cmd_begin_render_pass(
+                cmd,
+                &vk::RenderPassBeginInfo::builder()
+                    .render_pass(self.render_pass)
+                    .framebuffer(t.framebuffer)
+                    .render_area(vk::Rect2D {
+                        offset: vk::Offset2D::default(),
+                        extent,
+                    })
+                    .clear_values(&clear),
+                vk::SubpassContents::INLINE,
+            );
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: w as f32,
+                    height: h as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            d.cmd_set_scissor(
+                cmd,
+                0,
+                &[vk::Rect2D {
+                    offset: vk::Offset2D::default(),
+                    extent,
+                }],
+            );
+            for draw in &scene.draws {
+                push.geometry = draw.geometry;
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout,
+                    vk::ShaderStageFlags::VERTEX,
+                    0,
+                    bytemuck::bytes_of(&push),
+                );
+                d.cmd_draw(
+                    cmd,
+                    draw.vertex_count,
+                    draw.instance_count,
+                    0,
+                    draw.first_instance,
+                );
+            }
+            d.cmd_end_render_pass(cmd);
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                t.vis.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                t.vis_buffer.raw,
+                &[vk::BufferImageCopy {
+                    buffer_offset: 0,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    },
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: w,
+                        height: h,
+                        depth: 1,
+                    },
+                }],
+            );
+        });
+        let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
+        rec.dispatch(
+            Pass::GbufferFromVis,
+            w,
+            h,
+            [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
+        );
+    }
+
+    /// The near plane for a camera whose eye is `distance` from its target.
+    pub fn near_plane(distance: f32) -> f32 {
+        (distance * NEAR_FRACTION).max(f32::MIN_POSITIVE)
+    }
+}
+
+impl Drop for Rasterizer {
+    fn drop(&mut self) {
+        self.targets = None;
+        unsafe {
+            let d = &self.gpu.device;
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_render_pass(self.render_pass, None);
+        }
+    }
+}
+
+/// One subpass writing the visibility and depth attachments; the visibility image ends ready to be copied.
+/// The external dependencies order it after the previous frame's copy and resolve, and the copy after it.
+fn create_render_pass(gpu: &Gpu) -> Result<vk::RenderPass> {
+    let attachments = [
+        vk::AttachmentDescription::builder()
+            .format(VIS_FORMAT)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+            .build(),
+        vk::AttachmentDescription::builder()
+            .format(DEPTH_FORMAT)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL)
+            .build(),
+    ];
+    let color_ref = [vk::AttachmentReference {
+        attachment: 0,
+        layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+    }];
+    let depth_ref = vk::AttachmentReference {
+        attachment: 1,
+        layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+    };
+    let subpass = [vk::SubpassDescription::builder()
+        .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+        .color_attachments(&color_ref)
+        .depth_stencil_attachment(&depth_ref)
+        .build()];
+    let fragment_tests =
+        vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
+    let dependencies = [
+        vk::SubpassDependency {
+            src_subpass: vk::SUBPASS_EXTERNAL,
+            dst_subpass: 0,
+            src_stage_mask: vk::PipelineStageFlags::TRANSFER
+                | vk::PipelineStageFlags::COMPUTE_SHADER
+                | fragment_tests,
+            dst_stage_mask: vk::PipelineStageFlags::VERTEX_SHADER
+                | fragment_tests
+                | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+            src_access_mask: vk::AccessFlags::TRANSFER_WRITE
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            dst_access_mask: vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ
+                | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
+                | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            dependency_flags: vk::DependencyFlags::empty(),
+        },
+        vk::SubpassDependency {
+            src_subpass: 0,
+            dst_subpass: vk::SUBPASS_EXTERNAL,
+            src_stage_mask: vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+            dst_stage_mask: vk::PipelineStageFlags::TRANSFER,
+            src_access_mask: vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            dst_access_mask: vk::AccessFlags::TRANSFER_READ,
+            dependency_flags: vk::DependencyFlags::empty(),
+        },
+    ];
+    unsafe {
+        gpu.device
+            .create_render_pass(
+                &vk::RenderPassCreateInfo::builder()
+                    .attachments(&attachments)
+                    .subpasses(&subpass)
+                    .dependencies(&dependencies),
+                None,
+            )
+            .map_err(|e| CoreError::from_vk("vkCreateRenderPass", e))
+    }
+}
+
+/// Vertex pulling (no vertex input), both faces, reversed depth (nearer = greater), viewport set per frame.
+fn create_pipeline(
+    gpu: &Gpu,
+    render_pass: vk::RenderPass,
+    layout: vk::PipelineLayout,
+) -> Result<vk::Pipeline> {
+    let vert = shader_module(gpu, "visibility.vert")?;
+    let frag = match shader_module(gpu, "visibility.frag") {
+        Ok(f) => f,
+        Err(e) => {
+            unsafe { gpu.device.destroy_shader_module(vert, None) };
+            return Err(e);
+        }
+    };
+    let entry = c"main";
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::builder()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vert)
+            .name(entry)
+            .build(),
+        vk::PipelineShaderStageCreateInfo::builder()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(frag)
+            .name(entry)
+            .build(),
+    ];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::builder();
+    let input_assembly =
+        vk::PipelineInputAssemblyStateCreateInfo::builder().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let viewport = vk::PipelineViewportStateCreateInfo::builder()
+        .viewport_count(1)
+        .scissor_count(1);
+    let raster = vk::PipelineRasterizationStateCreateInfo::builder()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0);
+    let multisample =
+        vk::PipelineMultisampleStateCreateInfo::builder().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::builder()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::GREATER);
+    let blend_attachment = [vk::PipelineColorBlendAttachmentState::builder()
+        .blend_enable(false)
+        .color_write_mask(vk::ColorComponentFlags::RGBA)
+        .build()];
+    let blend = vk::PipelineColorBlendStateCreateInfo::builder().attachments(&blend_attachment);
+    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dynamic = vk::PipelineDynamicStateCreateInfo::builder().dynamic_states(&dynamic_states);
+    let info = [vk::GraphicsPipelineCreateInfo::builder()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&input_assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&multisample)
+        .depth_stencil_state(&depth)
+        .color_blend_state(&blend)
+        .dynamic_state(&dynamic)
+        .layout(layout)
+        .render_pass(render_pass)
+        .subpass(0)
+        .build()];
+    let result = unsafe {
+        gpu.device
+            .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
+    };
+    unsafe {
+        gpu.device.destroy_shader_module(vert, None);
+        gpu.device.destroy_shader_module(frag, None);
+    }
+    result
+        .map(|p| p[0])
+        .map_err(|(_, e)| CoreError::from_vk("vkCreateGraphicsPipelines", e))
+}

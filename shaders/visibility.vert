@@ -1,0 +1,30 @@
+#version 460
+// Rasterised primary visibility, vertex stage: pulls triangle corner gl_VertexIndex of the draw's geometry
+// (non-indexed draw of 3 corners per triangle, so gl_VertexIndex / 3 is the primitive index, as a ray query
+// reports it) for the visible instance gl_InstanceIndex, and projects it with the ray-traced camera.
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference2 : require
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+#include "gpu_types.glsl"
+#include "visibility.glsl"
+
+layout(push_constant, scalar) uniform Push { RasterPush pc; };
+layout(buffer_reference, scalar) readonly buffer GeometryRef { GeometryInfo v[]; };
+layout(buffer_reference, scalar) readonly buffer VertexRef { vec3 v[]; };
+layout(buffer_reference, scalar) readonly buffer CornerRef { uint v[]; };
+
+// (instance id, geometry, primitive, visible-instance slot): constant over the triangle.
+layout(location = 0) flat out uvec4 vis;
+
+void main() {
+    GeometryInfo geo = GeometryRef(pc.geometries).v[pc.geometry];
+    uint corner = CornerRef(geo.indices).v[gl_VertexIndex];
+    RasterInstance inst = RasterInstanceRef(pc.instances).v[gl_InstanceIndex];
+    vec3 d = raster_to_world(inst, VertexRef(geo.vertices).v[corner]) - pc.eye.xyz;
+    // Pinhole projection matching camera_dir(): x, y in [-1, 1] across the image (row 0 at the top, as Vulkan's
+    // viewport), reversed infinite depth near / distance.
+    gl_Position = vec4(dot(d, pc.cam_u.xyz), -dot(d, pc.cam_v.xyz), pc.eye.w, dot(d, pc.cam_w.xyz));
+    vis = uvec4(inst.instance, pc.geometry, uint(gl_VertexIndex) / 3u, uint(gl_InstanceIndex));
+}
