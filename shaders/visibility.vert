@@ -25,6 +25,9 @@ void main() {
     vec3 d = raster_to_world(inst, VertexRef(geo.vertices).v[corner]) - pc.eye.xyz;
     // Pinhole projection matching camera_dir(): x, y in [-1, 1] across the image (row 0 at the top, as Vulkan's
     // viewport), reversed infinite depth near / distance.
-    gl_Position = vec4(dot(d, pc.cam_u.xyz), -dot(d, pc.cam_v.xyz), pc.eye.w, dot(d, pc.cam_w.xyz));
+    // The jitter moves the image by -jitter, so the pixel centre samples where camera_dir's jittered ray goes.
+    float w = dot(d, pc.cam_w.xyz);
+    vec2 xy = vec2(dot(d, pc.cam_u.xyz), -dot(d, pc.cam_v.xyz)) - pc.jitter_ndc * w;
+    gl_Position = vec4(xy, pc.eye.w, w);
     vis = uvec4(inst.instance, pc.geometry, uint(gl_VertexIndex) / 3u, uint(gl_InstanceIndex));
 }

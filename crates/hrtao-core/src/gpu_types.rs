@@ -176,6 +176,9 @@ gpu_structs! {
         /// The geometry of this draw (index into the geometry table).
         geometry: u32,
         _pad: u32,
+        /// This frame's sub-pixel jitter (`FrameGlobals::jitter`) in normalised device coordinates, so the
+        /// rasteriser samples where the jittered camera rays go.
+        jitter_ndc: [f32; 2],
     }
 
     /// One cell of the world-space hash map (paper §1).

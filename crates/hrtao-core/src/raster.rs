@@ -387,6 +387,10 @@ impl Rasterizer {
             instances: scene.instances.address,
             geometry: 0,
             _pad: 0,
+            jitter_ndc: [
+                2.0 * globals.jitter[0] / w as f32,
+                2.0 * globals.jitter[1] / h as f32,
+            ],
         };
         let extent = vk::Extent2D { width: w, height: h };
         rec.commands(Pass::Primary.section(), |d, cmd| unsafe {

@@ -74,6 +74,7 @@ struct StillKey {
     tlas: vk::AccelerationStructureKHR,
     view_height: u32,
     jitter: bool,
+    primary: Primary,
 }
 
 /// The world-space hash map (paper §1), persistent across frames.
@@ -372,6 +373,7 @@ impl Renderer {
             tlas: scene.tlas.raw,
             view_height: self.view_height,
             jitter: self.jitter,
+            primary: self.primary,
         };
         if self.still_key.as_ref() == Some(&key) {
             self.still_index = self.still_index.saturating_add(1);

@@ -179,3 +179,41 @@ fn raster_follows_resizes_and_mode_switches() {
     }
     assert_clean(&gpu);
 }
+
+#[test]
+fn jittered_still_frames_sample_the_same_surfaces() {
+    // Anti-aliasing moves each still frame's sample within the pixel: the rasteriser must move with the rays.
+    let gpu = gpu();
+    let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let gbuffer = |primary| {
+        let mut r = Renderer::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
+        r.primary = primary;
+        r.jitter = true;
+        for _ in 0..3 {
+            r.render(&sg, scene.frame(), &cam).unwrap();
+        }
+        r.read_gbuffer().unwrap()
+    };
+    let (rq, ra) = (gbuffer(Primary::RayQuery), gbuffer(Primary::Raster));
+    let fraction = compare("cycloidal, jittered", &rq, &ra);
+    assert!(
+        fraction >= 0.995,
+        "jittered G-buffers agree on {:.3} % of pixels",
+        fraction * 100.0
+    );
+    // And the jitter is real: the third frame's samples are not the pixel centres.
+    let mut centred = Renderer::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
+    centred.render(&sg, scene.frame(), &cam).unwrap();
+    let c = centred.read_gbuffer().unwrap();
+    let moved = c
+        .iter()
+        .zip(&rq)
+        .filter(|(a, b)| a.t >= 0.0 && b.t >= 0.0 && a.t != b.t)
+        .count();
+    assert!(
+        moved > 1000,
+        "jittered samples differ from the centres ({moved} pixels)"
+    );
+    assert_clean(&gpu);
+}
