@@ -46,6 +46,7 @@ fn main() -> anyhow::Result<()> {
         serde_json::from_str(&std::fs::read_to_string(shared("refs/index.json"))?)?;
     println!("| scene | RTAO 1f | HRTAO 1f | ratio | RTAO eq. rays | HRTAO {frames}f | ratio | HRTAO rays/px | flicker | ms/frame 1st, still |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut curves = Vec::new();
     for key in keys {
         let entry = &index[key.as_str()];
         let scene = hrtao_scene::load(
@@ -77,6 +78,7 @@ fn main() -> anyhow::Result<()> {
         let mut prev: Vec<f32> = Vec::new();
         let (mut flicker, mut flicker_n) = (0.0f64, 0u32);
         let mut ms = (0.0, 0.0);
+        let mut hrtao_curve = Vec::new(); // (frames, cumulative rays, MAE)
         for f in 0..frames {
             let rep = r.render(&sg, scene.frame(), &cam)?;
             total_rays += rep.rays;
@@ -86,8 +88,10 @@ fn main() -> anyhow::Result<()> {
                 ms.1 += rep.wall_ms / (frames - 1).max(1) as f64;
             }
             let ao = r.read_ao()?;
+            let e = metrics::ao_error(&ao, &reference).mae;
+            hrtao_curve.push((f + 1, total_rays, e));
             if f == 0 {
-                hrtao_1 = metrics::ao_error(&ao, &reference).mae;
+                hrtao_1 = e;
             }
             if f >= 4 {
                 let d: f64 = ao
@@ -111,14 +115,22 @@ fn main() -> anyhow::Result<()> {
         };
         let mut rt = Renderer::new(&gpu, cam.width, cam.height, rt_settings)?;
         let eq_frames = ((rays_px / rays as f64).round() as u32).max(1);
-        let mut rtao_1 = 0.0;
-        for f in 0..eq_frames {
+        let mut rtao_curve = Vec::new();
+        for _ in 0..eq_frames.max(frames) {
             rt.render(&sg, scene.frame(), &cam)?;
-            if f == 0 {
-                rtao_1 = metrics::ao_error(&rt.read_ao()?, &reference).mae;
+            rtao_curve.push(metrics::ao_error(&rt.read_ao()?, &reference).mae);
+        }
+        let rtao_1 = rtao_curve[0];
+        let rtao_eq = rtao_curve[eq_frames as usize - 1];
+        // The still-camera curve: HRTAO after n frames beside per-pixel RTAO with the same total rays.
+        let mut line = format!("| {key} |");
+        for &(n, cum, e) in &hrtao_curve {
+            if n.is_power_of_two() {
+                let eq = ((cum as f64 / geometry / rays as f64).round() as usize).clamp(1, rtao_curve.len());
+                line += &format!(" {e:.4} / {:.4} |", rtao_curve[eq - 1]);
             }
         }
-        let rtao_eq = metrics::ao_error(&rt.read_ao()?, &reference).mae;
+        curves.push(line);
         println!(
             "| {key} | {rtao_1:.4} | {hrtao_1:.4} | {:.2} | {rtao_eq:.4} ({eq_frames}f) | {hrtao_n:.4} | {:.2} | {rays_px:.0} | {:.5} | {:.0}, {:.0} |",
             rtao_1 / hrtao_1,
@@ -127,6 +139,13 @@ fn main() -> anyhow::Result<()> {
             ms.0,
             ms.1
         );
+    }
+    println!("\nStill camera, MAE after n frames: HRTAO / per-pixel RTAO with the same total rays\n");
+    let header: Vec<String> = (0..32).map(|i| 1u32 << i).take_while(|&n| n <= frames).map(|n| n.to_string()).collect();
+    println!("| scene | {} |", header.join(" | "));
+    println!("|---|{}", "---|".repeat(header.len()));
+    for c in curves {
+        println!("{c}");
     }
     Ok(())
 }

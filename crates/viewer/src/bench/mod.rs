@@ -609,7 +609,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     for i in 0..args.settle {
         let rep = r.render(&scene_gpu, sf, &camera)?;
         settle.push(FrameRecord::new(i as usize + 1, "settle", &rep));
-        if (rep.rays as f64) < args.settle_until * first_rays {
+        // Settled once the cells take few rays (the still-camera refinement's own rays do not count).
+        if ((rep.rays - rep.refine_rays) as f64) < args.settle_until * first_rays {
             break;
         }
     }
