@@ -18,6 +18,8 @@ struct Run {
 }
 
 /// Runs `cmd` (stderr captured), killing it after `limit`; the exit status and peak RSS come from wait4.
+// The child is reaped by `wait4` (which also gives its rusage), not by `Child::wait`.
+#[allow(clippy::zombie_processes)]
 fn run_bounded(cmd: &mut Command, limit: Duration, what: &str) -> Run {
     let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
     let mut pipe = child.stderr.take().unwrap();
@@ -43,6 +45,7 @@ fn run_bounded(cmd: &mut Command, limit: Duration, what: &str) -> Run {
         );
         if start.elapsed() > limit {
             let _ = child.kill();
+            let _ = child.wait();
             panic!("{what}: hrtao did not finish within {limit:?}");
         }
         std::thread::sleep(Duration::from_millis(10));
