@@ -35,6 +35,9 @@ pub enum SceneError {
     /// The OBJ file is malformed.
     #[error("OBJ {path}: {message}")]
     Obj { path: PathBuf, message: String },
+    /// The STL file is malformed.
+    #[error("STL {path}: {message}")]
+    Stl { path: PathBuf, message: String },
     /// The scene data is inconsistent (bad index, NaN position, singular transform, ...).
     #[error("invalid scene: {0}")]
     Invalid(String),

@@ -152,6 +152,33 @@ fn glb(json: &str, bin: Option<&[u8]>) -> Vec<u8> {
     out
 }
 
+/// A binary STL of the triangles in `v` (9 floats each) with `header` at the start of its 80-byte header.
+pub fn stl_binary(v: &[f32], header: &[u8]) -> Vec<u8> {
+    let mut out = header.to_vec();
+    out.resize(80, 0);
+    out.extend(((v.len() / 9) as u32).to_le_bytes());
+    for t in v.chunks_exact(9) {
+        out.extend([0u8; 12]);
+        out.extend(floats(t));
+        out.extend([0u8; 2]);
+    }
+    out
+}
+
+/// An ASCII STL of the triangles in `v` (9 floats each).
+pub fn stl_ascii(v: &[f32]) -> String {
+    let mut s = String::from("solid hrtao\n");
+    for t in v.chunks_exact(9) {
+        s.push_str("  facet normal 0 0 0\n    outer loop\n");
+        for p in t.chunks_exact(3) {
+            s.push_str(&format!("      vertex {} {} {}\n", p[0], p[1], p[2]));
+        }
+        s.push_str("    endloop\n  endfacet\n");
+    }
+    s.push_str("endsolid hrtao\n");
+    s
+}
+
 /// Writes the corpus into `dir` (created if needed) and returns its cases (at least 30).
 pub fn write_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
     std::fs::create_dir_all(dir)?;
@@ -437,6 +464,27 @@ pub fn write_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
         Expect::Image,
     );
 
+    let corner_stl = stl_binary(&CORNER, b"hrtao corner");
+    let mut count_lies = corner_stl.clone();
+    count_lies[80..84].copy_from_slice(&4_000_000_000u32.to_le_bytes());
+    files.extend([
+        ("stl_binary", "stl", corner_stl, Expect::Image),
+        (
+            "stl_binary_header_says_solid",
+            "stl",
+            stl_binary(&CORNER, b"solid but binary"),
+            Expect::Image,
+        ),
+        ("stl_ascii", "stl", stl_ascii(&CORNER).into_bytes(), Expect::Image),
+        ("stl_count_far_beyond_file_size", "stl", count_lies, Expect::Error),
+        (
+            "stl_ascii_garbage",
+            "stl",
+            b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zz\n".to_vec(),
+            Expect::Error,
+        ),
+        ("stl_tiny", "stl", b"abc".to_vec(), Expect::Error),
+    ]);
     let mut cases = Vec::new();
     for (name, ext, bytes, expect) in files {
         let path = dir.join(format!("{name}.{ext}"));

@@ -257,3 +257,56 @@ fn cancel_stops_a_long_read() {
     assert!(matches!(r, Err(SceneError::Cancelled(_))), "{:?}", r.err());
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Triangles of a scene in world space, each as 9 coordinates, sorted.
+fn world_triangles(s: &hrtao_scene::Scene) -> Vec<[u32; 9]> {
+    let mut out = Vec::new();
+    for inst in &s.instances {
+        for p in &s.meshes[inst.mesh as usize].primitives {
+            for t in p.indices.chunks_exact(3) {
+                let mut tri = [0u32; 9];
+                for (k, &i) in t.iter().enumerate() {
+                    let w = inst
+                        .transform
+                        .transform_point3(glam::Vec3::from(p.positions[i as usize]));
+                    for (c, v) in w.to_array().into_iter().enumerate() {
+                        tri[k * 3 + c] = v.to_bits();
+                    }
+                }
+                out.push(tri);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// The same model as STL (binary, binary with a `solid` header, ASCII) and glTF: same triangles and bounds.
+#[test]
+fn stl_and_gltf_of_the_same_model_agree() {
+    let dir = temp_dir("stl");
+    let cases = write_corpus(&dir).unwrap();
+    let get = |name: &str| {
+        let c = cases.iter().find(|c| c.name == name).unwrap();
+        load(&c.path, &LoadOptions::default()).unwrap()
+    };
+    let gltf = get("valid_reference");
+    for name in ["stl_binary", "stl_binary_header_says_solid", "stl_ascii"] {
+        let stl = get(name);
+        assert_eq!(stl.meshes.len(), 1);
+        assert_eq!(stl.instances.len(), 1);
+        assert_eq!(world_triangles(&stl), world_triangles(&gltf), "{name}");
+        assert_eq!(stl.bounds().min, gltf.bounds().min);
+        assert_eq!(stl.bounds().max, gltf.bounds().max);
+    }
+    let c = cases
+        .iter()
+        .find(|c| c.name == "stl_count_far_beyond_file_size")
+        .unwrap();
+    let e = load(&c.path, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(
+        e.contains("4000000000 triangles") && e.contains("stl_count_far"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
