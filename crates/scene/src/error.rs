@@ -38,6 +38,9 @@ pub enum SceneError {
     /// The STL file is malformed.
     #[error("STL {path}: {message}")]
     Stl { path: PathBuf, message: String },
+    /// The PLY file is malformed.
+    #[error("PLY {path}: {message}")]
+    Ply { path: PathBuf, message: String },
     /// The scene data is inconsistent (bad index, NaN position, singular transform, ...).
     #[error("invalid scene: {0}")]
     Invalid(String),

@@ -179,6 +179,39 @@ pub fn stl_ascii(v: &[f32]) -> String {
     s
 }
 
+fn ply_header(format: &str, vertices: u64, faces: usize) -> String {
+    format!(
+        "ply\nformat {format} 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\n\
+         property float z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+}
+
+/// An ASCII PLY of the triangles in `v` (9 floats each, unshared vertices); `vertex_count` overrides the
+/// vertex count the header declares.
+pub fn ply_ascii(v: &[f32], vertex_count: Option<u64>) -> String {
+    let n = v.len() / 3;
+    let mut s = ply_header("ascii", vertex_count.unwrap_or(n as u64), n / 3);
+    for p in v.chunks_exact(3) {
+        s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+    }
+    for t in 0..n / 3 {
+        s.push_str(&format!("3 {} {} {}\n", 3 * t, 3 * t + 1, 3 * t + 2));
+    }
+    s
+}
+
+/// A binary little-endian PLY of the triangles in `v`.
+pub fn ply_binary(v: &[f32]) -> Vec<u8> {
+    let n = v.len() / 3;
+    let mut out = ply_header("binary_little_endian", n as u64, n / 3).into_bytes();
+    out.extend(floats(v));
+    for t in 0..n / 3 {
+        out.push(3);
+        out.extend(u32s(&[3 * t as u32, 3 * t as u32 + 1, 3 * t as u32 + 2]));
+    }
+    out
+}
+
 /// Writes the corpus into `dir` (created if needed) and returns its cases (at least 30).
 pub fn write_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
     std::fs::create_dir_all(dir)?;
@@ -484,6 +517,33 @@ pub fn write_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
             Expect::Error,
         ),
         ("stl_tiny", "stl", b"abc".to_vec(), Expect::Error),
+        (
+            "ply_ascii",
+            "ply",
+            ply_ascii(&CORNER, None).into_bytes(),
+            Expect::Image,
+        ),
+        ("ply_binary", "ply", ply_binary(&CORNER), Expect::Image),
+        (
+            "ply_vertex_count_far_beyond_file_size",
+            "ply",
+            ply_ascii(&CORNER, Some(4_000_000_000)).into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ply_face_index_out_of_range",
+            "ply",
+            ply_ascii(&CORNER, None)
+                .replace("3 3 4 5", "3 3 4 99")
+                .into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ply_garbage",
+            "ply",
+            b"ply\nformat ascii 1.0\nelement vertex 3\nend_header\n1 2\n".to_vec(),
+            Expect::Error,
+        ),
     ]);
     let mut cases = Vec::new();
     for (name, ext, bytes, expect) in files {

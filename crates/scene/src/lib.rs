@@ -12,6 +12,7 @@ mod guard;
 #[cfg(feature = "hostile-corpus")]
 pub mod hostile;
 mod obj_load;
+mod ply_load;
 mod scene;
 mod stl_load;
 
@@ -68,7 +69,7 @@ pub fn load(path_or_spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Resul
     load_with(path_or_spec, &LoadOptions::default(), progress)
 }
 
-/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj` or `*.stl`; `opts` can cancel the load from another
+/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl` or `*.ply`; `opts` can cancel the load from another
 /// thread and bounds its memory. Files and their references are read through a guard: references stay
 /// inside the model's folder, only regular files of the declared size are read (never devices, FIFOs,
 /// directories or sockets), and every read is bounded (see docs/reliability.md).
@@ -89,9 +90,10 @@ pub fn load_with(
         "gltf" | "glb" => gltf_load::load_gltf(path, opts, progress)?,
         "obj" => obj_load::load_obj(path, opts, progress)?,
         "stl" => stl_load::load_stl(path, opts, progress)?,
+        "ply" => ply_load::load_ply(path, opts, progress)?,
         _ => {
             return Err(SceneError::UnsupportedFormat(format!(
-                "{path_or_spec}: expected .gltf, .glb, .obj, .stl or gen:..."
+                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply or gen:..."
             )))
         }
     };

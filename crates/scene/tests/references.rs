@@ -281,7 +281,8 @@ fn world_triangles(s: &hrtao_scene::Scene) -> Vec<[u32; 9]> {
     out
 }
 
-/// The same model as STL (binary, binary with a `solid` header, ASCII) and glTF: same triangles and bounds.
+/// The same model as STL (binary, binary with a `solid` header, ASCII), PLY (ASCII, binary) and glTF: same
+/// triangles and bounds; counts far beyond the file's size are refused before reading.
 #[test]
 fn stl_and_gltf_of_the_same_model_agree() {
     let dir = temp_dir("stl");
@@ -291,7 +292,13 @@ fn stl_and_gltf_of_the_same_model_agree() {
         load(&c.path, &LoadOptions::default()).unwrap()
     };
     let gltf = get("valid_reference");
-    for name in ["stl_binary", "stl_binary_header_says_solid", "stl_ascii"] {
+    for name in [
+        "stl_binary",
+        "stl_binary_header_says_solid",
+        "stl_ascii",
+        "ply_ascii",
+        "ply_binary",
+    ] {
         let stl = get(name);
         assert_eq!(stl.meshes.len(), 1);
         assert_eq!(stl.instances.len(), 1);
