@@ -15,12 +15,32 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
+    /// The model file is not something a model can be read from (a device, FIFO, directory, socket).
+    #[error("cannot read {path}: {message}")]
+    Unreadable { path: PathBuf, message: String },
+    /// A file the model references (glTF buffer URI, OBJ `mtllib`) cannot be used: outside the model's
+    /// folder, not a regular file, missing, or of another size than declared.
+    #[error("{model}: cannot use `{uri}`: {message}")]
+    Reference {
+        model: PathBuf,
+        uri: String,
+        message: String,
+    },
+    /// The load was cancelled through [`crate::LoadOptions::cancel`].
+    #[error("loading {0} was cancelled")]
+    Cancelled(String),
     /// The glTF file is malformed or uses something unsupported.
     #[error("glTF {path}: {message}")]
     Gltf { path: PathBuf, message: String },
     /// The OBJ file is malformed.
     #[error("OBJ {path}: {message}")]
     Obj { path: PathBuf, message: String },
+    /// The STL file is malformed.
+    #[error("STL {path}: {message}")]
+    Stl { path: PathBuf, message: String },
+    /// The PLY file is malformed.
+    #[error("PLY {path}: {message}")]
+    Ply { path: PathBuf, message: String },
     /// The scene data is inconsistent (bad index, NaN position, singular transform, ...).
     #[error("invalid scene: {0}")]
     Invalid(String),

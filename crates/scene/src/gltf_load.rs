@@ -12,6 +12,7 @@ use gltf::mesh::Mode;
 use gltf::Semantic;
 
 use crate::error::SceneError;
+use crate::guard::{resolve_reference, Budget, Fetch, LoadOptions, Target};
 use crate::scene::{
     recentre_origin, relative_transform, transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene,
     DEFAULT_BASE_COLOR,
@@ -23,23 +24,28 @@ const MAX_DEPTH: usize = 256;
 const MAX_NODE_VISITS: u64 = 10_000_000;
 /// Maximum element count of an accessor that has no buffer view (implicit zeros).
 const MAX_IMPLICIT_COUNT: usize = 50_000_000;
+/// Memory of one instance (matrix, ids, a short name), for the memory estimate.
+const INSTANCE_BYTES: u64 = std::mem::size_of::<Instance>() as u64 + 32;
 
 /// Loads a .gltf or .glb file. Unreferenced meshes are kept so that mesh ids equal glTF
-/// mesh indices.
-pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
+/// mesh indices. The file and its buffers are read through the guard ([`crate::guard`]); the memory
+/// the declared counts imply is checked before anything large is allocated.
+pub fn load_gltf(
+    path: &Path,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
     let err = |message: String| SceneError::Gltf {
         path: path.to_path_buf(),
         message,
     };
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    progress(LoadProgress {
-        stage: "read",
-        done: 1,
-        total: 1,
-    });
+    let mut budget = Budget::new(opts, path);
+    let bytes = Fetch {
+        model: path,
+        target: Target::Model,
+        declared: None,
+    }
+    .read(path, opts, &mut budget, progress)?;
     let is_glb_ext = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
     check_glb_header(&bytes, is_glb_ext).map_err(err)?;
 
@@ -52,9 +58,16 @@ pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<
         }
     }
     validate_document(&document).map_err(err)?;
-    let base = path.parent();
-    let buffers =
-        gltf::import_buffers(&document, base, blob).map_err(|e| err(format!("cannot load buffers: {e}")))?;
+    let post_order = check_acyclic(&document).map_err(err)?;
+    budget.reserve(
+        geometry_bytes(&document),
+        "the declared geometry (accessor counts)",
+    )?;
+    budget.reserve(
+        instance_count(&document, &post_order).saturating_mul(INSTANCE_BYTES),
+        "the node hierarchy's mesh instances",
+    )?;
+    let buffers = load_buffers(&document, path, blob, opts, &mut budget, progress)?;
     progress(LoadProgress {
         stage: "buffers",
         done: 1,
@@ -69,6 +82,7 @@ pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<
 
     let total = document.meshes().len() as u64;
     for (mi, mesh) in document.meshes().enumerate() {
+        opts.check_cancel(path)?;
         let mut primitives = Vec::new();
         for (pi, prim) in mesh.primitives().enumerate() {
             let at = format!("mesh {mi} primitive {pi}");
@@ -508,15 +522,17 @@ enum Flatten {
     TooLarge(String),
 }
 
-/// Errors if the node graph (all nodes, not only the displayed scene) has a cycle.
-/// Iterative three-colour DFS, so arbitrarily deep graphs cannot overflow the stack.
-fn check_acyclic(doc: &gltf::Document) -> Result<(), String> {
+/// Errors if the node graph (all nodes, not only the displayed scene) has a cycle; else returns the
+/// nodes in post-order (children before parents). Iterative three-colour DFS, so arbitrarily deep
+/// graphs cannot overflow the stack.
+fn check_acyclic(doc: &gltf::Document) -> Result<Vec<usize>, String> {
     let children: Vec<Vec<usize>> = doc
         .nodes()
         .map(|n| n.children().map(|c| c.index()).collect())
         .collect();
     // 0 = unvisited, 1 = on the DFS path, 2 = done
     let mut state = vec![0u8; children.len()];
+    let mut order = Vec::with_capacity(children.len());
     for start in 0..children.len() {
         if state[start] != 0 {
             continue;
@@ -540,11 +556,12 @@ fn check_acyclic(doc: &gltf::Document) -> Result<(), String> {
                 }
             } else {
                 state[*node] = 2;
+                order.push(*node);
                 stack.pop();
             }
         }
     }
-    Ok(())
+    Ok(order)
 }
 
 /// A mesh instance with its world transform in f64 (file coordinates).
@@ -584,20 +601,9 @@ fn placed_centre(meshes: &[Mesh], placed: &[Placed]) -> DVec3 {
 }
 
 /// Flattens the default scene (else scene 0, else all root nodes) into instances.
+/// The node graph must be acyclic ([`check_acyclic`], run before by `load_gltf`).
 fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Placed>, Flatten> {
-    check_acyclic(doc).map_err(Flatten::Invalid)?;
-    let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
-        Some(s) => s.nodes().map(|n| n.index()).collect(),
-        None => {
-            let mut is_child = vec![false; doc.nodes().len()];
-            for n in doc.nodes() {
-                for c in n.children() {
-                    is_child[c.index()] = true;
-                }
-            }
-            (0..is_child.len()).filter(|&i| !is_child[i]).collect()
-        }
-    };
+    let roots = root_nodes(doc);
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut w = Walker {
         nodes: &nodes,
@@ -610,6 +616,152 @@ fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Placed>, Flatten> {
         w.visit(r, DMat4::IDENTITY, 0)?;
     }
     Ok(w.out)
+}
+
+/// Root nodes of the default scene (else scene 0, else all nodes that are nobody's child).
+fn root_nodes(doc: &gltf::Document) -> Vec<usize> {
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(s) => s.nodes().map(|n| n.index()).collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            (0..is_child.len()).filter(|&i| !is_child[i]).collect()
+        }
+    }
+}
+
+/// Number of mesh instances flattening will produce (paths from the roots to nodes with a mesh),
+/// computed over the acyclic graph's post-order without walking it; saturates instead of overflowing.
+fn instance_count(doc: &gltf::Document, post_order: &[usize]) -> u64 {
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut below = vec![0u64; nodes.len()];
+    for &n in post_order {
+        let own = u64::from(nodes[n].mesh().is_some());
+        below[n] = nodes[n]
+            .children()
+            .fold(own, |acc, c| acc.saturating_add(below[c.index()]));
+    }
+    root_nodes(doc)
+        .into_iter()
+        .fold(0u64, |acc, r| acc.saturating_add(below[r]))
+}
+
+/// Bytes the decoded triangle primitives will take, from the accessor counts the file declares
+/// (positions, raw and converted indices, colours), before any of it is read.
+fn geometry_bytes(doc: &gltf::Document) -> u64 {
+    let mut total = 0u64;
+    for prim in doc.meshes().flat_map(|m| m.primitives()) {
+        let mode = prim.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            continue;
+        }
+        let count = |s: &Semantic| prim.get(s).map_or(0, |a| a.count() as u64);
+        let vertices = count(&Semantic::Positions);
+        let indices = prim.indices().map_or(vertices, |a| a.count() as u64);
+        let converted = if mode == Mode::Triangles {
+            0
+        } else {
+            indices.saturating_sub(2).saturating_mul(3)
+        };
+        let colors = count(&Semantic::Colors(0));
+        total = total
+            .saturating_add(vertices.saturating_mul(12))
+            .saturating_add(indices.saturating_add(converted).saturating_mul(4))
+            .saturating_add(colors.saturating_mul(16));
+    }
+    total
+}
+
+/// Reads every buffer: the GLB BIN chunk, `data:` URIs (base64) and external files through the guard
+/// (inside the model's folder, regular file, at least `byteLength` bytes, reading only those).
+fn load_buffers(
+    doc: &gltf::Document,
+    path: &Path,
+    mut blob: Option<Vec<u8>>,
+    opts: &LoadOptions,
+    budget: &mut Budget,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Vec<gltf::buffer::Data>, SceneError> {
+    let err = |message: String| SceneError::Gltf {
+        path: path.to_path_buf(),
+        message,
+    };
+    let mut out = Vec::new();
+    for buffer in doc.buffers() {
+        opts.check_cancel(path)?;
+        let i = buffer.index();
+        let declared = buffer.length() as u64;
+        let mut data = match buffer.source() {
+            gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                err(format!(
+                    "buffer {i} refers to the GLB BIN chunk, which is missing"
+                ))
+            })?,
+            gltf::buffer::Source::Uri(uri) => match uri.strip_prefix("data:") {
+                Some(rest) => {
+                    let b64 = rest
+                        .split_once(";base64,")
+                        .map(|(_, b)| b)
+                        .ok_or_else(|| err(format!("buffer {i}: data URI is not base64")))?;
+                    budget.reserve(b64.len() as u64 / 4 * 3, &format!("buffer {i} (data URI)"))?;
+                    base64::decode(b64).map_err(|e| err(format!("buffer {i}: bad base64 data URI: {e}")))?
+                }
+                None => {
+                    let file = uri_path(path, uri)?;
+                    Fetch {
+                        model: path,
+                        target: Target::Reference(uri),
+                        declared: Some(declared),
+                    }
+                    .read(&file, opts, budget, progress)?
+                }
+            },
+        };
+        if (data.len() as u64) < declared {
+            return Err(err(format!(
+                "buffer {i} holds {} bytes but its byteLength declares {declared}",
+                data.len()
+            )));
+        }
+        while data.len() % 4 != 0 {
+            data.push(0);
+        }
+        out.push(gltf::buffer::Data(data));
+    }
+    Ok(out)
+}
+
+/// The file a buffer URI names (`file://` absolute or a percent-encoded relative reference), inside the
+/// model's folder; other schemes are refused.
+fn uri_path(model: &Path, uri: &str) -> Result<std::path::PathBuf, SceneError> {
+    let reference_err = |message: String| SceneError::Reference {
+        model: model.to_path_buf(),
+        uri: uri.to_string(),
+        message,
+    };
+    let encoded = if let Some(rest) = uri.strip_prefix("file:") {
+        let rest = rest.strip_prefix("//").unwrap_or(rest);
+        let rest = rest.strip_prefix("localhost").unwrap_or(rest);
+        if !rest.starts_with('/') {
+            return Err(reference_err(
+                "a file: URI must name an absolute path (file:///...)".into(),
+            ));
+        }
+        rest
+    } else if let Some((scheme, _)) = uri.split_once(':').filter(|(s, _)| !s.contains('/')) {
+        return Err(reference_err(format!(
+            "URI scheme `{scheme}:` is not supported (only files beside the model and data: URIs)"
+        )));
+    } else {
+        uri
+    };
+    let decoded =
+        urlencoding::decode(encoded).map_err(|e| reference_err(format!("bad percent-encoding: {e}")))?;
+    resolve_reference(model, Path::new(decoded.as_ref()), uri)
 }
 
 struct Walker<'a, 'd> {

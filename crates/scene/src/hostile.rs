@@ -18,6 +18,46 @@ pub struct HostileCase {
     pub name: &'static str,
     pub path: PathBuf,
     pub expect: Expect,
+    /// For a file whose reference leads somewhere bad (buffer URI, `mtllib`): the reference as written,
+    /// which the error must name besides the file.
+    pub reference: Option<&'static str>,
+}
+
+/// What one corpus entry is on disk.
+enum Entry {
+    File(Vec<u8>),
+    /// A named pipe (nobody ever writes to it: reading it would block forever).
+    Fifo,
+    Dir,
+    /// A symlink to this target.
+    Link(&'static str),
+}
+
+/// Creates `path` as `entry`, replacing whatever is there (never writing into a stale FIFO).
+fn make(path: &Path, entry: &Entry) -> io::Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => std::fs::remove_dir_all(path)?,
+        Ok(_) => std::fs::remove_file(path)?,
+        Err(_) => {}
+    }
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent)?;
+    }
+    match entry {
+        Entry::File(bytes) => std::fs::write(path, bytes),
+        Entry::Dir => std::fs::create_dir(path),
+        Entry::Link(target) => std::os::unix::fs::symlink(target, path),
+        Entry::Fifo => {
+            use std::os::unix::ffi::OsStrExt;
+            let c = std::ffi::CString::new(path.as_os_str().as_bytes())
+                .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
+            // SAFETY: `c` is a valid NUL-terminated path that outlives the call.
+            if unsafe { libc::mkfifo(c.as_ptr(), 0o644) } != 0 {
+                return Err(io::Error::last_os_error());
+            }
+            Ok(())
+        }
+    }
 }
 
 fn b64(data: &[u8]) -> String {
@@ -109,6 +149,66 @@ fn glb(json: &str, bin: Option<&[u8]>) -> Vec<u8> {
     out.extend(2u32.to_le_bytes());
     out.extend(((12 + chunks.len()) as u32).to_le_bytes());
     out.extend(chunks);
+    out
+}
+
+/// A binary STL of the triangles in `v` (9 floats each) with `header` at the start of its 80-byte header.
+pub fn stl_binary(v: &[f32], header: &[u8]) -> Vec<u8> {
+    let mut out = header.to_vec();
+    out.resize(80, 0);
+    out.extend(((v.len() / 9) as u32).to_le_bytes());
+    for t in v.chunks_exact(9) {
+        out.extend([0u8; 12]);
+        out.extend(floats(t));
+        out.extend([0u8; 2]);
+    }
+    out
+}
+
+/// An ASCII STL of the triangles in `v` (9 floats each).
+pub fn stl_ascii(v: &[f32]) -> String {
+    let mut s = String::from("solid hrtao\n");
+    for t in v.chunks_exact(9) {
+        s.push_str("  facet normal 0 0 0\n    outer loop\n");
+        for p in t.chunks_exact(3) {
+            s.push_str(&format!("      vertex {} {} {}\n", p[0], p[1], p[2]));
+        }
+        s.push_str("    endloop\n  endfacet\n");
+    }
+    s.push_str("endsolid hrtao\n");
+    s
+}
+
+fn ply_header(format: &str, vertices: u64, faces: usize) -> String {
+    format!(
+        "ply\nformat {format} 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\n\
+         property float z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+}
+
+/// An ASCII PLY of the triangles in `v` (9 floats each, unshared vertices); `vertex_count` overrides the
+/// vertex count the header declares.
+pub fn ply_ascii(v: &[f32], vertex_count: Option<u64>) -> String {
+    let n = v.len() / 3;
+    let mut s = ply_header("ascii", vertex_count.unwrap_or(n as u64), n / 3);
+    for p in v.chunks_exact(3) {
+        s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+    }
+    for t in 0..n / 3 {
+        s.push_str(&format!("3 {} {} {}\n", 3 * t, 3 * t + 1, 3 * t + 2));
+    }
+    s
+}
+
+/// A binary little-endian PLY of the triangles in `v`.
+pub fn ply_binary(v: &[f32]) -> Vec<u8> {
+    let n = v.len() / 3;
+    let mut out = ply_header("binary_little_endian", n as u64, n / 3).into_bytes();
+    out.extend(floats(v));
+    for t in 0..n / 3 {
+        out.push(3);
+        out.extend(u32s(&[3 * t as u32, 3 * t as u32 + 1, 3 * t as u32 + 2]));
+    }
     out
 }
 
@@ -397,11 +497,273 @@ pub fn write_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
         Expect::Image,
     );
 
+    let corner_stl = stl_binary(&CORNER, b"hrtao corner");
+    let mut count_lies = corner_stl.clone();
+    count_lies[80..84].copy_from_slice(&4_000_000_000u32.to_le_bytes());
+    files.extend([
+        ("stl_binary", "stl", corner_stl, Expect::Image),
+        (
+            "stl_binary_header_says_solid",
+            "stl",
+            stl_binary(&CORNER, b"solid but binary"),
+            Expect::Image,
+        ),
+        ("stl_ascii", "stl", stl_ascii(&CORNER).into_bytes(), Expect::Image),
+        ("stl_count_far_beyond_file_size", "stl", count_lies, Expect::Error),
+        (
+            "stl_ascii_garbage",
+            "stl",
+            b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zz\n".to_vec(),
+            Expect::Error,
+        ),
+        ("stl_tiny", "stl", b"abc".to_vec(), Expect::Error),
+        (
+            "ply_ascii",
+            "ply",
+            ply_ascii(&CORNER, None).into_bytes(),
+            Expect::Image,
+        ),
+        ("ply_binary", "ply", ply_binary(&CORNER), Expect::Image),
+        (
+            "ply_vertex_count_far_beyond_file_size",
+            "ply",
+            ply_ascii(&CORNER, Some(4_000_000_000)).into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ply_face_index_out_of_range",
+            "ply",
+            ply_ascii(&CORNER, None)
+                .replace("3 3 4 5", "3 3 4 99")
+                .into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ply_garbage",
+            "ply",
+            b"ply\nformat ascii 1.0\nelement vertex 3\nend_header\n1 2\n".to_vec(),
+            Expect::Error,
+        ),
+    ]);
     let mut cases = Vec::new();
     for (name, ext, bytes, expect) in files {
         let path = dir.join(format!("{name}.{ext}"));
-        std::fs::write(&path, bytes)?;
-        cases.push(HostileCase { name, path, expect });
+        make(&path, &Entry::File(bytes))?;
+        let reference = (name == "missing_bin").then_some("missing.bin");
+        cases.push(HostileCase {
+            name,
+            path,
+            expect,
+            reference,
+        });
     }
+    cases.extend(write_reference_cases(dir, &good)?);
     Ok(cases)
+}
+
+/// Files whose references lead where no model data lives (devices, FIFOs, directories, outside the
+/// folder, sizes that lie), the model path itself being such a thing, and valid external references.
+fn write_reference_cases(dir: &Path, good: &str) -> io::Result<Vec<HostileCase>> {
+    let inline = format!("data:application/octet-stream;base64,{}", b64(&floats(&CORNER)));
+    // The good glTF with its buffer at `uri`, declaring `len` bytes.
+    let external = |uri: &str, len: u64| {
+        good.replace(&inline, uri).replace(
+            r#""buffers":[{"byteLength":72,"#,
+            &format!(r#""buffers":[{{"byteLength":{len},"#),
+        )
+    };
+    let obj_body = |mtllib: &str| {
+        format!("mtllib {mtllib}\nusemtl steel\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n")
+    };
+    const HUGE: u64 = 4_000_000_000;
+    // (name, extension, the model entry, reference named in the error, files beside, expectation)
+    type Case = (
+        &'static str,
+        &'static str,
+        Entry,
+        Option<&'static str>,
+        Vec<(&'static str, Entry)>,
+        Expect,
+    );
+    let text = |s: String| Entry::File(s.into_bytes());
+    let cases: Vec<Case> = vec![
+        (
+            "buffer_dev_zero",
+            "gltf",
+            text(external("/dev/zero", HUGE)),
+            Some("/dev/zero"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "buffer_file_uri_dev_zero",
+            "gltf",
+            text(external("file:///dev/zero", HUGE)),
+            Some("file:///dev/zero"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "buffer_dev_urandom",
+            "gltf",
+            text(external("/dev/urandom", HUGE)),
+            Some("/dev/urandom"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "buffer_fifo",
+            "gltf",
+            text(external("buffer_fifo.bin", 72)),
+            Some("buffer_fifo.bin"),
+            vec![("buffer_fifo.bin", Entry::Fifo)],
+            Expect::Error,
+        ),
+        (
+            "buffer_symlink_to_dev_zero",
+            "gltf",
+            text(external("zero_link.bin", HUGE)),
+            Some("zero_link.bin"),
+            vec![("zero_link.bin", Entry::Link("/dev/zero"))],
+            Expect::Error,
+        ),
+        (
+            "buffer_etc_passwd",
+            "gltf",
+            text(external("../../../../../../etc/passwd", 72)),
+            Some("../../../../../../etc/passwd"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "buffer_directory",
+            "gltf",
+            text(external("a_directory.bin", 72)),
+            Some("a_directory.bin"),
+            vec![("a_directory.bin", Entry::Dir)],
+            Expect::Error,
+        ),
+        (
+            "buffer_missing_file",
+            "gltf",
+            text(external("no_such_file.bin", 72)),
+            Some("no_such_file.bin"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "buffer_shorter_than_byte_length",
+            "gltf",
+            text(external("short.bin", 72)),
+            Some("short.bin"),
+            vec![("short.bin", Entry::File(floats(&CORNER[..9])))],
+            Expect::Error,
+        ),
+        (
+            "buffer_http_uri",
+            "gltf",
+            text(external("http://example.com/part.bin", 72)),
+            Some("http://example.com/part.bin"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "buffer_external_valid",
+            "gltf",
+            text(external("corner.bin", 72)),
+            None,
+            vec![("corner.bin", Entry::File(floats(&CORNER)))],
+            Expect::Image,
+        ),
+        (
+            "buffer_external_subfolder_percent_encoded",
+            "gltf",
+            text(external("sub%20folder/corner%2B.bin", 72)),
+            None,
+            vec![("sub folder/corner+.bin", Entry::File(floats(&CORNER)))],
+            Expect::Image,
+        ),
+        (
+            "model_is_a_fifo",
+            "gltf",
+            Entry::Fifo,
+            None,
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "model_is_a_directory",
+            "glb",
+            Entry::Dir,
+            None,
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "model_is_dev_zero",
+            "glb",
+            Entry::Link("/dev/zero"),
+            None,
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "obj_mtllib_dev_zero",
+            "obj",
+            text(obj_body("/dev/zero")),
+            Some("/dev/zero"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "obj_mtllib_fifo",
+            "obj",
+            text(obj_body("mtl_fifo.mtl")),
+            Some("mtl_fifo.mtl"),
+            vec![("mtl_fifo.mtl", Entry::Fifo)],
+            Expect::Error,
+        ),
+        (
+            "obj_mtllib_symlink_to_dev_zero",
+            "obj",
+            text(obj_body("zero_link.mtl")),
+            Some("zero_link.mtl"),
+            vec![("zero_link.mtl", Entry::Link("/dev/zero"))],
+            Expect::Error,
+        ),
+        (
+            "obj_mtllib_etc_passwd",
+            "obj",
+            text(obj_body("../../../../../../etc/passwd")),
+            Some("../../../../../../etc/passwd"),
+            vec![],
+            Expect::Error,
+        ),
+        (
+            "obj_mtllib_valid",
+            "obj",
+            text(obj_body("steel.mtl")),
+            None,
+            vec![(
+                "steel.mtl",
+                Entry::File(b"newmtl steel\nKd 0.2 0.4 0.8\n".to_vec()),
+            )],
+            Expect::Image,
+        ),
+    ];
+    let mut out = Vec::new();
+    for (name, ext, entry, reference, beside, expect) in cases {
+        for (file, e) in &beside {
+            make(&dir.join(file), e)?;
+        }
+        let path = dir.join(format!("{name}.{ext}"));
+        make(&path, &entry)?;
+        out.push(HostileCase {
+            name,
+            path,
+            expect,
+            reference,
+        });
+    }
+    Ok(out)
 }

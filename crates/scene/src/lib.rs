@@ -8,10 +8,13 @@ mod aabb;
 mod error;
 mod generate;
 mod gltf_load;
+mod guard;
 #[cfg(feature = "hostile-corpus")]
 pub mod hostile;
 mod obj_load;
+mod ply_load;
 mod scene;
+mod stl_load;
 
 use std::path::Path;
 
@@ -20,18 +23,26 @@ pub use glam;
 pub use aabb::Aabb;
 pub use error::SceneError;
 pub use generate::{MAX_INSTANCES, MAX_MESH_TRIANGLES};
+pub use guard::{default_max_memory, LoadOptions};
 pub use scene::{
     Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR, EXACT_BOUNDS_VERTEX_BUDGET,
 };
 
-/// Loads a glTF 2.0 file (`.gltf` or `.glb`), validated and non-empty.
+/// Loads a glTF 2.0 file (`.gltf` or `.glb`), validated and non-empty, with the default [`LoadOptions`].
 pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
-    finish(gltf_load::load_gltf(path, progress)?, &path.display().to_string())
+    finish(
+        gltf_load::load_gltf(path, &LoadOptions::default(), progress)?,
+        &path.display().to_string(),
+    )
 }
 
-/// Loads a Wavefront OBJ file (materials from its `.mtl` if present), validated and non-empty.
+/// Loads a Wavefront OBJ file (materials from its `.mtl` if present), validated and non-empty, with
+/// the default [`LoadOptions`].
 pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
-    finish(obj_load::load_obj(path, progress)?, &path.display().to_string())
+    finish(
+        obj_load::load_obj(path, &LoadOptions::default(), progress)?,
+        &path.display().to_string(),
+    )
 }
 
 /// Builds a procedural scene from a `gen:NAME?key=value&...` spec; validated and non-empty.
@@ -53,8 +64,20 @@ pub fn generate(spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Sc
     finish(generate::generate(spec, progress)?, spec)
 }
 
-/// Loads a scene from `gen:...`, `*.gltf`, `*.glb` or `*.obj`.
+/// Loads a scene from `gen:...`, `*.gltf`, `*.glb` or `*.obj` with the default [`LoadOptions`].
 pub fn load(path_or_spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
+    load_with(path_or_spec, &LoadOptions::default(), progress)
+}
+
+/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl` or `*.ply`; `opts` can cancel the load from another
+/// thread and bounds its memory. Files and their references are read through a guard: references stay
+/// inside the model's folder, only regular files of the declared size are read (never devices, FIFOs,
+/// directories or sockets), and every read is bounded (see docs/reliability.md).
+pub fn load_with(
+    path_or_spec: &str,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
     if path_or_spec.starts_with("gen:") {
         return generate(path_or_spec, progress);
     }
@@ -63,13 +86,18 @@ pub fn load(path_or_spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Resul
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    match ext.as_str() {
-        "gltf" | "glb" => load_gltf(path, progress),
-        "obj" => load_obj(path, progress),
-        _ => Err(SceneError::UnsupportedFormat(format!(
-            "{path_or_spec}: expected .gltf, .glb, .obj or gen:..."
-        ))),
-    }
+    let scene = match ext.as_str() {
+        "gltf" | "glb" => gltf_load::load_gltf(path, opts, progress)?,
+        "obj" => obj_load::load_obj(path, opts, progress)?,
+        "stl" => stl_load::load_stl(path, opts, progress)?,
+        "ply" => ply_load::load_ply(path, opts, progress)?,
+        _ => {
+            return Err(SceneError::UnsupportedFormat(format!(
+                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply or gen:..."
+            )))
+        }
+    };
+    finish(scene, path_or_spec)
 }
 
 /// Validates and rejects scenes without any triangle; errors name the source.

@@ -1,34 +1,63 @@
 //! Wavefront OBJ loader (via tobj). Each OBJ model becomes one mesh with one primitive and
 //! one identity instance; the colour is the `.mtl` diffuse colour if available.
 
+use std::cell::RefCell;
 use std::path::Path;
 
 use glam::{DVec3, Mat4};
 
 use crate::error::SceneError;
+use crate::guard::{resolve_reference, Budget, Fetch, LoadOptions, Target};
 use crate::scene::{recentre_origin, Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
 
-pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
-    // tobj reports a missing file only as "open file failed"; give the real io error.
-    if let Err(source) = std::fs::metadata(path) {
-        return Err(SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        });
+pub fn load_obj(
+    path: &Path,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
+    let mut budget = Budget::new(opts, path);
+    let text = Fetch {
+        model: path,
+        target: Target::Model,
+        declared: None,
     }
+    .read(path, opts, &mut budget, progress)?;
+    budget.reserve(declared_bytes(&text), "the declared geometry (v and f lines)")?;
+    opts.check_cancel(path)?;
     // `..Default::default()` keeps this compiling if tobj's optional features add fields.
     #[allow(clippy::needless_update)]
-    let opts = tobj::LoadOptions {
+    let load_opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
         ..Default::default()
     };
-    let (models, materials) = tobj::load_obj(path, &opts).map_err(|e| SceneError::Obj {
+    // tobj's material loader is `Fn` and its error type has no message: keep ours aside.
+    let mtl_error: RefCell<Option<SceneError>> = RefCell::new(None);
+    let budget = RefCell::new(budget);
+    let load_mtl = |name: &Path| -> tobj::MTLLoadResult {
+        match read_mtl(path, name, opts, &mut budget.borrow_mut()) {
+            Ok(r) => r,
+            Err(MtlError::Missing(message)) => {
+                log::warn!("{}: {message}; using the default colour", path.display());
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+            Err(MtlError::Refused(e)) => {
+                mtl_error.borrow_mut().get_or_insert(e);
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
+    let parsed = tobj::load_obj_buf(&mut text.as_slice(), &load_opts, load_mtl);
+    if let Some(e) = mtl_error.into_inner() {
+        return Err(e);
+    }
+    let (models, materials) = parsed.map_err(|e| SceneError::Obj {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
+    drop(text);
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
@@ -63,6 +92,7 @@ pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<S
     scene.origin = origin.to_array();
     let total = models.len() as u64;
     for (mi, model) in models.into_iter().enumerate() {
+        opts.check_cancel(path)?;
         let m = model.mesh;
         if m.positions.len() % 3 != 0 {
             return Err(SceneError::Obj {
@@ -103,4 +133,55 @@ pub fn load_obj(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<S
         });
     }
     Ok(scene)
+}
+
+enum MtlError {
+    /// The `.mtl` does not exist: a warning, the model loads with the default colour.
+    Missing(String),
+    /// The `mtllib` points outside the folder, at a device, FIFO, directory, ...: an error.
+    Refused(SceneError),
+}
+
+/// Reads an `mtllib` through the guard (inside the OBJ's folder, a regular file, within the budget).
+fn read_mtl(
+    obj: &Path,
+    name: &Path,
+    opts: &LoadOptions,
+    budget: &mut Budget,
+) -> Result<tobj::MTLLoadResult, MtlError> {
+    let uri = name.to_string_lossy();
+    let file = resolve_reference(obj, name, &uri).map_err(MtlError::Refused)?;
+    if std::fs::symlink_metadata(&file).is_err() {
+        return Err(MtlError::Missing(format!("mtllib `{uri}` does not exist")));
+    }
+    let bytes = Fetch {
+        model: obj,
+        target: Target::Reference(&uri),
+        declared: None,
+    }
+    .read(&file, opts, budget, &mut |_| {})
+    .map_err(MtlError::Refused)?;
+    Ok(tobj::load_mtl_buf(&mut bytes.as_slice()))
+}
+
+/// Memory tobj and this loader will take for the OBJ, from the counts its lines declare: `v`/`vn`/`vt`
+/// arrays, and per face corner an output vertex (position, normal, texcoord, our copy) plus the
+/// triangulated indices (face lists and the final list).
+fn declared_bytes(text: &[u8]) -> u64 {
+    let (mut v, mut vn, mut vt, mut corners, mut tri) = (0u64, 0u64, 0u64, 0u64, 0u64);
+    for line in text.split(|&b| b == b'\n') {
+        let mut words = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
+        match words.next() {
+            Some(b"v") => v += 1,
+            Some(b"vn") => vn += 1,
+            Some(b"vt") => vt += 1,
+            Some(b"f") => {
+                let k = words.count() as u64;
+                corners += k;
+                tri += k.saturating_sub(2) * 3;
+            }
+            _ => {}
+        }
+    }
+    v * 12 + vn * 12 + vt * 8 + corners * (12 + 12 + 8 + 12) + tri * 4 * 2
 }

@@ -187,7 +187,11 @@ fn missing_external_bin() {
     let end = start + text[start..].find('"').unwrap();
     std::fs::write(&p, format!("{}missing.bin{}", &text[..start], &text[end..])).unwrap();
     let e = load_err(&p);
-    assert!(matches!(e, SceneError::Gltf { .. }), "{e:?}");
+    assert!(
+        matches!(&e, SceneError::Reference { uri, .. } if uri == "missing.bin"),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("does not exist"), "{e}");
     let _ = std::fs::remove_dir_all(dir);
 }
 

@@ -327,6 +327,8 @@ enum LoadMsg {
 
 struct Loading {
     spec: String,
+    /// Its cancel flag stops the loader thread at its next chunk or mesh.
+    opts: hrtao_scene::LoadOptions,
     rx: Receiver<LoadMsg>,
     progress: String,
     started: Instant,
@@ -544,14 +546,20 @@ impl Viewer {
     }
 
     /// Starts loading `spec` on a background thread (the window keeps running; the old scene stays).
+    /// A load still running is cancelled.
     pub(crate) fn start_loading(&mut self, spec: String) {
+        if let Some(old) = self.loading.take() {
+            old.opts.cancel.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
         let (tx, rx) = mpsc::channel();
         let s = spec.clone();
+        let opts = hrtao_scene::LoadOptions::default();
+        let thread_opts = opts.clone();
         std::thread::spawn(move || {
             let t0 = Instant::now();
             let mut last = Instant::now() - Duration::from_secs(1);
             let ptx = tx.clone();
-            let result = hrtao_scene::load(&s, &mut |p| {
+            let result = hrtao_scene::load_with(&s, &thread_opts, &mut |p| {
                 if last.elapsed() > Duration::from_millis(100) {
                     last = Instant::now();
                     let pct = if p.total > 0 {
@@ -559,7 +567,12 @@ impl Viewer {
                     } else {
                         String::new()
                     };
-                    let _ = ptx.send(LoadMsg::Progress(format!("{}{pct}", p.stage)));
+                    let mb = if p.stage == "read" {
+                        format!(" of {:.0} MB", p.total as f64 / 1e6)
+                    } else {
+                        String::new()
+                    };
+                    let _ = ptx.send(LoadMsg::Progress(format!("{}{pct}{mb}", p.stage)));
                 }
             })
             .map_err(|e| format!("cannot open `{s}`: {e}"));
@@ -567,11 +580,23 @@ impl Viewer {
         });
         self.loading = Some(Loading {
             spec,
+            opts,
             rx,
             progress: "starting".into(),
             started: Instant::now(),
         });
         self.load_error = None;
+    }
+
+    /// Cancel button: stops the running load; the current scene stays.
+    pub(crate) fn cancel_loading(&mut self) {
+        if let Some(l) = self.loading.take() {
+            l.opts.cancel.store(true, std::sync::atomic::Ordering::Relaxed);
+            self.toast(
+                format!("cancelled opening {}; the current scene stays", l.spec),
+                false,
+            );
+        }
     }
 
     /// Polls the loader; installs a loaded scene (GPU build, camera, radius).

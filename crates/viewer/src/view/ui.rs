@@ -91,18 +91,25 @@ impl Viewer {
                 let resp = ui.allocate_rect(rect, egui::Sense::click_and_drag());
                 self.view_input(ctx, &resp, rect);
                 if let Some(l) = &self.loading {
-                    ui.put(
-                        egui::Rect::from_center_size(rect.center(), egui::vec2(400.0, 40.0)),
-                        egui::Label::new(
-                            egui::RichText::new(format!(
-                                "Loading {} … {} ({:.0} s)",
-                                l.spec,
-                                l.progress,
-                                l.started.elapsed().as_secs_f32()
-                            ))
-                            .heading(),
-                        ),
+                    let text = format!(
+                        "Loading {} … {} ({:.0} s)",
+                        l.spec,
+                        l.progress,
+                        l.started.elapsed().as_secs_f32()
                     );
+                    let area = egui::Rect::from_center_size(rect.center(), egui::vec2(400.0, 80.0));
+                    let cancel = ui
+                        .allocate_ui_at_rect(area, |ui| {
+                            ui.vertical_centered(|ui| {
+                                ui.label(egui::RichText::new(text).heading());
+                                ui.button("Cancel").clicked()
+                            })
+                            .inner
+                        })
+                        .inner;
+                    if cancel {
+                        self.cancel_loading();
+                    }
                 }
             });
         self.keyboard(ctx);
@@ -173,10 +180,18 @@ impl Viewer {
             self.start_loading(super::default_spec());
         }
         if let Some(l) = &self.loading {
-            ui.horizontal(|ui| {
-                ui.spinner();
-                ui.label(format!("loading: {}", l.progress));
-            });
+            let cancel = ui
+                .horizontal(|ui| {
+                    ui.spinner();
+                    ui.label(format!("loading: {}", l.progress));
+                    ui.button("Cancel")
+                        .on_hover_text("Stop loading; the current scene stays")
+                        .clicked()
+                })
+                .inner;
+            if cancel {
+                self.cancel_loading();
+            }
         }
         if let Some(e) = &self.load_error {
             ui.colored_label(egui::Color32::from_rgb(230, 80, 70), e);

@@ -1,0 +1,108 @@
+//! STL loader (binary and ASCII, via stl_io): one mesh, one identity instance, coordinates as in the file.
+//! The file goes through the guard; the triangle count a binary file declares must match its size, and
+//! the memory it implies is checked before decoding.
+
+use std::path::Path;
+
+use glam::Mat4;
+use stl_io::TriangleIterator;
+
+use crate::error::SceneError;
+use crate::guard::{Budget, Fetch, LoadOptions, Target};
+use crate::scene::{Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
+
+/// Header (80) + triangle count (4), then 50 bytes per triangle.
+const HEADER: u64 = 84;
+const RECORD: u64 = 50;
+/// Memory per decoded triangle: 3 positions and 3 indices.
+const TRIANGLE_BYTES: u64 = 36 + 12;
+/// Triangles decoded between two checks of the cancel flag.
+const CANCEL_EVERY: usize = 1 << 16;
+
+pub fn load_stl(
+    path: &Path,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
+    let err = |message: String| SceneError::Stl {
+        path: path.to_path_buf(),
+        message,
+    };
+    let mut budget = Budget::new(opts, path);
+    let mut bytes = Fetch {
+        model: path,
+        target: Target::Model,
+        declared: None,
+    }
+    .read(path, opts, &mut budget, progress)?;
+    let size = bytes.len() as u64;
+    let declared =
+        (size >= HEADER).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64);
+    let binary = declared.is_some_and(|n| HEADER + n * RECORD == size);
+    let triangles = if binary {
+        // A binary header may begin with "solid": hide it so the ASCII probe does not take it.
+        if bytes.starts_with(b"solid") {
+            bytes[..5].fill(b' ');
+        }
+        declared.unwrap_or(0)
+    } else if bytes.trim_ascii_start().starts_with(b"solid") {
+        count_facets(&bytes)
+    } else {
+        return Err(err(match declared {
+            Some(n) => format!(
+                "binary STL declares {n} triangles ({} bytes) but the file has {size} bytes",
+                HEADER + n * RECORD
+            ),
+            None => format!("only {size} bytes: neither a binary STL header nor ASCII `solid`"),
+        }));
+    };
+    budget.reserve(triangles.saturating_mul(TRIANGLE_BYTES), "the declared triangles")?;
+    opts.check_cancel(path)?;
+    let mut cursor = std::io::Cursor::new(bytes);
+    let reader: Box<dyn TriangleIterator<Item = std::io::Result<stl_io::Triangle>>> =
+        stl_io::create_stl_reader(&mut cursor).map_err(|e| err(format!("cannot parse: {e}")))?;
+    let mut positions = Vec::with_capacity(triangles as usize * 3);
+    for (k, t) in reader.enumerate() {
+        if k % CANCEL_EVERY == 0 {
+            opts.check_cancel(path)?;
+            progress(LoadProgress {
+                stage: "triangles",
+                done: k as u64,
+                total: triangles,
+            });
+        }
+        let t = t.map_err(|e| err(format!("triangle {k}: {e}")))?;
+        if positions.len() as u64 >= triangles * 3 {
+            return Err(err(format!("more than the {triangles} triangles counted")));
+        }
+        positions.extend(t.vertices.iter().map(|v| v.0));
+    }
+    let n = u32::try_from(positions.len()).map_err(|_| err("more than 2^32 vertices".into()))?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut scene = Scene::new(name.clone());
+    scene.meshes.push(Mesh {
+        name: name.clone(),
+        primitives: vec![Primitive {
+            positions,
+            indices: (0..n).collect(),
+            base_color: DEFAULT_BASE_COLOR,
+        }],
+    });
+    scene.instances.push(Instance {
+        mesh: 0,
+        transform: Mat4::IDENTITY,
+        name,
+        visible: true,
+    });
+    Ok(scene)
+}
+
+/// Facets of an ASCII STL (lines starting with `facet`).
+fn count_facets(text: &[u8]) -> u64 {
+    text.split(|&b| b == b'\n')
+        .filter(|l| l.trim_ascii_start().starts_with(b"facet"))
+        .count() as u64
+}
