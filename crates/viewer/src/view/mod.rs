@@ -7,9 +7,11 @@
 //! - `present`: swapchain, the scaled blit of the renderer's output, readback of the presented image.
 //! - `ui`: the panel, navigation and picking input, toasts.
 pub mod edits;
+pub mod motion;
 pub mod nav;
 pub mod prefs;
 pub mod present;
+pub mod stats;
 mod ui;
 
 use std::path::{Path, PathBuf};
@@ -78,6 +80,13 @@ pub struct ViewArgs {
     /// current scene in place), e.g. `--open-at-frame 1 broken.glb`.
     #[arg(long, num_args = 2, value_names = ["K", "FILE"])]
     pub open_at_frame: Vec<String>,
+    /// Scripted mode: orbit the view's pivot by 2° per frame for N frames, then stay still until the image has
+    /// converged at full resolution (then the screenshots, --exit).
+    #[arg(long, value_name = "N")]
+    pub orbit: Option<u32>,
+    /// Scripted mode: write per-frame statistics (wall/GPU ms, internal and view size, moving) to this JSON.
+    #[arg(long, value_name = "FILE")]
+    pub stats: Option<PathBuf>,
     /// Scripted mode: exit after --frames (exit status 1 if anything failed or validation reported messages).
     #[arg(long)]
     pub exit: bool,
@@ -341,6 +350,10 @@ pub(crate) struct Toast {
 /// Scripted-mode state.
 struct Script {
     frames: Option<u32>,
+    /// --orbit N: frames still to orbit, and whether the run waits for convergence after them.
+    orbit_left: u32,
+    wait_converged: bool,
+    stats: Option<stats::StatsLog>,
     screenshot: Option<PathBuf>,
     screenshot_ui: Option<PathBuf>,
     screenshot_frames: u32,
@@ -388,6 +401,10 @@ pub(crate) struct Viewer {
     view_rect: [i32; 4],
     laid_out: bool,
     last_report: Option<FrameReport>,
+    /// The camera of the last rendered frame (a different one this frame: the view is moving).
+    last_drawn_cam: Option<Camera>,
+    /// When this frame's UI pass started (the frame's wall time runs from here to the present).
+    frame_started: Instant,
     frame_ms_avg: f64,
     interval_ms_avg: f64,
     last_frame_at: Option<Instant>,
@@ -477,6 +494,8 @@ impl Viewer {
             view_rect: [0, 0, 1, 1],
             laid_out: false,
             last_report: None,
+            last_drawn_cam: None,
+            frame_started: Instant::now(),
             frame_ms_avg: 0.0,
             interval_ms_avg: 0.0,
             last_frame_at: None,
@@ -489,7 +508,10 @@ impl Viewer {
             toasts: Vec::new(),
             shot: None,
             script: Script {
-                frames: args.frames,
+                frames: args.frames.or(args.orbit.map(|_| 0)),
+                orbit_left: args.orbit.unwrap_or(0),
+                wait_converged: args.orbit.is_some(),
+                stats: args.stats.clone().map(stats::StatsLog::new),
                 screenshot: args.screenshot.clone(),
                 screenshot_ui: args.screenshot_ui.clone(),
                 screenshot_frames: args.screenshot_frames,
@@ -874,14 +896,14 @@ impl Viewer {
         }
         let mut src = None;
         let mut rendered = false;
+        let cam = Camera {
+            width: iw,
+            height: ih,
+            ..self.nav.cam
+        };
         if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
             r.resize(iw, ih)?;
             r.output_bgra = bgra_direct;
-            let cam = Camera {
-                width: iw,
-                height: ih,
-                ..self.nav.cam
-            };
             r.record_frame(cmd, sg, scene.frame(), &cam)?;
             src = Some((r.output_buffer().raw, iw, ih));
             rendered = true;
@@ -944,6 +966,18 @@ impl Viewer {
             self.last_frame_at = Some(now);
             let (r, scene) = (self.renderer.as_mut().unwrap(), self.scene.as_ref().unwrap());
             let report = r.finish_frame(scene.frame(), gpu_wall)?;
+            let moving = self.last_drawn_cam.map_or(true, |c| !same_view(&c, &cam));
+            self.last_drawn_cam = Some(cam);
+            if let Some(log) = &mut self.script.stats {
+                log.frames.push(stats::FrameStat {
+                    wall_ms: self.frame_started.elapsed().as_secs_f64() * 1e3,
+                    gpu_ms: report.gpu_total_ms,
+                    internal: [iw, ih],
+                    view: [rect[2] as u32, rect[3] as u32],
+                    moving,
+                    rays: report.rays,
+                });
+            }
             self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
             self.last_report = Some(report);
             self.auto_budget(gpu_wall);
@@ -996,6 +1030,9 @@ impl Viewer {
                 self.start_loading(file);
             }
         }
+        if self.script.orbit_left > 0 || (self.script.wait_converged && !self.converged_full()) {
+            return;
+        }
         if n >= frames && self.loading.is_some() {
             // Let a scripted open finish (success or error) before the screenshots.
             return;
@@ -1029,12 +1066,57 @@ impl Viewer {
                     self.renderer.as_ref().map(|r| r.size())
                 );
             }
+            self.write_stats();
             if self.script.exit {
                 let bad = self.gpu.validation_messages() > 0
                     || self.outcome.lock().map(|o| o.error.is_some()).unwrap_or(true);
                 self.exit_signal
                     .send(if bad { ExitCode::FAILURE } else { ExitCode::SUCCESS });
             }
+        }
+    }
+
+    /// The last frame shows a converged image at the full internal size.
+    fn converged_full(&self) -> bool {
+        let full = self.internal_size();
+        match (&self.last_report, &self.renderer) {
+            (Some(rep), Some(r)) => motion::image_converged(rep) && r.size() == full,
+            _ => false,
+        }
+    }
+
+    /// Scripted mode: one step of `--orbit` (2° about the pivot, around the world up axis).
+    fn script_orbit(&mut self) {
+        if self.script.frames.is_none() || self.script.orbit_left == 0 || self.scene.is_none() {
+            return;
+        }
+        if self.loading.is_some() || self.last_report.is_none() {
+            return;
+        }
+        self.script.orbit_left -= 1;
+        self.nav.cam = nav::orbit(
+            &self.nav.cam,
+            self.nav.pivot,
+            self.nav.world_up.vector(),
+            2f32.to_radians(),
+            0.0,
+        );
+    }
+
+    /// Writes `--stats` (once; an error is fatal in scripted mode).
+    fn write_stats(&mut self) {
+        let Some(log) = self.script.stats.take() else {
+            return;
+        };
+        match log.write(&self.gpu.info.name, &self.scene_spec) {
+            Ok(()) => log::info!(
+                "stats written to {} ({} frames, median moving {:.1} ms, still {:.1} ms)",
+                log.path().display(),
+                log.frames.len(),
+                log.median_wall_ms(true).unwrap_or(f64::NAN),
+                log.median_wall_ms(false).unwrap_or(f64::NAN)
+            ),
+            Err(e) => self.fatal(format!("{e:#}")),
         }
     }
 
@@ -1067,6 +1149,7 @@ impl Viewer {
         }
         self.shut_down = true;
         self.maybe_save_prefs(true);
+        self.write_stats();
         self.gpu.wait_idle();
         self.pending_ui_readback = None;
         self.renderer = None;
@@ -1079,6 +1162,11 @@ impl Drop for Viewer {
     fn drop(&mut self) {
         self.shutdown();
     }
+}
+
+/// Same camera pose and lens (the image size is not part of the view).
+fn same_view(a: &Camera, b: &Camera) -> bool {
+    a.eye == b.eye && a.target == b.target && a.up == b.up && a.fov_y_deg == b.fov_y_deg
 }
 
 fn ema(avg: f64, x: f64) -> f64 {

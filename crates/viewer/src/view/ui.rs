@@ -50,7 +50,9 @@ pub const BINDINGS: &[(&str, &str)] = &[
 
 impl Viewer {
     pub(crate) fn ui(&mut self, ctx: &egui::Context) {
+        self.frame_started = Instant::now();
         self.poll_loading();
+        self.script_orbit();
         if let Some(d) = self.script.deadline {
             if Instant::now() > d {
                 self.script.deadline = None;
