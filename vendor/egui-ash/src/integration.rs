@@ -293,7 +293,10 @@ impl<A: Allocator + 'static> Integration<A> {
                 .state
                 .on_window_event(&viewport.window, &window_event);
 
-            if event_response.repaint {
+            // hrtao patch: egui-winit answers `repaint` to `RedrawRequested` itself; requesting another redraw
+            // for it painted in an endless loop (two full frames per event-loop iteration with `Poll`).
+            let is_redraw = matches!(window_event, winit::event::WindowEvent::RedrawRequested);
+            if event_response.repaint && !is_redraw {
                 viewport.window.request_redraw();
             }
 

@@ -165,6 +165,10 @@ pub fn run<C: AppCreator<A> + 'static, A: Allocator + 'static>(
     };
     let (mut app, render_state) = creator.create(cc);
 
+    // hrtao patch: paint when egui asks for it (input, `request_repaint[_after]` from any thread) and otherwise
+    // wait for events, instead of `ControlFlow::Poll` with a paint on every `AboutToWait`.
+    let repaint = RepaintSchedule::new(&context, event_loop.create_proxy());
+
     // ManuallyDrop is required because the integration object needs to be dropped before
     // the app drops for gpu_allocator drop order reasons.
     let mut integration = ManuallyDrop::new(Integration::new(
@@ -186,9 +190,6 @@ pub fn run<C: AppCreator<A> + 'static, A: Allocator + 'static>(
 
     let exit_code = Arc::new(Mutex::new(ExitCode::SUCCESS));
     let exit_code_clone = exit_code.clone();
-    // hrtao patch: paint when egui asks for it (input, `request_repaint[_after]` from any thread) and otherwise
-    // wait for events, instead of `ControlFlow::Poll` with a paint on every `AboutToWait`.
-    let repaint = RepaintSchedule::new(&context, event_loop.create_proxy());
     event_loop
         .run(move |event, event_loop| {
             if let Some(code) = exit_signal_rx.try_recv().ok() {
@@ -207,6 +208,7 @@ pub fn run<C: AppCreator<A> + 'static, A: Allocator + 'static>(
                     event, window_id, ..
                 } => {
                     if matches!(event, winit::event::WindowEvent::RedrawRequested) {
+                        log::trace!("paint: RedrawRequested");
                         repaint.clear();
                     }
                     let consumed = integration.handle_window_event(
@@ -266,6 +268,7 @@ pub fn run<C: AppCreator<A> + 'static, A: Allocator + 'static>(
                     };
                     app.handle_event(app_event);
                     if repaint.due() {
+                        log::trace!("paint: repaint requested");
                         repaint.clear();
                         integration.paint_all(event_loop, &mut app);
                     }
@@ -322,6 +325,7 @@ impl RepaintSchedule {
                 .checked_add(info.delay)
                 .unwrap_or_else(|| Instant::now() + std::time::Duration::from_secs(86400));
             let mut next = shared.lock().unwrap_or_else(|p| p.into_inner());
+            log::trace!("repaint requested in {:?}", info.delay);
             if next.map_or(true, |t| when < t) {
                 *next = Some(when);
                 drop(next);

@@ -91,7 +91,13 @@ mod tests {
     #[test]
     fn medians_of_moving_and_still_frames() {
         let mut log = StatsLog::new("x.json".into());
-        for (ms, moving) in [(10.0, true), (30.0, true), (20.0, true), (5.0, false), (7.0, false)] {
+        for (ms, moving) in [
+            (10.0, true),
+            (30.0, true),
+            (20.0, true),
+            (5.0, false),
+            (7.0, false),
+        ] {
             log.frames.push(FrameStat {
                 wall_ms: ms,
                 gpu_ms: 0.0,
