@@ -397,7 +397,7 @@ fn tab_and_quick_f12_taps_work_with_real_x_events() {
     let shots = dir.join("screenshots");
     let mut v = Running::start(&["--size", "560x300"], &dir);
     v.wait_for("opened", 1, std::time::Duration::from_secs(60));
-    let window = xdotool(&["search", "--sync", "--name", "^hrtao"]);
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^hrtao"]);
     let window = window
         .lines()
         .next()

@@ -823,9 +823,7 @@ impl Viewer {
         rect[3] = rect[3].clamp(1, ext.height as i32 - rect[1]);
         self.view_rect = rect;
         let now = Instant::now();
-        let changed = self
-            .last_drawn_cam
-            .map_or(true, |c| !same_view(&c, &self.nav.cam));
+        let changed = !self.last_drawn_cam.is_some_and(|c| same_view(&c, &self.nav.cam));
         self.motion.frame(changed, now);
         let moving = self.motion.moving(now);
         let (iw, ih) = self.internal_size_at(self.motion.scale(self.render_scale, now));

@@ -4,8 +4,9 @@ use std::time::{Duration, Instant};
 
 use hrtao_core::FrameReport;
 
-/// Frames accumulated with the same camera, settings and scene after which the image counts as final.
-pub const CONVERGED_FRAMES: u32 = 64;
+/// Frames accumulated with the same camera, settings and scene after which the image counts as final (a
+/// stand-in until the renderer reports convergence itself: a full-resolution frame takes seconds on lavapipe).
+pub const CONVERGED_FRAMES: u32 = 16;
 /// With no ray traced any more (every cell is full), the image stops changing sooner.
 pub const CONVERGED_FRAMES_NO_RAYS: u32 = 8;
 
@@ -99,8 +100,8 @@ mod tests {
     #[test]
     fn convergence_needs_accumulated_frames() {
         assert!(!image_converged(&report(1, 1000)));
-        assert!(!image_converged(&report(63, 1000)));
-        assert!(image_converged(&report(64, 1000)));
+        assert!(!image_converged(&report(CONVERGED_FRAMES - 1, 1000)));
+        assert!(image_converged(&report(CONVERGED_FRAMES, 1000)));
         assert!(!image_converged(&report(7, 0)));
         assert!(image_converged(&report(8, 0)));
     }
