@@ -424,3 +424,53 @@ fn tab_and_quick_f12_taps_work_with_real_x_events() {
     drop(v);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--orbit N --stats FILE`: N moving frames at the reduced scale (never below 0.35 of the view), then still frames
+/// until the image has converged, the last one at the full view size.
+#[test]
+fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("orbit");
+    let stats = dir.join("orbit.json");
+    run_viewer(&[
+        "--size",
+        "320x200",
+        "--no-panel",
+        "--orbit",
+        "3",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let frames = json["frames"].as_array().expect("frames");
+    let size = |f: &serde_json::Value, k: &str| -> (u64, u64) {
+        (f[k][0].as_u64().unwrap(), f[k][1].as_u64().unwrap())
+    };
+    let moving: Vec<_> = frames.iter().filter(|f| f["moving"] == true).collect();
+    // The first frame (a new camera) and the three orbit steps.
+    assert_eq!(moving.len(), 4, "{json}");
+    // A software device starts moving at 0.35 of the view (a GPU at full size).
+    let software = json["device"].as_str().unwrap_or("").contains("llvmpipe");
+    for f in &moving {
+        let ((iw, ih), (vw, vh)) = (size(f, "internal"), size(f, "view"));
+        assert!(iw <= vw && ih <= vh, "{f}");
+        assert!(
+            !software || (iw < vw && ih < vh),
+            "moving frames at a reduced scale: {f}"
+        );
+        assert!(iw as f64 >= 0.35 * vw as f64 - 1.0, "not below 0.35: {f}");
+        assert!(f["wall_ms"].as_f64().unwrap() > 0.0);
+    }
+    let last = frames.last().unwrap();
+    assert_eq!(last["moving"], false);
+    assert_eq!(
+        size(last, "internal"),
+        size(last, "view"),
+        "still frame at full size"
+    );
+    assert_eq!(size(last, "view"), (320, 200));
+    assert!(json["median_moving_wall_ms"].as_f64().unwrap() > 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
