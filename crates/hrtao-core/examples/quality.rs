@@ -141,7 +141,11 @@ fn main() -> anyhow::Result<()> {
         );
     }
     println!("\nStill camera, MAE after n frames: HRTAO / per-pixel RTAO with the same total rays\n");
-    let header: Vec<String> = (0..32).map(|i| 1u32 << i).take_while(|&n| n <= frames).map(|n| n.to_string()).collect();
+    let header: Vec<String> = (0..32)
+        .map(|i| 1u32 << i)
+        .take_while(|&n| n <= frames)
+        .map(|n| n.to_string())
+        .collect();
     println!("| scene | {} |", header.join(" | "));
     println!("|---|{}", "---|".repeat(header.len()));
     for c in curves {

@@ -474,6 +474,36 @@ impl Renderer {
         self.finish_frame(scene_f, t0.elapsed().as_secs_f64() * 1e3)
     }
 
+    /// Chooses the faster primary visibility for `scene` by measurement: a frame without AO with each, timed
+    /// on the wall clock (GPU timestamps after a render pass are unreliable on lavapipe), after a warm-up frame
+    /// each (the first dispatch compiles pipelines). Keeps the choice in `self.primary` and returns it with the
+    /// two times in ms (ray queries, raster).
+    pub fn pick_primary(
+        &mut self,
+        scene: &SceneGpu,
+        scene_f: u32,
+        camera: &Camera,
+    ) -> Result<(Primary, f64, f64)> {
+        let saved = self.settings.clone();
+        self.settings.mode = Mode::NoAo;
+        let time = |r: &mut Renderer, primary| -> Result<f64> {
+            r.primary = primary;
+            r.render(scene, scene_f, camera)?;
+            Ok(r.render(scene, scene_f, camera)?.wall_ms)
+        };
+        let ray_query = time(self, Primary::RayQuery);
+        let raster = time(self, Primary::Raster);
+        self.settings = saved;
+        self.still_key = None;
+        let (ray_query, raster) = (ray_query?, raster?);
+        self.primary = if raster < ray_query {
+            Primary::Raster
+        } else {
+            Primary::RayQuery
+        };
+        Ok((self.primary, ray_query, raster))
+    }
+
     /// Whether the frame just rendered (`still_index` frames into its view, `rays` traced) is final:
     /// per-pixel RTAO and HRTAO with refinement once each pixel has `still_samples` of its own rays (and, with
     /// jitter, `AA_FRAMES` samples); the paper's HRTAO once no cell takes rays; other modes once anti-aliased.

@@ -143,7 +143,7 @@ impl Default for AoSettings {
             shaded: true,
             refine: true,
             prior_rays: 32.0,
-            still_samples: 256,
+            still_samples: 64,
             max_cell_fraction: 0.25,
         }
     }

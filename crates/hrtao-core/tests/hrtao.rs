@@ -321,3 +321,43 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
     assert!(failed > 0 && reclaimed > 0, "overload and reclaims happened");
     assert_clean(&gpu);
 }
+
+#[test]
+fn a_still_view_converges_and_then_reports_it() {
+    // Refinement: converged once every pixel has still_samples rays of its own (own rays start at the second
+    // still frame); the paper's behaviour: once no cell takes rays. A camera move starts over.
+    let gpu = gpu();
+    let (scene, cam, radius) = shared_scene("rod", 160, 90);
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let settings = AoSettings {
+        still_samples: 32,
+        ..hrtao(8, radius)
+    };
+    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+    let done: Vec<bool> = (0..6)
+        .map(|_| r.render(&sg, scene.frame(), &cam).unwrap().converged)
+        .collect();
+    // Frames 1..=5 give 0, 8, 16, 24, 32 own rays per pixel.
+    assert_eq!(done, [false, false, false, false, true, true]);
+    let mut moved = cam;
+    moved.eye[2] += 1.0;
+    assert!(!r.render(&sg, scene.frame(), &moved).unwrap().converged);
+    let mut paper = Renderer::new(
+        &gpu,
+        cam.width,
+        cam.height,
+        AoSettings {
+            refine: false,
+            max_samples: 64,
+            ..settings
+        },
+    )
+    .unwrap();
+    let mut frames = 0;
+    while !paper.render(&sg, scene.frame(), &cam).unwrap().converged {
+        frames += 1;
+        assert!(frames < 64, "the paper's behaviour ends once every cell is full");
+    }
+    assert_eq!(paper.render(&sg, scene.frame(), &cam).unwrap().rays, 0);
+    assert_clean(&gpu);
+}

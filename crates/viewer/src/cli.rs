@@ -1,4 +1,4 @@
-//! Command-line interface.
+//! Command-line interface: every command's arguments. The commands import them from here (never the reverse).
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
@@ -21,9 +21,9 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Open the interactive viewer (the default with no command).
-    View(crate::view::ViewArgs),
+    View(ViewArgs),
     /// Benchmark HRTAO against per-pixel RTAO along a camera path (JSON + table).
-    Bench(crate::bench::BenchArgs),
+    Bench(BenchArgs),
     /// Render a scene headless to PNG (shaded) and PFM/EXR (linear AO).
     Render(RenderArgs),
     /// List Vulkan devices and whether they support ray queries.
@@ -129,6 +129,165 @@ pub struct RenderArgs {
     /// Statistics JSON (device, timings, rays).
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    #[command(flatten)]
+    pub device: DeviceArgs,
+}
+
+#[derive(Args, Debug, Clone, Default)]
+pub struct ViewArgs {
+    /// Scene to open: .gltf, .glb, .obj or a generator spec such as gen:city (default: the bundled gearbox).
+    pub file: Option<String>,
+    /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// Up axis when fitting a camera: y or z (default: z for the bundled scene, y otherwise).
+    #[arg(long)]
+    pub up: Option<String>,
+    /// Window size, e.g. 1280x720.
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// Largest internal resolution as a fraction of the 3D view (default 1): a still image is rendered at it;
+    /// while the camera moves the scale drops to meet the frame-time target (never below 0.35 unless capped).
+    #[arg(long)]
+    pub render_scale: Option<f32>,
+    /// AO mode: hrtao, rtao, none, debug-cells, debug-lod, debug-samples.
+    #[arg(long)]
+    pub mode: Option<Mode>,
+    /// Ray budget in rays per frame, whatever the internal resolution (turns the frame-time target off).
+    #[arg(long, value_name = "N")]
+    pub rays_per_frame: Option<u32>,
+    /// Keep the ray budget and the moving render scale fixed instead of following the frame-time target.
+    #[arg(long)]
+    pub no_auto_budget: bool,
+    /// AO radius in scene units (default: 8 for the bundled scene, else 5% of the bounds diagonal).
+    #[arg(long)]
+    pub radius: Option<f32>,
+    /// Scripted mode: render this many frames once the scene is ready, then take the screenshots.
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Scripted mode: save the 3D view (no UI) at window resolution to this PNG after --frames.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Scripted mode: save the whole window including the UI to this PNG after --frames.
+    #[arg(long)]
+    pub screenshot_ui: Option<PathBuf>,
+    /// Scripted mode: extra frames rendered for --screenshot (the hash map keeps converging).
+    #[arg(long, default_value_t = 4)]
+    pub screenshot_frames: u32,
+    /// Scripted mode: resize the window to WxH after frame K (tests resizing), e.g. `--resize-at-frame 2 320x200`.
+    #[arg(long, num_args = 2, value_names = ["K", "WxH"])]
+    pub resize_at_frame: Vec<String>,
+    /// Scripted mode: open FILE after frame K, as a user would from the panel (tests that a bad file leaves the
+    /// current scene in place), e.g. `--open-at-frame 1 broken.glb`.
+    #[arg(long, num_args = 2, value_names = ["K", "FILE"])]
+    pub open_at_frame: Vec<String>,
+    /// Scripted mode: orbit the view's pivot by 2° per frame for N frames, then stay still until the image has
+    /// converged at full resolution (then the screenshots, --exit).
+    #[arg(long, value_name = "N")]
+    pub orbit: Option<u32>,
+    /// Scripted mode: write per-frame statistics (wall/GPU ms, internal and view size, moving) to this JSON.
+    #[arg(long, value_name = "FILE")]
+    pub stats: Option<PathBuf>,
+    /// Scripted mode: exit after --frames (exit status 1 if anything failed or validation reported messages).
+    #[arg(long)]
+    pub exit: bool,
+    /// Scripted mode: fail if the run has not finished after this many seconds.
+    #[arg(long, default_value_t = 600)]
+    pub timeout: u64,
+    /// Settings/bookmarks file (default: ~/.config/hrtao/viewer.json).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Neither read nor write the settings file.
+    #[arg(long)]
+    pub no_config: bool,
+    /// Start with the side panel hidden (Tab toggles it).
+    #[arg(long)]
+    pub no_panel: bool,
+    /// Use the first device whose name contains this text.
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
+    #[arg(long)]
+    pub validation: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
+    #[arg(long, required_unless_present = "report")]
+    pub scene: Option<String>,
+    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"} (default: fit the scene).
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// Navigation path: a JSON array of cameras (or {"cameras": [...]}); sizes come from --width/--height.
+    #[arg(long, conflicts_with = "orbit")]
+    pub path: Option<PathBuf>,
+    /// Navigation: N frames orbiting the camera target by --orbit-step degrees per frame (default 16).
+    #[arg(long)]
+    pub orbit: Option<u32>,
+    /// Degrees per orbit frame (a walking-speed camera move at 60 frames per second).
+    #[arg(long, default_value_t = 0.25)]
+    pub orbit_step: f32,
+    /// Image width (default: the camera file's, else 320).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: the camera file's, else 180).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Up axis for the automatic camera: y or z (default z for gen: scenes, else y).
+    #[arg(long)]
+    pub up: Option<String>,
+    /// At most this many static frames after the first frame and before the navigation, letting cells fill as
+    /// they would during the first fraction of a second on a GPU (the paper's navigation is with a warm map).
+    #[arg(long, default_value_t = 128)]
+    pub settle: u32,
+    /// Stop settling once a frame traces fewer than this fraction of the first frame's rays.
+    #[arg(long, default_value_t = 0.1)]
+    pub settle_until: f64,
+    /// Automatic camera (no --camera): "fit" frames the whole scene from outside; "corner" stands at a corner of
+    /// the bounds at 80 % of their height and looks across the scene (inside a room: depth complexity grows with
+    /// its size).
+    #[arg(long, default_value = "fit")]
+    pub auto_camera: String,
+    /// First-frame repetitions (each from an empty hash map); the summary takes medians.
+    #[arg(long, default_value_t = 3)]
+    pub repeat: u32,
+    /// Skip the error measurements (reference, curves, search over B): timing and memory only.
+    #[arg(long)]
+    pub no_quality: bool,
+    /// Rays per pixel per frame of the progressive per-pixel RTAO run (resolution of the search over B).
+    #[arg(long, default_value_t = 4)]
+    pub step: u32,
+    /// Cap of the search over per-pixel rays (0: 64 × B, at least 64).
+    #[arg(long, default_value_t = 0)]
+    pub max_rays: u32,
+    /// Rays per pixel of the converged per-pixel RTAO reference (disjoint from the searched samples).
+    #[arg(long, default_value_t = 1024)]
+    pub ref_rays: u32,
+    /// Static HRTAO frames for HRTAO's error-versus-rays curve.
+    #[arg(long, default_value_t = 8)]
+    pub hrtao_frames: u32,
+    /// Optional independent reference AO image (.pfm, e.g. the Cycles references of ../shared/refs).
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Name in reports (default: the scene file stem or spec).
+    #[arg(long)]
+    pub label: Option<String>,
+    /// Group in reports: "scenes" (default) or "scale".
+    #[arg(long, default_value = "scenes")]
+    pub group: String,
+    /// Write the results here (schema hrtao-bench/1).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Report mode: read every *.json bench result in this directory and write --markdown and plots beside it.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Report mode: markdown output (default: DIR/../benchmarks.md).
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
+    /// AO settings (--mode is ignored: the bench runs both HRTAO and per-pixel RTAO).
+    #[command(flatten)]
+    pub ao: AoArgs,
     #[command(flatten)]
     pub device: DeviceArgs,
 }

@@ -1,6 +1,7 @@
 //! `hrtao`: CAD viewport with noise-free ray-traced ambient occlusion (HRTAO), and its headless commands.
 mod bench;
 mod cli;
+mod common;
 mod render_cmd;
 mod view;
 
@@ -17,7 +18,7 @@ fn main() {
         Some(cli::Command::Devices(d)) => render_cmd::list_devices(&d),
         Some(cli::Command::View(v)) => view::run(&v),
         Some(cli::Command::Bench(b)) => bench::run(&b),
-        None => view::run(&view::ViewArgs::default()),
+        None => view::run(&cli::ViewArgs::default()),
     };
     if let Err(e) = result {
         eprintln!("hrtao: error: {e:#}");

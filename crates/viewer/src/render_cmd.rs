@@ -1,53 +1,12 @@
 //! `hrtao render`: load, build, render K frames headless, write images and statistics.
-use std::path::Path;
-use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use hrtao_core::camera::UpAxis;
-use hrtao_core::{imageio, Camera, ContextOptions, FrameReport, Gpu, Renderer, SceneGpu};
-use hrtao_scene::Scene;
+use hrtao_core::{imageio, Camera, FrameReport, Renderer, SceneGpu};
 
 use crate::cli::{DeviceArgs, RenderArgs};
-
-pub fn open_gpu(d: &DeviceArgs) -> Result<Arc<Gpu>> {
-    let opts = ContextOptions {
-        validation: d.validation || hrtao_core::context::validation_requested_by_env(),
-        device: d.device.clone(),
-        memory_limit: hrtao_core::context::memory_limit_from_env(),
-        ..Default::default()
-    };
-    let gpu = Gpu::new(&opts)?;
-    log::info!(
-        "device: {} ({}; {})",
-        gpu.info.name,
-        gpu.info.kind,
-        gpu.info.driver
-    );
-    Ok(gpu)
-}
-
-pub fn load_scene(spec: &str) -> Result<(Scene, f64)> {
-    let t0 = Instant::now();
-    let mut last = Instant::now();
-    let scene = hrtao_scene::load(spec, &mut |p| {
-        if last.elapsed().as_millis() > 500 {
-            log::info!("loading {spec}: {} {}/{}", p.stage, p.done, p.total);
-            last = Instant::now();
-        }
-    })
-    .with_context(|| format!("cannot load scene `{spec}`"))?;
-    let ms = t0.elapsed().as_secs_f64() * 1e3;
-    log::info!(
-        "scene {}: {} meshes, {} instances, {} unique / {} instanced triangles, loaded in {ms:.0} ms",
-        scene.name,
-        scene.meshes.len(),
-        scene.instances.len(),
-        scene.unique_triangle_count(),
-        scene.instanced_triangle_count()
-    );
-    Ok((scene, ms))
-}
+use crate::common::{load_scene, open_gpu, write_json};
 
 fn parse_up(s: &str) -> Result<UpAxis> {
     match s.to_ascii_lowercase().as_str() {
@@ -167,11 +126,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
-    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
-}
-
 pub fn list_devices(d: &DeviceArgs) -> Result<()> {
     let gpu = open_gpu(d)?;
     println!(
@@ -179,21 +133,4 @@ pub fn list_devices(d: &DeviceArgs) -> Result<()> {
         gpu.info.name, gpu.info.kind, gpu.info.driver, gpu.info.api_version
     );
     Ok(())
-}
-
-/// The default scene bundled in `assets/`.
-pub fn default_scene_path() -> std::path::PathBuf {
-    let beside_exe = std::env::current_exe()
-        .ok()
-        .and_then(|p| p.parent().map(|d| d.join("assets")));
-    let candidates = [
-        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/default.glb")),
-        beside_exe.map(|d| d.join("default.glb")),
-        Some(Path::new("assets/default.glb").to_path_buf()),
-    ];
-    candidates
-        .into_iter()
-        .flatten()
-        .find(|p| p.exists())
-        .unwrap_or_else(|| "assets/default.glb".into())
 }

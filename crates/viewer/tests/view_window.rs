@@ -217,3 +217,260 @@ fn screenshot_to_unwritable_or_full_destination_fails_cleanly() {
         assert!(err.contains("screenshot failed"), "{dest}: message\n{err}");
     }
 }
+
+/// A viewer started in the background (interactive, not scripted), its log collected line by line; killed when
+/// dropped.
+struct Running {
+    child: std::process::Child,
+    log: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+}
+
+impl Running {
+    fn start(args: &[&str], cwd: &Path) -> Running {
+        use std::io::BufRead;
+        let mut child = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+            .arg("view")
+            .args(args)
+            .arg("--no-config")
+            .current_dir(cwd)
+            .env("HRTAO_VALIDATION", "1")
+            .env("RUST_LOG", "info")
+            .stderr(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .expect("start hrtao view");
+        let log = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let stderr = child.stderr.take().unwrap();
+        let sink = log.clone();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+                sink.lock().unwrap().push(line);
+            }
+        });
+        Running { child, log }
+    }
+
+    fn log_text(&self) -> String {
+        self.log.lock().unwrap().join("\n")
+    }
+
+    /// Waits until `count` log lines contain `needle`.
+    fn wait_for(&mut self, needle: &str, count: usize, timeout: std::time::Duration) {
+        let t0 = std::time::Instant::now();
+        loop {
+            let n = self
+                .log
+                .lock()
+                .unwrap()
+                .iter()
+                .filter(|l| l.contains(needle))
+                .count();
+            if n >= count {
+                return;
+            }
+            if let Ok(Some(status)) = self.child.try_wait() {
+                panic!(
+                    "the viewer exited ({status}) before `{needle}`:\n{}",
+                    self.log_text()
+                );
+            }
+            assert!(
+                t0.elapsed() < timeout,
+                "no `{needle}` (×{count}) within {timeout:?}:\n{}",
+                self.log_text()
+            );
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+    }
+
+    /// User + system CPU time of the process so far, in seconds (/proc/PID/stat fields 14 and 15).
+    fn cpu_seconds(&self) -> f64 {
+        let stat = std::fs::read_to_string(format!("/proc/{}/stat", self.child.id())).unwrap();
+        // The command name (field 2) is in parentheses and may contain spaces: split after it.
+        let rest = &stat[stat.rfind(')').unwrap() + 2..];
+        let f: Vec<&str> = rest.split_whitespace().collect();
+        let ticks: u64 = f[11].parse::<u64>().unwrap() + f[12].parse::<u64>().unwrap();
+        ticks as f64 / clock_ticks_per_second()
+    }
+
+    fn validation_clean(&self) {
+        let log = self.log_text();
+        assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
+        assert!(!log.contains("panicked"), "panic:\n{log}");
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn clock_ticks_per_second() -> f64 {
+    Command::new("getconf")
+        .arg("CLK_TCK")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8_lossy(&o.stdout).trim().parse().ok())
+        .unwrap_or(100.0)
+}
+
+/// Left alone, the viewer refines the image until it has converged at full resolution and then waits for events:
+/// ≤ 5 % of one core over the next 10 s (it used two full cores before).
+#[test]
+fn a_viewer_left_alone_rests() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("rest");
+    let mut v = Running::start(&["--size", "320x200", "--no-panel"], &dir);
+    v.wait_for("at rest", 1, std::time::Duration::from_secs(90));
+    let log = v.log_text();
+    assert!(log.contains("converged"), "{log}");
+    // The "opened" toast expires 4 s after the load: one more frame; measure after it.
+    std::thread::sleep(std::time::Duration::from_secs(1));
+    let (c0, t0) = (v.cpu_seconds(), std::time::Instant::now());
+    std::thread::sleep(std::time::Duration::from_secs(10));
+    let cpu = 100.0 * (v.cpu_seconds() - c0) / t0.elapsed().as_secs_f64();
+    eprintln!("CPU at rest: {cpu:.2} % of one core");
+    assert!(cpu <= 5.0, "{cpu:.1} % of one core at rest\n{}", v.log_text());
+    v.validation_clean();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn xdotool(args: &[&str]) -> String {
+    let out = Command::new("xdotool").args(args).output().expect("xdotool");
+    assert!(
+        out.status.success(),
+        "xdotool {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// PNG widths of the screenshots in `dir`, oldest first, once there are `count` of them.
+fn wait_for_screenshots(dir: &Path, count: usize, v: &mut Running) -> Vec<u32> {
+    let t0 = std::time::Instant::now();
+    loop {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+            .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+            .unwrap_or_default();
+        files.retain(|p| p.extension().is_some_and(|e| e == "png"));
+        if files.len() >= count {
+            files.sort();
+            // The PNG is written in one go after rendering; a partly written file fails to decode: retry.
+            let widths: Option<Vec<u32>> = files
+                .iter()
+                .map(|f| image::image_dimensions(f).ok().map(|d| d.0))
+                .collect();
+            if let Some(w) = widths {
+                return w;
+            }
+        }
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(60),
+            "{} of {count} screenshots after 60 s\n{}",
+            files.len(),
+            v.log_text()
+        );
+        if let Ok(Some(status)) = v.child.try_wait() {
+            panic!("the viewer exited ({status}):\n{}", v.log_text());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+}
+
+/// Real X key events (xdotool: press and release at once, as a quick tap): F12 saves a screenshot of the 3D view,
+/// Tab hides the panel (the screenshot then spans the whole window) and shows it again, whether the viewer is
+/// busy refining or at rest, and Tab never leaves a panel widget with the focus that would swallow later keys.
+#[test]
+fn tab_and_quick_f12_taps_work_with_real_x_events() {
+    if !display_available() {
+        return;
+    }
+    if Command::new("xdotool").arg("version").output().is_err() {
+        eprintln!("skipping: xdotool is not installed");
+        return;
+    }
+    let dir = out_dir("keys");
+    let shots = dir.join("screenshots");
+    let mut v = Running::start(&["--size", "560x300"], &dir);
+    v.wait_for("opened", 1, std::time::Duration::from_secs(60));
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^hrtao"]);
+    let window = window
+        .lines()
+        .next()
+        .expect("the viewer's window")
+        .trim()
+        .to_string();
+    xdotool(&["windowfocus", "--sync", &window]);
+    // While the image is still refining (frames keep coming): Tab, then a quick F12.
+    xdotool(&["key", "Tab"]);
+    xdotool(&["key", "F12"]);
+    let widths = wait_for_screenshots(&shots, 1, &mut v);
+    assert_eq!(widths, [560], "panel hidden: the 3D view spans the window");
+    // At rest (the loop waits for events): Tab shows the panel again, F12 still acts.
+    v.wait_for("at rest", 1, std::time::Duration::from_secs(90));
+    xdotool(&["key", "Tab"]);
+    xdotool(&["key", "F12"]);
+    let widths = wait_for_screenshots(&shots, 2, &mut v);
+    assert!(widths[1] < 560, "panel shown again: {widths:?}");
+    // A Tab and F12 tapped together (one frame sees both) act together.
+    xdotool(&["key", "--delay", "5", "Tab", "F12"]);
+    let widths = wait_for_screenshots(&shots, 3, &mut v);
+    assert_eq!(widths[2], 560, "{widths:?}");
+    v.validation_clean();
+    drop(v);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--orbit N --stats FILE`: N moving frames at the reduced scale (never below 0.35 of the view), then still frames
+/// until the image has converged, the last one at the full view size.
+#[test]
+fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("orbit");
+    let stats = dir.join("orbit.json");
+    run_viewer(&[
+        "--size",
+        "320x200",
+        "--no-panel",
+        "--orbit",
+        "3",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let frames = json["frames"].as_array().expect("frames");
+    let size = |f: &serde_json::Value, k: &str| -> (u64, u64) {
+        (f[k][0].as_u64().unwrap(), f[k][1].as_u64().unwrap())
+    };
+    let moving: Vec<_> = frames.iter().filter(|f| f["moving"] == true).collect();
+    // The first frame (a new camera) and the three orbit steps.
+    assert_eq!(moving.len(), 4, "{json}");
+    // A software device starts moving at 0.35 of the view (a GPU at full size).
+    let software = json["device"].as_str().unwrap_or("").contains("llvmpipe");
+    for f in &moving {
+        let ((iw, ih), (vw, vh)) = (size(f, "internal"), size(f, "view"));
+        assert!(iw <= vw && ih <= vh, "{f}");
+        assert!(
+            !software || (iw < vw && ih < vh),
+            "moving frames at a reduced scale: {f}"
+        );
+        assert!(iw as f64 >= 0.35 * vw as f64 - 1.0, "not below 0.35: {f}");
+        assert!(f["wall_ms"].as_f64().unwrap() > 0.0);
+    }
+    let last = frames.last().unwrap();
+    assert_eq!(last["moving"], false);
+    assert_eq!(
+        size(last, "internal"),
+        size(last, "view"),
+        "still frame at full size"
+    );
+    assert_eq!(size(last, "view"), (320, 200));
+    assert!(json["median_moving_wall_ms"].as_f64().unwrap() > 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -14,103 +14,20 @@ pub mod report;
 pub mod stats;
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use clap::Args;
 use hrtao_core::camera::UpAxis;
 use hrtao_core::metrics::{ao_error, AoError};
 use hrtao_core::{imageio, AoSettings, Camera, FrameReport, Mode, Renderer, SceneGpu};
 use serde::{Deserialize, Serialize};
 
-use crate::cli::{AoArgs, DeviceArgs};
-use crate::render_cmd::{load_scene, open_gpu, write_json};
+use crate::cli::BenchArgs;
+use crate::common::{load_scene, open_gpu, write_json};
 use stats::{
     median, rays_to_reach, section_sum, segment_mean, CurvePoint, Match, HRTAO_PASSES, NON_RAY_PASSES,
 };
 
 pub const SCHEMA: &str = "hrtao-bench/1";
-
-#[derive(Args, Debug, Clone)]
-pub struct BenchArgs {
-    /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
-    #[arg(long, required_unless_present = "report")]
-    pub scene: Option<String>,
-    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"} (default: fit the scene).
-    #[arg(long)]
-    pub camera: Option<PathBuf>,
-    /// Navigation path: a JSON array of cameras (or {"cameras": [...]}); sizes come from --width/--height.
-    #[arg(long, conflicts_with = "orbit")]
-    pub path: Option<PathBuf>,
-    /// Navigation: N frames orbiting the camera target by --orbit-step degrees per frame (default 16).
-    #[arg(long)]
-    pub orbit: Option<u32>,
-    /// Degrees per orbit frame (a walking-speed camera move at 60 frames per second).
-    #[arg(long, default_value_t = 0.25)]
-    pub orbit_step: f32,
-    /// Image width (default: the camera file's, else 320).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height (default: the camera file's, else 180).
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Up axis for the automatic camera: y or z (default z for gen: scenes, else y).
-    #[arg(long)]
-    pub up: Option<String>,
-    /// At most this many static frames after the first frame and before the navigation, letting cells fill as
-    /// they would during the first fraction of a second on a GPU (the paper's navigation is with a warm map).
-    #[arg(long, default_value_t = 128)]
-    pub settle: u32,
-    /// Stop settling once a frame traces fewer than this fraction of the first frame's rays.
-    #[arg(long, default_value_t = 0.1)]
-    pub settle_until: f64,
-    /// Automatic camera (no --camera): "fit" frames the whole scene from outside; "corner" stands at a corner of
-    /// the bounds at 80 % of their height and looks across the scene (inside a room: depth complexity grows with
-    /// its size).
-    #[arg(long, default_value = "fit")]
-    pub auto_camera: String,
-    /// First-frame repetitions (each from an empty hash map); the summary takes medians.
-    #[arg(long, default_value_t = 3)]
-    pub repeat: u32,
-    /// Skip the error measurements (reference, curves, search over B): timing and memory only.
-    #[arg(long)]
-    pub no_quality: bool,
-    /// Rays per pixel per frame of the progressive per-pixel RTAO run (resolution of the search over B).
-    #[arg(long, default_value_t = 4)]
-    pub step: u32,
-    /// Cap of the search over per-pixel rays (0: 64 × B, at least 64).
-    #[arg(long, default_value_t = 0)]
-    pub max_rays: u32,
-    /// Rays per pixel of the converged per-pixel RTAO reference (disjoint from the searched samples).
-    #[arg(long, default_value_t = 1024)]
-    pub ref_rays: u32,
-    /// Static HRTAO frames for HRTAO's error-versus-rays curve.
-    #[arg(long, default_value_t = 8)]
-    pub hrtao_frames: u32,
-    /// Optional independent reference AO image (.pfm, e.g. the Cycles references of ../shared/refs).
-    #[arg(long)]
-    pub reference: Option<PathBuf>,
-    /// Name in reports (default: the scene file stem or spec).
-    #[arg(long)]
-    pub label: Option<String>,
-    /// Group in reports: "scenes" (default) or "scale".
-    #[arg(long, default_value = "scenes")]
-    pub group: String,
-    /// Write the results here (schema hrtao-bench/1).
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-    /// Report mode: read every *.json bench result in this directory and write --markdown and plots beside it.
-    #[arg(long)]
-    pub report: Option<PathBuf>,
-    /// Report mode: markdown output (default: DIR/../benchmarks.md).
-    #[arg(long)]
-    pub markdown: Option<PathBuf>,
-    /// AO settings (--mode is ignored: the bench runs both HRTAO and per-pixel RTAO).
-    #[command(flatten)]
-    pub ao: AoArgs,
-    #[command(flatten)]
-    pub device: DeviceArgs,
-}
 
 /// One rendered frame.
 #[derive(Clone, Debug, Serialize, Deserialize)]

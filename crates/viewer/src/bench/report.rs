@@ -114,10 +114,32 @@ pub fn run(dir: &Path, markdown: Option<&Path>) -> Result<()> {
             .display()
             .to_string()
     };
-    let text = render_markdown(&results, dir, &rel)?;
+    let mut text = render_markdown(&results, dir, &rel)?;
+    if let Ok(old) = std::fs::read_to_string(&md_path) {
+        text.push_str(&kept_sections(&old));
+    }
     std::fs::write(&md_path, text).with_context(|| format!("cannot write {}", md_path.display()))?;
     println!("wrote {}", md_path.display());
     Ok(())
+}
+
+/// Sections of the markdown that `hrtao bench` does not generate (measured by other commands), carried over
+/// unchanged when the report is regenerated: each runs from its heading to the next `## ` heading.
+const KEPT_SECTIONS: &[&str] = &["## Viewer orbit"];
+
+fn kept_sections(old: &str) -> String {
+    let mut kept = String::new();
+    for heading in KEPT_SECTIONS {
+        let Some(start) = old.find(&format!("\n{heading}")) else {
+            continue;
+        };
+        let body = &old[start + 1..];
+        let end = body[3..].find("\n## ").map_or(body.len(), |e| e + 4);
+        kept.push('\n');
+        kept.push_str(body[..end].trim_end());
+        kept.push('\n');
+    }
+    kept
 }
 
 /// `p` relative to `base` when `p` is inside it (enough for docs/bench under docs/).
@@ -817,4 +839,18 @@ fn render_markdown(
         )?;
     }
     Ok(m)
+}
+
+#[cfg(test)]
+mod kept_tests {
+    use super::kept_sections;
+
+    #[test]
+    fn hand_written_sections_survive_regeneration() {
+        let old = "# Benchmarks\n\n## Table 1\nx\n\n## Viewer orbit\n\n| a |\n|---|\n\n## Scale\ny\n";
+        assert_eq!(kept_sections(old), "\n## Viewer orbit\n\n| a |\n|---|\n");
+        let at_end = "# B\n\n## Viewer orbit\nfigures\n";
+        assert_eq!(kept_sections(at_end), "\n## Viewer orbit\nfigures\n");
+        assert_eq!(kept_sections("# B\n## Table 1\n"), "");
+    }
 }

@@ -6,10 +6,13 @@
 //! - `prefs`: persisted settings and camera bookmarks.
 //! - `present`: swapchain, the scaled blit of the renderer's output, readback of the presented image.
 //! - `ui`: the panel, navigation and picking input, toasts.
+pub mod budget;
 pub mod edits;
+pub mod motion;
 pub mod nav;
 pub mod prefs;
 pub mod present;
+pub mod stats;
 mod ui;
 
 use std::path::{Path, PathBuf};
@@ -20,7 +23,6 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
-use clap::Args;
 use egui_ash::winit;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
@@ -29,77 +31,11 @@ use hrtao_core::camera::UpAxis;
 use hrtao_core::{AoSettings, Camera, ContextOptions, FrameReport, Gpu, Mode, Renderer, SceneGpu};
 use hrtao_scene::Scene;
 
+use crate::cli::ViewArgs;
 use edits::EditStack;
 use nav::Nav;
 use prefs::Prefs;
 use present::Presenter;
-
-#[derive(Args, Debug, Clone, Default)]
-pub struct ViewArgs {
-    /// Scene to open: .gltf, .glb, .obj or a generator spec such as gen:city (default: the bundled gearbox).
-    pub file: Option<String>,
-    /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
-    #[arg(long)]
-    pub camera: Option<PathBuf>,
-    /// Up axis when fitting a camera: y or z (default: z for the bundled scene, y otherwise).
-    #[arg(long)]
-    pub up: Option<String>,
-    /// Window size, e.g. 1280x720.
-    #[arg(long, value_name = "WxH")]
-    pub size: Option<String>,
-    /// Internal resolution as a fraction of the 3D view (default: 0.35 on software devices, else 1).
-    #[arg(long)]
-    pub render_scale: Option<f32>,
-    /// AO mode: hrtao, rtao, none, debug-cells, debug-lod, debug-samples.
-    #[arg(long)]
-    pub mode: Option<Mode>,
-    /// Ray budget (rays per pixel per frame).
-    #[arg(long)]
-    pub rays: Option<u32>,
-    /// AO radius in scene units (default: 8 for the bundled scene, else 5% of the bounds diagonal).
-    #[arg(long)]
-    pub radius: Option<f32>,
-    /// Scripted mode: render this many frames once the scene is ready, then take the screenshots.
-    #[arg(long)]
-    pub frames: Option<u32>,
-    /// Scripted mode: save the 3D view (no UI) at window resolution to this PNG after --frames.
-    #[arg(long)]
-    pub screenshot: Option<PathBuf>,
-    /// Scripted mode: save the whole window including the UI to this PNG after --frames.
-    #[arg(long)]
-    pub screenshot_ui: Option<PathBuf>,
-    /// Scripted mode: extra frames rendered for --screenshot (the hash map keeps converging).
-    #[arg(long, default_value_t = 4)]
-    pub screenshot_frames: u32,
-    /// Scripted mode: resize the window to WxH after frame K (tests resizing), e.g. `--resize-at-frame 2 320x200`.
-    #[arg(long, num_args = 2, value_names = ["K", "WxH"])]
-    pub resize_at_frame: Vec<String>,
-    /// Scripted mode: open FILE after frame K, as a user would from the panel (tests that a bad file leaves the
-    /// current scene in place), e.g. `--open-at-frame 1 broken.glb`.
-    #[arg(long, num_args = 2, value_names = ["K", "FILE"])]
-    pub open_at_frame: Vec<String>,
-    /// Scripted mode: exit after --frames (exit status 1 if anything failed or validation reported messages).
-    #[arg(long)]
-    pub exit: bool,
-    /// Scripted mode: fail if the run has not finished after this many seconds.
-    #[arg(long, default_value_t = 600)]
-    pub timeout: u64,
-    /// Settings/bookmarks file (default: ~/.config/hrtao/viewer.json).
-    #[arg(long)]
-    pub config: Option<PathBuf>,
-    /// Neither read nor write the settings file.
-    #[arg(long)]
-    pub no_config: bool,
-    /// Start with the side panel hidden (Tab toggles it).
-    #[arg(long)]
-    pub no_panel: bool,
-    /// Use the first device whose name contains this text.
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
-    #[arg(long)]
-    pub validation: bool,
-}
 
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let (w, h) = s
@@ -114,7 +50,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
 
 /// The bundled scene's path, normalised for display.
 pub(crate) fn default_spec() -> String {
-    let p = crate::render_cmd::default_scene_path();
+    let p = crate::common::default_scene_path();
     std::fs::canonicalize(&p).unwrap_or(p).display().to_string()
 }
 
@@ -343,6 +279,10 @@ pub(crate) struct Toast {
 /// Scripted-mode state.
 struct Script {
     frames: Option<u32>,
+    /// --orbit N: frames still to orbit, and whether the run waits for convergence after them.
+    orbit_left: u32,
+    wait_converged: bool,
+    stats: Option<stats::StatsLog>,
     screenshot: Option<PathBuf>,
     screenshot_ui: Option<PathBuf>,
     screenshot_frames: u32,
@@ -386,15 +326,25 @@ pub(crate) struct Viewer {
     forced_up: Option<UpAxis>,
     args_radius: Option<f32>,
     // View.
+    /// The user's render scale: the internal resolution of a still image, and the cap while moving.
     render_scale: f32,
+    motion: motion::Motion,
     view_rect: [i32; 4],
     laid_out: bool,
     last_report: Option<FrameReport>,
+    /// The camera of the last rendered frame (a different one this frame: the view is moving).
+    last_drawn_cam: Option<Camera>,
+    /// When this frame's UI pass started (the frame's wall time runs from here to the present).
+    frame_started: Instant,
     frame_ms_avg: f64,
     interval_ms_avg: f64,
     last_frame_at: Option<Instant>,
     bookmark_name: String,
     show_panel: bool,
+    /// Tab was pressed this frame: drop the focus egui's keyboard navigation gave a widget.
+    drop_nav_focus: bool,
+    /// The last frame left nothing to refine: the event loop waits for input.
+    resting: bool,
     // Persistence.
     prefs: Prefs,
     prefs_path: Option<PathBuf>,
@@ -428,16 +378,25 @@ impl Viewer {
         if let Some(m) = args.mode {
             settings.mode = m;
         }
-        if let Some(r) = args.rays {
-            settings.rays_per_pixel = r;
+        if let Some(r) = args.rays_per_frame {
+            prefs.rays_per_frame = r.clamp(budget::MIN_RAYS_PER_FRAME, budget::MAX_RAYS_PER_FRAME);
             prefs.auto_budget = false;
         }
-        let default_scale = if gpu.info.is_software { 0.35 } else { 1.0 };
+        if args.no_auto_budget {
+            prefs.auto_budget = false;
+        }
+        // The user's render scale caps the internal resolution; a still image is rendered at it.
         let render_scale = args
             .render_scale
-            .or(prefs.render_scale)
-            .unwrap_or(default_scale)
+            .or(prefs.max_render_scale)
+            .unwrap_or(1.0)
             .clamp(0.05, 2.0);
+        // While moving: today's 0.35 on software devices, adapted to the frame-time target from there.
+        let moving_scale = if gpu.info.is_software {
+            motion::MIN_MOVING_SCALE
+        } else {
+            1.0
+        };
         egui_ctx.set_visuals(if prefs.dark_theme {
             egui::Visuals::dark()
         } else {
@@ -476,14 +435,19 @@ impl Viewer {
             forced_up,
             args_radius: args.radius,
             render_scale,
+            motion: motion::Motion::new(moving_scale.min(render_scale)),
             view_rect: [0, 0, 1, 1],
             laid_out: false,
             last_report: None,
+            last_drawn_cam: None,
+            frame_started: Instant::now(),
             frame_ms_avg: 0.0,
             interval_ms_avg: 0.0,
             last_frame_at: None,
             bookmark_name: String::new(),
             show_panel: !args.no_panel,
+            drop_nav_focus: false,
+            resting: false,
             prefs,
             prefs_path,
             prefs_saved,
@@ -491,7 +455,10 @@ impl Viewer {
             toasts: Vec::new(),
             shot: None,
             script: Script {
-                frames: args.frames,
+                frames: args.frames.or(args.orbit.map(|_| 0)),
+                orbit_left: args.orbit.unwrap_or(0),
+                wait_converged: args.orbit.is_some(),
+                stats: args.stats.clone().map(stats::StatsLog::new),
                 screenshot: args.screenshot.clone(),
                 screenshot_ui: args.screenshot_ui.clone(),
                 screenshot_frames: args.screenshot_frames,
@@ -684,16 +651,28 @@ impl Viewer {
         self.home = cam;
         self.selected = u32::MAX;
         self.edits.clear();
-        match &mut self.renderer {
-            Some(r) => {
-                r.set_settings(settings.clone())?;
-                // A different scene: the cached AO belongs to the old geometry.
-                r.clear_cache()?;
-            }
-            None => {
-                let (w, h) = self.internal_size();
-                self.renderer = Some(Renderer::new(&self.gpu, w, h, settings.clone())?);
-            }
+        if self.renderer.is_none() {
+            let (w, h) = self.internal_size();
+            let mut r = Renderer::new(&self.gpu, w, h, settings.clone())?;
+            // Still frames are jittered and accumulated: anti-aliased stills (docs/algorithm.md).
+            r.jitter = true;
+            self.renderer = Some(r);
+        }
+        if let Some(r) = &mut self.renderer {
+            r.set_settings(settings.clone())?;
+            // A different scene: the cached AO belongs to the old geometry.
+            r.clear_cache()?;
+            // Rasterised or ray-traced primary visibility, whichever is faster for this scene here.
+            let (w, h) = r.size();
+            let probe = Camera {
+                width: w,
+                height: h,
+                ..self.nav.cam
+            };
+            let (primary, rq_ms, raster_ms) = r.pick_primary(&scene_gpu, scene.frame(), &probe)?;
+            log::info!(
+                "primary visibility: {primary:?} (ray queries {rq_ms:.0} ms, raster {raster_ms:.0} ms at {w}x{h})"
+            );
         }
         self.settings = settings;
         self.scene_gpu = Some(scene_gpu);
@@ -712,10 +691,15 @@ impl Viewer {
         Ok(())
     }
 
-    /// Internal resolution: the 3D view rectangle times the render scale.
+    /// Internal resolution of a still image: the 3D view rectangle times the render scale.
     fn internal_size(&self) -> (u32, u32) {
+        self.internal_size_at(self.render_scale)
+    }
+
+    /// Internal resolution at `scale` (1 when the swapchain cannot blit: the output is copied 1:1).
+    fn internal_size_at(&self, scale: f32) -> (u32, u32) {
         let scale = if self.presenter.blit_ok || self.presenter.images.is_empty() {
-            self.render_scale
+            scale
         } else {
             1.0
         };
@@ -799,20 +783,9 @@ impl Viewer {
 
     /// A timestamped screenshot path in the configured folder.
     pub(crate) fn screenshot_path(&self) -> PathBuf {
-        let now = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap_or_default();
-        let secs = now.as_secs();
-        let (days, rem) = (secs / 86400, secs % 86400);
-        let (y, m, d) = civil_from_days(days as i64);
-        let name = format!(
-            "hrtao-{y:04}{m:02}{d:02}-{:02}{:02}{:02}-{:03}.png",
-            rem / 3600,
-            rem / 60 % 60,
-            rem % 60,
-            now.subsec_millis()
-        );
-        self.prefs.screenshot_dir.join(name)
+        self.prefs
+            .screenshot_dir
+            .join(screenshot_name(jiff::Zoned::now()))
     }
 
     pub(crate) fn request_screenshot(&mut self) {
@@ -870,6 +843,8 @@ impl Viewer {
             });
         }
         let Some(index) = self.presenter.acquire()? else {
+            // Out of date: the next frame recreates the swapchain.
+            self.egui_ctx.request_repaint();
             return Ok(());
         };
         // The 3D view rectangle (clamped to the swapchain) and the renderer's resolution.
@@ -880,7 +855,12 @@ impl Viewer {
         rect[2] = rect[2].clamp(1, ext.width as i32 - rect[0]);
         rect[3] = rect[3].clamp(1, ext.height as i32 - rect[1]);
         self.view_rect = rect;
-        let (iw, ih) = self.internal_size();
+        let now = Instant::now();
+        let changed = !self.last_drawn_cam.is_some_and(|c| same_view(&c, &self.nav.cam));
+        self.motion.frame(changed, now);
+        let moving = self.motion.moving(now);
+        let (iw, ih) = self.internal_size_at(self.motion.scale(self.render_scale, now));
+        self.apply_ray_budget(iw, ih);
         let bgra_direct = !self.presenter.blit_ok && self.presenter.is_bgra();
         let gpu = self.gpu.clone();
         let cmd = self.presenter.cmd;
@@ -895,14 +875,16 @@ impl Viewer {
         }
         let mut src = None;
         let mut rendered = false;
+        let cam = Camera {
+            width: iw,
+            height: ih,
+            ..self.nav.cam
+        };
         if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
             r.resize(iw, ih)?;
             r.output_bgra = bgra_direct;
-            let cam = Camera {
-                width: iw,
-                height: ih,
-                ..self.nav.cam
-            };
+            // s_p counts view pixels: cells keep their size when the render scale changes.
+            r.view_height = self.view_rect[3].max(1) as u32;
             r.record_frame(cmd, sg, scene.frame(), &cam)?;
             src = Some((r.output_buffer().raw, iw, ih));
             rendered = true;
@@ -965,30 +947,83 @@ impl Viewer {
             self.last_frame_at = Some(now);
             let (r, scene) = (self.renderer.as_mut().unwrap(), self.scene.as_ref().unwrap());
             let report = r.finish_frame(scene.frame(), gpu_wall)?;
+            self.last_drawn_cam = Some(cam);
+            let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;
+            if let Some(log) = &mut self.script.stats {
+                log.frames.push(stats::FrameStat {
+                    wall_ms,
+                    gpu_ms: report.gpu_total_ms,
+                    internal: [iw, ih],
+                    view: [rect[2] as u32, rect[3] as u32],
+                    moving: changed,
+                    rays: report.rays,
+                });
+            }
             self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
             self.last_report = Some(report);
-            self.auto_budget(gpu_wall);
+            if moving {
+                self.frame_time_target(wall_ms);
+            }
             self.script_step();
         }
         self.maybe_save_prefs(false);
+        self.schedule_repaint();
         Ok(())
     }
 
-    /// Target frame time → ray budget (the paper: "the ray budget can be adjusted to match a target rendering
-    /// speed"): multiplicative decrease when too slow, additive increase when there is slack.
-    fn auto_budget(&mut self, ms: f64) {
-        if !self.prefs.auto_budget || !self.settings.mode.uses_hash() && self.settings.mode != Mode::Rtao {
+    /// The frame-time target, applied after a moving frame only (a still image keeps its budget and size so
+    /// that it converges): the moving render scale and the ray budget per frame both follow it.
+    fn frame_time_target(&mut self, frame_ms: f64) {
+        if !self.prefs.auto_budget {
             return;
         }
         let target = self.prefs.target_ms.max(1.0) as f64;
-        let b = self.settings.rays_per_pixel;
-        let nb = next_budget(b, ms, target);
-        if nb != b {
-            self.settings.rays_per_pixel = nb;
-            if let Some(r) = &mut self.renderer {
-                let _ = r.set_settings(self.settings.clone());
+        self.motion.adapt(frame_ms, target, self.render_scale);
+        let traces = self.settings.mode.uses_hash() || self.settings.mode == Mode::Rtao;
+        if traces {
+            self.prefs.rays_per_frame =
+                budget::next_rays_per_frame(self.prefs.rays_per_frame, frame_ms, target);
+        }
+    }
+
+    /// Converts the budget in rays per frame to the renderer's rays per pixel at `width`×`height`.
+    fn apply_ray_budget(&mut self, width: u32, height: u32) {
+        let rpp = budget::rays_per_pixel(self.prefs.rays_per_frame, width, height);
+        if rpp == self.settings.rays_per_pixel {
+            return;
+        }
+        self.settings.rays_per_pixel = rpp;
+        if let Some(r) = &mut self.renderer {
+            if let Err(e) = r.set_settings(self.settings.clone()) {
+                self.toast(format!("settings: {e}"), true);
             }
         }
+    }
+
+    /// Asks for another frame while something is still changing: input was handled (egui asks by itself),
+    /// the camera moves or has just stopped, the image has not converged at full resolution, a scene is
+    /// loading, a screenshot or a scripted run is pending. Otherwise the event loop waits for events.
+    fn schedule_repaint(&mut self) {
+        let now = Instant::now();
+        let script_running = self.script.frames.is_some() && !self.script.done;
+        let viewing = self.renderer.is_some() && self.scene.is_some();
+        let converging = viewing && !self.converged_full();
+        let busy = script_running
+            || self.shot.is_some()
+            || self.script.ui_capture_pending
+            || converging
+            || (viewing && self.motion.moving(now));
+        if busy {
+            self.egui_ctx.request_repaint();
+        } else if self.loading.is_some() {
+            self.egui_ctx.request_repaint_after(Duration::from_millis(100));
+        }
+        let resting = !busy && self.loading.is_none();
+        if resting && !self.resting {
+            let frames = self.last_report.as_ref().map_or(0, |r| r.accumulated_frames);
+            log::info!("at rest: the image has converged ({frames} frames); waiting for input");
+        }
+        self.resting = resting;
     }
 
     /// Scripted mode: count frames, resize, take the screenshots, exit.
@@ -1016,6 +1051,9 @@ impl Viewer {
                 log::info!("scripted open of {file}");
                 self.start_loading(file);
             }
+        }
+        if self.script.orbit_left > 0 || (self.script.wait_converged && !self.converged_full()) {
+            return;
         }
         if n >= frames && self.loading.is_some() {
             // Let a scripted open finish (success or error) before the screenshots.
@@ -1050,6 +1088,7 @@ impl Viewer {
                     self.renderer.as_ref().map(|r| r.size())
                 );
             }
+            self.write_stats();
             if self.script.exit {
                 let bad = self.gpu.validation_messages() > 0
                     || self.outcome.lock().map(|o| o.error.is_some()).unwrap_or(true);
@@ -1059,12 +1098,56 @@ impl Viewer {
         }
     }
 
+    /// The last frame shows a converged image at the full internal size.
+    fn converged_full(&self) -> bool {
+        let full = self.internal_size();
+        match (&self.last_report, &self.renderer) {
+            (Some(rep), Some(r)) => motion::image_converged(rep) && r.size() == full,
+            _ => false,
+        }
+    }
+
+    /// Scripted mode: one step of `--orbit` (2° about the pivot, around the world up axis).
+    fn script_orbit(&mut self) {
+        if self.script.frames.is_none() || self.script.orbit_left == 0 || self.scene.is_none() {
+            return;
+        }
+        if self.loading.is_some() || self.last_report.is_none() {
+            return;
+        }
+        self.script.orbit_left -= 1;
+        self.nav.cam = nav::orbit(
+            &self.nav.cam,
+            self.nav.pivot,
+            self.nav.world_up.vector(),
+            2f32.to_radians(),
+            0.0,
+        );
+    }
+
+    /// Writes `--stats` (once; an error is fatal in scripted mode).
+    fn write_stats(&mut self) {
+        let Some(log) = self.script.stats.take() else {
+            return;
+        };
+        match log.write(&self.gpu.info.name, &self.scene_spec) {
+            Ok(()) => log::info!(
+                "stats written to {} ({} frames, median moving {:.1} ms, still {:.1} ms)",
+                log.path().display(),
+                log.frames.len(),
+                log.median_wall_ms(true).unwrap_or(f64::NAN),
+                log.median_wall_ms(false).unwrap_or(f64::NAN)
+            ),
+            Err(e) => self.fatal(format!("{e:#}")),
+        }
+    }
+
     fn maybe_save_prefs(&mut self, force: bool) {
         let Some(path) = self.prefs_path.clone() else {
             return;
         };
         self.prefs.settings = self.settings.clone();
-        self.prefs.render_scale = Some(self.render_scale);
+        self.prefs.max_render_scale = Some(self.render_scale);
         if self.prefs == self.prefs_saved {
             return;
         }
@@ -1088,6 +1171,7 @@ impl Viewer {
         }
         self.shut_down = true;
         self.maybe_save_prefs(true);
+        self.write_stats();
         self.gpu.wait_idle();
         self.pending_ui_readback = None;
         self.renderer = None;
@@ -1102,6 +1186,16 @@ impl Drop for Viewer {
     }
 }
 
+/// `hrtao-YYYYMMDD-HHMMSS-mmm.png` in local time.
+fn screenshot_name(t: jiff::Zoned) -> String {
+    format!("hrtao-{}.png", t.strftime("%Y%m%d-%H%M%S-%3f"))
+}
+
+/// Same camera pose and lens (the image size is not part of the view).
+fn same_view(a: &Camera, b: &Camera) -> bool {
+    a.eye == b.eye && a.target == b.target && a.up == b.up && a.fov_y_deg == b.fov_y_deg
+}
+
 fn ema(avg: f64, x: f64) -> f64 {
     if avg == 0.0 {
         x
@@ -1110,53 +1204,18 @@ fn ema(avg: f64, x: f64) -> f64 {
     }
 }
 
-/// One step of the automatic ray budget controller.
-pub fn next_budget(budget: u32, frame_ms: f64, target_ms: f64) -> u32 {
-    if frame_ms > target_ms * 1.15 {
-        ((budget as f64 * 0.8).floor() as u32).max(1)
-    } else if frame_ms < target_ms * 0.8 {
-        (budget + 1).min(64)
-    } else {
-        budget
-    }
-}
-
-/// Days since 1970-01-01 → (year, month, day) (Howard Hinnant's algorithm).
-fn civil_from_days(z: i64) -> (i64, u32, u32) {
-    let z = z + 719468;
-    let era = z.div_euclid(146097);
-    let doe = z.rem_euclid(146097);
-    let yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
-    let y = yoe + era * 400;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    (if m <= 2 { y + 1 } else { y }, m, d)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn budget_controller_converges_to_the_target() {
-        assert_eq!(next_budget(10, 200.0, 100.0), 8);
-        assert_eq!(next_budget(1, 500.0, 100.0), 1);
-        assert_eq!(next_budget(4, 50.0, 100.0), 5);
-        assert_eq!(next_budget(4, 100.0, 100.0), 4);
-        // A frame time proportional to the budget settles near the target.
-        let mut b = 32;
-        for _ in 0..100 {
-            b = next_budget(b, 10.0 + 8.0 * b as f64, 60.0);
-        }
-        assert!((5..=7).contains(&b), "{b}");
-    }
-
-    #[test]
     fn dates_and_sizes() {
-        assert_eq!(civil_from_days(0), (1970, 1, 1));
-        assert_eq!(civil_from_days(19723), (2024, 1, 1));
+        let name = screenshot_name(
+            jiff::Timestamp::from_second(1_704_067_200)
+                .unwrap()
+                .to_zoned(jiff::tz::TimeZone::UTC),
+        );
+        assert_eq!(name, "hrtao-20240101-000000-000.png");
         assert_eq!(parse_size("480x270").unwrap(), (480, 270));
         assert!(parse_size("0x10").is_err() && parse_size("abc").is_err());
     }

@@ -19,9 +19,11 @@ pub struct Bookmark {
 pub struct Prefs {
     /// AO settings (the radius is reset to the scene's default when a scene is opened).
     pub settings: AoSettings,
-    /// Internal resolution as a fraction of the window (None: pick by device: 0.35 on software devices).
-    pub render_scale: Option<f32>,
-    /// Adjust the ray budget automatically to meet `target_ms`.
+    /// Largest internal resolution as a fraction of the 3D view (None: 1): still images are rendered at it.
+    pub max_render_scale: Option<f32>,
+    /// Ray budget in rays per frame (converted to rays per pixel at the current internal resolution).
+    pub rays_per_frame: u32,
+    /// Adapt the ray budget and the moving render scale to meet `target_ms`.
     pub auto_budget: bool,
     pub target_ms: f32,
     pub screenshot_dir: PathBuf,
@@ -38,8 +40,9 @@ impl Default for Prefs {
     fn default() -> Self {
         Prefs {
             settings: AoSettings::default(),
-            render_scale: None,
-            auto_budget: false,
+            max_render_scale: None,
+            rays_per_frame: super::budget::DEFAULT_RAYS_PER_FRAME,
+            auto_budget: true,
             target_ms: 100.0,
             screenshot_dir: PathBuf::from("screenshots"),
             screenshot_custom: false,

@@ -45,12 +45,18 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("Esc", "deselect"),
     ("Ctrl+Z / Ctrl+Y (Ctrl+Shift+Z)", "undo / redo"),
     ("F12", "screenshot of the 3D view (PNG, no UI)"),
-    ("Tab", "show / hide the panel"),
+    (
+        "Tab",
+        "show / hide the panel (also while a panel widget has the keyboard focus)",
+    ),
 ];
 
 impl Viewer {
     pub(crate) fn ui(&mut self, ctx: &egui::Context) {
+        self.frame_started = Instant::now();
+        self.global_keys(ctx);
         self.poll_loading();
+        self.script_orbit();
         if let Some(d) = self.script.deadline {
             if Instant::now() > d {
                 self.script.deadline = None;
@@ -114,6 +120,26 @@ impl Viewer {
             });
         self.keyboard(ctx);
         self.draw_toasts(ctx);
+    }
+
+    /// Keys that act whatever has the keyboard focus, read before any widget runs: Tab toggles the panel and
+    /// F12 takes a screenshot. egui moves the focus between widgets on Tab (and arrow keys); that focus made
+    /// every later shortcut wait for a click elsewhere, so focus gained by keyboard navigation is dropped again.
+    fn global_keys(&mut self, ctx: &egui::Context) {
+        let (tabs, shots) = ctx.input(|i| (i.num_presses(Key::Tab), i.num_presses(Key::F12)));
+        if tabs % 2 == 1 {
+            self.show_panel = !self.show_panel;
+        }
+        if shots > 0 {
+            self.request_screenshot();
+        }
+        self.drop_nav_focus = tabs > 0;
+    }
+
+    /// Is the user typing into a text field (then letters are text, not shortcuts)?
+    fn typing(&self, ctx: &egui::Context) -> bool {
+        ctx.memory(|m| m.focus())
+            .is_some_and(|id| egui::TextEdit::load_state(ctx, id).is_some())
     }
 
     fn panel(&mut self, ui: &mut egui::Ui) {
@@ -218,11 +244,17 @@ impl Viewer {
             );
         ui.add_enabled(
             !self.prefs.auto_budget,
-            egui::Slider::new(&mut s.rays_per_pixel, 1..=64).text("ray budget"),
+            egui::Slider::new(
+                &mut self.prefs.rays_per_frame,
+                super::budget::MIN_RAYS_PER_FRAME..=16_000_000,
+            )
+            .logarithmic(true)
+            .text("rays / frame"),
         )
         .on_hover_text(
-            "Ray budget (§3, §6): rays traced per pixel per frame, shared between the hash cells visible in \
-             the image (collaborative ray tracing). Higher: faster convergence, slower frames.",
+            "Ray budget (§3, §6): rays traced per frame whatever the resolution, shared between the hash \
+             cells visible in the image (collaborative ray tracing); the renderer gets it as rays per pixel \
+             (at least 1). Higher: faster convergence, slower frames.",
         );
         ui.add(
             egui::Slider::new(&mut s.s_p, 0.5..=32.0)
@@ -295,16 +327,18 @@ impl Viewer {
         let blit = self.presenter.blit_ok || self.presenter.images.is_empty();
         ui.add_enabled(
             blit,
-            egui::Slider::new(&mut self.render_scale, 0.1..=1.0).text("render scale"),
+            egui::Slider::new(&mut self.render_scale, 0.1..=1.0).text("max render scale"),
         )
         .on_hover_text(
-            "Internal resolution as a fraction of the 3D view (blitted to the window). Note s_p is in \
-             internal pixels.",
+            "Internal resolution of a still image as a fraction of the 3D view (blitted to the window). While \
+             the camera moves the resolution drops to meet the frame-time target (not below 0.35 of the view \
+             unless this cap is lower). Note s_p is in internal pixels.",
         );
         ui.horizontal(|ui| {
-            ui.checkbox(&mut self.prefs.auto_budget, "auto budget").on_hover_text(
-                "§6: \"the ray budget can be adjusted to match a target rendering speed\": the ray budget is \
-                 adapted every frame to reach the target frame time.",
+            ui.checkbox(&mut self.prefs.auto_budget, "frame-time target")
+                .on_hover_text(
+                "§6: \"the ray budget can be adjusted to match a target rendering speed\": while the camera \
+                 moves, the ray budget and the render scale adapt to reach the target frame time.",
             );
             ui.add_enabled(
                 self.prefs.auto_budget,
@@ -383,7 +417,18 @@ impl Viewer {
             }
             row(
                 "resolution",
-                format!("{iw}×{ih} internal ({:.0}%)", self.render_scale * 100.0),
+                format!(
+                    "{iw}×{ih} internal ({:.0}% of the view)",
+                    100.0 * iw as f32 / self.view_rect[2].max(1) as f32
+                ),
+            );
+            row(
+                "image",
+                if super::motion::image_converged(rep) {
+                    format!("converged ({} frames)", rep.accumulated_frames)
+                } else {
+                    format!("refining ({} frames)", rep.accumulated_frames)
+                },
             );
             row(
                 "rays",
@@ -599,9 +644,11 @@ impl Viewer {
     fn draw_toasts(&mut self, ctx: &egui::Context) {
         let now = Instant::now();
         self.toasts.retain(|t| t.until > now);
-        if self.toasts.is_empty() {
+        let Some(first_expiry) = self.toasts.iter().map(|t| t.until).min() else {
             return;
-        }
+        };
+        // Repaint when the first toast expires (the loop rests otherwise).
+        ctx.request_repaint_after(first_expiry - now);
         egui::Area::new("toasts")
             .anchor(egui::Align2::LEFT_BOTTOM, [10.0, -10.0])
             .interactable(false)
@@ -621,6 +668,8 @@ impl Viewer {
 
     /// Mouse input over the 3D view.
     fn view_input(&mut self, ctx: &egui::Context, resp: &egui::Response, rect: egui::Rect) {
+        // A drag in progress keeps the view "moving" (reduced resolution) even in frames without a new delta.
+        self.motion.dragging = resp.dragged();
         if self.scene.is_none() {
             return;
         }
@@ -811,7 +860,12 @@ impl Viewer {
     }
 
     fn keyboard(&mut self, ctx: &egui::Context) {
-        if ctx.wants_keyboard_input() {
+        if self.drop_nav_focus {
+            // Tab is ours: nothing keeps the focus egui gave to a widget for it.
+            ctx.memory_mut(|m| m.stop_text_input());
+            self.drop_nav_focus = false;
+        }
+        if self.typing(ctx) {
             return;
         }
         let (pressed, down, mods, dt) = ctx.input(|i| {
@@ -828,8 +882,6 @@ impl Viewer {
                 Key::Escape,
                 Key::Z,
                 Key::Y,
-                Key::F12,
-                Key::Tab,
                 Key::ArrowLeft,
                 Key::ArrowRight,
                 Key::ArrowUp,
@@ -853,8 +905,6 @@ impl Viewer {
                 Key::Num9 => self.std_view(StdView::Iso),
                 Key::Enter => self.reset_view(),
                 Key::Escape => self.set_selected(u32::MAX),
-                Key::Tab => self.show_panel = !self.show_panel,
-                Key::F12 => self.request_screenshot(),
                 Key::Z if mods.command && mods.shift => self.edit(Action::Redo),
                 Key::Z if mods.command => self.edit(Action::Undo),
                 Key::Y if mods.command => self.edit(Action::Redo),
@@ -903,6 +953,7 @@ impl Viewer {
             }
         }
         if !down.is_empty() && self.scene.is_some() {
+            self.motion.dragging = true;
             let speed = self.move_step() * 25.0 * if mods.shift { 4.0 } else { 1.0 } * dt;
             let mut local = Vec3::ZERO;
             for k in down {

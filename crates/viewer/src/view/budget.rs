@@ -1,0 +1,68 @@
+//! The viewer's ray budget: rays per frame, independent of the internal resolution (the hash map shares rays
+//! between the pixels of a cell, §3, so full resolution need not multiply the AO cost), converted each frame to
+//! the renderer's rays per pixel; and the frame-time target controller that adapts it while the camera moves.
+
+/// Default budget: about today's 4 rays per pixel at the software default of 0.35 × an 862×800 view.
+pub const DEFAULT_RAYS_PER_FRAME: u32 = 300_000;
+pub const MIN_RAYS_PER_FRAME: u32 = 1_000;
+pub const MAX_RAYS_PER_FRAME: u32 = 64_000_000;
+/// The renderer's per-pixel budget is an integer of at least 1 (0 would stop the AO update altogether).
+pub const MAX_RAYS_PER_PIXEL: u32 = 64;
+
+/// Rays per pixel for `rays_per_frame` spread over `width`×`height` internal pixels, rounded, within
+/// 1..=MAX_RAYS_PER_PIXEL. At full resolution the floor of one ray per pixel can exceed the budget until the
+/// renderer takes a fractional budget.
+pub fn rays_per_pixel(rays_per_frame: u32, width: u32, height: u32) -> u32 {
+    let pixels = (width.max(1) as f64) * (height.max(1) as f64);
+    ((rays_per_frame as f64 / pixels).round() as u32).clamp(1, MAX_RAYS_PER_PIXEL)
+}
+
+/// One step of the frame-time controller (the paper, §6: "the ray budget can be adjusted to match a target
+/// rendering speed"): multiplicative decrease when the frame was too slow, gentle increase when there is slack.
+pub fn next_rays_per_frame(rays_per_frame: u32, frame_ms: f64, target_ms: f64) -> u32 {
+    let b = rays_per_frame as f64;
+    let next = if frame_ms > target_ms * 1.15 {
+        b * 0.8
+    } else if frame_ms < target_ms * 0.8 {
+        b * 1.1 + 1.0
+    } else {
+        b
+    };
+    (next.round() as u32).clamp(MIN_RAYS_PER_FRAME, MAX_RAYS_PER_FRAME)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn per_pixel_budget_follows_the_pixel_count() {
+        assert_eq!(rays_per_pixel(300_000, 302, 280), 4);
+        assert_eq!(rays_per_pixel(300_000, 151, 140), 14);
+        // Full resolution: the floor of 1 ray per pixel.
+        assert_eq!(rays_per_pixel(300_000, 862, 800), 1);
+        assert_eq!(rays_per_pixel(u32::MAX, 1, 1), MAX_RAYS_PER_PIXEL);
+        assert_eq!(rays_per_pixel(0, 0, 0), 1);
+    }
+
+    #[test]
+    fn controller_settles_near_the_target() {
+        assert_eq!(next_rays_per_frame(100_000, 200.0, 100.0), 80_000);
+        assert_eq!(next_rays_per_frame(100_000, 100.0, 100.0), 100_000);
+        assert!(next_rays_per_frame(100_000, 50.0, 100.0) > 100_000);
+        assert_eq!(
+            next_rays_per_frame(MIN_RAYS_PER_FRAME, 1e6, 100.0),
+            MIN_RAYS_PER_FRAME
+        );
+        // A frame time proportional to the budget settles within the dead band around the target.
+        let mut b = 2_000_000;
+        for _ in 0..200 {
+            b = next_rays_per_frame(b, 10.0 + b as f64 * 1e-4, 60.0);
+        }
+        let ms = 10.0 + b as f64 * 1e-4;
+        assert!(
+            (60.0 * 0.8 * 0.8..=60.0 * 1.15 * 1.1).contains(&ms),
+            "{b} rays: {ms} ms"
+        );
+    }
+}

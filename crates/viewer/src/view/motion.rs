@@ -1,0 +1,114 @@
+//! When the view moves and when the image is done: the convergence test that lets the viewer rest, and the
+//! internal resolution that follows from motion (reduced while the camera moves, full once it rests).
+use std::time::{Duration, Instant};
+
+use hrtao_core::FrameReport;
+
+/// The one place that decides whether the image still changes (more frames would refine it) or is done and the
+/// viewer may rest: the renderer's own end of the still-camera refinement (`Renderer::converged`).
+pub fn image_converged(report: &FrameReport) -> bool {
+    report.converged
+}
+
+/// The smallest render scale while moving (the user's render-scale setting caps it from above).
+pub const MIN_MOVING_SCALE: f32 = 0.35;
+/// The view counts as still once the camera has not changed for this long and for `STILL_FRAMES` frames.
+pub const STILL_AFTER: Duration = Duration::from_millis(150);
+pub const STILL_FRAMES: u32 = 1;
+
+/// Tracks camera motion and picks the internal render scale: the adaptive moving scale while the camera moves
+/// (so a frame meets the frame-time target), the full scale (the user's cap) once it rests.
+#[derive(Debug, Clone)]
+pub struct Motion {
+    last_change: Instant,
+    frames_since_change: u32,
+    /// Scale used while moving; adapted to the frame-time target within [MIN_MOVING_SCALE, cap].
+    pub moving_scale: f32,
+    /// A pointer drag on the view is in progress (moving even when a frame brings no new delta).
+    pub dragging: bool,
+}
+
+impl Motion {
+    pub fn new(moving_scale: f32) -> Motion {
+        Motion {
+            last_change: Instant::now(),
+            frames_since_change: 0,
+            moving_scale,
+            dragging: false,
+        }
+    }
+
+    /// Records one frame: `changed` when its camera differs from the previous frame's.
+    pub fn frame(&mut self, changed: bool, now: Instant) {
+        if changed {
+            self.last_change = now;
+            self.frames_since_change = 0;
+        } else {
+            self.frames_since_change = self.frames_since_change.saturating_add(1);
+        }
+    }
+
+    /// True while the camera moves (or has just stopped).
+    pub fn moving(&self, now: Instant) -> bool {
+        self.dragging
+            || self.frames_since_change < STILL_FRAMES
+            || now.duration_since(self.last_change) < STILL_AFTER
+    }
+
+    /// The render scale for the next frame; `cap` is the user's render-scale setting.
+    pub fn scale(&self, cap: f32, now: Instant) -> f32 {
+        if self.moving(now) {
+            self.moving_scale.clamp(MIN_MOVING_SCALE.min(cap), cap)
+        } else {
+            cap
+        }
+    }
+
+    /// Adapts the moving scale to the frame-time target after a moving frame of `frame_ms` (area ∝ scale²).
+    pub fn adapt(&mut self, frame_ms: f64, target_ms: f64, cap: f32) {
+        let s = self.moving_scale;
+        let next = if frame_ms > target_ms * 1.15 {
+            s * 0.9
+        } else if frame_ms < target_ms * 0.7 {
+            s * 1.05
+        } else {
+            s
+        };
+        self.moving_scale = next.clamp(MIN_MOVING_SCALE.min(cap), cap);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_scale_once_still_reduced_while_moving() {
+        let t0 = Instant::now();
+        let mut m = Motion::new(0.35);
+        m.frame(true, t0);
+        assert!(m.moving(t0));
+        assert_eq!(m.scale(1.0, t0), 0.35);
+        // The user's setting caps the scale, also while moving.
+        assert_eq!(m.scale(0.2, t0), 0.2);
+        let later = t0 + STILL_AFTER + Duration::from_millis(1);
+        m.frame(false, later);
+        assert!(!m.moving(later));
+        assert_eq!(m.scale(1.0, later), 1.0);
+        m.dragging = true;
+        assert!(m.moving(later));
+    }
+
+    #[test]
+    fn moving_scale_follows_the_frame_time_target() {
+        let mut m = Motion::new(1.0);
+        for _ in 0..100 {
+            m.adapt(500.0, 100.0, 1.0);
+        }
+        assert_eq!(m.moving_scale, MIN_MOVING_SCALE);
+        for _ in 0..100 {
+            m.adapt(10.0, 100.0, 0.8);
+        }
+        assert_eq!(m.moving_scale, 0.8);
+    }
+}
