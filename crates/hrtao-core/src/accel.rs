@@ -115,6 +115,8 @@ pub struct SceneGpu {
     /// Draw list of the rasterised primary visibility (the TLAS's instances), updated with the TLAS.
     pub raster: RasterScene,
     pub stats: BuildStats,
+    /// Bumped by every `update_instances` (edits, visibility, selection): an image of an older version is stale.
+    version: u64,
 }
 
 /// Maximum instance id stored in a TLAS instance's 24-bit custom index.
@@ -430,6 +432,7 @@ impl SceneGpu {
             tlas_instances,
             tlas: placeholder,
             raster,
+            version: 0,
             stats: BuildStats {
                 blas_count: per_mesh.iter().filter(|g| !g.is_empty()).count(),
                 geometry_count: table.len(),
@@ -450,7 +453,13 @@ impl SceneGpu {
 
     /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
     /// `selected` is the instance to highlight (u32::MAX for none).
+    /// How many times the instance tables were updated (see `version`).
+    pub fn version(&self) -> u64 {
+        self.version
+    }
+
     pub fn update_instances(&mut self, scene: &Scene, selected: u32) -> Result<()> {
+        self.version += 1;
         let gpu = self.gpu.clone();
         if scene.instances.len() > MAX_INSTANCES {
             return Err(CoreError::Invalid(format!(

@@ -72,6 +72,7 @@ struct StillKey {
     settings: AoSettings,
     scene_f: u32,
     tlas: vk::AccelerationStructureKHR,
+    scene_version: u64,
     view_height: u32,
     jitter: bool,
     primary: Primary,
@@ -128,6 +129,8 @@ pub struct Renderer {
     /// F of the previous frame, and the frame_index of the first frame rendered with it (eq. 6).
     last_f: Option<u32>,
     f_start_frame: u32,
+    /// The last finished frame reported `converged`.
+    last_converged: bool,
     /// Jitter the primary samples of still frames (anti-aliasing). `hrtao render` keeps pixel centres.
     pub jitter: bool,
     /// Height of the view in pixels when the renderer works at a reduced internal resolution (0 = the internal
@@ -184,6 +187,7 @@ impl Renderer {
             still_key: None,
             last_f: None,
             f_start_frame: 0,
+            last_converged: false,
             jitter: false,
             view_height: 0,
             background_top: [0.62, 0.68, 0.76],
@@ -353,6 +357,30 @@ impl Renderer {
         }
     }
 
+    fn still_key_for(&self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> StillKey {
+        StillKey {
+            camera: Camera {
+                width: self.targets.width,
+                height: self.targets.height,
+                ..*camera
+            },
+            settings: self.settings.clone(),
+            scene_f,
+            tlas: scene.tlas.raw,
+            scene_version: scene.version(),
+            view_height: self.view_height,
+            jitter: self.jitter,
+            primary: self.primary,
+        }
+    }
+
+    /// True when the output buffer already holds the final image of this view: the last frame converged and
+    /// nothing it depends on (camera, size, settings, scene, instances) has changed since. A viewer can then
+    /// present the output again instead of rendering (expose events, UI repaints).
+    pub fn shows_final(&self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> bool {
+        self.last_converged && self.still_key.as_ref() == Some(&self.still_key_for(scene, scene_f, camera))
+    }
+
     /// Prepares the frame's globals and records all passes into `cmd` (the caller submits and then calls
     /// `finish_frame`). The output is left in `output_buffer()`.
     pub fn record_frame(
@@ -362,19 +390,7 @@ impl Renderer {
         scene_f: u32,
         camera: &Camera,
     ) -> Result<()> {
-        let key = StillKey {
-            camera: Camera {
-                width: self.targets.width,
-                height: self.targets.height,
-                ..*camera
-            },
-            settings: self.settings.clone(),
-            scene_f,
-            tlas: scene.tlas.raw,
-            view_height: self.view_height,
-            jitter: self.jitter,
-            primary: self.primary,
-        };
+        let key = self.still_key_for(scene, scene_f, camera);
         if self.still_key.as_ref() == Some(&key) {
             self.still_index = self.still_index.saturating_add(1);
         } else {
@@ -444,6 +460,7 @@ impl Renderer {
             None => Vec::new(),
         };
         let occupied = c[gpu::STAT_OCCUPIED as usize];
+        self.last_converged = self.converged(c[gpu::STAT_RAYS as usize]);
         Ok(FrameReport {
             gpu_total_ms: gpu_ms.iter().map(|(_, ms)| ms).sum(),
             gpu_ms,
@@ -460,7 +477,7 @@ impl Renderer {
             scene_f,
             accumulated_frames: self.still_index + 1,
             refine_rays: c[gpu::STAT_REFINE_RAYS as usize] as u64,
-            converged: self.converged(c[gpu::STAT_RAYS as usize]),
+            converged: self.last_converged,
         })
     }
 

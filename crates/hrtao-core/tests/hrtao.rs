@@ -339,8 +339,17 @@ fn a_still_view_converges_and_then_reports_it() {
         .collect();
     // Frames 1..=5 give 0, 8, 16, 24, 32 own rays per pixel.
     assert_eq!(done, [false, false, false, false, true, true]);
+    // The final image can be shown again without rendering, until anything it depends on changes.
+    assert!(r.shows_final(&sg, scene.frame(), &cam));
     let mut moved = cam;
     moved.eye[2] += 1.0;
+    assert!(!r.shows_final(&sg, scene.frame(), &moved));
+    let mut sg = sg;
+    sg.update_instances(&scene, 0).unwrap(); // a selection: same F, other instance flags
+    assert!(
+        !r.shows_final(&sg, scene.frame(), &cam),
+        "instance updates invalidate the image"
+    );
     assert!(!r.render(&sg, scene.frame(), &moved).unwrap().converged);
     let mut paper = Renderer::new(
         &gpu,

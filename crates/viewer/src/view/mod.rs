@@ -885,9 +885,14 @@ impl Viewer {
             r.output_bgra = bgra_direct;
             // s_p counts view pixels: cells keep their size when the render scale changes.
             r.view_height = self.view_rect[3].max(1) as u32;
-            r.record_frame(cmd, sg, scene.frame(), &cam)?;
+            // A converged image of this very view is already in the output: present it again (expose events,
+            // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render.
+            let scripted = self.script.frames.is_some() && !self.script.done;
+            if scripted || !r.shows_final(sg, scene.frame(), &cam) {
+                r.record_frame(cmd, sg, scene.frame(), &cam)?;
+                rendered = true;
+            }
             src = Some((r.output_buffer().raw, iw, ih));
-            rendered = true;
         }
         if self.presenter.blit_ok && src.is_some() {
             self.presenter.ensure_internal(iw, ih)?;
