@@ -80,7 +80,7 @@ fn main() -> anyhow::Result<()> {
         let mut ms = (0.0, 0.0);
         let mut hrtao_curve = Vec::new(); // (frames, cumulative rays, MAE)
         for f in 0..frames {
-            let rep = r.render(&sg, scene.frame(), &cam)?;
+            let rep = r.render(&sg, scene.f(), &cam)?;
             total_rays += rep.rays;
             if f == 0 {
                 ms.0 = rep.wall_ms;
@@ -117,7 +117,7 @@ fn main() -> anyhow::Result<()> {
         let eq_frames = ((rays_px / rays as f64).round() as u32).max(1);
         let mut rtao_curve = Vec::new();
         for _ in 0..eq_frames.max(frames) {
-            rt.render(&sg, scene.frame(), &cam)?;
+            rt.render(&sg, scene.f(), &cam)?;
             rtao_curve.push(metrics::ao_error(&rt.read_ao()?, &reference).mae);
         }
         let rtao_1 = rtao_curve[0];

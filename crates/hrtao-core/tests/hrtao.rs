@@ -18,7 +18,7 @@ fn quality_on(key: &str) {
     let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(rays, radius)).unwrap();
     let mut errors = Vec::new();
     for _ in 0..4 {
-        r.render(&sg, scene.frame(), &cam).unwrap();
+        r.render(&sg, scene.f(), &cam).unwrap();
         errors.push(mae(&r.read_ao().unwrap(), &reference));
     }
     let ratio = errors[0] / pp_mae;
@@ -60,16 +60,16 @@ fn navigation_reuses_capped_cells() {
         ..hrtao(16, radius)
     };
     let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
-    let first = r.render(&sg, scene.frame(), &cam).unwrap();
+    let first = r.render(&sg, scene.f(), &cam).unwrap();
     // The paper's navigation runs on a warm map: the view rests for two more frames.
     for _ in 0..2 {
-        r.render(&sg, scene.frame(), &cam).unwrap();
+        r.render(&sg, scene.f(), &cam).unwrap();
     }
     // A small orbit step: the eye moves ~1% of its distance.
     let mut moved = cam;
     moved.eye[0] += 1.0;
     moved.eye[1] += 0.5;
-    let second = r.render(&sg, scene.frame(), &moved).unwrap();
+    let second = r.render(&sg, scene.f(), &moved).unwrap();
     println!(
         "rays: first frame {}, nearby camera {} ({:.1}%); cells {} -> {}",
         first.rays,
@@ -115,7 +115,7 @@ fn edits_bump_f_and_old_cells_are_never_read() {
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
     let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(8, 4.0)).unwrap();
     for _ in 0..3 {
-        r.render(&sg, scene.frame(), &cam).unwrap();
+        r.render(&sg, scene.f(), &cam).unwrap();
     }
     let gb = r.read_gbuffer().unwrap();
     let under: Vec<usize> = (0..gb.len())
@@ -132,23 +132,23 @@ fn edits_bump_f_and_old_cells_are_never_read() {
     let mean = |ao: &[f32]| under.iter().map(|&i| ao[i]).sum::<f32>() / under.len() as f32;
     let before = mean(&r.read_ao().unwrap());
     // Move the plate far away: F is bumped, the TLAS rebuilt.
-    let f0 = scene.frame();
+    let f0 = scene.f();
     scene
         .set_transform(1, Mat4::from_translation(Vec3::new(500.0, 500.0, 1.0)))
         .unwrap();
-    assert_eq!(scene.frame(), f0.wrapping_add(1));
+    assert_eq!(scene.f(), f0.wrapping_add(1));
     sg.update_instances(&scene, u32::MAX).unwrap();
     let mut after = 0.0;
     for _ in 0..3 {
-        let rep = r.render(&sg, scene.frame(), &cam).unwrap();
-        assert_eq!(rep.scene_f, scene.frame());
+        let rep = r.render(&sg, scene.f(), &cam).unwrap();
+        assert_eq!(rep.scene_f, scene.f());
         after = mean(&r.read_ao().unwrap());
     }
     println!("floor under the plate: AO {before:.3} before the edit, {after:.3} after moving the plate away");
     assert!(before < 0.6, "the plate darkens the floor ({before})");
     assert!(after > 0.97, "the freed floor is open again ({after})");
     // Every cell a pixel uses holds its key of the new F.
-    check_map(&r, &cam, scene.frame(), None);
+    check_map(&r, &cam, scene.f(), None);
     assert_clean(&gpu);
 }
 
@@ -165,7 +165,7 @@ fn overloaded_map_stays_finite_and_falls_back_to_coarser_levels() {
         ..hrtao(4, radius)
     };
     let mut roomy = Renderer::new(&gpu, cam.width, cam.height, base.clone()).unwrap();
-    let need = roomy.render(&sg, scene.frame(), &cam).unwrap().occupied_cells;
+    let need = roomy.render(&sg, scene.f(), &cam).unwrap().occupied_cells;
     let capacity = (need / 10 + 1).next_power_of_two() / 2;
     let overload = need as f32 / capacity as f32;
     let settings = AoSettings {
@@ -176,9 +176,9 @@ fn overloaded_map_stays_finite_and_falls_back_to_coarser_levels() {
     let mut failed = 0;
     for _ in 0..4 {
         let before = r.read_hash_cells().unwrap();
-        let rep = r.render(&sg, scene.frame(), &cam).unwrap();
+        let rep = r.render(&sg, scene.f(), &cam).unwrap();
         failed += rep.failed_inserts;
-        check_map(&r, &cam, scene.frame(), Some(&before));
+        check_map(&r, &cam, scene.f(), Some(&before));
     }
     let ao = r.read_ao().unwrap();
     assert!(ao.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
@@ -203,7 +203,7 @@ fn debug_views_show_cells_lods_and_samples() {
     let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, radius)).unwrap();
-    r.render(&sg, scene.frame(), &cam).unwrap();
+    r.render(&sg, scene.f(), &cam).unwrap();
     let mut colours = Vec::new();
     for mode in [
         hrtao_core::Mode::DebugCells,
@@ -215,7 +215,7 @@ fn debug_views_show_cells_lods_and_samples() {
             ..r.settings.clone()
         })
         .unwrap();
-        r.render(&sg, scene.frame(), &cam).unwrap();
+        r.render(&sg, scene.f(), &cam).unwrap();
         let rgba = r.read_rgba().unwrap();
         let distinct: std::collections::HashSet<&[u8]> = rgba.chunks(4).collect();
         colours.push(distinct.len());
@@ -253,10 +253,10 @@ fn stale_cells_are_reclaimed_so_the_map_never_fills() {
             cam.eye[2] * (1.0 + 0.2 * (i % 3) as f32),
         ];
         let before = r.read_hash_cells().unwrap();
-        let rep = r.render(&sg, scene.frame(), &c).unwrap();
+        let rep = r.render(&sg, scene.f(), &c).unwrap();
         reclaimed += rep.reclaimed;
         last_failed = rep.failed_inserts;
-        check_map(&r, &c, scene.frame(), Some(&before));
+        check_map(&r, &c, scene.f(), Some(&before));
     }
     println!("8192-cell map, 12 views: {reclaimed} cells reclaimed, {last_failed} failed inserts in the last frame");
     assert!(reclaimed > 1000, "stale cells must be reused");
@@ -277,7 +277,7 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
     };
     let need = Renderer::new(&gpu, cam.width, cam.height, base.clone())
         .unwrap()
-        .render(&sg, scene.frame(), &cam)
+        .render(&sg, scene.f(), &cam)
         .unwrap()
         .occupied_cells;
     // The largest power of two at most a tenth of the need (the map's smallest size is 1024).
@@ -306,10 +306,10 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
             c.eye[0] += i as f32 * 3.0;
         }
         let before = r.read_hash_cells().unwrap();
-        let rep = r.render(&sg, scene.frame(), &c).unwrap();
+        let rep = r.render(&sg, scene.f(), &c).unwrap();
         failed += rep.failed_inserts as u64;
         reclaimed += rep.reclaimed as u64;
-        live = check_map(&r, &c, scene.frame(), Some(&before)).live_cells;
+        live = check_map(&r, &c, scene.f(), Some(&before)).live_cells;
     }
     println!(
         "{need} cells needed, capacity {capacity}: {failed} failed inserts, {reclaimed} reclaimed, {live} live cells at the end"
@@ -335,22 +335,22 @@ fn a_still_view_converges_and_then_reports_it() {
     };
     let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
     let done: Vec<bool> = (0..6)
-        .map(|_| r.render(&sg, scene.frame(), &cam).unwrap().converged)
+        .map(|_| r.render(&sg, scene.f(), &cam).unwrap().converged)
         .collect();
     // Frames 1..=5 give 0, 8, 16, 24, 32 own rays per pixel.
     assert_eq!(done, [false, false, false, false, true, true]);
     // The final image can be shown again without rendering, until anything it depends on changes.
-    assert!(r.shows_final(&sg, scene.frame(), &cam));
+    assert!(r.shows_final(&sg, scene.f(), &cam));
     let mut moved = cam;
     moved.eye[2] += 1.0;
-    assert!(!r.shows_final(&sg, scene.frame(), &moved));
+    assert!(!r.shows_final(&sg, scene.f(), &moved));
     let mut sg = sg;
     sg.update_instances(&scene, 0).unwrap(); // a selection: same F, other instance flags
     assert!(
-        !r.shows_final(&sg, scene.frame(), &cam),
+        !r.shows_final(&sg, scene.f(), &cam),
         "instance updates invalidate the image"
     );
-    assert!(!r.render(&sg, scene.frame(), &moved).unwrap().converged);
+    assert!(!r.render(&sg, scene.f(), &moved).unwrap().converged);
     let mut paper = Renderer::new(
         &gpu,
         cam.width,
@@ -363,10 +363,10 @@ fn a_still_view_converges_and_then_reports_it() {
     )
     .unwrap();
     let mut frames = 0;
-    while !paper.render(&sg, scene.frame(), &cam).unwrap().converged {
+    while !paper.render(&sg, scene.f(), &cam).unwrap().converged {
         frames += 1;
         assert!(frames < 64, "the paper's behaviour ends once every cell is full");
     }
-    assert_eq!(paper.render(&sg, scene.frame(), &cam).unwrap().rays, 0);
+    assert_eq!(paper.render(&sg, scene.f(), &cam).unwrap().rays, 0);
     assert_clean(&gpu);
 }

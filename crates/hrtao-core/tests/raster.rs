@@ -22,7 +22,7 @@ fn render_with(
     let mut r = Renderer::new(gpu, cam.width, cam.height, settings.clone()).unwrap();
     r.primary = primary;
     for _ in 0..frames {
-        r.render(sg, scene.frame(), cam).unwrap();
+        r.render(sg, scene.f(), cam).unwrap();
     }
     (r.read_gbuffer().unwrap(), r.read_ao().unwrap())
 }
@@ -169,10 +169,10 @@ fn raster_follows_resizes_and_mode_switches() {
         r.resize(w, h).unwrap();
         let cam = top_down_camera(20.0, w, h);
         r.primary = Primary::Raster;
-        r.render(&sg, scene.frame(), &cam).unwrap();
+        r.render(&sg, scene.f(), &cam).unwrap();
         let raster = r.read_gbuffer().unwrap();
         r.primary = Primary::RayQuery;
-        r.render(&sg, scene.frame(), &cam).unwrap();
+        r.render(&sg, scene.f(), &cam).unwrap();
         let rq = r.read_gbuffer().unwrap();
         assert_eq!(raster.len(), (w * h) as usize);
         assert!(compare(&format!("slab {w}x{h}"), &rq, &raster) >= 0.995);
@@ -191,7 +191,7 @@ fn jittered_still_frames_sample_the_same_surfaces() {
         r.primary = primary;
         r.jitter = true;
         for _ in 0..3 {
-            r.render(&sg, scene.frame(), &cam).unwrap();
+            r.render(&sg, scene.f(), &cam).unwrap();
         }
         r.read_gbuffer().unwrap()
     };
@@ -204,7 +204,7 @@ fn jittered_still_frames_sample_the_same_surfaces() {
     );
     // And the jitter is real: the third frame's samples are not the pixel centres.
     let mut centred = Renderer::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
-    centred.render(&sg, scene.frame(), &cam).unwrap();
+    centred.render(&sg, scene.f(), &cam).unwrap();
     let c = centred.read_gbuffer().unwrap();
     let moved = c
         .iter()

@@ -90,14 +90,14 @@ fn soak_with_edits_stays_bounded_and_clean() {
         c.eye[1] = cam.target[1] + dx * a.sin() + dy * a.cos();
         c.width = 64;
         c.height = 36;
-        let rep = r.render(&sg, scene.frame(), &c).unwrap();
-        assert_eq!(rep.scene_f, scene.frame());
+        let rep = r.render(&sg, scene.f(), &c).unwrap();
+        assert_eq!(rep.scene_f, scene.f());
         assert_eq!(rep.bounds_violations, 0);
         max_occupied = max_occupied.max(rep.occupied_cells);
         failed += rep.failed_inserts as u64;
         if i % 50 == 49 {
             // Every pixel reads a cell of its key under the current F; no duplicates; counters bounded.
-            check_map(&r, &c, scene.frame(), None);
+            check_map(&r, &c, scene.f(), None);
             let ao = r.read_ao().unwrap();
             assert!(ao.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
         }

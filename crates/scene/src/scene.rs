@@ -83,7 +83,7 @@ pub struct Scene {
     /// GPU works near zero in f32. Cameras, picks and reported positions convert with it.
     pub origin: [f64; 3],
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
-    frame: u32,
+    f: u32,
 }
 
 /// Geometry whose centre lies farther than this from the file's origin is re-centred (see [`Scene::origin`]).
@@ -114,7 +114,7 @@ impl std::fmt::Debug for Scene {
             .field("meshes", &self.meshes.len())
             .field("instances", &self.instances.len())
             .field("unique_triangles", &self.unique_triangle_count())
-            .field("frame", &self.frame)
+            .field("f", &self.f)
             .finish()
     }
 }
@@ -145,7 +145,7 @@ impl Scene {
             instances: Vec::new(),
             name: name.into(),
             origin: [0.0; 3],
-            frame: 0,
+            f: 0,
         }
     }
 
@@ -160,13 +160,13 @@ impl Scene {
     }
 
     /// The animation frame identifier `F`.
-    pub fn frame(&self) -> u32 {
-        self.frame
+    pub fn f(&self) -> u32 {
+        self.f
     }
 
     /// Explicit `F` increment (wrapping).
-    pub fn bump_frame(&mut self) {
-        self.frame = self.frame.wrapping_add(1);
+    pub fn bump_f(&mut self) {
+        self.f = self.f.wrapping_add(1);
     }
 
     /// Triangles of every mesh counted once (unreferenced meshes included).
@@ -325,7 +325,7 @@ impl Scene {
         let i = self.check_instance(instance)?;
         check_transform(&m)?;
         self.instances[i].transform = m;
-        self.bump_frame();
+        self.bump_f();
         Ok(())
     }
 
@@ -333,7 +333,7 @@ impl Scene {
     pub fn set_visible(&mut self, instance: u32, visible: bool) -> Result<(), SceneError> {
         let i = self.check_instance(instance)?;
         self.instances[i].visible = visible;
-        self.bump_frame();
+        self.bump_f();
         Ok(())
     }
 
@@ -341,7 +341,7 @@ impl Scene {
     pub fn remove_instance(&mut self, instance: u32) -> Result<Instance, SceneError> {
         let i = self.check_instance(instance)?;
         let inst = self.instances.remove(i);
-        self.bump_frame();
+        self.bump_f();
         Ok(inst)
     }
 
@@ -356,7 +356,7 @@ impl Scene {
         }
         self.check_new_instance(&inst)?;
         self.instances.insert(at as usize, inst);
-        self.bump_frame();
+        self.bump_f();
         Ok(())
     }
 
@@ -366,7 +366,7 @@ impl Scene {
             .map_err(|_| SceneError::TooLarge(format!("scene {} has too many instances", self.name)))?;
         self.check_new_instance(&inst)?;
         self.instances.push(inst);
-        self.bump_frame();
+        self.bump_f();
         Ok(id)
     }
 }
@@ -472,8 +472,8 @@ mod tests {
     #[test]
     fn frame_wraps() {
         let mut s = tri_scene();
-        s.frame = u32::MAX;
-        s.bump_frame();
-        assert_eq!(s.frame(), 0);
+        s.f = u32::MAX;
+        s.bump_f();
+        assert_eq!(s.f(), 0);
     }
 }

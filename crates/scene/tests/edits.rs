@@ -16,7 +16,7 @@ fn set_transform_bumps_frame_and_moves_bounds() {
     let b0 = s.bounds();
     let t = Mat4::from_translation(Vec3::new(1000.0, 0.0, 0.0)) * s.instances[3].transform;
     s.set_transform(3, t).unwrap();
-    assert_eq!(s.frame(), 1);
+    assert_eq!(s.f(), 1);
     assert_eq!(s.instances[3].transform, t);
     assert!(s.bounds().max.x > b0.max.x + 900.0);
 }
@@ -33,7 +33,7 @@ fn set_transform_rejects_bad_matrices_without_bumping() {
         let e = s.set_transform(0, m).unwrap_err();
         assert!(matches!(e, SceneError::Invalid(_)), "{e:?}");
     }
-    assert_eq!(s.frame(), 0);
+    assert_eq!(s.f(), 0);
     assert_eq!(s.instances[0].transform, before);
 }
 
@@ -43,7 +43,7 @@ fn set_visible_bumps_frame() {
     s.set_visible(0, false).unwrap();
     assert!(!s.instances[0].visible);
     s.set_visible(0, true).unwrap();
-    assert_eq!(s.frame(), 2);
+    assert_eq!(s.f(), 2);
 }
 
 #[test]
@@ -53,11 +53,11 @@ fn remove_then_insert_is_undo() {
     let tris = s.instanced_triangle_count();
     let original = s.instances.clone();
     let removed = s.remove_instance(5).unwrap();
-    assert_eq!(s.frame(), 1);
+    assert_eq!(s.f(), 1);
     assert_eq!(s.instances.len(), n - 1);
     assert!(s.instanced_triangle_count() < tris);
     s.insert_instance(5, removed).unwrap();
-    assert_eq!(s.frame(), 2);
+    assert_eq!(s.f(), 2);
     assert_eq!(s.instances, original);
     assert_eq!(s.instanced_triangle_count(), tris);
 }
@@ -75,7 +75,7 @@ fn add_instance_returns_new_id() {
         })
         .unwrap();
     assert_eq!(id, n);
-    assert_eq!(s.frame(), 1);
+    assert_eq!(s.f(), 1);
     assert_eq!(s.instances[id as usize].name, "copy");
 }
 
@@ -105,21 +105,21 @@ fn out_of_range_ids_are_errors_without_bump() {
         s.add_instance(bad_tf).unwrap_err(),
         SceneError::Invalid(_)
     ));
-    assert_eq!(s.frame(), 0);
+    assert_eq!(s.f(), 0);
     assert_eq!(s.instances, snapshot);
     s.validate().unwrap();
 }
 
 #[test]
-fn bump_frame_is_explicit_and_wrapping() {
+fn bump_f_is_explicit_and_wrapping() {
     let mut s = load("gen:plane", &mut no_progress()).unwrap();
-    assert_eq!(s.frame(), 0);
-    s.bump_frame();
-    s.bump_frame();
-    assert_eq!(s.frame(), 2);
+    assert_eq!(s.f(), 0);
+    s.bump_f();
+    s.bump_f();
+    assert_eq!(s.f(), 2);
     // Insert at the end is an append.
     let inst = s.instances[0].clone();
     s.insert_instance(1, inst).unwrap();
     assert_eq!(s.instances.len(), 2);
-    assert_eq!(s.frame(), 3);
+    assert_eq!(s.f(), 3);
 }

@@ -58,7 +58,7 @@ fn check(e: &Expected) -> Scene {
     let last_mesh = stages.iter().rfind(|p| p.stage == "meshes").unwrap();
     assert_eq!(last_mesh.done, last_mesh.total);
     assert_eq!(last_mesh.total, e.meshes as u64);
-    assert_eq!(scene.frame(), 0);
+    assert_eq!(scene.f(), 0);
     assert!(scene.instances.iter().all(|i| i.visible));
     scene
 }
@@ -200,5 +200,5 @@ fn hiding_an_instance_changes_counts_and_frame() {
     s.set_visible(0, false).unwrap();
     assert_eq!(s.instanced_triangle_count(), before - tris);
     assert_eq!(s.unique_triangle_count(), 5_412);
-    assert_eq!(s.frame(), 1);
+    assert_eq!(s.f(), 1);
 }

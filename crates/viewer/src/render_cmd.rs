@@ -68,7 +68,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let mut frames = Vec::new();
     for i in 0..args.frames {
-        let report = renderer.render(&scene_gpu, scene.frame(), &camera)?;
+        let report = renderer.render(&scene_gpu, scene.f(), &camera)?;
         log::info!(
             "frame {i}: {:.1} ms wall, {:.1} ms GPU, {} rays{}",
             report.wall_ms,

@@ -86,7 +86,7 @@ pub fn render(
     let sg = SceneGpu::new(gpu, scene).expect("scene upload");
     let mut r = Renderer::new(gpu, cam.width, cam.height, settings).expect("renderer");
     for _ in 0..frames {
-        r.render(&sg, scene.frame(), cam).expect("frame");
+        r.render(&sg, scene.f(), cam).expect("frame");
     }
     (r, sg)
 }

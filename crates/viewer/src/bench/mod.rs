@@ -506,7 +506,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let total = scene_estimate + renderer_device_estimate(w, h, hrtao_settings.hash_capacity);
             (scene_estimate, total, "estimate")
         };
-    let sf = scene.frame();
+    let sf = scene.f();
 
     // Warm-up (pipeline compilation, caches) for both modes.
     r.render(&scene_gpu, sf, &camera)?;

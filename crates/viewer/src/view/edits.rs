@@ -145,7 +145,7 @@ mod tests {
     fn edit_bumps_f_undo_restores_redo_reapplies() {
         let mut s = scene();
         let mut stack = EditStack::default();
-        let f0 = s.frame();
+        let f0 = s.f();
         let before = s.instances[1].transform;
         let after = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)) * before;
         stack
@@ -159,11 +159,11 @@ mod tests {
             )
             .unwrap();
         assert_eq!(s.instances[1].transform, after);
-        assert!(s.frame() > f0, "an edit increments F");
-        let f1 = s.frame();
+        assert!(s.f() > f0, "an edit increments F");
+        let f1 = s.f();
         assert!(stack.undo(&mut s).unwrap().is_some());
         assert_eq!(s.instances[1].transform, before, "undo restores the instance");
-        assert!(s.frame() > f1, "undo is an edit too: F increments");
+        assert!(s.f() > f1, "undo is an edit too: F increments");
         stack.redo(&mut s).unwrap();
         assert_eq!(s.instances[1].transform, after);
         assert!(stack.redo(&mut s).unwrap().is_none());
@@ -236,7 +236,7 @@ mod tests {
         }
         stack.undo(&mut s).unwrap();
         assert_eq!(s.instances[0].transform, t0, "one undo reverts the whole drag");
-        let f = s.frame();
+        let f = s.f();
         let bad = Edit::Transform {
             instance: 99,
             before: t0,
@@ -249,7 +249,7 @@ mod tests {
             after: Mat4::ZERO,
         };
         assert!(stack.apply(&mut s, singular).is_err());
-        assert_eq!(s.frame(), f, "a rejected edit changes nothing");
+        assert_eq!(s.f(), f, "a rejected edit changes nothing");
     }
 }
 
@@ -311,9 +311,9 @@ mod gpu_tests {
                 .map(|p| p.instance)
                 .collect::<Vec<u32>>()
         };
-        let before_img = render(&mut r, &sg, scene.frame());
+        let before_img = render(&mut r, &sg, scene.f());
         let mut stack = EditStack::default();
-        let f0 = scene.frame();
+        let f0 = scene.f();
         let slab = 1;
         let before = scene.instances[slab].transform;
         let after = glam::Mat4::from_translation(glam::Vec3::new(1000.0, 0.0, 0.0)) * before;
@@ -323,15 +323,15 @@ mod gpu_tests {
             after,
         };
         run_action(&mut stack, &mut scene, &mut sg, u32::MAX, Action::Apply(edit)).unwrap();
-        assert!(scene.frame() > f0);
-        let moved_img = render(&mut r, &sg, scene.frame());
+        assert!(scene.f() > f0);
+        let moved_img = render(&mut r, &sg, scene.f());
         assert_ne!(
             before_img, moved_img,
             "the TLAS was rebuilt: the slab moved out of view"
         );
         run_action(&mut stack, &mut scene, &mut sg, u32::MAX, Action::Undo).unwrap();
         assert_eq!(scene.instances[slab].transform, before);
-        assert_eq!(render(&mut r, &sg, scene.frame()), before_img);
+        assert_eq!(render(&mut r, &sg, scene.f()), before_img);
         drop(r);
         drop(sg);
         assert_eq!(gpu.validation_messages(), 0);

@@ -669,7 +669,7 @@ impl Viewer {
                 height: h,
                 ..self.nav.cam
             };
-            let (primary, rq_ms, raster_ms) = r.pick_primary(&scene_gpu, scene.frame(), &probe)?;
+            let (primary, rq_ms, raster_ms) = r.pick_primary(&scene_gpu, scene.f(), &probe)?;
             log::info!(
                 "primary visibility: {primary:?} (ray queries {rq_ms:.0} ms, raster {raster_ms:.0} ms at {w}x{h})"
             );
@@ -731,7 +731,7 @@ impl Viewer {
             Ok(Some(label)) => {
                 // Deletes shift later ids: keep the selection valid.
                 let n = scene.instances.len() as u32;
-                log::debug!("{label}: F = {}", scene.frame());
+                log::debug!("{label}: F = {}", scene.f());
                 if self.selected != u32::MAX && self.selected >= n {
                     self.set_selected(u32::MAX);
                 }
@@ -758,7 +758,7 @@ impl Viewer {
         let result = (|| -> Result<Vec<u8>> {
             r.resize(size.0, size.1)?;
             for _ in 0..frames.max(1) {
-                r.render(sg, scene.frame(), &cam)?;
+                r.render(sg, scene.f(), &cam)?;
             }
             Ok(r.read_rgba()?)
         })();
@@ -888,8 +888,8 @@ impl Viewer {
             // A converged image of this very view is already in the output: present it again (expose events,
             // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render.
             let scripted = self.script.frames.is_some() && !self.script.done;
-            if scripted || !r.shows_final(sg, scene.frame(), &cam) {
-                r.record_frame(cmd, sg, scene.frame(), &cam)?;
+            if scripted || !r.shows_final(sg, scene.f(), &cam) {
+                r.record_frame(cmd, sg, scene.f(), &cam)?;
                 rendered = true;
             }
             src = Some((r.output_buffer().raw, iw, ih));
@@ -951,7 +951,7 @@ impl Viewer {
             }
             self.last_frame_at = Some(now);
             let (r, scene) = (self.renderer.as_mut().unwrap(), self.scene.as_ref().unwrap());
-            let report = r.finish_frame(scene.frame(), gpu_wall)?;
+            let report = r.finish_frame(scene.f(), gpu_wall)?;
             self.last_drawn_cam = Some(cam);
             let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;
             if let Some(log) = &mut self.script.stats {

@@ -454,7 +454,7 @@ impl Viewer {
                 row("accumulated", format!("{} frames", rep.accumulated_frames));
             }
             if let Some(scene) = &self.scene {
-                row("F (scene frame)", scene.frame().to_string());
+                row("F (scene frame)", scene.f().to_string());
                 row("instances", scene.instances.len().to_string());
                 row(
                     "triangles",
