@@ -12,7 +12,7 @@ use gltf::mesh::Mode;
 use gltf::Semantic;
 
 use crate::error::SceneError;
-use crate::guard::{resolve_reference, Budget, Fetch, LoadOptions, Target};
+use crate::guard::{read_model, resolve_reference, Budget, Fetch, LoadOptions, Target};
 use crate::scene::{
     recentre_origin, relative_transform, transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene,
     DEFAULT_BASE_COLOR,
@@ -39,13 +39,7 @@ pub fn load_gltf(
         path: path.to_path_buf(),
         message,
     };
-    let mut budget = Budget::new(opts, path);
-    let bytes = Fetch {
-        model: path,
-        target: Target::Model,
-        declared: None,
-    }
-    .read(path, opts, &mut budget, progress)?;
+    let (bytes, mut budget) = read_model(path, opts, progress)?;
     let is_glb_ext = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
     check_glb_header(&bytes, is_glb_ext).map_err(err)?;
 

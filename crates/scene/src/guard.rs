@@ -75,6 +75,23 @@ impl LoadOptions {
     }
 }
 
+/// Reads the model file itself through the guard, and starts the memory budget of its load (which counts the
+/// file's bytes). Every loader begins here.
+pub(crate) fn read_model(
+    path: &Path,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<(Vec<u8>, Budget), SceneError> {
+    let mut budget = Budget::new(opts, path);
+    let bytes = Fetch {
+        model: path,
+        target: Target::Model,
+        declared: None,
+    }
+    .read(path, opts, &mut budget, progress)?;
+    Ok((bytes, budget))
+}
+
 /// Running total of the memory a load will take, checked against [`LoadOptions::max_memory`].
 pub(crate) struct Budget {
     limit: u64,

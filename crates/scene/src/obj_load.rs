@@ -7,7 +7,7 @@ use std::path::Path;
 use glam::{DVec3, Mat4};
 
 use crate::error::SceneError;
-use crate::guard::{resolve_reference, Budget, Fetch, LoadOptions, Target};
+use crate::guard::{read_model, resolve_reference, Budget, Fetch, LoadOptions, Target};
 use crate::scene::{recentre_origin, Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
 
 pub fn load_obj(
@@ -15,13 +15,7 @@ pub fn load_obj(
     opts: &LoadOptions,
     progress: &mut dyn FnMut(LoadProgress),
 ) -> Result<Scene, SceneError> {
-    let mut budget = Budget::new(opts, path);
-    let text = Fetch {
-        model: path,
-        target: Target::Model,
-        declared: None,
-    }
-    .read(path, opts, &mut budget, progress)?;
+    let (text, mut budget) = read_model(path, opts, progress)?;
     budget.reserve(declared_bytes(&text), "the declared geometry (v and f lines)")?;
     opts.check_cancel(path)?;
     // `..Default::default()` keeps this compiling if tobj's optional features add fields.

@@ -10,7 +10,7 @@ use ply_rs::parser::Parser;
 use ply_rs::ply::{DefaultElement, ElementDef, Encoding, Property, PropertyAccess, PropertyType, ScalarType};
 
 use crate::error::SceneError;
-use crate::guard::{Budget, Fetch, LoadOptions, Target};
+use crate::guard::{read_model, LoadOptions};
 use crate::scene::{Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
 
 /// Memory per vertex (position) and per face (index list, ~3 triangle indices) while decoding.
@@ -100,13 +100,7 @@ pub fn load_ply(
         path: path.to_path_buf(),
         message,
     };
-    let mut budget = Budget::new(opts, path);
-    let bytes = Fetch {
-        model: path,
-        target: Target::Model,
-        declared: None,
-    }
-    .read(path, opts, &mut budget, progress)?;
+    let (bytes, mut budget) = read_model(path, opts, progress)?;
     let mut reader = bytes.as_slice();
     let header = Parser::<DefaultElement>::new()
         .read_header(&mut reader)

@@ -8,7 +8,7 @@ use glam::Mat4;
 use stl_io::TriangleIterator;
 
 use crate::error::SceneError;
-use crate::guard::{Budget, Fetch, LoadOptions, Target};
+use crate::guard::{read_model, LoadOptions};
 use crate::scene::{Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
 
 /// Header (80) + triangle count (4), then 50 bytes per triangle.
@@ -28,13 +28,7 @@ pub fn load_stl(
         path: path.to_path_buf(),
         message,
     };
-    let mut budget = Budget::new(opts, path);
-    let mut bytes = Fetch {
-        model: path,
-        target: Target::Model,
-        declared: None,
-    }
-    .read(path, opts, &mut budget, progress)?;
+    let (mut bytes, mut budget) = read_model(path, opts, progress)?;
     let size = bytes.len() as u64;
     let declared =
         (size >= HEADER).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64);
