@@ -5,13 +5,12 @@
 
 use std::path::Path;
 
-use glam::Mat4;
 use ply_rs::parser::Parser;
 use ply_rs::ply::{DefaultElement, ElementDef, Encoding, Property, PropertyAccess, PropertyType, ScalarType};
 
 use crate::error::SceneError;
 use crate::guard::{read_model, LoadOptions};
-use crate::scene::{Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
+use crate::scene::{LoadProgress, Scene};
 
 /// Memory per vertex (position) and per face (index list, ~3 triangle indices) while decoding.
 const VERTEX_BYTES: u64 = 12 + 16;
@@ -159,24 +158,9 @@ pub fn load_ply(
             indices.extend([f.0[0] as u32, f.0[k] as u32, f.0[k + 1] as u32]);
         }
     }
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let mut scene = Scene::new(name.clone());
-    scene.meshes.push(Mesh {
-        name: name.clone(),
-        primitives: vec![Primitive {
-            positions: vertices.into_iter().map(|v| v.0).collect(),
-            indices,
-            base_color: DEFAULT_BASE_COLOR,
-        }],
-    });
-    scene.instances.push(Instance {
-        mesh: 0,
-        transform: Mat4::IDENTITY,
-        name,
-        visible: true,
-    });
-    Ok(scene)
+    Ok(Scene::single_mesh(
+        path,
+        vertices.into_iter().map(|v| v.0).collect(),
+        indices,
+    ))
 }

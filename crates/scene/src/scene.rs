@@ -149,6 +149,31 @@ impl Scene {
         }
     }
 
+    /// A scene of one mesh with one identity instance, both named after the file (STL, PLY: one triangle
+    /// soup, coordinates as in the file).
+    pub fn single_mesh(path: &std::path::Path, positions: Vec<[f32; 3]>, indices: Vec<u32>) -> Scene {
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let mut scene = Scene::new(name.clone());
+        scene.meshes.push(Mesh {
+            name: name.clone(),
+            primitives: vec![Primitive {
+                positions,
+                indices,
+                base_color: DEFAULT_BASE_COLOR,
+            }],
+        });
+        scene.instances.push(Instance {
+            mesh: 0,
+            transform: Mat4::IDENTITY,
+            name,
+            visible: true,
+        });
+        scene
+    }
+
     /// A point of the scene in the file's own coordinates.
     pub fn to_file(&self, p: Vec3) -> DVec3 {
         DVec3::from(self.origin) + p.as_dvec3()

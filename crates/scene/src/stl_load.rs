@@ -4,12 +4,11 @@
 
 use std::path::Path;
 
-use glam::Mat4;
 use stl_io::TriangleIterator;
 
 use crate::error::SceneError;
 use crate::guard::{read_model, LoadOptions};
-use crate::scene::{Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
+use crate::scene::{LoadProgress, Scene};
 
 /// Header (80) + triangle count (4), then 50 bytes per triangle.
 const HEADER: u64 = 84;
@@ -72,26 +71,7 @@ pub fn load_stl(
         positions.extend(t.vertices.iter().map(|v| v.0));
     }
     let n = u32::try_from(positions.len()).map_err(|_| err("more than 2^32 vertices".into()))?;
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let mut scene = Scene::new(name.clone());
-    scene.meshes.push(Mesh {
-        name: name.clone(),
-        primitives: vec![Primitive {
-            positions,
-            indices: (0..n).collect(),
-            base_color: DEFAULT_BASE_COLOR,
-        }],
-    });
-    scene.instances.push(Instance {
-        mesh: 0,
-        transform: Mat4::IDENTITY,
-        name,
-        visible: true,
-    });
-    Ok(scene)
+    Ok(Scene::single_mesh(path, positions, (0..n).collect()))
 }
 
 /// Facets of an ASCII STL (lines starting with `facet`).
