@@ -57,6 +57,29 @@ vec3 shade(uvec2 pix, GPixel px) {
     return color;
 }
 
+// Feature edges (CAD look): 1 where a 4-neighbour shows a miss, another instance, a surface off this pixel's
+// tangent plane (a silhouette within one part) or a normal beyond the crease angle. Drawn on the nearer side.
+float edge(uvec2 pix, GPixel px) {
+    if ((g.flags & FLAG_EDGES) == 0u || px.t < 0.0) return 0.0;
+    // World width of one pixel at this distance (cam_v spans half the image height).
+    float pixel_size = px.t * 2.0 * length(g.cam_v.xyz) / float(g.height);
+    const ivec2 OFFSETS[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
+    for (int i = 0; i < 4; ++i) {
+        ivec2 q = ivec2(pix) + OFFSETS[i];
+        if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+        GPixel o = GBufferRef(g.gbuffer).px[uint(q.y) * g.width + uint(q.x)];
+        if (o.t < 0.0) return 1.0;
+        if (o.t < px.t) continue;   // the neighbour is nearer: it draws the line
+        float off_plane = abs(dot(o.position - px.position, px.normal));
+        if (o.instance != px.instance && off_plane > 0.5 * pixel_size) return 1.0;
+        if (off_plane > 4.0 * pixel_size) return 1.0;
+        if (dot(o.normal, px.normal) < g.crease_cos) return 1.0;
+    }
+    return 0.0;
+}
+
+const vec3 EDGE_COLOR = vec3(0.06, 0.07, 0.08);
+
 void main() {
     uvec2 pix;
     uint index;
@@ -67,7 +90,7 @@ void main() {
         color = debug_color(index);
     } else {
         bool hashed = g.mode == MODE_HRTAO;
-        vec3 s = shade(pix, px);
+        vec3 s = mix(shade(pix, px), EDGE_COLOR, 0.85 * edge(pix, px));
         // This sample: its cell estimate and its own rays (a miss counts as rays_per_pixel open rays, so
         // partly covered pixels weigh background and surface by coverage).
         float c = hashed && px.t >= 0.0 ? clamp(FloatRef(g.ao).v[index], 0.0, 1.0) : 1.0;

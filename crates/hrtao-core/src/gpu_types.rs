@@ -27,6 +27,8 @@ gpu_consts! {
     /// Still-camera refinement (ours, docs/algorithm.md): from the second still frame every pixel traces its own
     /// rays, which also feed its cells, and its AO moves from the cell estimate to its own ray-traced estimate.
     FLAG_REFINE: u32 = 16;
+    /// Feature edges (silhouettes and creases) drawn over the shading in the composite; never in the AO image.
+    FLAG_EDGES: u32 = 32;
     /// `InstanceInfo::flags` bits.
     INSTANCE_SELECTED: u32 = 1;
     /// `GPixel::instance` of a pixel whose primary ray hit nothing.
@@ -102,7 +104,8 @@ gpu_structs! {
         filter_iterations: u32,
         /// Still-camera refinement: the cell estimate counts as this many of the pixel's own rays.
         prior_rays: f32,
-        _pad: u32,
+        /// Feature edges: normals meeting at more than the crease angle draw a crease (its cosine).
+        crease_cos: f32,
         background_top: [f32; 4],
         background_bottom: [f32; 4],
         /// Buffer device addresses of the frame's buffers.

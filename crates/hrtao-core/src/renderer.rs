@@ -294,6 +294,9 @@ impl Renderer {
         if s.refine {
             flags |= gpu::FLAG_REFINE;
         }
+        if s.edges {
+            flags |= gpu::FLAG_EDGES;
+        }
         let jitter = if self.jitter && s.accumulates() && self.still_index > 0 {
             // R2 points in the pixel, frame after frame (the centre first).
             let i = self.still_index as f64;
@@ -337,7 +340,7 @@ impl Renderer {
             stale_frames: s.stale_frames,
             filter_iterations: s.filter_iterations,
             prior_rays: s.prior_rays,
-            _pad: 0,
+            crease_cos: s.crease_deg.to_radians().cos(),
             background_top: c4(self.background_top),
             background_bottom: c4(self.background_bottom),
             gbuffer: t.gbuffer.address,

@@ -122,6 +122,10 @@ pub struct AoSettings {
     /// The finest cell size s_w is at most this fraction of the AO radius R (eq. 2-3), so cells stay small
     /// against the contact shadows they store.
     pub max_cell_fraction: f32,
+    /// Feature edges over the shading (silhouettes: depth and instance changes; creases: normals meeting at
+    /// more than `crease_deg`), as CAD viewports draw them. Never in the AO image.
+    pub edges: bool,
+    pub crease_deg: f32,
 }
 
 impl Default for AoSettings {
@@ -145,6 +149,8 @@ impl Default for AoSettings {
             prior_rays: 32.0,
             still_samples: 64,
             max_cell_fraction: 0.25,
+            edges: true,
+            crease_deg: 40.0,
         }
     }
 }
@@ -210,6 +216,12 @@ impl AoSettings {
             return Err(format!(
                 "max cell fraction must be positive, got {}",
                 self.max_cell_fraction
+            ));
+        }
+        if !(self.crease_deg.is_finite() && (0.0..=180.0).contains(&self.crease_deg)) {
+            return Err(format!(
+                "crease angle must be in 0..=180 degrees, got {}",
+                self.crease_deg
             ));
         }
         if self.filter_iterations > 8 {

@@ -72,6 +72,12 @@ pub struct AoArgs {
     /// Render a uniform grey clay instead of the materials' base colours.
     #[arg(long)]
     pub clay: bool,
+    /// Draw feature edges (silhouettes and creases) over the shaded image (never in the AO image).
+    #[arg(long)]
+    pub edges: bool,
+    /// Crease angle of the feature edges, in degrees.
+    #[arg(long, default_value_t = AoSettings::default().crease_deg)]
+    pub crease: f32,
 }
 
 impl AoArgs {
@@ -93,6 +99,8 @@ impl AoArgs {
             filter_iterations: self.filter_iterations,
             hash_capacity: self.hash_capacity,
             shaded: !self.clay,
+            edges: self.edges,
+            crease_deg: self.crease,
             ..AoSettings::default()
         }
     }

@@ -310,6 +310,21 @@ impl Viewer {
             )
             .on_hover_text("À-trous iterations (§5); each doubles the filter's reach.");
         });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut s.edges, "edges").on_hover_text(
+                "Feature edges over the shading: silhouettes (depth and part changes) and creases. In \
+                 screenshots, never in the AO image.",
+            );
+            ui.add_enabled(
+                s.edges,
+                egui::Slider::new(&mut s.crease_deg, 5.0..=120.0).text("crease °"),
+            )
+            .on_hover_text("Faces meeting at more than this angle draw a crease line.");
+        });
+        ui.checkbox(&mut s.refine, "refine when still").on_hover_text(
+            "Ours (docs/algorithm.md): while the view rests, each pixel traces its own rays and its AO converges \
+             from the cell estimate to the ray-traced value, with anti-aliasing. Off: the paper's behaviour.",
+        );
         let mut log2 = s.hash_capacity.trailing_zeros();
         ui.add(
             egui::Slider::new(&mut log2, 10..=26)
