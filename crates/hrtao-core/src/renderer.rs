@@ -62,6 +62,11 @@ impl Targets {
     }
 }
 
+/// Scenes drawing more instanced triangles than this keep ray queries without a raster trial in
+/// `Renderer::pick_primary`: rasterising costs in proportion to the triangles (hundreds of millions in massive
+/// instanced scenes), while ray queries scale with the pixels.
+pub const RASTER_TRIAL_TRIANGLES: u64 = 20_000_000;
+
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
 
@@ -497,13 +502,17 @@ impl Renderer {
     /// Chooses the faster primary visibility for `scene` by measurement: a frame without AO with each, timed
     /// on the wall clock (GPU timestamps after a render pass are unreliable on lavapipe), after a warm-up frame
     /// each (the first dispatch compiles pipelines). Keeps the choice in `self.primary` and returns it with the
-    /// two times in ms (ray queries, raster).
+    /// two times in ms (ray queries, raster; NaN when a scene above `RASTER_TRIAL_TRIANGLES` is not tried).
     pub fn pick_primary(
         &mut self,
         scene: &SceneGpu,
         scene_f: u32,
         camera: &Camera,
     ) -> Result<(Primary, f64, f64)> {
+        if scene.raster.triangles() > RASTER_TRIAL_TRIANGLES {
+            self.primary = Primary::RayQuery;
+            return Ok((self.primary, f64::NAN, f64::NAN));
+        }
         let saved = self.settings.clone();
         self.settings.mode = Mode::NoAo;
         let time = |r: &mut Renderer, primary| -> Result<f64> {

@@ -217,3 +217,38 @@ fn jittered_still_frames_sample_the_same_surfaces() {
     );
     assert_clean(&gpu);
 }
+
+#[test]
+fn primary_visibility_is_picked_by_measurement_and_massive_scenes_keep_ray_queries() {
+    let gpu = gpu();
+    let scene = hrtao_scene::generate("gen:city?blocks=3&per_block=2&floors=8", &mut |_| {}).unwrap();
+    let b = scene.bounds();
+    let cam = Camera::fit(b.min, b.max, UpAxis::Z, 45.0, 160, 100);
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, 4.0)).unwrap();
+    let (picked, rq_ms, raster_ms) = r.pick_primary(&sg, scene.f(), &cam).unwrap();
+    println!("city: {picked:?} (ray queries {rq_ms:.1} ms, raster {raster_ms:.1} ms)");
+    assert!(rq_ms > 0.0 && raster_ms > 0.0);
+    assert_eq!(
+        picked,
+        if raster_ms < rq_ms {
+            Primary::Raster
+        } else {
+            Primary::RayQuery
+        }
+    );
+    assert_eq!(r.primary, picked);
+    assert_eq!(
+        r.settings.mode,
+        hrtao_core::Mode::Hrtao,
+        "the trial restores the settings"
+    );
+    // 10,000 server instances of 2,500 triangles: 25 M triangles per raster frame, not tried.
+    let racks = hrtao_scene::generate("gen:racks?rows=10&cols=25", &mut |_| {}).unwrap();
+    let sg = SceneGpu::new(&gpu, &racks).unwrap();
+    assert!(sg.raster.triangles() > hrtao_core::renderer::RASTER_TRIAL_TRIANGLES);
+    let (picked, rq_ms, _) = r.pick_primary(&sg, racks.f(), &cam).unwrap();
+    assert_eq!(picked, Primary::RayQuery);
+    assert!(rq_ms.is_nan(), "no trial frames were rendered");
+    assert_clean(&gpu);
+}
