@@ -255,3 +255,24 @@ pub fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
         );
     }
 }
+
+/// The copy region of a whole single-layer colour image of `width` x `height` to or from a tightly packed buffer.
+pub fn whole_image_copy(width: u32, height: u32) -> vk::BufferImageCopy {
+    vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        },
+        image_offset: vk::Offset3D::default(),
+        image_extent: vk::Extent3D {
+            width,
+            height,
+            depth: 1,
+        },
+    }
+}

@@ -463,23 +463,7 @@ impl Rasterizer {
                 t.vis.raw,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 t.vis_buffer.raw,
-                &[vk::BufferImageCopy {
-                    buffer_offset: 0,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    },
-                    image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D {
-                        width: w,
-                        height: h,
-                        depth: 1,
-                    },
-                }],
+                &[crate::buffer::whole_image_copy(w, h)],
             );
         });
         let (vis, inst) = (t.vis_buffer.address, scene.instances.address);

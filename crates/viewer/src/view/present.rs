@@ -563,23 +563,10 @@ impl Presenter {
                 image,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 buffer,
-                &[vk::BufferImageCopy {
-                    buffer_offset: 0,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    },
-                    image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D {
-                        width: self.extent.width,
-                        height: self.extent.height,
-                        depth: 1,
-                    },
-                }],
+                &[hrtao_core::buffer::whole_image_copy(
+                    self.extent.width,
+                    self.extent.height,
+                )],
             );
             d.cmd_pipeline_barrier(
                 cmd,
