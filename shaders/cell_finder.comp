@@ -22,6 +22,7 @@ void main() {
     // A failed coarser level means the table is full here: finer cells would fail too.
     if (level < LOD_COUNT - 1u && cells.v[index].cells[level + 1u] == INVALID_CELL) return;
     int lod = pixel_lod(px.t);
-    CellKey key = cell_key(px.position, px.normal, lod + int(level), g.s_nd, g.scene_f, g.hash_capacity);
+    int l = lod + int(level);
+    CellKey key = region_cell_key(cell_coord(px.position, l), l, normal_coord(px.normal, g.s_nd));
     cells.v[index].cells[level] = find_or_insert(key);
 }

@@ -9,6 +9,7 @@
 // Per-pixel RTAO is the same with k -> 0; the paper's behaviour (no refinement) shows the current frame's c.
 // The final AO is written back to `ao` (what read_ao and --ao-out see).
 #include "common.glsl"
+#include "hash_map.glsl"
 
 vec3 linear_to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
@@ -105,7 +106,8 @@ void main() {
         bool accumulates = g.mode == MODE_RTAO || ((g.flags & FLAG_REFINE) != 0u && (hashed || g.mode == MODE_NO_AO));
         PixelAccumRef accum = PixelAccumRef(g.accum);
         PixelAccum a;
-        if (!accumulates || g.still_index == 0u) {
+        // A local edit (ours) restarts the accumulation only in the regions it touched.
+        if (!accumulates || g.still_index == 0u || (px.t >= 0.0 && region_edited_now(px.position, pixel_lod(px.t)))) {
             a.shade_cell = vec3(0.0);
             a.cell = 0.0;
             a.shade_open = vec3(0.0);

@@ -49,8 +49,10 @@ ivec3 normal_coord(vec3 n, float s_nd) {
 }
 
 // eq. (4)-(6) with one base hash: H8D = h(F + h(nz + h(ny + h(nx + h(lod + h(pz + h(py + h(px)))))))).
+// Ours (local edits, docs/algorithm.md): a non-zero region epoch E enters as one more step before F,
+// h(F + h(E + H7D)); E = 0 leaves the paper's key unchanged.
 #define HRTAO_H8D(H)                                                          \
-    uint H##_8d(ivec3 c, int lod, ivec3 nq, uint F) {                          \
+    uint H##_8d(ivec3 c, int lod, ivec3 nq, uint F, uint E) {                  \
         uint k = H(uint(c.x));                                                \
         k = H(uint(c.y) + k);                                                 \
         k = H(uint(c.z) + k);                                                 \
@@ -58,6 +60,7 @@ ivec3 normal_coord(vec3 n, float s_nd) {
         k = H(uint(nq.x) + k);                                                \
         k = H(uint(nq.y) + k);                                                \
         k = H(uint(nq.z) + k);                                                \
+        if (E != 0u) k = H(E + k);                                            \
         return H(F + k);                                                      \
     }
 HRTAO_H8D(h_index)
@@ -69,16 +72,33 @@ struct CellKey {
 };
 
 // The key of integer cell `c` at LOD `lod` (eq. 4-6), its slot wrapped into the table.
-CellKey cell_key_at(ivec3 c, int lod, ivec3 nq, uint F, uint capacity) {
+CellKey cell_key_at(ivec3 c, int lod, ivec3 nq, uint F, uint E, uint capacity) {
     CellKey key;
-    key.slot = h_index_8d(c, lod, nq, F) & (capacity - 1u);
-    uint check = h_check_8d(c, lod, nq, F);
+    key.slot = h_index_8d(c, lod, nq, F, E) & (capacity - 1u);
+    uint check = h_check_8d(c, lod, nq, F, E);
     key.checksum = check == EMPTY_CELL ? 1u : check;
     return key;
 }
 
-CellKey cell_key(vec3 p, vec3 n, int lod, float s_nd, uint F, uint capacity) {
-    return cell_key_at(cell_coord(p, lod), lod, normal_coord(n, s_nd), F, capacity);
+CellKey cell_key(vec3 p, vec3 n, int lod, float s_nd, uint F, uint E, uint capacity) {
+    return cell_key_at(cell_coord(p, lod), lod, normal_coord(n, s_nd), F, E, capacity);
+}
+
+// The region epoch table (local edits, ours; regions.rs). Cells of LOD `lod` lie in cubic regions of edge
+// 2^(grid + 1), grid = max(lod, region_lod), where region_lod is the LOD of the largest finest cell (s_w_max):
+// two cells across, never smaller than a cell, and one grid shared by all finer levels. A region is hashed
+// with its grid into REGION_COUNT entries. Arithmetic shifts floor negative coordinates, so the region is
+// exact on the CPU and the GPU.
+uint region_entry(ivec3 r, int grid) {
+    uint k = h_index(uint(grid));
+    k = h_index(uint(r.x) + k);
+    k = h_index(uint(r.y) + k);
+    k = h_index(uint(r.z) + k);
+    return k & (REGION_COUNT - 1u);
+}
+uint region_index(ivec3 c, int lod, int region_lod) {
+    int grid = max(lod, region_lod);
+    return region_entry(c >> clamp(grid + 1 - lod, 0, 31), grid);
 }
 
 #endif

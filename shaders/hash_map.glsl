@@ -32,6 +32,21 @@ bool stamp_reclaimable(uint64_t s) {
     return age > g.frame_index - g.f_start_frame || age > g.stale_frames;
 }
 
+// Local edits (ours): the epoch of the region holding cell `c`, and the cell's key with it.
+layout(buffer_reference, scalar) buffer RegionRef { uint v[]; };
+uint region_epoch(ivec3 c, int lod) {
+    return RegionRef(g.regions).v[region_index(c, lod, g.region_lod)];
+}
+CellKey region_cell_key(ivec3 c, int lod, ivec3 nq) {
+    return cell_key_at(c, lod, nq, g.scene_f, region_epoch(c, lod), g.hash_capacity);
+}
+// True when the last local edit touching the region of the finest cell of `p` (at LOD `lod`) happened this
+// frame.
+bool region_edited_now(vec3 p, int lod) {
+    uint r = region_index(cell_coord(p, lod), lod, g.region_lod);
+    return RegionRef(g.regions).v[REGION_COUNT + r] == g.frame_index;
+}
+
 void note_probe(uint length) { atomicMax(StatsRef(g.stats).counters[STAT_MAX_PROBE], length); }
 
 // Empties the counters of a cell this thread has just claimed (its stamp already names the new key).

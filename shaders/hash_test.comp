@@ -13,8 +13,9 @@ void main() {
     HashTestCase c = cases.v[i];
     int log2_s_min = g.log2_s_min;
     int lod = lod_of(c.s_w, log2_s_min) + int(c.lod_offset);
-    CellKey key = cell_key(c.position, c.normal, lod, g.s_nd, c.scene_f, g.hash_capacity);
+    CellKey key = cell_key(c.position, c.normal, lod, g.s_nd, c.scene_f, c.epoch, g.hash_capacity);
     cases.v[i].index = key.slot;
     cases.v[i].checksum = key.checksum;
     cases.v[i].lod = lod;
+    cases.v[i].region = region_index(cell_coord(c.position, lod), lod, g.region_lod);
 }

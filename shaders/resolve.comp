@@ -48,7 +48,7 @@ void main() {
                 vec3 wv = mix(1.0 - f, f, vec3(o));
                 float w = wv.x * wv.y * wv.z;
                 if (w <= 0.0) continue;
-                uint c = find_cell(cell_key_at(b + o, lod, nq, g.scene_f, g.hash_capacity));
+                uint c = find_cell(region_cell_key(b + o, lod, nq));
                 if (c == INVALID_CELL) continue;
                 uint s = cells.v[c].samples;
                 if (s == 0u) continue;

@@ -33,6 +33,7 @@ fn main() -> anyhow::Result<()> {
     let rays: u32 = take("--rays", "8").parse()?;
     let frames: u32 = take("--frames", "32").parse()?;
     let extra = take("--set", "{}");
+    let dump = take("--dump", "");
     let keys = if args.is_empty() {
         vec!["rod", "duplex", "cycloidal", "engine", "sf"]
             .into_iter()
@@ -92,6 +93,15 @@ fn main() -> anyhow::Result<()> {
             hrtao_curve.push((f + 1, total_rays, e));
             if f == 0 {
                 hrtao_1 = e;
+                if !dump.is_empty() {
+                    let d = PathBuf::from(&dump);
+                    std::fs::create_dir_all(&d)?;
+                    let (w, h) = (cam.width, cam.height);
+                    hrtao_core::imageio::write_pfm(&d.join(format!("{key}_hrtao1.pfm")), w, h, &ao)?;
+                    let gb = r.read_gbuffer()?;
+                    let mask: Vec<f32> = gb.iter().map(|p| if p.t >= 0.0 { 1.0 } else { 0.0 }).collect();
+                    hrtao_core::imageio::write_pfm(&d.join(format!("{key}_mask.pfm")), w, h, &mask)?;
+                }
             }
             if f >= 4 {
                 let d: f64 = ao
@@ -119,6 +129,16 @@ fn main() -> anyhow::Result<()> {
         for _ in 0..eq_frames.max(frames) {
             rt.render(&sg, scene.f(), &cam)?;
             rtao_curve.push(metrics::ao_error(&rt.read_ao()?, &reference).mae);
+        }
+        if !dump.is_empty() {
+            let d = PathBuf::from(&dump);
+            let ao = rt.read_ao()?;
+            hrtao_core::imageio::write_pfm(
+                &d.join(format!("{key}_rtao_many.pfm")),
+                cam.width,
+                cam.height,
+                &ao,
+            )?;
         }
         let rtao_1 = rtao_curve[0];
         let rtao_eq = rtao_curve[eq_frames as usize - 1];

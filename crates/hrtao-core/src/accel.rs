@@ -4,6 +4,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use ash::vk;
+use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use hrtao_scene::Scene;
 
@@ -117,7 +118,14 @@ pub struct SceneGpu {
     pub stats: BuildStats,
     /// Bumped by every `update_instances` (edits, visibility, selection): an image of an older version is stale.
     version: u64,
+    /// The scene's F at the last `update_instances`, and the located changes between synced F values
+    /// (from, to, world boxes or None when unknown), newest last: see `changes_between`.
+    synced_f: u32,
+    changes: std::collections::VecDeque<(u32, u32, Option<Vec<(Vec3, Vec3)>>)>,
 }
+
+/// Synced changes `SceneGpu::changes_between` can look back over.
+const SYNCED_CHANGES: usize = 64;
 
 /// Maximum instance id stored in a TLAS instance's 24-bit custom index.
 const MAX_INSTANCES: usize = (1 << 24) - 1;
@@ -433,6 +441,8 @@ impl SceneGpu {
             tlas: placeholder,
             raster,
             version: 0,
+            synced_f: scene.f(),
+            changes: Default::default(),
             stats: BuildStats {
                 blas_count: per_mesh.iter().filter(|g| !g.is_empty()).count(),
                 geometry_count: table.len(),
@@ -451,15 +461,43 @@ impl SceneGpu {
         self.blas.iter().filter(|b| b.is_some()).count()
     }
 
-    /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
-    /// `selected` is the instance to highlight (u32::MAX for none).
     /// How many times the instance tables were updated (see `version`).
     pub fn version(&self) -> u64 {
         self.version
     }
 
+    /// The world boxes the scene's edits changed between F = `f0` and F = `f1` (both synced), or None when
+    /// some change in between is not located (or is too old): then everything may have changed.
+    pub fn changes_between(&self, f0: u32, f1: u32) -> Option<Vec<(Vec3, Vec3)>> {
+        let mut out = Vec::new();
+        let mut to = f1;
+        for (from, t, boxes) in self.changes.iter().rev() {
+            if to == f0 {
+                break;
+            }
+            if *t != to {
+                return None;
+            }
+            out.extend(boxes.as_ref()?.iter().copied());
+            to = *from;
+        }
+        (to == f0).then_some(out)
+    }
+
+    /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
+    /// `selected` is the instance to highlight (u32::MAX for none).
     pub fn update_instances(&mut self, scene: &Scene, selected: u32) -> Result<()> {
         self.version += 1;
+        if scene.f() != self.synced_f {
+            let boxes = scene
+                .changes_since(self.synced_f)
+                .map(|b| b.iter().map(|a| (a.min, a.max)).collect());
+            if self.changes.len() == SYNCED_CHANGES {
+                self.changes.pop_front();
+            }
+            self.changes.push_back((self.synced_f, scene.f(), boxes));
+            self.synced_f = scene.f();
+        }
         let gpu = self.gpu.clone();
         if scene.instances.len() > MAX_INSTANCES {
             return Err(CoreError::Invalid(format!(

@@ -41,7 +41,7 @@ mod tests {
         // Scalar block layout: a u64 field must sit at an 8-byte offset.
         assert_eq!(std::mem::size_of::<GPixel>(), 48);
         assert_eq!(std::mem::size_of::<HashCell>(), 24);
-        assert_eq!(std::mem::size_of::<HashTestCase>(), 48);
+        assert_eq!(std::mem::size_of::<HashTestCase>(), 56);
         assert_eq!(std::mem::size_of::<GeometryInfo>(), 32);
         assert_eq!(std::mem::size_of::<FrameGlobals>() % 8, 0);
         assert_eq!(std::mem::offset_of!(FrameGlobals, gbuffer) % 8, 0);

@@ -42,6 +42,8 @@ gpu_consts! {
     SAMPLE_CAP: u32 = 0x0100_0000;
     /// Largest `max_samples`: the QMC index plus one frame's block claims stays far from u32 overflow.
     MAX_SAMPLES_LIMIT: u32 = 0x0010_0000;
+    /// Entries of the region epoch table (local edits, ours): a power of two.
+    REGION_COUNT: u32 = 65536;
     /// Indices into `FrameStats::counters`.
     STAT_RAYS: u32 = 0;
     STAT_CELLS_INSERTED: u32 = 1;
@@ -104,6 +106,13 @@ gpu_structs! {
         filter_iterations: u32,
         /// Still-camera refinement: the cell estimate counts as this many of the pixel's own rays.
         prior_rays: f32,
+        /// Variance-guided filtering (ours, docs/algorithm.md): neighbours whose AO differs from the pixel's by
+        /// more than this many standard deviations of the cells' binomial noise stop the filter; 0 = the paper's
+        /// footprint-bounded filter.
+        filter_sigma: f32,
+        /// Local edits (ours, docs/algorithm.md): the LOD of the largest finest cell (s_w_max), which sets the
+        /// grids of the region epoch table (hash.glsl `region_index`).
+        region_lod: i32,
         /// Feature edges: normals meeting at more than the crease angle draw a crease (its cosine).
         crease_cos: f32,
         background_top: [f32; 4],
@@ -125,6 +134,8 @@ gpu_structs! {
         /// Pixel indices that trace rays this frame (STAT_RAY_QUEUE of them), and the indirect dispatch size.
         ray_queue: u64,
         dispatch_args: u64,
+        /// `RegionTable`: REGION_COUNT epochs, then REGION_COUNT frame indices of the regions' last local edit.
+        regions: u64,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -208,11 +219,15 @@ gpu_structs! {
         s_w: f32,
         normal: [f32; 3],
         scene_f: u32,
+        /// The region epoch of eq. (6) as we extend it (0 = the paper's key).
+        epoch: u32,
         /// LOD offset added to the point's level (0..LOD_COUNT).
         lod_offset: u32,
         index: u32,
         checksum: u32,
         lod: i32,
+        /// Region epoch table entry of the point's cell (`region_index` at the renderer's region_lod).
+        region: u32,
     }
 
     /// Per pixel, the hash cell indices at the LOD_COUNT levels (cell finder output).

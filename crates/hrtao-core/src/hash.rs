@@ -75,8 +75,9 @@ pub fn normal_coord(n: Vec3, s_nd: f32) -> IVec3 {
 }
 
 /// eq. (4)-(6) chained with one base hash `h`: h(F + H7D), H7D = h(nz + h(ny + h(nx + H4D))),
-/// H4D = h(lod + h(pz + h(py + h(px)))).
-pub fn h8d(h: fn(u32) -> u32, c: IVec3, lod: i32, nq: IVec3, frame: u32) -> u32 {
+/// H4D = h(lod + h(pz + h(py + h(px)))). Ours (local edits): a non-zero region epoch E adds one step,
+/// h(F + h(E + H7D)); E = 0 is the paper's key.
+pub fn h8d(h: fn(u32) -> u32, c: IVec3, lod: i32, nq: IVec3, frame: u32, epoch: u32) -> u32 {
     let mut k = h(c.x as u32);
     k = h((c.y as u32).wrapping_add(k));
     k = h((c.z as u32).wrapping_add(k));
@@ -84,6 +85,9 @@ pub fn h8d(h: fn(u32) -> u32, c: IVec3, lod: i32, nq: IVec3, frame: u32) -> u32 
     k = h((nq.x as u32).wrapping_add(k)); // eq. (5)
     k = h((nq.y as u32).wrapping_add(k));
     k = h((nq.z as u32).wrapping_add(k));
+    if epoch != 0 {
+        k = h(epoch.wrapping_add(k));
+    }
     h(frame.wrapping_add(k)) // eq. (6)
 }
 
@@ -94,18 +98,40 @@ pub struct CellKey {
     pub checksum: u32,
 }
 
-/// The key of integer cell `c` at LOD `lod` with quantised normal `nq`.
-pub fn cell_key_at(c: IVec3, lod: i32, nq: IVec3, frame: u32, capacity: u32) -> CellKey {
-    let slot = h8d(h_index, c, lod, nq, frame) & (capacity - 1);
-    let check = h8d(h_check, c, lod, nq, frame);
+/// The key of integer cell `c` at LOD `lod` with quantised normal `nq`, F `frame` and region epoch `epoch`.
+pub fn cell_key_at(c: IVec3, lod: i32, nq: IVec3, frame: u32, epoch: u32, capacity: u32) -> CellKey {
+    let slot = h8d(h_index, c, lod, nq, frame, epoch) & (capacity - 1);
+    let check = h8d(h_check, c, lod, nq, frame, epoch);
     CellKey {
         slot,
         checksum: if check == EMPTY_CELL { 1 } else { check },
     }
 }
 
-pub fn cell_key(p: Vec3, n: Vec3, lod: i32, s_nd: f32, frame: u32, capacity: u32) -> CellKey {
-    cell_key_at(cell_coord(p, lod), lod, normal_coord(n, s_nd), frame, capacity)
+pub fn cell_key(p: Vec3, n: Vec3, lod: i32, s_nd: f32, frame: u32, epoch: u32, capacity: u32) -> CellKey {
+    cell_key_at(
+        cell_coord(p, lod),
+        lod,
+        normal_coord(n, s_nd),
+        frame,
+        epoch,
+        capacity,
+    )
+}
+
+/// hash.glsl `region_entry`: the epoch table entry of region `r` of grid `grid` (regions of edge 2^(grid+1)).
+pub fn region_entry(r: IVec3, grid: i32) -> u32 {
+    let mut k = h_index(grid as u32);
+    k = h_index((r.x as u32).wrapping_add(k));
+    k = h_index((r.y as u32).wrapping_add(k));
+    k = h_index((r.z as u32).wrapping_add(k));
+    k & (crate::gpu::REGION_COUNT - 1)
+}
+
+/// hash.glsl `region_index`: the epoch table entry of integer cell `c` at LOD `lod`, grid max(lod, region_lod).
+pub fn region_index(c: IVec3, lod: i32, region_lod: i32) -> u32 {
+    let grid = lod.max(region_lod);
+    region_entry(c >> (grid + 1 - lod).clamp(0, 31), grid)
 }
 
 #[cfg(test)]
@@ -172,32 +198,54 @@ mod tests {
     fn keys_separate_position_normal_lod_and_frame() {
         let p = Vec3::new(1.25, -3.5, 7.0);
         let n = Vec3::Z;
-        let base = cell_key(p, n, -2, 3.0, 0, 1 << 20);
+        let base = cell_key(p, n, -2, 3.0, 0, 0, 1 << 20);
         assert_eq!(
             base,
-            cell_key(p + Vec3::splat(0.01), n, -2, 3.0, 0, 1 << 20),
+            cell_key(p + Vec3::splat(0.01), n, -2, 3.0, 0, 0, 1 << 20),
             "same cell"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p + Vec3::X, n, -2, 3.0, 0, 1 << 20).checksum,
+            cell_key(p + Vec3::X, n, -2, 3.0, 0, 0, 1 << 20).checksum,
             "next cell"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p, -n, -2, 3.0, 0, 1 << 20).checksum,
+            cell_key(p, -n, -2, 3.0, 0, 0, 1 << 20).checksum,
             "other normal"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p, n, -1, 3.0, 0, 1 << 20).checksum,
+            cell_key(p, n, -1, 3.0, 0, 0, 1 << 20).checksum,
             "other LOD"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p, n, -2, 3.0, 1, 1 << 20).checksum,
+            cell_key(p, n, -2, 3.0, 1, 0, 1 << 20).checksum,
             "other F"
         );
+        // A region epoch makes a new key, distinct from every F's epoch-0 key and from the next F's.
+        let e1 = cell_key(p, n, -2, 3.0, 0, 1, 1 << 20);
+        assert_ne!(base.checksum, e1.checksum, "other epoch");
+        assert_ne!(e1.checksum, cell_key(p, n, -2, 3.0, 1, 0, 1 << 20).checksum);
+        assert_ne!(e1.checksum, cell_key(p, n, -2, 3.0, 1, 1, 1 << 20).checksum);
         assert!(base.slot < 1 << 20 && base.checksum != EMPTY_CELL);
+    }
+
+    #[test]
+    fn a_region_holds_whole_cells_and_negative_coordinates_floor() {
+        // region_lod 1: cells of LOD <= 1 lie in regions of edge 4 (grid 1), LOD 2 in regions of edge 8.
+        let r = |x: i32, lod: i32| region_index(IVec3::new(x, 0, 0), lod, 1);
+        // LOD 0 cells at x = -4..-1 (world -4..0) share a region, x = 0 starts the next.
+        assert_eq!(r(-4, 0), r(-1, 0));
+        assert_ne!(r(-1, 0), r(0, 0));
+        assert_eq!(r(0, 0), r(3, 0));
+        // A LOD 1 cell at x = 1 (world 2..4) lies in the region of world 0..4, as do finer cells there.
+        assert_eq!(r(1, 1), r(0, 0));
+        assert_eq!(r(7, -1), r(0, 0));
+        // Coarser LODs have their own grid: regions two cells across.
+        assert_eq!(r(0, 2), r(1, 2));
+        assert_ne!(r(1, 2), r(2, 2));
+        assert_eq!(r(-2, 2), region_entry(IVec3::new(-1, 0, 0), 2));
     }
 }

@@ -19,6 +19,7 @@ pub mod imageio;
 pub mod metrics;
 pub mod pass;
 pub mod raster;
+pub mod regions;
 pub mod renderer;
 pub mod settings;
 pub mod timer;

@@ -16,6 +16,7 @@ use crate::gpu::{
 };
 use crate::pass::{Pass, PassSet, Recorder};
 use crate::raster::{Primary, Rasterizer};
+use crate::regions::RegionTable;
 use crate::settings::{AoSettings, Mode};
 use crate::timer::GpuTimer;
 
@@ -134,6 +135,12 @@ pub struct Renderer {
     /// F of the previous frame, and the frame_index of the first frame rendered with it (eq. 6).
     last_f: Option<u32>,
     f_start_frame: u32,
+    /// The F cells are keyed with (eq. 6): the scene's F after a global change; local edits leave it and
+    /// bump region epochs instead (`regions`).
+    key_f: u32,
+    regions: RegionTable,
+    /// `still_index` at the last local edit: pixels near it restarted their refinement then.
+    edit_still_index: u32,
     /// The last finished frame reported `converged`.
     last_converged: bool,
     /// Jitter the primary samples of still frames (anti-aliasing). `hrtao render` keeps pixel centres.
@@ -177,7 +184,7 @@ impl Renderer {
         )?;
         let passes = PassSet::new(gpu, &globals)?;
         let hash = Self::create_hash(gpu, settings.hash_capacity)?;
-        let r = Renderer {
+        let mut r = Renderer {
             gpu: gpu.clone(),
             timer: GpuTimer::new(gpu)?,
             passes,
@@ -192,6 +199,9 @@ impl Renderer {
             still_key: None,
             last_f: None,
             f_start_frame: 0,
+            key_f: 0,
+            regions: RegionTable::new(gpu)?,
+            edit_still_index: 0,
             last_converged: false,
             jitter: false,
             view_height: 0,
@@ -205,7 +215,26 @@ impl Renderer {
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
         })?;
+        r.sync_region_size();
         Ok(r)
+    }
+
+    /// Region grids for the current settings (`RegionTable::region_lod`); new grids forget local edits.
+    fn sync_region_size(&mut self) {
+        let s = &self.settings;
+        let l = RegionTable::region_lod_for(
+            s.ao_radius * s.max_cell_fraction,
+            crate::hash::log2_s_min(s.s_min),
+        );
+        if l != self.regions.region_lod {
+            self.regions.region_lod = l;
+            self.regions.reset();
+        }
+    }
+
+    /// The LOD setting the grids of the local-edit region table (`RegionTable::region_lod`).
+    pub fn region_lod(&self) -> i32 {
+        self.regions.region_lod
     }
 
     fn create_hash(gpu: &Arc<Gpu>, capacity: u32) -> Result<HashMapGpu> {
@@ -255,6 +284,7 @@ impl Renderer {
             })?;
         }
         self.settings = settings;
+        self.sync_region_size();
         Ok(())
     }
 
@@ -266,10 +296,11 @@ impl Renderer {
             self.gpu.device.cmd_fill_buffer(cmd, cells, 0, vk::WHOLE_SIZE, 0);
             self.gpu.device.cmd_fill_buffer(cmd, stats, 0, vk::WHOLE_SIZE, 0);
         })?;
+        self.regions.reset();
         Ok(())
     }
 
-    fn globals_for(&self, camera: &Camera, scene_f: u32) -> FrameGlobals {
+    fn globals_for(&self, camera: &Camera, key_f: u32) -> FrameGlobals {
         let s = &self.settings;
         let t = &self.targets;
         let cam = Camera {
@@ -323,7 +354,7 @@ impl Renderer {
             width: t.width,
             height: t.height,
             still_index: self.still_index,
-            scene_f,
+            scene_f: key_f,
             frame_index: self.frame_index,
             f_start_frame: self.f_start_frame,
             mode: s.mode.gpu_value(),
@@ -345,6 +376,8 @@ impl Renderer {
             stale_frames: s.stale_frames,
             filter_iterations: s.filter_iterations,
             prior_rays: s.prior_rays,
+            filter_sigma: s.filter_sigma,
+            region_lod: self.regions.region_lod,
             crease_cos: s.crease_deg.to_radians().cos(),
             background_top: c4(self.background_top),
             background_bottom: c4(self.background_bottom),
@@ -362,6 +395,7 @@ impl Renderer {
             stats: self.stats.address,
             ray_queue: t.ray_queue.address,
             dispatch_args: self.dispatch_args.address,
+            regions: self.regions.address(),
         }
     }
 
@@ -398,18 +432,28 @@ impl Renderer {
         scene_f: u32,
         camera: &Camera,
     ) -> Result<()> {
+        let local_edit = self.scene_changed(scene, scene_f);
         let key = self.still_key_for(scene, scene_f, camera);
+        if local_edit {
+            // A local edit keeps the still accumulation of the view; composite.comp restarts it only in the
+            // edited regions.
+            if let Some(k) = self.still_key.as_mut() {
+                k.scene_f = key.scene_f;
+                k.tlas = key.tlas;
+                k.scene_version = key.scene_version;
+            }
+        }
         if self.still_key.as_ref() == Some(&key) {
             self.still_index = self.still_index.saturating_add(1);
         } else {
             self.still_index = 0;
             self.still_key = Some(key);
         }
-        if self.last_f != Some(scene_f) {
-            self.last_f = Some(scene_f);
-            self.f_start_frame = self.frame_index;
+        if local_edit || self.still_index == 0 {
+            self.edit_still_index = self.still_index;
         }
-        let mut globals = self.globals_for(camera, scene_f);
+        self.regions.upload()?;
+        let mut globals = self.globals_for(camera, self.key_f);
         globals.instances = scene.instance_info.address;
         globals.geometries = scene.geometries.address;
         self.globals.write(&[globals])?;
@@ -457,6 +501,36 @@ impl Renderer {
         rec.dispatch(Pass::Composite, w, h, [0; 4]);
         host_read_barrier(&self.gpu, cmd);
         Ok(())
+    }
+
+    /// Follows the scene's F (eq. 6). Returns true for a local edit: the change is located
+    /// (`SceneGpu::changes_between`), `local_edits` is on and the regions within reach of it (R plus a region,
+    /// so every cell whose AO can change) got new epochs; cells elsewhere keep their keys. Otherwise, as the
+    /// paper does, the new F re-keys every cell and the old ones become reclaimable.
+    fn scene_changed(&mut self, scene: &SceneGpu, scene_f: u32) -> bool {
+        let Some(last) = self.last_f else {
+            self.last_f = Some(scene_f);
+            self.key_f = scene_f;
+            self.f_start_frame = self.frame_index;
+            return false;
+        };
+        if last == scene_f {
+            return false;
+        }
+        self.last_f = Some(scene_f);
+        if self.settings.local_edits {
+            if let Some(boxes) = scene.changes_between(last, scene_f) {
+                if self
+                    .regions
+                    .invalidate(&boxes, self.settings.ao_radius, self.frame_index)
+                {
+                    return true;
+                }
+            }
+        }
+        self.key_f = scene_f;
+        self.f_start_frame = self.frame_index;
+        false
     }
 
     /// Reads the statistics of the frame just completed.
@@ -543,7 +617,10 @@ impl Renderer {
         let own_rays = |frames: u32| frames as u64 * s.rays_per_pixel as u64 >= s.still_samples as u64;
         match s.mode {
             Mode::Rtao => aa && (s.rays_per_pixel == 0 || own_rays(frames)),
-            Mode::Hrtao if s.refine => aa && (s.rays_per_pixel == 0 || own_rays(self.still_index)),
+            // Pixels near a local edit restarted their own rays then.
+            Mode::Hrtao if s.refine => {
+                aa && (s.rays_per_pixel == 0 || own_rays(self.still_index - self.edit_still_index))
+            }
             Mode::Hrtao => rays == 0 && frames > 1,
             _ => aa,
         }
@@ -669,15 +746,24 @@ impl Renderer {
     /// The keys of the cells the cell finder gives a G-buffer sample at each level (a CPU mirror of
     /// cell_finder.comp for tests of the map).
     pub fn pixel_cell_keys(&self, camera: &Camera, scene_f: u32, px: &GPixel) -> [crate::hash::CellKey; 4] {
-        let g = self.globals_for(camera, scene_f);
+        // The F cells are keyed with: the renderer's after a local edit of this F, else `scene_f`.
+        let key_f = if self.last_f == Some(scene_f) {
+            self.key_f
+        } else {
+            scene_f
+        };
+        let g = self.globals_for(camera, key_f);
         let lod = crate::hash::pixel_lod(px.t, g.s_w_per_distance, g.s_w_max, g.log2_s_min);
         std::array::from_fn(|level| {
-            crate::hash::cell_key(
-                px.position.into(),
-                px.normal.into(),
-                lod + level as i32,
-                g.s_nd,
-                scene_f,
+            let l = lod + level as i32;
+            let c = crate::hash::cell_coord(px.position.into(), l);
+            let epoch = self.regions.epoch(crate::hash::region_index(c, l, g.region_lod));
+            crate::hash::cell_key_at(
+                c,
+                l,
+                crate::hash::normal_coord(px.normal.into(), g.s_nd),
+                key_f,
+                epoch,
                 g.hash_capacity,
             )
         })

@@ -103,6 +103,10 @@ pub struct AoSettings {
     /// Adaptive à-trous filter on/off (§5) and its iterations.
     pub filter: bool,
     pub filter_iterations: u32,
+    /// Ours: variance-guided à-trous (edge-stopping on the AO difference in units of the cells' noise, as
+    /// Schied et al. 2017 do with luminance), so the filter smooths the noise of young cells over more than a
+    /// cell and stops at real AO gradients. 0 = the paper's filter, bounded by the cell footprint.
+    pub filter_sigma: f32,
     /// Hash map capacity in cells (power of two).
     pub hash_capacity: u32,
     /// Longest linear probe before an insert fails.
@@ -126,6 +130,9 @@ pub struct AoSettings {
     /// more than `crease_deg`), as CAD viewports draw them. Never in the AO image.
     pub edges: bool,
     pub crease_deg: f32,
+    /// Ours (docs/algorithm.md, `regions.rs`): an edit invalidates only the cells within reach of what it
+    /// changed (region epochs in the key); off = the paper's eq. (6), every edit empties the whole map.
+    pub local_edits: bool,
 }
 
 impl Default for AoSettings {
@@ -140,7 +147,8 @@ impl Default for AoSettings {
             max_samples: 1000,
             min_samples: 8,
             filter: true,
-            filter_iterations: 2,
+            filter_iterations: 3,
+            filter_sigma: 1.0,
             hash_capacity: 1 << 20,
             max_probe: 32,
             stale_frames: 240,
@@ -151,11 +159,23 @@ impl Default for AoSettings {
             max_cell_fraction: 0.25,
             edges: true,
             crease_deg: 40.0,
+            local_edits: true,
         }
     }
 }
 
 impl AoSettings {
+    /// The paper's behaviour with these parameters: our additions (still-camera refinement, variance-guided
+    /// filter, local edits) off, so `hrtao bench` can run both side by side.
+    pub fn paper(&self) -> AoSettings {
+        AoSettings {
+            refine: false,
+            filter_sigma: 0.0,
+            local_edits: false,
+            ..self.clone()
+        }
+    }
+
     /// Whether still frames accumulate (per-pixel RTAO; HRTAO and AO off with refinement). Must agree with
     /// composite.comp.
     pub fn accumulates(&self) -> bool {
@@ -222,6 +242,12 @@ impl AoSettings {
             return Err(format!(
                 "crease angle must be in 0..=180 degrees, got {}",
                 self.crease_deg
+            ));
+        }
+        if !(self.filter_sigma.is_finite() && self.filter_sigma >= 0.0) {
+            return Err(format!(
+                "filter sigma must be a number >= 0, got {}",
+                self.filter_sigma
             ));
         }
         if self.filter_iterations > 8 {

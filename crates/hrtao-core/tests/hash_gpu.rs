@@ -53,6 +53,7 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
             s_w,
             normal: n.to_array(),
             scene_f: frame,
+            epoch: if i % 5 == 0 { 0 } else { rng.next().to_bits() },
             lod_offset: i % 4,
             ..Default::default()
         });
@@ -68,13 +69,15 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
             lod,
             settings.s_nd,
             c.scene_f,
+            c.epoch,
             settings.hash_capacity,
         );
-        if (g.lod, g.index, g.checksum) != (lod, key.slot, key.checksum) {
+        let region = hash::region_index(hash::cell_coord(Vec3::from(c.position), lod), lod, r.region_lod());
+        if (g.lod, g.index, g.checksum, g.region) != (lod, key.slot, key.checksum, region) {
             if mismatches < 5 {
                 eprintln!(
-                    "mismatch: {c:?}\n  gpu lod {} slot {} check {}\n  cpu lod {lod} slot {} check {}",
-                    g.lod, g.index, g.checksum, key.slot, key.checksum
+                    "mismatch: {c:?}\n  gpu lod {} slot {} check {} region {}\n  cpu lod {lod} slot {} check {} region {region}",
+                    g.lod, g.index, g.checksum, g.region, key.slot, key.checksum
                 );
             }
             mismatches += 1;

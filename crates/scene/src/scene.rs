@@ -84,7 +84,13 @@ pub struct Scene {
     pub origin: [f64; 3],
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     f: u32,
+    /// The world bounds each recent edit changed, with the F it produced (newest last, at most
+    /// `CHANGE_LOG_LEN`): what a renderer needs to invalidate only the AO near an edit.
+    changes: std::collections::VecDeque<(u32, Vec<Aabb>)>,
 }
+
+/// Edits remembered by [`Scene::changes_since`].
+pub const CHANGE_LOG_LEN: usize = 256;
 
 /// Geometry whose centre lies farther than this from the file's origin is re-centred (see [`Scene::origin`]).
 pub const RECENTRE_DISTANCE: f64 = 1.0e4;
@@ -146,6 +152,7 @@ impl Scene {
             name: name.into(),
             origin: [0.0; 3],
             f: 0,
+            changes: Default::default(),
         }
     }
 
@@ -189,9 +196,46 @@ impl Scene {
         self.f
     }
 
-    /// Explicit `F` increment (wrapping).
+    /// Explicit `F` increment (wrapping). The change is not located: a renderer invalidates all its AO.
     pub fn bump_f(&mut self) {
         self.f = self.f.wrapping_add(1);
+    }
+
+    /// Bumps F for an edit that changed the geometry within `changed` (world bounds; empty boxes skipped).
+    fn edited(&mut self, changed: Vec<Aabb>) {
+        self.bump_f();
+        if self.changes.len() == CHANGE_LOG_LEN {
+            self.changes.pop_front();
+        }
+        let changed = changed.into_iter().filter(|b| !b.is_empty()).collect();
+        self.changes.push_back((self.f, changed));
+    }
+
+    /// The world bounds changed by the edits since F was `f0`, or None when they are not all known (an
+    /// explicit `bump_f`, or more edits than the log keeps): then anything may have changed.
+    pub fn changes_since(&self, f0: u32) -> Option<Vec<Aabb>> {
+        let n = self.f.wrapping_sub(f0) as usize;
+        if n > self.changes.len() {
+            return None;
+        }
+        let recent = self.changes.iter().skip(self.changes.len() - n);
+        let mut out = Vec::new();
+        for (i, (f, boxes)) in recent.enumerate() {
+            // Each of the last n bumps must be a logged edit, in order.
+            if *f != f0.wrapping_add(i as u32 + 1) {
+                return None;
+            }
+            out.extend(boxes.iter().copied());
+        }
+        Some(out)
+    }
+
+    /// World bounds of one instance (empty when out of range).
+    pub fn instance_bounds(&self, instance: u32) -> Aabb {
+        self.instances
+            .get(instance as usize)
+            .map(|i| self.mesh_bounds(i.mesh).transformed(&i.transform))
+            .unwrap_or_else(Aabb::empty)
     }
 
     /// Triangles of every mesh counted once (unreferenced meshes included).
@@ -349,8 +393,10 @@ impl Scene {
     pub fn set_transform(&mut self, instance: u32, m: Mat4) -> Result<(), SceneError> {
         let i = self.check_instance(instance)?;
         check_transform(&m)?;
+        let before = self.instance_bounds(instance);
         self.instances[i].transform = m;
-        self.bump_f();
+        let after = self.instance_bounds(instance);
+        self.edited(vec![before, after]);
         Ok(())
     }
 
@@ -358,15 +404,16 @@ impl Scene {
     pub fn set_visible(&mut self, instance: u32, visible: bool) -> Result<(), SceneError> {
         let i = self.check_instance(instance)?;
         self.instances[i].visible = visible;
-        self.bump_f();
+        self.edited(vec![self.instance_bounds(instance)]);
         Ok(())
     }
 
     /// Removes an instance (later ids shift down by one) and returns it for undo.
     pub fn remove_instance(&mut self, instance: u32) -> Result<Instance, SceneError> {
         let i = self.check_instance(instance)?;
+        let bounds = self.instance_bounds(instance);
         let inst = self.instances.remove(i);
-        self.bump_f();
+        self.edited(vec![bounds]);
         Ok(inst)
     }
 
@@ -381,7 +428,7 @@ impl Scene {
         }
         self.check_new_instance(&inst)?;
         self.instances.insert(at as usize, inst);
-        self.bump_f();
+        self.edited(vec![self.instance_bounds(at)]);
         Ok(())
     }
 
@@ -391,7 +438,7 @@ impl Scene {
             .map_err(|_| SceneError::TooLarge(format!("scene {} has too many instances", self.name)))?;
         self.check_new_instance(&inst)?;
         self.instances.push(inst);
-        self.bump_f();
+        self.edited(vec![self.instance_bounds(id)]);
         Ok(id)
     }
 }

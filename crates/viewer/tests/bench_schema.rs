@@ -98,7 +98,7 @@ fn tiny_bench_writes_the_schema_and_a_report() {
     assert!(num(&v, "host.cpu_cores") >= 1.0);
 
     // Frames: one first frame per repetition, 3 navigation frames, each with GPU sections and rays.
-    for mode in ["hrtao", "rtao"] {
+    for mode in ["hrtao", "paper", "rtao"] {
         assert_eq!(v[mode]["first"].as_array().unwrap().len(), 1);
         let nav = v[mode]["nav"].as_array().unwrap();
         assert_eq!(nav.len(), 3);
@@ -175,6 +175,12 @@ fn tiny_bench_writes_the_schema_and_a_report() {
         assert!((0.0..=1.0).contains(&mae) && mae <= rmse + 1e-12, "{p}");
     }
     assert_eq!(q["hrtao_curve"].as_array().unwrap().len(), 2);
+    // The paper's behaviour in the same run: the same still frames; with refinement off its second frame
+    // traces no rays of its own, so it has at most the rays ours has.
+    let paper = q["paper_curve"].as_array().unwrap();
+    assert_eq!(paper.len(), 2);
+    assert!(num(&paper[1], "rays_per_pixel") <= num(&q["hrtao_curve"][1], "rays_per_pixel") + 1e-9);
+    assert_eq!(v["settings"]["refine"], true, "the bench's HRTAO is ours");
     assert!(q["match_mae"]["kind"].is_string());
     assert!(num(&v, "memory.host_peak_bytes") > 0.0);
     assert!(num(&v, "memory.device_total_bytes") >= num(&v, "memory.device_scene_bytes"));
@@ -194,6 +200,7 @@ fn tiny_bench_writes_the_schema_and_a_report() {
         "Table 1",
         "Table 2",
         "Targets of issue 5",
+        "beside the paper's behaviour",
         "tiny",
         "error_tiny.png",
     ] {

@@ -204,6 +204,14 @@ pub struct Quality {
     pub rtao_same_b: CurvePoint,
     /// HRTAO from an empty map, static camera, frame by frame.
     pub hrtao_curve: Vec<HrtaoPoint>,
+    /// Mean |ΔAO| between consecutive HRTAO frames of the still camera after frame 4 (None: too few frames).
+    #[serde(default)]
+    pub hrtao_flicker: Option<f64>,
+    /// The same run and flicker with the paper's behaviour (`AoSettings::paper`).
+    #[serde(default)]
+    pub paper_curve: Vec<HrtaoPoint>,
+    #[serde(default)]
+    pub paper_flicker: Option<f64>,
     /// Per-pixel rays needed to match HRTAO's one-frame MAE / RMSE, and their ratio to HRTAO's rays.
     pub match_mae: Match,
     pub match_rmse: Match,
@@ -290,6 +298,9 @@ pub struct BenchResult {
     pub navigation: String,
     pub nav_frames: usize,
     pub hrtao: ModeRun,
+    /// HRTAO as the paper has it (`AoSettings::paper`: our additions off), over the same cameras.
+    #[serde(default)]
+    pub paper: Option<ModeRun>,
     pub rtao: ModeRun,
     pub summary: Summary,
     pub quality: Option<Quality>,
@@ -513,36 +524,28 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     r.set_settings(rtao_settings.clone())?;
     r.render(&scene_gpu, sf, &camera)?;
 
-    // 1. Timing: HRTAO.
-    r.set_settings(hrtao_settings.clone())?;
-    let mut first = Vec::new();
-    for i in 0..args.repeat {
-        r.clear_cache()?;
-        let rep = r.render(&scene_gpu, sf, &camera)?;
-        first.push(FrameRecord::new(i as usize, "first", &rep));
-    }
-    let mut settle = Vec::new();
-    let first_rays = first.last().map(|f| f.rays).unwrap_or(0) as f64;
-    for i in 0..args.settle {
-        let rep = r.render(&scene_gpu, sf, &camera)?;
-        settle.push(FrameRecord::new(i as usize + 1, "settle", &rep));
-        // Settled once the cells take few rays (the still-camera refinement's own rays do not count).
-        if ((rep.rays - rep.refine_rays) as f64) < args.settle_until * first_rays {
-            break;
-        }
-    }
-    let mut nav = Vec::new();
-    for (i, cam) in nav_cams.iter().enumerate() {
-        let rep = r.render(&scene_gpu, sf, cam)?;
-        nav.push(FrameRecord::new(i + 1, "nav", &rep));
-    }
-    let hrtao = ModeRun::new(first, settle, nav);
+    // 1. Timing: HRTAO, then the paper's behaviour (our additions off) over the same cameras.
+    let hrtao = time_hrtao(&mut r, &scene_gpu, sf, &camera, &nav_cams, &hrtao_settings, args)?;
     log::info!(
         "HRTAO: first {:.1} ms (passes {:.1} ms), nav {:.1} ms (passes {:.1} ms), GPU medians",
         hrtao.first_stats.gpu_total_ms,
         hrtao.first_stats.hrtao_passes_ms,
         hrtao.nav_stats.gpu_total_ms,
         hrtao.nav_stats.hrtao_passes_ms
+    );
+    let paper = time_hrtao(
+        &mut r,
+        &scene_gpu,
+        sf,
+        &camera,
+        &nav_cams,
+        &hrtao_settings.paper(),
+        args,
+    )?;
+    log::info!(
+        "HRTAO, the paper's mode: first {:.1} ms, nav {:.1} ms (GPU medians)",
+        paper.first_stats.gpu_total_ms,
+        paper.nav_stats.gpu_total_ms
     );
 
     // Per-pixel RTAO at the same B over the same cameras (no accumulation: each first frame after a reset).
@@ -616,6 +619,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         navigation,
         nav_frames: nav_cams.len(),
         hrtao,
+        paper: Some(paper),
         rtao,
         summary,
         quality,
@@ -631,6 +635,42 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         log::warn!("the validation layer reported {validation_messages} messages");
     }
     Ok(())
+}
+
+/// HRTAO timing with `settings`: the first frame `--repeat` times from an empty map, static frames until the
+/// map has settled, then the navigation cameras.
+fn time_hrtao(
+    r: &mut Renderer,
+    scene_gpu: &SceneGpu,
+    sf: u32,
+    camera: &Camera,
+    nav_cams: &[Camera],
+    settings: &AoSettings,
+    args: &BenchArgs,
+) -> Result<ModeRun> {
+    r.set_settings(settings.clone())?;
+    let mut first = Vec::new();
+    for i in 0..args.repeat {
+        r.clear_cache()?;
+        let rep = r.render(scene_gpu, sf, camera)?;
+        first.push(FrameRecord::new(i as usize, "first", &rep));
+    }
+    let mut settle = Vec::new();
+    let first_rays = first.last().map(|f| f.rays).unwrap_or(0) as f64;
+    for i in 0..args.settle {
+        let rep = r.render(scene_gpu, sf, camera)?;
+        settle.push(FrameRecord::new(i as usize + 1, "settle", &rep));
+        // Settled once the cells take few rays (the still-camera refinement's own rays do not count).
+        if ((rep.rays - rep.refine_rays) as f64) < args.settle_until * first_rays {
+            break;
+        }
+    }
+    let mut nav = Vec::new();
+    for (i, cam) in nav_cams.iter().enumerate() {
+        let rep = r.render(scene_gpu, sf, cam)?;
+        nav.push(FrameRecord::new(i + 1, "nav", &rep));
+    }
+    Ok(ModeRun::new(first, settle, nav))
 }
 
 pub fn summarize(hrtao: &ModeRun, rtao: &ModeRun) -> Summary {
@@ -779,34 +819,35 @@ fn measure_quality(
     let rtao_b_img = r.read_ao()?;
     let rtao_same_b = err_point(b as f64, ao_error(&rtao_b_img, &reference));
 
-    // HRTAO from an empty map, static camera.
-    r.set_settings(hrtao_settings.clone())?;
-    r.clear_cache()?;
+    // HRTAO from an empty map, static camera: ours, and the paper's behaviour.
     let mae_curve: Vec<(f64, f64)> = rtao_curve.iter().map(|p| (p.rays_per_pixel, p.mae)).collect();
     let rmse_curve: Vec<(f64, f64)> = rtao_curve.iter().map(|p| (p.rays_per_pixel, p.rmse)).collect();
-    let mut hrtao_curve = Vec::new();
-    let mut cum_rays = 0u64;
-    let mut hrtao_first_img = Vec::new();
-    let mut hrtao_last_img = Vec::new();
-    for f in 1..=args.hrtao_frames.max(1) {
-        let rep = r.render(scene_gpu, sf, camera)?;
-        cum_rays += rep.rays;
-        let img = r.read_ao()?;
-        let e = ao_error(&img, &reference);
-        let rpp = cum_rays as f64 / covered.max(1) as f64;
-        hrtao_curve.push(HrtaoPoint {
-            frame: f as usize,
-            rays_per_pixel: rpp,
-            mae: e.mae,
-            rmse: e.rmse,
-            rtao_mae_same_rays: stats::error_at(&mae_curve, rpp),
-            rtao_rmse_same_rays: stats::error_at(&rmse_curve, rpp),
-        });
-        if f == 1 {
-            hrtao_first_img = img.clone();
-        }
-        hrtao_last_img = img;
-    }
+    let curves = (&mae_curve[..], &rmse_curve[..]);
+    let frames = args.hrtao_frames.max(1);
+    let ours = still_run(
+        r,
+        scene_gpu,
+        sf,
+        camera,
+        hrtao_settings,
+        frames,
+        covered,
+        &reference,
+        curves,
+    )?;
+    let paper = still_run(
+        r,
+        scene_gpu,
+        sf,
+        camera,
+        &hrtao_settings.paper(),
+        frames,
+        covered,
+        &reference,
+        curves,
+    )?;
+    let hrtao_curve = ours.curve;
+    let (hrtao_first_img, hrtao_last_img) = (ours.first_img, ours.last_img);
     let first = &hrtao_curve[0];
     let match_mae = rays_to_reach(&mae_curve, first.mae);
     let match_rmse = rays_to_reach(&rmse_curve, first.rmse);
@@ -845,7 +886,76 @@ fn measure_quality(
         rtao_curve,
         rtao_same_b,
         hrtao_curve,
+        hrtao_flicker: ours.flicker,
+        paper_curve: paper.curve,
+        paper_flicker: paper.flicker,
         external,
+    })
+}
+
+/// One still-camera HRTAO run from an empty map.
+struct StillRun {
+    curve: Vec<HrtaoPoint>,
+    /// Mean |ΔAO| between consecutive frames after frame 4 (None: too few frames).
+    flicker: Option<f64>,
+    first_img: Vec<f32>,
+    last_img: Vec<f32>,
+}
+
+/// Mean |a - b| over all pixels.
+pub fn mean_abs_diff(a: &[f32], b: &[f32]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs() as f64).sum::<f64>() / a.len().max(1) as f64
+}
+
+/// HRTAO from an empty map for `frames` still frames: its error curve against `reference` (beside per-pixel
+/// RTAO at the same cumulated rays, from `curves` = (MAE, RMSE) curves) and its flicker.
+#[allow(clippy::too_many_arguments)]
+fn still_run(
+    r: &mut Renderer,
+    scene_gpu: &SceneGpu,
+    sf: u32,
+    camera: &Camera,
+    settings: &AoSettings,
+    frames: u32,
+    covered: u64,
+    reference: &[f32],
+    (mae_curve, rmse_curve): (&[(f64, f64)], &[(f64, f64)]),
+) -> Result<StillRun> {
+    r.set_settings(settings.clone())?;
+    r.clear_cache()?;
+    let mut curve = Vec::new();
+    let mut cum_rays = 0u64;
+    let mut first_img = Vec::new();
+    let mut prev: Vec<f32> = Vec::new();
+    let (mut flicker, mut flicker_n) = (0.0, 0u32);
+    for f in 1..=frames {
+        let rep = r.render(scene_gpu, sf, camera)?;
+        cum_rays += rep.rays;
+        let img = r.read_ao()?;
+        let e = ao_error(&img, reference);
+        let rpp = cum_rays as f64 / covered.max(1) as f64;
+        curve.push(HrtaoPoint {
+            frame: f as usize,
+            rays_per_pixel: rpp,
+            mae: e.mae,
+            rmse: e.rmse,
+            rtao_mae_same_rays: stats::error_at(mae_curve, rpp),
+            rtao_rmse_same_rays: stats::error_at(rmse_curve, rpp),
+        });
+        if f == 1 {
+            first_img = img.clone();
+        }
+        if f >= 5 {
+            flicker += mean_abs_diff(&img, &prev);
+            flicker_n += 1;
+        }
+        prev = img;
+    }
+    Ok(StillRun {
+        curve,
+        flicker: (flicker_n > 0).then(|| flicker / flicker_n as f64),
+        first_img,
+        last_img: prev,
     })
 }
 

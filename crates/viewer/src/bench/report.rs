@@ -143,6 +143,53 @@ fn kept_sections(old: &str) -> String {
 }
 
 /// `p` relative to `base` when `p` is inside it (enough for docs/bench under docs/).
+/// Our HRTAO beside the paper's behaviour (`AoSettings::paper`), measured in the same run: frame cost while
+/// navigating, flicker of a still camera, and the error curve.
+fn ours_vs_paper(m: &mut String, results: &[&BenchResult]) -> Result<()> {
+    let rows: Vec<_> = results
+        .iter()
+        .filter_map(|r| {
+            let q = r.quality.as_ref()?;
+            let paper = r.paper.as_ref()?;
+            (!q.paper_curve.is_empty()).then_some((r, q, paper))
+        })
+        .collect();
+    if rows.is_empty() {
+        return Ok(());
+    }
+    writeln!(m, "### Ours beside the paper's behaviour, same run\n")?;
+    writeln!(
+        m,
+        "Paper = `AoSettings::paper()`: still-camera refinement and variance-guided filter off. Navigation: GPU ms \
+         (median whole frame). Flicker: mean |ΔAO| between consecutive frames of the still camera after frame 4. \
+         MAE against the converged reference above.\n"
+    )?;
+    writeln!(
+        m,
+        "| scene | nav. frame ms: ours / paper | flicker: ours / paper | MAE 1 frame: ours / paper | MAE after {} frames: ours / paper |",
+        rows[0].1.hrtao_curve.len()
+    )?;
+    writeln!(m, "|---|---|---|---|---|")?;
+    for (r, q, paper) in rows {
+        let opt = |v: Option<f64>| v.map(|x| f(x, 5)).unwrap_or_else(|| "–".into());
+        writeln!(
+            m,
+            "| {} | {} / {} | {} / {} | {} / {} | {} / {} |",
+            r.scene.label,
+            f(r.hrtao.nav_stats.gpu_total_ms, 1),
+            f(paper.nav_stats.gpu_total_ms, 1),
+            opt(q.hrtao_flicker),
+            opt(q.paper_flicker),
+            f(q.hrtao_curve[0].mae, 4),
+            f(q.paper_curve[0].mae, 4),
+            f(q.hrtao_curve.last().unwrap().mae, 4),
+            f(q.paper_curve.last().unwrap().mae, 4),
+        )?;
+    }
+    writeln!(m)?;
+    Ok(())
+}
+
 fn pathdiff(p: &Path, base: &Path) -> Option<PathBuf> {
     let p = std::fs::canonicalize(p).ok()?;
     let base = std::fs::canonicalize(base).ok()?;
@@ -655,6 +702,7 @@ fn render_markdown(
             )?;
         }
         writeln!(m)?;
+        ours_vs_paper(&mut m, &with_q)?;
         let ext: Vec<&BenchResult> = with_q
             .iter()
             .copied()
