@@ -66,7 +66,10 @@ void main() {
     if (first >= LOD_COUNT) return;
     // The target cell takes the rays it granted; bottom-up propagation (§4): every coarser level takes all of
     // them until it holds SAMPLE_CAP.
-    if (claimed > 0u) add_rays(cells, pc.cells[first], claimed, open_claimed);
+    if (claimed > 0u) {
+        add_rays(cells, pc.cells[first], claimed, open_claimed);
+        stat_add(STAT_CELL_RAYS, claimed);
+    }
     for (uint l = first + 1u; l < LOD_COUNT; ++l) {
         uint c = pc.cells[l];
         if (c == INVALID_CELL || !slot_in_bounds(c)) continue;

@@ -106,8 +106,10 @@ void main() {
         bool accumulates = g.mode == MODE_RTAO || ((g.flags & FLAG_REFINE) != 0u && (hashed || g.mode == MODE_NO_AO));
         PixelAccumRef accum = PixelAccumRef(g.accum);
         PixelAccum a;
-        // A local edit (ours) restarts the accumulation only in the regions it touched.
-        if (!accumulates || g.still_index == 0u || (px.t >= 0.0 && region_edited_now(px.position, pixel_lod(px.t)))) {
+        // A local edit (ours) restarts the accumulation only of pixels whose AO it can change: within the AO
+        // radius (plus their cell) of what it changed.
+        bool edited = px.t >= 0.0 && edited_near(px.position, g.ao_radius + exp2(float(pixel_lod(px.t))));
+        if (!accumulates || g.still_index == 0u || edited) {
             a.shade_cell = vec3(0.0);
             a.cell = 0.0;
             a.shade_open = vec3(0.0);

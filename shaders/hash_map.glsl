@@ -40,11 +40,18 @@ uint region_epoch(ivec3 c, int lod) {
 CellKey region_cell_key(ivec3 c, int lod, ivec3 nq) {
     return cell_key_at(c, lod, nq, g.scene_f, region_epoch(c, lod), g.hash_capacity);
 }
-// True when the last local edit touching the region of the finest cell of `p` (at LOD `lod`) happened this
-// frame.
-bool region_edited_now(vec3 p, int lod) {
-    uint r = region_index(cell_coord(p, lod), lod, g.region_lod);
-    return RegionRef(g.regions).v[REGION_COUNT + r] == g.frame_index;
+// True when a local edit of this frame changed geometry within `reach` of `p` (its boxes follow the epochs).
+bool edited_near(vec3 p, float reach) {
+    RegionRef t = RegionRef(g.regions);
+    if (t.v[REGION_COUNT] != g.frame_index) return false;
+    uint n = min(t.v[REGION_COUNT + 1u], MAX_EDIT_BOXES);
+    for (uint i = 0u; i < n; ++i) {
+        uint w = REGION_COUNT + 4u + 8u * i;
+        vec3 lo = uintBitsToFloat(uvec3(t.v[w], t.v[w + 1u], t.v[w + 2u]));
+        vec3 hi = uintBitsToFloat(uvec3(t.v[w + 4u], t.v[w + 5u], t.v[w + 6u]));
+        if (length(max(max(lo - p, p - hi), vec3(0.0))) <= reach) return true;
+    }
+    return false;
 }
 
 void note_probe(uint length) { atomicMax(StatsRef(g.stats).counters[STAT_MAX_PROBE], length); }

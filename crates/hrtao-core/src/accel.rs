@@ -121,7 +121,15 @@ pub struct SceneGpu {
     /// The scene's F at the last `update_instances`, and the located changes between synced F values
     /// (from, to, world boxes or None when unknown), newest last: see `changes_between`.
     synced_f: u32,
-    changes: std::collections::VecDeque<(u32, u32, Option<Vec<(Vec3, Vec3)>>)>,
+    changes: std::collections::VecDeque<SyncedChange>,
+}
+
+/// The scene's F went from `from` to `to` between two `update_instances`, changing the world boxes `boxes`
+/// (None: not located).
+struct SyncedChange {
+    from: u32,
+    to: u32,
+    boxes: Option<Vec<(Vec3, Vec3)>>,
 }
 
 /// Synced changes `SceneGpu::changes_between` can look back over.
@@ -471,15 +479,15 @@ impl SceneGpu {
     pub fn changes_between(&self, f0: u32, f1: u32) -> Option<Vec<(Vec3, Vec3)>> {
         let mut out = Vec::new();
         let mut to = f1;
-        for (from, t, boxes) in self.changes.iter().rev() {
+        for c in self.changes.iter().rev() {
             if to == f0 {
                 break;
             }
-            if *t != to {
+            if c.to != to {
                 return None;
             }
-            out.extend(boxes.as_ref()?.iter().copied());
-            to = *from;
+            out.extend(c.boxes.as_ref()?.iter().copied());
+            to = c.from;
         }
         (to == f0).then_some(out)
     }
@@ -495,7 +503,11 @@ impl SceneGpu {
             if self.changes.len() == SYNCED_CHANGES {
                 self.changes.pop_front();
             }
-            self.changes.push_back((self.synced_f, scene.f(), boxes));
+            self.changes.push_back(SyncedChange {
+                from: self.synced_f,
+                to: scene.f(),
+                boxes,
+            });
             self.synced_f = scene.f();
         }
         let gpu = self.gpu.clone();

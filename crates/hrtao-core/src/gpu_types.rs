@@ -44,6 +44,8 @@ gpu_consts! {
     MAX_SAMPLES_LIMIT: u32 = 0x0010_0000;
     /// Entries of the region epoch table (local edits, ours): a power of two.
     REGION_COUNT: u32 = 65536;
+    /// Boxes of the last local edit kept for the composite (more are merged into one).
+    MAX_EDIT_BOXES: u32 = 64;
     /// Indices into `FrameStats::counters`.
     STAT_RAYS: u32 = 0;
     STAT_CELLS_INSERTED: u32 = 1;
@@ -56,11 +58,14 @@ gpu_consts! {
     STAT_RAY_QUEUE: u32 = 7;
     /// Rays traced by the still-camera refinement (included in STAT_RAYS).
     STAT_REFINE_RAYS: u32 = 8;
+    /// Rays the target cells took this frame (the paper's collaborative rays; refinement rays that a target
+    /// cell also takes are counted here too).
+    STAT_CELL_RAYS: u32 = 9;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
-    STAT_OCCUPIED: u32 = 9;
-    STAT_COUNT: u32 = 10;
+    STAT_OCCUPIED: u32 = 10;
+    STAT_COUNT: u32 = 11;
     /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 9;
+    STAT_PER_FRAME: u32 = 10;
 }
 
 gpu_structs! {
@@ -134,7 +139,7 @@ gpu_structs! {
         /// Pixel indices that trace rays this frame (STAT_RAY_QUEUE of them), and the indirect dispatch size.
         ray_queue: u64,
         dispatch_args: u64,
-        /// `RegionTable`: REGION_COUNT epochs, then REGION_COUNT frame indices of the regions' last local edit.
+        /// `RegionTable`: REGION_COUNT epochs, then the last local edit (frame index, box count, boxes).
         regions: u64,
     }
 
@@ -256,6 +261,6 @@ gpu_structs! {
 
     /// Counters read back after every frame.
     struct FrameStats {
-        counters: [u32; 10],
+        counters: [u32; 11],
     }
 }

@@ -6,9 +6,9 @@
 //! region (hash.glsl `cell_key_at`). A point's AO can change only if changed geometry lies within the AO radius
 //! R of it, so an edit bumps, on every grid, the epochs of the regions that meet its old and new bounds grown
 //! by R: exactly the cells whose AO can change (and their region neighbours) get new, empty keys; all others
-//! keep serving pixels. Hash collisions between regions only invalidate more than needed. The second half of
-//! the table holds, per entry, the frame index of its last edit (the composite restarts the still
-//! accumulation of pixels whose finest cell was invalidated).
+//! keep serving pixels. Hash collisions between regions only invalidate more than needed. After the epochs the
+//! buffer holds the boxes of the last edit and its frame index: the composite restarts the still accumulation
+//! of the pixels within reach of them, exactly.
 use std::sync::Arc;
 
 use ash::vk;
@@ -18,7 +18,7 @@ use gpu_allocator::MemoryLocation;
 use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::Result;
-use crate::gpu::{LOD_COUNT, REGION_COUNT};
+use crate::gpu::{LOD_COUNT, MAX_EDIT_BOXES, REGION_COUNT};
 use crate::hash;
 
 /// At most this many regions are bumped by one edit (an eighth of the table, so far regions rarely share an
@@ -27,7 +27,8 @@ pub const MAX_REGIONS_PER_EDIT: u64 = REGION_COUNT as u64 / 8;
 
 pub struct RegionTable {
     buffer: Buffer,
-    /// Epochs, then frame indices of the last edit (the GPU layout).
+    /// The GPU layout: REGION_COUNT epochs; the last edit's frame index and box count and two unused words;
+    /// MAX_EDIT_BOXES boxes as (min.xyz, 0, max.xyz, 0) floats.
     table: Vec<u32>,
     dirty: bool,
     /// The LOD of the largest finest cell: grids region_lod ..= region_lod + LOD_COUNT - 1.
@@ -39,19 +40,21 @@ impl RegionTable {
         let buffer = Buffer::new(
             gpu,
             "region epochs",
-            2 * REGION_COUNT as u64 * 4,
+            Self::WORDS as u64 * 4,
             MemoryLocation::CpuToGpu,
             vk::BufferUsageFlags::empty(),
         )?;
         let mut t = RegionTable {
             buffer,
-            table: vec![0; 2 * REGION_COUNT as usize],
+            table: vec![0; Self::WORDS],
             dirty: true,
             region_lod: 0,
         };
         t.upload()?;
         Ok(t)
     }
+
+    const WORDS: usize = REGION_COUNT as usize + 4 + 8 * MAX_EDIT_BOXES as usize;
 
     pub fn address(&self) -> u64 {
         self.buffer.address
@@ -102,7 +105,38 @@ impl RegionTable {
         for i in touched {
             let e = &mut self.table[i as usize];
             *e = e.wrapping_add(1).max(1);
-            self.table[(REGION_COUNT + i) as usize] = frame;
+        }
+        // The edit's boxes (several edits before one frame add up; beyond MAX_EDIT_BOXES they merge).
+        let header = REGION_COUNT as usize;
+        let mut list: Vec<(Vec3, Vec3)> = Vec::new();
+        if self.table[header] == frame {
+            for i in 0..self.table[header + 1] as usize {
+                let w = &self.table[header + 4 + 8 * i..header + 12 + 8 * i];
+                let v = |k: usize| {
+                    Vec3::new(
+                        f32::from_bits(w[k]),
+                        f32::from_bits(w[k + 1]),
+                        f32::from_bits(w[k + 2]),
+                    )
+                };
+                list.push((v(0), v(4)));
+            }
+        }
+        list.extend_from_slice(boxes);
+        if list.len() > MAX_EDIT_BOXES as usize {
+            let all = list
+                .iter()
+                .fold(list[0], |(a, b), &(lo, hi)| (a.min(lo), b.max(hi)));
+            list = vec![all];
+        }
+        self.table[header] = frame;
+        self.table[header + 1] = list.len() as u32;
+        for (i, (lo, hi)) in list.iter().enumerate() {
+            let w = &mut self.table[header + 4 + 8 * i..header + 12 + 8 * i];
+            for k in 0..3 {
+                w[k] = lo[k].to_bits();
+                w[4 + k] = hi[k].to_bits();
+            }
         }
         self.dirty = true;
         true

@@ -112,6 +112,8 @@ pub struct FrameReport {
     pub accumulated_frames: u32,
     /// Rays of the still-camera refinement (included in `rays`).
     pub refine_rays: u64,
+    /// Rays the target cells took (see `STAT_CELL_RAYS`).
+    pub cell_rays: u64,
     /// The image of this view is final: rendering more frames would not change it (see `Renderer::converged`).
     pub converged: bool,
 }
@@ -559,6 +561,7 @@ impl Renderer {
             scene_f,
             accumulated_frames: self.still_index + 1,
             refine_rays: c[gpu::STAT_REFINE_RAYS as usize] as u64,
+            cell_rays: c[gpu::STAT_CELL_RAYS as usize] as u64,
             converged: self.last_converged,
         })
     }

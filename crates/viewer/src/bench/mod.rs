@@ -893,6 +893,9 @@ fn measure_quality(
     })
 }
 
+/// An error curve: (rays per pixel, error) points.
+type Curve<'a> = &'a [(f64, f64)];
+
 /// One still-camera HRTAO run from an empty map.
 struct StillRun {
     curve: Vec<HrtaoPoint>,
@@ -919,7 +922,7 @@ fn still_run(
     frames: u32,
     covered: u64,
     reference: &[f32],
-    (mae_curve, rmse_curve): (&[(f64, f64)], &[(f64, f64)]),
+    (mae_curve, rmse_curve): (Curve, Curve),
 ) -> Result<StillRun> {
     r.set_settings(settings.clone())?;
     r.clear_cache()?;
