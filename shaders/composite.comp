@@ -44,7 +44,7 @@ vec3 shade(uvec2 pix, GPixel px) {
         float y = (float(pix.y) + 0.5) / float(g.height);
         return mix(g.background_top.rgb, g.background_bottom.rgb, y);
     }
-    vec3 view = normalize(px.position - g.eye.xyz);
+    vec3 view = view_dir(px.position);
     // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
     vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
     float diffuse = max(dot(px.normal, key), 0.0);
@@ -61,8 +61,7 @@ vec3 shade(uvec2 pix, GPixel px) {
 // tangent plane (a silhouette within one part) or a normal beyond the crease angle. Drawn on the nearer side.
 float edge(uvec2 pix, GPixel px) {
     if ((g.flags & FLAG_EDGES) == 0u || px.t < 0.0) return 0.0;
-    // World width of one pixel at this distance (cam_v spans half the image height).
-    float pixel_size = px.t * 2.0 * length(g.cam_v.xyz) / float(g.height);
+    float pixel_size = pixel_world_size(px.t);
     const ivec2 OFFSETS[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
     for (int i = 0; i < 4; ++i) {
         ivec2 q = ivec2(pix) + OFFSETS[i];

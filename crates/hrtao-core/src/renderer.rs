@@ -8,7 +8,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::accel::SceneGpu;
 use crate::buffer::{host_read_barrier, Buffer};
-use crate::camera::Camera;
+use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{
@@ -283,6 +283,7 @@ impl Renderer {
         } else {
             t.height
         };
+        let feature_size = crate::hash::FeatureSize::for_camera(&cam, view_height, s.s_p);
         let mut flags = 0;
         if self.output_bgra {
             flags |= gpu::FLAG_OUTPUT_BGRA;
@@ -330,11 +331,7 @@ impl Renderer {
             flags,
             rays_per_pixel: s.rays_per_pixel,
             ao_radius: s.ao_radius,
-            s_w_per_distance: crate::hash::feature_size_per_distance(
-                cam.fov_y_deg.to_radians(),
-                view_height,
-                s.s_p,
-            ),
+            s_w_per_distance: feature_size.per_distance,
             s_w_max: s.ao_radius * s.max_cell_fraction,
             log2_s_min: crate::hash::log2_s_min(s.s_min),
             s_nd: s.s_nd,
@@ -362,6 +359,11 @@ impl Renderer {
             stats: self.stats.address,
             ray_queue: t.ray_queue.address,
             dispatch_args: self.dispatch_args.address,
+            projection: match cam.projection {
+                Projection::Perspective => gpu::PROJECTION_PERSPECTIVE,
+                Projection::Orthographic => gpu::PROJECTION_ORTHOGRAPHIC,
+            },
+            s_w_base: feature_size.base,
         }
     }
 
@@ -428,10 +430,7 @@ impl Renderer {
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (self.primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
-                let near = Rasterizer::near_plane(
-                    (glam::Vec3::from(camera.target) - glam::Vec3::from(camera.eye)).length(),
-                );
-                raster.record(&mut rec, &scene.raster, &globals, near);
+                raster.record(&mut rec, &scene.raster, &globals, camera.distance());
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
         }
@@ -670,7 +669,11 @@ impl Renderer {
     /// cell_finder.comp for tests of the map).
     pub fn pixel_cell_keys(&self, camera: &Camera, scene_f: u32, px: &GPixel) -> [crate::hash::CellKey; 4] {
         let g = self.globals_for(camera, scene_f);
-        let lod = crate::hash::pixel_lod(px.t, g.s_w_per_distance, g.s_w_max, g.log2_s_min);
+        let size = crate::hash::FeatureSize {
+            base: g.s_w_base,
+            per_distance: g.s_w_per_distance,
+        };
+        let lod = crate::hash::pixel_lod(px.t, size, g.s_w_max, g.log2_s_min);
         std::array::from_fn(|level| {
             crate::hash::cell_key(
                 px.position.into(),
