@@ -29,6 +29,8 @@ gpu_consts! {
     FLAG_REFINE: u32 = 16;
     /// Feature edges (silhouettes and creases) drawn over the shading in the composite; never in the AO image.
     FLAG_EDGES: u32 = 32;
+    /// Most internal pixels a feature-edge line spans (bounds the composite's neighbour reads).
+    MAX_EDGE_STEPS: u32 = 8;
     /// `FrameGlobals::projection` and `RasterPush::projection` values (camera.rs `Projection`).
     PROJECTION_PERSPECTIVE: u32 = 0;
     PROJECTION_ORTHOGRAPHIC: u32 = 1;
@@ -135,6 +137,11 @@ gpu_structs! {
         /// eq. (2) as we read it, the distance-independent term: s_w = s_w_base + d * s_w_per_distance
         /// (0 in perspective; s_p * ortho_height / view height in orthographic, where s_w_per_distance is 0).
         s_w_base: f32,
+        /// Height of the view in pixels (`Renderer::view_height`; the internal `height` when there is no
+        /// separate view): s_p and the feature-edge width count view pixels.
+        view_height: u32,
+        /// Feature-edge line width in view pixels (`EDGE_WIDTH`), drawn at any render scale.
+        edge_width: f32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

@@ -67,6 +67,10 @@ impl Targets {
 /// instanced scenes), while ray queries scale with the pixels.
 pub const RASTER_TRIAL_TRIANGLES: u64 = 20_000_000;
 
+/// Feature-edge line width in view pixels: lines keep it at any internal resolution (render scale, screenshots
+/// larger than the view).
+pub const EDGE_WIDTH: f32 = 1.0;
+
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
 
@@ -364,6 +368,8 @@ impl Renderer {
                 Projection::Orthographic => gpu::PROJECTION_ORTHOGRAPHIC,
             },
             s_w_base: feature_size.base,
+            view_height,
+            edge_width: EDGE_WIDTH,
         }
     }
 
