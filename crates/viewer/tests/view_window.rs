@@ -485,3 +485,53 @@ fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
     assert!(json["median_moving_wall_ms"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn orthographic_camera_file_frames_the_expected_extent() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("ortho");
+    // A 2 x 2 plane seen straight down by an orthographic camera spanning 4 units: the central half of the view.
+    let camera = dir.join("ortho.camera.json");
+    std::fs::write(
+        &camera,
+        r#"{"eye": [0, 0, 30], "target": [0, 0, 0], "up": [0, 1, 0], "width": 320, "height": 320,
+            "projection": "orthographic", "ortho_height": 4}"#,
+    )
+    .unwrap();
+    let shot = dir.join("view.png");
+    run_viewer(&[
+        "gen:plane?size=2",
+        "--camera",
+        camera.to_str().unwrap(),
+        "--size",
+        "320x320",
+        "--no-panel",
+        "--frames",
+        "4",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (320, 320));
+    let plane = img.get_pixel(160, 160).0;
+    let inside: Vec<(u32, u32)> = img
+        .enumerate_pixels()
+        .filter(|(_, _, p)| p.0 == plane)
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    // 160 x 160 pixels, less the outline (feature edges) and anti-aliased border pixels.
+    assert!(
+        (150 * 150..=160 * 160).contains(&inside.len()),
+        "{} plane pixels",
+        inside.len()
+    );
+    assert!(
+        inside
+            .iter()
+            .all(|&(x, y)| (80..240).contains(&x) && (80..240).contains(&y)),
+        "the plane stays within its analytic square"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
