@@ -153,22 +153,8 @@ pub fn set_projection(c: &Camera, pivot: Vec3, projection: Projection) -> Camera
     }
     let f = forward(c);
     let depth = (pivot - eye(c)).dot(f).max(distance(c) * 1e-3).max(1e-6);
-    let tan_half = (c.fov_y_deg.to_radians() * 0.5).tan();
-    match projection {
-        Projection::Orthographic => Camera {
-            projection,
-            ortho_height: 2.0 * depth * tan_half,
-            ..*c
-        },
-        Projection::Perspective => {
-            let on_axis = eye(c) + f * depth;
-            let d = c.ortho_height * 0.5 / tan_half;
-            Camera {
-                projection,
-                ..set(c, on_axis - f * d, on_axis, cam_up(c))
-            }
-        }
-    }
+    // The target moves to the pivot's depth; `Camera::with_projection` keeps the framing of the target plane.
+    set(c, eye(c), eye(c) + f * depth, cam_up(c)).with_projection(projection)
 }
 
 /// View direction (eye → target) and up vector of a standard view.
