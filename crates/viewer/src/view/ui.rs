@@ -790,6 +790,10 @@ impl Viewer {
             Projection::Orthographic => Projection::Perspective,
         };
         self.nav.cam = nav::set_projection(&self.nav.cam, self.nav.pivot, next);
+        log::info!(
+            "projection: {next:?} (view height at the pivot {:.4})",
+            nav::world_per_pixel(&self.nav.cam, 1.0)
+        );
     }
 
     /// Picks the surface under a view point from the last frame's G-buffer: (position, instance).
