@@ -143,6 +143,38 @@ mod tests {
     use super::*;
 
     #[test]
+    fn feature_size_is_affine_in_distance_per_projection() {
+        let persp = crate::Camera {
+            fov_y_deg: 60.0,
+            ..Default::default()
+        };
+        let p = FeatureSize::for_camera(&persp, 360, 4.0);
+        assert_eq!(p.base, 0.0);
+        assert_eq!(
+            p.at(7.0),
+            7.0 * feature_size_per_distance(60f32.to_radians(), 360, 4.0)
+        );
+        // Orthographic: s_p pixels of ortho_height / R_y world units, at any distance.
+        let ortho = crate::Camera {
+            projection: crate::camera::Projection::Orthographic,
+            ortho_height: 9.0,
+            ..persp
+        };
+        let o = FeatureSize::for_camera(&ortho, 360, 4.0);
+        assert_eq!(o.per_distance, 0.0);
+        assert_eq!(o.at(0.5), 0.1);
+        assert_eq!(o.at(5000.0), 0.1);
+        // The orthographic camera framing the perspective view at distance d gives the same cells there.
+        let d = 3.0;
+        let framed = crate::Camera {
+            ortho_height: persp.view_height_at(d),
+            ..ortho
+        };
+        let f = FeatureSize::for_camera(&framed, 360, 4.0);
+        assert!((f.at(123.0) - p.at(d)).abs() < 1e-6);
+    }
+
+    #[test]
     fn lod_is_a_power_of_two_and_steps_when_distance_doubles() {
         let l2 = log2_s_min(1e-10);
         assert_eq!(l2, -33);
