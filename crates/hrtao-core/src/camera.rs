@@ -199,6 +199,26 @@ impl Camera {
         self.ray(x, y).1
     }
 
+    /// Where orthographic rays start: the eye, moved back along the view direction until every point of
+    /// `points` (the scene bounds' corners) lies in front of the plane through it. An orthographic view thus
+    /// never clips the scene, wherever the eye stands (as in CAD tools); the eye fixes the view direction and the
+    /// image position only.
+    /// When it moves, it stops 1 % of the points' depth range short of the nearest point (a ray starting exactly
+    /// on a face could miss it).
+    pub fn ortho_ray_plane(&self, points: &[Vec3]) -> Vec3 {
+        let f = self.frame();
+        let depths = points
+            .iter()
+            .map(|p| (*p - f.eye).dot(f.w))
+            .filter(|d| d.is_finite());
+        let (near, far) = depths.fold((f32::MAX, f32::MIN), |(n, x), d| (n.min(d), x.max(d)));
+        if near >= 0.0 || near > far {
+            return f.eye;
+        }
+        let margin = 0.01 * (far - near);
+        f.eye + f.w * (near - margin)
+    }
+
     /// Distance from the eye to the target.
     pub fn distance(&self) -> f32 {
         (Vec3::from(self.target) - Vec3::from(self.eye)).length()
@@ -294,6 +314,11 @@ mod tests {
         assert!((o1 - Vec3::new(4.0, -2.0, 5.0)).length() < 1e-5, "{o1}");
         assert_eq!(cam.view_height_at(1.0), 4.0);
         assert_eq!(cam.view_height_at(100.0), 4.0);
+        // Rays start in front of every given point: behind the eye (z 5) up to z 7 and a margin of 1 % of the
+        // points' depth range (9), never in front of the eye.
+        let plane = cam.ortho_ray_plane(&[Vec3::new(3.0, 1.0, 7.0), Vec3::new(0.0, 0.0, -2.0)]);
+        assert!((plane - Vec3::new(0.0, 0.0, 7.09)).length() < 1e-5, "{plane}");
+        assert_eq!(cam.ortho_ray_plane(&[Vec3::ZERO]), Vec3::new(0.0, 0.0, 5.0));
     }
 
     #[test]

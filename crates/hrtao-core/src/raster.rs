@@ -131,6 +131,11 @@ impl RasterScene {
         self.instances.write(&table)
     }
 
+    /// Conservative world bounds of the drawn (visible) instances; empty when nothing is drawn.
+    pub fn bounds(&self) -> hrtao_scene::Aabb {
+        self.bounds
+    }
+
     /// Triangles drawn per frame (every visible instance's).
     pub fn triangles(&self) -> u64 {
         self.draws

@@ -418,6 +418,17 @@ impl Renderer {
             self.f_start_frame = self.frame_index;
         }
         let mut globals = self.globals_for(camera, scene_f);
+        if camera.is_orthographic() {
+            // Orthographic rays start in front of the whole scene: nothing is clipped by the eye plane.
+            let b = scene.raster.bounds();
+            let corners = if b.is_empty() {
+                Vec::new()
+            } else {
+                b.corners().to_vec()
+            };
+            let start = camera.ortho_ray_plane(&corners);
+            globals.eye = [start.x, start.y, start.z, 0.0];
+        }
         globals.instances = scene.instance_info.address;
         globals.geometries = scene.geometries.address;
         self.globals.write(&[globals])?;

@@ -83,8 +83,8 @@ pub fn pan(c: &Camera, dx: f32, dy: f32, height: f32) -> Camera {
 
 /// Zoom toward the point under the cursor, where the cursor ray (`origin`, unit `dir`: `Camera::ray`) meets the
 /// target plane, by `factor` (< 1 zooms in); that point stays under the cursor. Perspective: eye and target
-/// scale about it. Orthographic: `ortho_height` scales by `factor` and the view shifts sideways (the eye plane
-/// stays, so nothing new is clipped).
+/// scale about it. Orthographic: `ortho_height` scales by `factor` and the view shifts sideways (the eye keeps
+/// its depth).
 pub fn zoom_to(c: &Camera, (origin, dir): (Vec3, Vec3), factor: f32) -> Camera {
     let f = forward(c);
     let cos = dir.dot(f).max(1e-3);
@@ -133,7 +133,7 @@ pub fn fit_distance(c: &Camera, radius: f32) -> f32 {
 
 /// Keeps the view direction and the projection and frames the box `min..max`; returns the camera and the new
 /// pivot (the centre). Orthographic: the bounding sphere fills the smaller image extent, and the eye stands
-/// where the perspective fit would put it (outside the box: nothing is clipped by the eye plane).
+/// where the perspective fit would put it (so switching back to perspective frames the box too).
 pub fn fit(c: &Camera, min: Vec3, max: Vec3) -> (Camera, Vec3) {
     let centre = (min + max) * 0.5;
     let radius = (max - min).length() * 0.5;
