@@ -32,9 +32,19 @@ fn floor_and_box() -> hrtao_scene::Scene {
 
 #[test]
 fn edges_outline_a_box_and_leave_flat_faces_and_ao_alone() {
+    outline_check(&top_down_camera(20.0, 160, 90));
+}
+
+#[test]
+fn orthographic_edges_outline_a_box_and_leave_flat_faces_alone() {
+    // The same view in orthographic projection (its depth tests use the constant pixel size).
+    let cam = top_down_camera(20.0, 160, 90).with_projection(hrtao_core::camera::Projection::Orthographic);
+    outline_check(&cam);
+}
+
+fn outline_check(cam: &hrtao_core::Camera) {
     let gpu = gpu();
     let scene = floor_and_box();
-    let cam = top_down_camera(20.0, 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     // Per-pixel RTAO: deterministic, so the AO images can be compared exactly.
     let frame = |edges: bool| {
@@ -44,7 +54,7 @@ fn edges_outline_a_box_and_leave_flat_faces_and_ao_alone() {
         };
         let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
         for _ in 0..2 {
-            r.render(&sg, scene.f(), &cam).unwrap();
+            r.render(&sg, scene.f(), cam).unwrap();
         }
         (
             r.read_rgba().unwrap(),
