@@ -43,11 +43,29 @@ bool pixel_coords(out uvec2 pix, out uint index) {
     return pix.x < g.width && pix.y < g.height;
 }
 
-// Pinhole camera through the pixel centre moved by this frame's jitter; the vertical field of view spans the
-// image height.
-vec3 camera_dir(uvec2 pix) {
+bool camera_orthographic() { return g.projection == PROJECTION_ORTHOGRAPHIC; }
+
+// The camera ray through the pixel centre moved by this frame's jitter (Camera::ray): perspective, from the eye
+// with the vertical field of view spanning the image height; orthographic, along cam_w from the plane through
+// the eye, the image spanning 2 cam_u x 2 cam_v world units.
+void camera_ray(uvec2 pix, out vec3 origin, out vec3 dir) {
     vec2 ndc = (vec2(pix) + 0.5 + g.jitter) / vec2(g.width, g.height) * 2.0 - 1.0;
-    return normalize(g.cam_w.xyz + ndc.x * g.cam_u.xyz - ndc.y * g.cam_v.xyz);
+    vec3 offset = ndc.x * g.cam_u.xyz - ndc.y * g.cam_v.xyz;
+    if (camera_orthographic()) {
+        origin = g.eye.xyz + offset;
+        dir = g.cam_w.xyz;
+    } else {
+        origin = g.eye.xyz;
+        dir = normalize(g.cam_w.xyz + offset);
+    }
+}
+
+// Unit direction from the camera toward the visible point p.
+vec3 view_dir(vec3 p) { return camera_orthographic() ? g.cam_w.xyz : normalize(p - g.eye.xyz); }
+
+// World size of one internal pixel at hit distance t (cam_v spans half the image height).
+float pixel_world_size(float t) {
+    return (camera_orthographic() ? 1.0 : t) * 2.0 * length(g.cam_v.xyz) / float(g.height);
 }
 
 // Offsets a ray origin off the surface along the normal, robust at any scale

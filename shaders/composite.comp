@@ -45,7 +45,7 @@ vec3 shade(uvec2 pix, GPixel px) {
         float y = (float(pix.y) + 0.5) / float(g.height);
         return mix(g.background_top.rgb, g.background_bottom.rgb, y);
     }
-    vec3 view = normalize(px.position - g.eye.xyz);
+    vec3 view = view_dir(px.position);
     // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
     vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
     float diffuse = max(dot(px.normal, key), 0.0);
@@ -58,23 +58,34 @@ vec3 shade(uvec2 pix, GPixel px) {
     return color;
 }
 
-// Feature edges (CAD look): 1 where a 4-neighbour shows a miss, another instance, a surface off this pixel's
-// tangent plane (a silhouette within one part) or a normal beyond the crease angle. Drawn on the nearer side.
+// Internal pixels a feature-edge line spans: edge_width view pixels at this render scale (at least one).
+int edge_steps() {
+    float internal_per_view = float(g.height) / float(max(g.view_height, 1u));
+    return clamp(int(round(g.edge_width * internal_per_view)), 1, int(MAX_EDGE_STEPS));
+}
+
+// Feature edges (CAD look): 1 where a neighbour along the 4 axes, up to edge_steps() pixels away, shows a miss,
+// another instance, a surface off this pixel's tangent plane (a silhouette within one part) or a normal beyond
+// the crease angle. Drawn on the nearer side, edge_width view pixels wide at any render scale.
 float edge(uvec2 pix, GPixel px) {
     if ((g.flags & FLAG_EDGES) == 0u || px.t < 0.0) return 0.0;
-    // World width of one pixel at this distance (cam_v spans half the image height).
-    float pixel_size = px.t * 2.0 * length(g.cam_v.xyz) / float(g.height);
+    float pixel_size = pixel_world_size(px.t);
+    int steps = edge_steps();
     const ivec2 OFFSETS[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
-    for (int i = 0; i < 4; ++i) {
-        ivec2 q = ivec2(pix) + OFFSETS[i];
-        if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
-        GPixel o = GBufferRef(g.gbuffer).px[uint(q.y) * g.width + uint(q.x)];
-        if (o.t < 0.0) return 1.0;
-        if (o.t < px.t) continue;   // the neighbour is nearer: it draws the line
-        float off_plane = abs(dot(o.position - px.position, px.normal));
-        if (o.instance != px.instance && off_plane > 0.5 * pixel_size) return 1.0;
-        if (off_plane > 4.0 * pixel_size) return 1.0;
-        if (dot(o.normal, px.normal) < g.crease_cos) return 1.0;
+    for (int k = 1; k <= steps; ++k) {
+        // Depth tests scale with the distance to the neighbour.
+        float size = float(k) * pixel_size;
+        for (int i = 0; i < 4; ++i) {
+            ivec2 q = ivec2(pix) + k * OFFSETS[i];
+            if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+            GPixel o = GBufferRef(g.gbuffer).px[uint(q.y) * g.width + uint(q.x)];
+            if (o.t < 0.0) return 1.0;
+            if (o.t < px.t) continue;   // the neighbour is nearer: it draws the line
+            float off_plane = abs(dot(o.position - px.position, px.normal));
+            if (o.instance != px.instance && off_plane > 0.5 * size) return 1.0;
+            if (off_plane > 4.0 * size) return 1.0;
+            if (dot(o.normal, px.normal) < g.crease_cos) return 1.0;
+        }
     }
     return 0.0;
 }

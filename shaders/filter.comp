@@ -33,8 +33,8 @@ void main() {
     // World size of the cell the AO came from, and of one pixel at this distance.
     int lod = pixel_lod(px.t) + int(used);
     float cell = exp2(float(lod));
-    // World width of one (internal) pixel at this distance: cam_v spans half the image height.
-    float pixel_size = px.t * 2.0 * length(g.cam_v.xyz) / float(g.height);
+    // World width of one (internal) pixel at this distance.
+    float pixel_size = pixel_world_size(px.t);
     float footprint = cell / max(pixel_size, 1e-30);   // cell width in pixels
     int step = 1 << iteration;
     bool guided = g.filter_sigma > 0.0;

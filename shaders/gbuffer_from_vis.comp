@@ -13,7 +13,8 @@ void main() {
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
-    vec3 dir = camera_dir(pix);
+    vec3 origin, dir;
+    camera_ray(pix, origin, dir);
     uvec4 vis = VisRef(packUint2x32(push.xy)).v[index];
     GPixel px = gpixel_miss();
     if (vis.x != NO_INSTANCE) {
@@ -31,7 +32,7 @@ void main() {
         float det = dot(e1, p);
         if (det != 0.0) {
             float inv = 1.0 / det;
-            vec3 s = g.eye.xyz - a;
+            vec3 s = origin - a;
             vec3 q = cross(s, e1);
             vec2 bary = vec2(dot(s, p), dot(dir, q)) * inv;
             float t = dot(e2, q) * inv;

@@ -151,9 +151,10 @@ uint find_cell(CellKey key) {
     return INVALID_CELL;
 }
 
-// The LOD of a pixel with hit distance d (eq. 2-3): s_w = d * s_w_per_distance, bounded by s_w_max.
+// The LOD of a pixel with hit distance d (eq. 2-3): s_w = s_w_base + d * s_w_per_distance (one of the two terms
+// is 0: perspective or orthographic, see FrameGlobals), bounded by s_w_max.
 int pixel_lod(float d) {
-    return lod_of(min(d * g.s_w_per_distance, g.s_w_max), g.log2_s_min);
+    return lod_of(min(g.s_w_base + d * g.s_w_per_distance, g.s_w_max), g.log2_s_min);
 }
 
 #endif

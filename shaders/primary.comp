@@ -7,9 +7,10 @@ void main() {
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
-    vec3 dir = camera_dir(pix);
+    vec3 origin, dir;
+    camera_ray(pix, origin, dir);
     rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT, 0xFF, g.eye.xyz, 0.0, dir, 1e30);
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT, 0xFF, origin, 0.0, dir, 1e30);
     while (rayQueryProceedEXT(rq)) {
     }
     GPixel px;

@@ -23,11 +23,14 @@ void main() {
     uint corner = CornerRef(geo.indices).v[gl_VertexIndex];
     RasterInstance inst = RasterInstanceRef(pc.instances).v[gl_InstanceIndex];
     vec3 d = raster_to_world(inst, VertexRef(geo.vertices).v[corner]) - pc.eye.xyz;
-    // Pinhole projection matching camera_dir(): x, y in [-1, 1] across the image (row 0 at the top, as Vulkan's
-    // viewport), reversed infinite depth near / distance.
-    // The jitter moves the image by -jitter, so the pixel centre samples where camera_dir's jittered ray goes.
-    float w = dot(d, pc.cam_w.xyz);
+    // Projection matching camera_ray(): x, y in [-1, 1] across the image (row 0 at the top, as Vulkan's
+    // viewport). Perspective: reversed infinite depth near / distance. Orthographic: w = 1 and reversed linear
+    // depth 1 - distance / far (points behind the eye plane or beyond the scene are clipped).
+    // The jitter moves the image by -jitter, so the pixel centre samples where camera_ray's jittered ray goes.
+    float dist = dot(d, pc.cam_w.xyz);
+    bool ortho = pc.projection == PROJECTION_ORTHOGRAPHIC;
+    float w = ortho ? 1.0 : dist;
     vec2 xy = vec2(dot(d, pc.cam_u.xyz), -dot(d, pc.cam_v.xyz)) - pc.jitter_ndc * w;
-    gl_Position = vec4(xy, pc.eye.w, w);
+    gl_Position = vec4(xy, ortho ? 1.0 - dist * pc.eye.w : pc.eye.w, w);
     vis = uvec4(inst.instance, pc.geometry, uint(gl_VertexIndex) / 3u, uint(gl_InstanceIndex));
 }

@@ -29,6 +29,11 @@ gpu_consts! {
     FLAG_REFINE: u32 = 16;
     /// Feature edges (silhouettes and creases) drawn over the shading in the composite; never in the AO image.
     FLAG_EDGES: u32 = 32;
+    /// Most internal pixels a feature-edge line spans (bounds the composite's neighbour reads).
+    MAX_EDGE_STEPS: u32 = 8;
+    /// `FrameGlobals::projection` and `RasterPush::projection` values (camera.rs `Projection`).
+    PROJECTION_PERSPECTIVE: u32 = 0;
+    PROJECTION_ORTHOGRAPHIC: u32 = 1;
     /// `InstanceInfo::flags` bits.
     INSTANCE_SELECTED: u32 = 1;
     /// `GPixel::instance` of a pixel whose primary ray hit nothing.
@@ -71,8 +76,9 @@ gpu_consts! {
 gpu_structs! {
     /// Per-frame parameters, read by every pass (binding 1).
     struct FrameGlobals {
-        /// Camera: eye position; `cam_u`/`cam_v` span half the image (right * tan(fov/2) * aspect,
-        /// up * tan(fov/2)); `cam_w` is the unit forward vector.
+        /// Camera: eye position; `cam_u`/`cam_v` span half the image (perspective: right * tan(fov/2) * aspect,
+        /// up * tan(fov/2); orthographic: the same in world units, up * ortho_height/2); `cam_w` is the unit
+        /// forward vector. See `projection`.
         eye: [f32; 4],
         cam_u: [f32; 4],
         cam_v: [f32; 4],
@@ -141,6 +147,17 @@ gpu_structs! {
         dispatch_args: u64,
         /// `RegionTable`: REGION_COUNT epochs, then the last local edit (frame index, box count, boxes).
         regions: u64,
+        /// `PROJECTION_PERSPECTIVE` (rays from `eye`) or `PROJECTION_ORTHOGRAPHIC` (rays along `cam_w` from the
+        /// plane through `eye`, spread by `cam_u`/`cam_v`).
+        projection: u32,
+        /// eq. (2) as we read it, the distance-independent term: s_w = s_w_base + d * s_w_per_distance
+        /// (0 in perspective; s_p * ortho_height / view height in orthographic, where s_w_per_distance is 0).
+        s_w_base: f32,
+        /// Height of the view in pixels (`Renderer::view_height`; the internal `height` when there is no
+        /// separate view): s_p and the feature-edge width count view pixels.
+        view_height: u32,
+        /// Feature-edge line width in view pixels (`EDGE_WIDTH`), drawn at any render scale.
+        edge_width: f32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -183,7 +200,8 @@ gpu_structs! {
 
     /// Push constants of the visibility draw (visibility.vert): the camera, in clip form, and the tables.
     struct RasterPush {
-        /// xyz: eye; w: the near plane distance (depth = near / view distance, reversed).
+        /// xyz: eye; w: perspective, the near plane distance (depth = near / view distance, reversed);
+        /// orthographic, 1 / the far plane distance (see `projection`).
         eye: [f32; 4],
         /// `cam_u / |cam_u|^2` and `cam_v / |cam_v|^2` (see `FrameGlobals`): clip x, y = dot(p - eye, ·).
         cam_u: [f32; 4],
@@ -194,7 +212,9 @@ gpu_structs! {
         instances: u64,
         /// The geometry of this draw (index into the geometry table).
         geometry: u32,
-        _pad: u32,
+        /// `PROJECTION_*`. Orthographic: clip w = 1 and depth = 1 - dot(p - eye, cam_w) * eye.w (eye.w is then
+        /// 1 / the far plane distance, depth stays linear and reversed).
+        projection: u32,
         /// This frame's sub-pixel jitter (`FrameGlobals::jitter`) in normalised device coordinates, so the
         /// rasteriser samples where the jittered camera rays go.
         jitter_ndc: [f32; 2],

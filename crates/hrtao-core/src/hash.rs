@@ -36,6 +36,36 @@ pub fn feature_size_per_distance(fov_y_radians: f32, view_height: u32, s_p: f32)
     s_p * 2.0 * (0.5 * fov_y_radians).tan() / view_height.max(1) as f32
 }
 
+/// eq. (2) as an affine function of the hit distance d: s_w = base + d · per_distance. Perspective: base = 0
+/// and per_distance = `feature_size_per_distance`; orthographic: a pixel spans ortho_height / R_y world units
+/// at any distance, so base = s_p · ortho_height / R_y and per_distance = 0 (docs/algorithm.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeatureSize {
+    pub base: f32,
+    pub per_distance: f32,
+}
+
+impl FeatureSize {
+    /// eq. (2) for `camera` (its projection, field of view or ortho height) spanning `view_height` view pixels.
+    pub fn for_camera(camera: &crate::Camera, view_height: u32, s_p: f32) -> FeatureSize {
+        match camera.projection {
+            crate::camera::Projection::Perspective => FeatureSize {
+                base: 0.0,
+                per_distance: feature_size_per_distance(camera.fov_y_deg.to_radians(), view_height, s_p),
+            },
+            crate::camera::Projection::Orthographic => FeatureSize {
+                base: s_p * camera.ortho_height / view_height.max(1) as f32,
+                per_distance: 0.0,
+            },
+        }
+    }
+
+    /// s_w at hit distance d (hash_map.glsl evaluates the same expression: bit-identical, as one term is 0).
+    pub fn at(&self, d: f32) -> f32 {
+        self.base + d * self.per_distance
+    }
+}
+
 /// eq. (3) as an integer LOD: floor(log2(s_w)), at least log2(s_min); the cell size is s_wd = 2^lod.
 pub fn lod_of(s_w: f32, log2_s_min: i32) -> i32 {
     if s_w.is_nan() || s_w <= 0.0 || s_w.is_infinite() {
@@ -48,9 +78,9 @@ pub fn lod_of(s_w: f32, log2_s_min: i32) -> i32 {
     (biased - 127).max(log2_s_min)
 }
 
-/// The LOD of a pixel at hit distance d (hash_map.glsl `pixel_lod`): s_w = d s_w_per_distance, at most s_w_max.
-pub fn pixel_lod(d: f32, s_w_per_distance: f32, s_w_max: f32, log2_s_min: i32) -> i32 {
-    lod_of((d * s_w_per_distance).min(s_w_max), log2_s_min)
+/// The LOD of a pixel at hit distance d (hash_map.glsl `pixel_lod`): s_w = `size.at(d)`, at most s_w_max.
+pub fn pixel_lod(d: f32, size: FeatureSize, s_w_max: f32, log2_s_min: i32) -> i32 {
+    lod_of(size.at(d).min(s_w_max), log2_s_min)
 }
 
 /// s_wd of eq. (3) for a LOD.
@@ -139,6 +169,38 @@ mod tests {
     use super::*;
 
     #[test]
+    fn feature_size_is_affine_in_distance_per_projection() {
+        let persp = crate::Camera {
+            fov_y_deg: 60.0,
+            ..Default::default()
+        };
+        let p = FeatureSize::for_camera(&persp, 360, 4.0);
+        assert_eq!(p.base, 0.0);
+        assert_eq!(
+            p.at(7.0),
+            7.0 * feature_size_per_distance(60f32.to_radians(), 360, 4.0)
+        );
+        // Orthographic: s_p pixels of ortho_height / R_y world units, at any distance.
+        let ortho = crate::Camera {
+            projection: crate::camera::Projection::Orthographic,
+            ortho_height: 9.0,
+            ..persp
+        };
+        let o = FeatureSize::for_camera(&ortho, 360, 4.0);
+        assert_eq!(o.per_distance, 0.0);
+        assert_eq!(o.at(0.5), 0.1);
+        assert_eq!(o.at(5000.0), 0.1);
+        // The orthographic camera framing the perspective view at distance d gives the same cells there.
+        let d = 3.0;
+        let framed = crate::Camera {
+            ortho_height: persp.view_height_at(d),
+            ..ortho
+        };
+        let f = FeatureSize::for_camera(&framed, 360, 4.0);
+        assert!((f.at(123.0) - p.at(d)).abs() < 1e-6);
+    }
+
+    #[test]
     fn lod_is_a_power_of_two_and_steps_when_distance_doubles() {
         let l2 = log2_s_min(1e-10);
         assert_eq!(l2, -33);
@@ -176,7 +238,18 @@ mod tests {
             );
         }
         // s_w is capped (a fraction of the AO radius): far away, cells stop growing.
-        assert_eq!(pixel_lod(1e6, 0.01, 0.25, -33), lod_of(0.25, -33));
+        assert_eq!(
+            pixel_lod(
+                1e6,
+                FeatureSize {
+                    base: 0.0,
+                    per_distance: 0.01
+                },
+                0.25,
+                -33
+            ),
+            lod_of(0.25, -33)
+        );
     }
 
     #[test]

@@ -17,7 +17,7 @@ use hrtao_scene::Scene;
 use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
-use crate::gpu::{FrameGlobals, RasterInstance, RasterPush, NO_INSTANCE};
+use crate::gpu::{FrameGlobals, RasterInstance, RasterPush, NO_INSTANCE, PROJECTION_ORTHOGRAPHIC};
 use crate::pass::{shader_module, Pass, Recorder};
 
 /// How the renderer finds the surface seen through each pixel.
@@ -54,6 +54,8 @@ pub struct RasterScene {
     mesh_geometries: Vec<Vec<(u32, u32)>>,
     instances: Buffer,
     draws: Vec<Draw>,
+    /// Conservative world bounds of the drawn instances: the far plane of orthographic views.
+    bounds: hrtao_scene::Aabb,
 }
 
 impl RasterScene {
@@ -70,6 +72,7 @@ impl RasterScene {
             mesh_geometries,
             instances: Self::instance_buffer(gpu, 1)?,
             draws: Vec::new(),
+            bounds: hrtao_scene::Aabb::empty(),
         })
     }
 
@@ -120,11 +123,17 @@ impl RasterScene {
                 });
             }
         }
+        self.bounds = scene.bounds_conservative();
         let bytes = (table.len() * std::mem::size_of::<RasterInstance>()) as u64;
         if self.instances.size < bytes {
             self.instances = Self::instance_buffer(gpu, table.len())?;
         }
         self.instances.write(&table)
+    }
+
+    /// Conservative world bounds of the drawn (visible) instances; empty when nothing is drawn.
+    pub fn bounds(&self) -> hrtao_scene::Aabb {
+        self.bounds
     }
 
     /// Triangles drawn per frame (every visible instance's).
@@ -364,9 +373,15 @@ impl Rasterizer {
     }
 
     /// Records the visibility draws, the copy of the visibility image and the G-buffer resolve, all timed as
-    /// primary visibility. `globals` are the frame's (camera and size); `near` is the near plane distance.
-    /// Panics if `prepare` was not called for this size.
-    pub fn record(&self, rec: &mut Recorder, scene: &RasterScene, globals: &FrameGlobals, near: f32) {
+    /// primary visibility. `globals` are the frame's (camera and size); `target_distance` is the camera's
+    /// eye-target distance (it sets the perspective near plane). Panics if `prepare` was not called for this size.
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        scene: &RasterScene,
+        globals: &FrameGlobals,
+        target_distance: f32,
+    ) {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
         let (w, h) = t.size;
         assert_eq!(
@@ -378,15 +393,20 @@ impl Rasterizer {
             let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
             [v[0] / len2, v[1] / len2, v[2] / len2, 0.0]
         };
+        let depth = if globals.projection == PROJECTION_ORTHOGRAPHIC {
+            1.0 / Self::ortho_far_plane(globals, &scene.bounds)
+        } else {
+            Self::near_plane(target_distance)
+        };
         let mut push = RasterPush {
-            eye: [globals.eye[0], globals.eye[1], globals.eye[2], near],
+            eye: [globals.eye[0], globals.eye[1], globals.eye[2], depth],
             cam_u: scaled(globals.cam_u),
             cam_v: scaled(globals.cam_v),
             cam_w: globals.cam_w,
             geometries: globals.geometries,
             instances: scene.instances.address,
             geometry: 0,
-            _pad: 0,
+            projection: globals.projection,
             jitter_ndc: [
                 2.0 * globals.jitter[0] / w as f32,
                 2.0 * globals.jitter[1] / h as f32,
@@ -473,6 +493,23 @@ impl Rasterizer {
             h,
             [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
         );
+    }
+
+    /// The far plane of an orthographic view (depth is linear there): just beyond the farthest corner of the
+    /// scene bounds along the view direction, and never zero.
+    fn ortho_far_plane(globals: &FrameGlobals, bounds: &hrtao_scene::Aabb) -> f32 {
+        let eye = glam::Vec3::from_slice(&globals.eye[..3]);
+        let w = glam::Vec3::from_slice(&globals.cam_w[..3]);
+        let far = if bounds.is_empty() {
+            1.0
+        } else {
+            bounds
+                .corners()
+                .iter()
+                .map(|c| (*c - eye).dot(w))
+                .fold(0.0f32, f32::max)
+        };
+        (far * 1.001).max(f32::MIN_POSITIVE.sqrt())
     }
 
     /// The near plane for a camera whose eye is `distance` from its target.

@@ -8,7 +8,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::accel::SceneGpu;
 use crate::buffer::{host_read_barrier, Buffer};
-use crate::camera::Camera;
+use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{
@@ -67,6 +67,10 @@ impl Targets {
 /// `Renderer::pick_primary`: rasterising costs in proportion to the triangles (hundreds of millions in massive
 /// instanced scenes), while ray queries scale with the pixels.
 pub const RASTER_TRIAL_TRIANGLES: u64 = 20_000_000;
+
+/// Feature-edge line width in view pixels: lines keep it at any internal resolution (render scale, screenshots
+/// larger than the view).
+pub const EDGE_WIDTH: f32 = 1.0;
 
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
@@ -316,6 +320,7 @@ impl Renderer {
         } else {
             t.height
         };
+        let feature_size = crate::hash::FeatureSize::for_camera(&cam, view_height, s.s_p);
         let mut flags = 0;
         if self.output_bgra {
             flags |= gpu::FLAG_OUTPUT_BGRA;
@@ -363,11 +368,7 @@ impl Renderer {
             flags,
             rays_per_pixel: s.rays_per_pixel,
             ao_radius: s.ao_radius,
-            s_w_per_distance: crate::hash::feature_size_per_distance(
-                cam.fov_y_deg.to_radians(),
-                view_height,
-                s.s_p,
-            ),
+            s_w_per_distance: feature_size.per_distance,
             s_w_max: s.ao_radius * s.max_cell_fraction,
             log2_s_min: crate::hash::log2_s_min(s.s_min),
             s_nd: s.s_nd,
@@ -398,6 +399,13 @@ impl Renderer {
             ray_queue: t.ray_queue.address,
             dispatch_args: self.dispatch_args.address,
             regions: self.regions.address(),
+            projection: match cam.projection {
+                Projection::Perspective => gpu::PROJECTION_PERSPECTIVE,
+                Projection::Orthographic => gpu::PROJECTION_ORTHOGRAPHIC,
+            },
+            s_w_base: feature_size.base,
+            view_height,
+            edge_width: EDGE_WIDTH,
         }
     }
 
@@ -456,6 +464,17 @@ impl Renderer {
         }
         self.regions.upload()?;
         let mut globals = self.globals_for(camera, self.key_f);
+        if camera.is_orthographic() {
+            // Orthographic rays start in front of the whole scene: nothing is clipped by the eye plane.
+            let b = scene.raster.bounds();
+            let corners = if b.is_empty() {
+                Vec::new()
+            } else {
+                b.corners().to_vec()
+            };
+            let start = camera.ortho_ray_plane(&corners);
+            globals.eye = [start.x, start.y, start.z, 0.0];
+        }
         globals.instances = scene.instance_info.address;
         globals.geometries = scene.geometries.address;
         self.globals.write(&[globals])?;
@@ -474,10 +493,7 @@ impl Renderer {
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (self.primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
-                let near = Rasterizer::near_plane(
-                    (glam::Vec3::from(camera.target) - glam::Vec3::from(camera.eye)).length(),
-                );
-                raster.record(&mut rec, &scene.raster, &globals, near);
+                raster.record(&mut rec, &scene.raster, &globals, camera.distance());
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
         }
@@ -756,7 +772,11 @@ impl Renderer {
             scene_f
         };
         let g = self.globals_for(camera, key_f);
-        let lod = crate::hash::pixel_lod(px.t, g.s_w_per_distance, g.s_w_max, g.log2_s_min);
+        let size = crate::hash::FeatureSize {
+            base: g.s_w_base,
+            per_distance: g.s_w_per_distance,
+        };
+        let lod = crate::hash::pixel_lod(px.t, size, g.s_w_max, g.log2_s_min);
         std::array::from_fn(|level| {
             let l = lod + level as i32;
             let c = crate::hash::cell_coord(px.position.into(), l);

@@ -55,6 +55,7 @@ fn wedge_matches_analytic_value() {
         fov_y_deg: 50.0,
         width: 160,
         height: 90,
+        ..Default::default()
     };
     for (label, settings, frames) in modes(radius) {
         let (r, _sg) = render(&gpu, &scene, &cam, settings, frames);

@@ -6,10 +6,8 @@ use hrtao_core::{AoSettings, Renderer, SceneGpu};
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{Instance, Mesh};
 
-#[test]
-fn edges_outline_a_box_and_leave_flat_faces_and_ao_alone() {
-    let gpu = gpu();
-    // A floor and a 4 x 4 x 2 box (its own instance) seen from above.
+/// A floor and a 4 x 4 x 2 box (its own instance) seen from above.
+fn floor_and_box() -> hrtao_scene::Scene {
     let mut scene = scene_of(vec![floor()]);
     let (h, a) = (2.0, 2.0);
     let sides = vec![
@@ -29,7 +27,24 @@ fn edges_outline_a_box_and_leave_flat_faces_and_ao_alone() {
         name: "box".into(),
         visible: true,
     });
-    let cam = top_down_camera(20.0, 160, 90);
+    scene
+}
+
+#[test]
+fn edges_outline_a_box_and_leave_flat_faces_and_ao_alone() {
+    outline_check(&top_down_camera(20.0, 160, 90));
+}
+
+#[test]
+fn orthographic_edges_outline_a_box_and_leave_flat_faces_alone() {
+    // The same view in orthographic projection (its depth tests use the constant pixel size).
+    let cam = top_down_camera(20.0, 160, 90).with_projection(hrtao_core::camera::Projection::Orthographic);
+    outline_check(&cam);
+}
+
+fn outline_check(cam: &hrtao_core::Camera) {
+    let gpu = gpu();
+    let scene = floor_and_box();
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     // Per-pixel RTAO: deterministic, so the AO images can be compared exactly.
     let frame = |edges: bool| {
@@ -39,7 +54,7 @@ fn edges_outline_a_box_and_leave_flat_faces_and_ao_alone() {
         };
         let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
         for _ in 0..2 {
-            r.render(&sg, scene.f(), &cam).unwrap();
+            r.render(&sg, scene.f(), cam).unwrap();
         }
         (
             r.read_rgba().unwrap(),
@@ -79,5 +94,65 @@ fn edges_outline_a_box_and_leave_flat_faces_and_ao_alone() {
     println!("{changed} edge pixels around a box of {box_pixels} pixels");
     assert!(changed >= 50, "the silhouette is drawn ({changed} pixels)");
     assert!(changed < box_pixels, "only the outline, not the faces");
+    assert_clean(&gpu);
+}
+
+/// Pixels whose colour the edges change, at internal size `w` x `h` in a view `view_height` pixels tall.
+fn edge_pixels(
+    gpu: &std::sync::Arc<hrtao_core::Gpu>,
+    scene: &hrtao_scene::Scene,
+    w: u32,
+    h: u32,
+    view_height: u32,
+) -> usize {
+    let cam = top_down_camera(10.0, w, h);
+    let sg = SceneGpu::new(gpu, scene).unwrap();
+    let image = |edges: bool| {
+        let mut r = Renderer::new(
+            gpu,
+            w,
+            h,
+            AoSettings {
+                edges,
+                ..rtao(1, 3.0)
+            },
+        )
+        .unwrap();
+        r.view_height = view_height;
+        r.render(&sg, scene.f(), &cam).unwrap();
+        r.read_rgba().unwrap()
+    };
+    let (with, without) = (image(true), image(false));
+    with.chunks(4)
+        .zip(without.chunks(4))
+        .filter(|(a, b)| a[..3] != b[..3])
+        .count()
+}
+
+#[test]
+fn edge_width_counts_view_pixels_at_any_render_scale() {
+    let gpu = gpu();
+    let scene = floor_and_box();
+    // The same 160 x 90 view rendered at internal scale 1, 2 and 0.5.
+    let base = edge_pixels(&gpu, &scene, 160, 90, 90);
+    let double = edge_pixels(&gpu, &scene, 320, 180, 90);
+    let half = edge_pixels(&gpu, &scene, 80, 45, 90);
+    // At scale 1 of a 180-pixel view, lines are one internal pixel wide: twice as long, as wide.
+    let thin = edge_pixels(&gpu, &scene, 320, 180, 180);
+    println!("edge pixels: scale 1 {base}, scale 2 {double} (view 180: {thin}), scale 0.5 {half}");
+    let ratio = double as f32 / base as f32;
+    // Twice as long and twice as wide in internal pixels: the same lines in view pixels.
+    assert!((3.2..=4.8).contains(&ratio), "scale 2 / scale 1 = {ratio}");
+    let thin_ratio = thin as f32 / base as f32;
+    assert!(
+        (1.6..=2.4).contains(&thin_ratio),
+        "one internal pixel at scale 1: {thin_ratio}"
+    );
+    // Below scale 1 a line cannot be thinner than one pixel: half as long.
+    let half_ratio = half as f32 / base as f32;
+    assert!(
+        (0.35..=0.65).contains(&half_ratio),
+        "scale 0.5 / scale 1 = {half_ratio}"
+    );
     assert_clean(&gpu);
 }

@@ -111,6 +111,7 @@ fn edits_bump_f_and_old_cells_are_never_read() {
         fov_y_deg: 50.0,
         width: 160,
         height: 90,
+        ..Default::default()
     };
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
     let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(8, 4.0)).unwrap();

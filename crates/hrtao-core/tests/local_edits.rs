@@ -60,6 +60,7 @@ fn camera() -> Camera {
         fov_y_deg: 60.0,
         width: 240,
         height: 135,
+        ..Camera::default()
     }
 }
 

@@ -111,7 +111,8 @@ pub struct RenderArgs {
     /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
     #[arg(long)]
     pub scene: String,
-    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"} (default: fit the scene).
+    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
+    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: fit the scene.
     #[arg(long)]
     pub camera: Option<PathBuf>,
     /// Image width (overrides the camera file).
@@ -224,7 +225,8 @@ pub struct BenchArgs {
     /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
     #[arg(long, required_unless_present = "report")]
     pub scene: Option<String>,
-    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"} (default: fit the scene).
+    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
+    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: fit the scene.
     #[arg(long)]
     pub camera: Option<PathBuf>,
     /// Navigation path: a JSON array of cameras (or {"cameras": [...]}); sizes come from --width/--height.

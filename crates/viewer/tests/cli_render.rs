@@ -120,3 +120,45 @@ fn bad_inputs_give_clear_errors() {
     ]);
     assert_clean_error(&out, "bad_camera.json");
 }
+
+#[test]
+fn render_accepts_an_orthographic_camera_file() {
+    // A 2 x 2 plane seen straight down by an orthographic camera whose 64-pixel image spans 4 units: the plane
+    // covers the central 32 x 32 pixels, whatever the eye height.
+    let camera = tmp("ortho.camera.json");
+    std::fs::write(
+        &camera,
+        r#"{"eye": [0, 0, 50], "target": [0, 0, 0], "up": [0, 1, 0], "width": 64, "height": 64,
+            "projection": "orthographic", "ortho_height": 4}"#,
+    )
+    .unwrap();
+    let png = tmp("ortho.png");
+    let out = hrtao(&[
+        "render",
+        "--scene",
+        "gen:plane?size=2",
+        "--camera",
+        camera.to_str().unwrap(),
+        "--mode",
+        "rtao",
+        "--rays",
+        "1",
+        "--frames",
+        "1",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let img = image::open(&png).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (64, 64));
+    let plane = img.get_pixel(32, 32).0;
+    let covered: Vec<(u32, u32)> = img
+        .enumerate_pixels()
+        .filter(|(_, _, p)| p.0 == plane)
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    assert_eq!(covered.len(), 32 * 32);
+    assert!(covered
+        .iter()
+        .all(|&(x, y)| (16..48).contains(&x) && (16..48).contains(&y)));
+}

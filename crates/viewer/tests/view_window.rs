@@ -485,3 +485,135 @@ fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
     assert!(json["median_moving_wall_ms"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn orthographic_camera_file_frames_the_expected_extent() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("ortho");
+    // A 2 x 2 plane seen straight down by an orthographic camera spanning 4 units: the central half of the view.
+    let camera = dir.join("ortho.camera.json");
+    std::fs::write(
+        &camera,
+        r#"{"eye": [0, 0, 30], "target": [0, 0, 0], "up": [0, 1, 0], "width": 320, "height": 320,
+            "projection": "orthographic", "ortho_height": 4}"#,
+    )
+    .unwrap();
+    let shot = dir.join("view.png");
+    run_viewer(&[
+        "gen:plane?size=2",
+        "--camera",
+        camera.to_str().unwrap(),
+        "--size",
+        "320x320",
+        "--no-panel",
+        "--frames",
+        "4",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (320, 320));
+    let plane = img.get_pixel(160, 160).0;
+    let inside: Vec<(u32, u32)> = img
+        .enumerate_pixels()
+        .filter(|(_, _, p)| p.0 == plane)
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    // 160 x 160 pixels, less the outline (feature edges) and anti-aliased border pixels.
+    assert!(
+        (150 * 150..=160 * 160).contains(&inside.len()),
+        "{} plane pixels",
+        inside.len()
+    );
+    assert!(
+        inside
+            .iter()
+            .all(|&(x, y)| (80..240).contains(&x) && (80..240).contains(&y)),
+        "the plane stays within its analytic square"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Pixels of a screenshot that differ from the background (the colour at the left edge of their row).
+fn foreground_width(png: &Path) -> u32 {
+    let img = image::open(png).unwrap().to_rgba8();
+    let y = img.height() / 2;
+    let bg = img.get_pixel(0, y).0;
+    (0..img.width()).filter(|&x| img.get_pixel(x, y).0 != bg).count() as u32
+}
+
+/// Key 5 switches perspective ⇄ orthographic keeping the framing at the pivot: a 2 x 2 plane 10 units below the
+/// eye, with the pivot 5 units below it, spans twice as many pixels in orthographic (framed at the pivot depth).
+#[test]
+fn key_5_toggles_orthographic_keeping_the_framing_at_the_pivot() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("ortho-key");
+    let shots = dir.join("screenshots");
+    let camera = dir.join("top.camera.json");
+    std::fs::write(
+        &camera,
+        r#"{"eye": [0, 0, 10], "target": [0, 0, 5], "up": [0, 1, 0], "fov_y_deg": 40, "width": 320, "height": 320}"#,
+    )
+    .unwrap();
+    let mut v = Running::start(
+        &[
+            "gen:plane?size=2",
+            "--camera",
+            camera.to_str().unwrap(),
+            "--size",
+            "320x320",
+            "--no-panel",
+        ],
+        &dir,
+    );
+    v.wait_for("opened", 1, std::time::Duration::from_secs(60));
+    let pid = v.child.id().to_string();
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--pid", &pid]);
+    let window = window
+        .lines()
+        .next()
+        .expect("the viewer's window")
+        .trim()
+        .to_string();
+    xdotool(&["windowfocus", "--sync", &window]);
+    let mut widths = Vec::new();
+    for (i, key) in ["F12", "5", "5"].iter().enumerate() {
+        if *key == "5" {
+            xdotool(&["key", "5"]);
+            let name = if i == 1 { "Orthographic" } else { "Perspective" };
+            v.wait_for(
+                &format!("projection: {name}"),
+                1,
+                std::time::Duration::from_secs(30),
+            );
+            xdotool(&["key", "F12"]);
+        } else {
+            xdotool(&["key", key]);
+        }
+        wait_for_screenshots(&shots, i + 1, &mut v);
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&shots)
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "png"))
+            .collect();
+        files.sort();
+        widths.push(foreground_width(&files[i]));
+    }
+    // Perspective: 2 units of the 2 * 10 * tan(20 deg) = 7.28 the view spans at the plane (88 px); orthographic:
+    // the view spans the pivot depth's 3.64 units (176 px); back in perspective: 88 px again.
+    println!(
+        "plane width in pixels: perspective {}, orthographic {}, perspective {}",
+        widths[0], widths[1], widths[2]
+    );
+    assert!((84..=92).contains(&widths[0]), "{widths:?}");
+    assert!((170..=182).contains(&widths[1]), "{widths:?}");
+    assert!(widths[2].abs_diff(widths[0]) <= 2, "{widths:?}");
+    v.validation_clean();
+    drop(v);
+    let _ = std::fs::remove_dir_all(&dir);
+}

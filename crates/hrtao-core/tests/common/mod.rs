@@ -63,6 +63,7 @@ pub fn top_down_camera(height: f32, w: u32, h: u32) -> Camera {
         fov_y_deg: 60.0,
         width: w,
         height: h,
+        ..Default::default()
     }
 }
 

@@ -363,6 +363,7 @@ pub fn corner_camera(min: glam::Vec3, max: glam::Vec3, up: UpAxis) -> Camera {
         fov_y_deg: 50.0,
         width: 320,
         height: 180,
+        ..Default::default()
     }
 }
 

@@ -639,9 +639,13 @@ impl Viewer {
         let file_aspect = cam.width as f32 / cam.height.max(1) as f32;
         let view_aspect = self.view_rect[2].max(1) as f32 / self.view_rect[3].max(1) as f32;
         if cam_file.is_some() && self.view_rect[2] > 1 && view_aspect < file_aspect {
-            let t = nav::target(&cam);
-            let e = t + (nav::eye(&cam) - t) * (file_aspect / view_aspect);
-            cam.eye = e.to_array();
+            let widen = file_aspect / view_aspect;
+            if cam.is_orthographic() {
+                cam.ortho_height *= widen;
+            } else {
+                let t = nav::target(&cam);
+                cam.eye = (t + (nav::eye(&cam) - t) * widen).to_array();
+            }
         }
         self.nav = Nav {
             cam,
@@ -1198,7 +1202,12 @@ fn screenshot_name(t: jiff::Zoned) -> String {
 
 /// Same camera pose and lens (the image size is not part of the view).
 fn same_view(a: &Camera, b: &Camera) -> bool {
-    a.eye == b.eye && a.target == b.target && a.up == b.up && a.fov_y_deg == b.fov_y_deg
+    a.eye == b.eye
+        && a.target == b.target
+        && a.up == b.up
+        && a.fov_y_deg == b.fov_y_deg
+        && a.projection == b.projection
+        && a.ortho_height == b.ortho_height
 }
 
 fn ema(avg: f64, x: f64) -> f64 {

@@ -1,10 +1,11 @@
 //! CAD camera navigation as pure functions on [`Camera`] (no GPU): orbit around a pivot, pan, zoom toward the
-//! cursor, fly, fit all and the standard views (F3D's 1/3/7/9 keys).
+//! cursor, fly, fit all and the standard views (F3D's 1/3/7/9 keys), in perspective or orthographic projection
+//! (switched keeping the framing; front/right/top views are orthographic, as in CAD tools).
 //!
 //! The camera's `up` is always kept as the true camera up vector (orthogonal to the view direction), so views
 //! looking straight down an axis stay valid; orbiting yaws around the scene's world up axis.
 use glam::{Quat, Vec3};
-use hrtao_core::camera::UpAxis;
+use hrtao_core::camera::{Projection, UpAxis};
 use hrtao_core::Camera;
 
 /// The camera plus the point it orbits around.
@@ -66,9 +67,10 @@ pub fn orbit(c: &Camera, pivot: Vec3, world_up: Vec3, yaw: f32, pitch: f32) -> C
     set(c, e, t, q * cam_up(c))
 }
 
-/// World units per pixel at the target distance for an image `height` pixels tall.
+/// World units per pixel at the target distance (at any distance in orthographic) for an image `height` pixels
+/// tall.
 pub fn world_per_pixel(c: &Camera, height: f32) -> f32 {
-    2.0 * distance(c) * (c.fov_y_deg.to_radians() * 0.5).tan() / height.max(1.0)
+    c.view_height_at(distance(c)) / height.max(1.0)
 }
 
 /// Pan so that content under the cursor follows a drag of (`dx`, `dy`) pixels (x right, y down) in a view
@@ -79,13 +81,25 @@ pub fn pan(c: &Camera, dx: f32, dy: f32, height: f32) -> Camera {
     set(c, eye(c) + delta, target(c) + delta, cam_up(c))
 }
 
-/// Zoom toward the point under the cursor: scales eye and target about the point where the cursor ray
-/// (`ray_dir`, unit) meets the target plane, by `factor` (< 1 zooms in). That point stays under the cursor.
-pub fn zoom_to(c: &Camera, ray_dir: Vec3, factor: f32) -> Camera {
+/// Zoom toward the point under the cursor, where the cursor ray (`origin`, unit `dir`: `Camera::ray`) meets the
+/// target plane, by `factor` (< 1 zooms in); that point stays under the cursor. Perspective: eye and target
+/// scale about it. Orthographic: `ortho_height` scales by `factor` and the view shifts sideways (the eye keeps
+/// its depth).
+pub fn zoom_to(c: &Camera, (origin, dir): (Vec3, Vec3), factor: f32) -> Camera {
     let f = forward(c);
-    let cos = ray_dir.dot(f).max(1e-3);
-    let p = eye(c) + ray_dir * (distance(c) / cos);
-    zoom_about(c, p, factor)
+    let cos = dir.dot(f).max(1e-3);
+    let p = origin + dir * ((target(c) - origin).dot(f) / cos);
+    match c.projection {
+        Projection::Perspective => zoom_about(c, p, factor),
+        Projection::Orthographic => {
+            let factor = factor.clamp(1e-3, 1e3);
+            let shift = (p - target(c)) * (1.0 - factor);
+            Camera {
+                ortho_height: (c.ortho_height * factor).clamp(1e-9, 1e30),
+                ..set(c, eye(c) + shift, target(c) + shift, cam_up(c))
+            }
+        }
+    }
 }
 
 /// Scales eye and target about `p` by `factor` (the view direction is unchanged).
@@ -117,13 +131,30 @@ pub fn fit_distance(c: &Camera, radius: f32) -> f32 {
     radius.max(1e-6) / half.sin()
 }
 
-/// Keeps the view direction and frames the box `min..max`; returns the camera and the new pivot (the centre).
+/// Keeps the view direction and the projection and frames the box `min..max`; returns the camera and the new
+/// pivot (the centre). Orthographic: the bounding sphere fills the smaller image extent, and the eye stands
+/// where the perspective fit would put it (so switching back to perspective frames the box too).
 pub fn fit(c: &Camera, min: Vec3, max: Vec3) -> (Camera, Vec3) {
     let centre = (min + max) * 0.5;
     let radius = (max - min).length() * 0.5;
     let d = fit_distance(c, radius);
-    let cam = set(c, centre - forward(c) * d, centre, cam_up(c));
+    let mut cam = set(c, centre - forward(c) * d, centre, cam_up(c));
+    let aspect = c.width as f32 / c.height.max(1) as f32;
+    cam.ortho_height = 2.0 * radius.max(1e-6) / aspect.min(1.0);
     (cam, centre)
+}
+
+/// Switches the projection keeping the framing at the pivot: the orthographic height is the perspective view
+/// height at the pivot's depth, and back, the eye moves along the view direction until the pivot's depth
+/// shows that height again (the target follows at the pivot's depth).
+pub fn set_projection(c: &Camera, pivot: Vec3, projection: Projection) -> Camera {
+    if c.projection == projection {
+        return *c;
+    }
+    let f = forward(c);
+    let depth = (pivot - eye(c)).dot(f).max(distance(c) * 1e-3).max(1e-6);
+    // The target moves to the pivot's depth; `Camera::with_projection` keeps the framing of the target plane.
+    set(c, eye(c), eye(c) + f * depth, cam_up(c)).with_projection(projection)
 }
 
 /// View direction (eye → target) and up vector of a standard view.
@@ -144,11 +175,15 @@ pub fn std_view_dirs(view: StdView, up: UpAxis) -> (Vec3, Vec3) {
     }
 }
 
-/// A standard view framing the box `min..max`; returns the camera and pivot.
+/// A standard view framing the box `min..max`; returns the camera and pivot. Front, right and top views are
+/// orthographic (as in CAD tools); the iso view keeps the current projection.
 pub fn std_view(c: &Camera, view: StdView, up: UpAxis, min: Vec3, max: Vec3) -> (Camera, Vec3) {
     let (dir, upv) = std_view_dirs(view, up);
     let centre = (min + max) * 0.5;
-    let oriented = set(c, centre - dir, centre, upv);
+    let mut oriented = set(c, centre - dir, centre, upv);
+    if view != StdView::Iso {
+        oriented.projection = Projection::Orthographic;
+    }
     fit(&oriented, min, max)
 }
 
@@ -174,6 +209,7 @@ mod tests {
             fov_y_deg: 60.0,
             width: 200,
             height: 100,
+            ..Default::default()
         }
     }
 
@@ -221,7 +257,7 @@ mod tests {
         let c = cam();
         // A ray to the right of centre: pixel (150, 50).
         let dir = c.ray_dir(150.0, 50.0);
-        let z = zoom_to(&c, dir, 0.5);
+        let z = zoom_to(&c, c.ray(150.0, 50.0), 0.5);
         assert!((distance(&z) - 5.0).abs() < 1e-4, "distance halves");
         assert!(close(forward(&z), forward(&c)));
         // The point under the cursor on the target plane projects to the same pixel.
@@ -233,7 +269,7 @@ mod tests {
             z.ray_dir(150.0, 50.0)
         );
         // Zoom at the centre moves straight along the view direction.
-        let zc = zoom_to(&c, forward(&c), 2.0);
+        let zc = zoom_to(&c, (eye(&c), forward(&c)), 2.0);
         assert!(close(target(&zc), target(&c)));
         assert!((distance(&zc) - 20.0).abs() < 1e-3);
     }
@@ -278,6 +314,132 @@ mod tests {
                 assert!(std_view(&c, v, up, min, max).0.validate().is_ok());
             }
         }
+    }
+
+    fn ortho() -> Camera {
+        Camera {
+            projection: Projection::Orthographic,
+            ortho_height: 6.0,
+            ..cam()
+        }
+    }
+
+    /// Image coordinates in [-1, 1] (x right, y up) of world point `p`, and its depth in front of the eye.
+    fn project(c: &Camera, p: Vec3) -> (f32, f32, f32) {
+        let v = p - eye(c);
+        let depth = v.dot(forward(c));
+        let aspect = c.width as f32 / c.height as f32;
+        let half = match c.projection {
+            Projection::Perspective => (c.fov_y_deg.to_radians() * 0.5).tan() * depth,
+            Projection::Orthographic => c.ortho_height * 0.5,
+        };
+        (v.dot(right(c)) / (half * aspect), v.dot(cam_up(c)) / half, depth)
+    }
+
+    #[test]
+    fn fit_all_projects_the_box_inside_the_view_in_both_projections() {
+        let (min, max) = (Vec3::new(10.0, 10.0, 10.0), Vec3::new(14.0, 12.0, 11.0));
+        for base in [
+            cam(),
+            ortho(),
+            Camera {
+                width: 100,
+                height: 200,
+                ..ortho()
+            },
+        ] {
+            let (f, pivot) = fit(&base, min, max);
+            assert_eq!(f.projection, base.projection);
+            assert!(close(pivot, (min + max) * 0.5));
+            assert!(close(forward(&f), forward(&base)));
+            let mut widest = 0.0f32;
+            for corner in hrtao_scene::Aabb::new(min, max).corners() {
+                let (x, y, depth) = project(&f, corner);
+                assert!(depth > 0.0, "{:?}: corner behind the eye plane", f.projection);
+                assert!(
+                    x.abs() <= 1.0 + 1e-4 && y.abs() <= 1.0 + 1e-4,
+                    "{:?}: ({x}, {y})",
+                    f.projection
+                );
+                widest = widest.max(x.abs()).max(y.abs());
+            }
+            // Framed, not lost in the middle: the box reaches at least a third of the image.
+            assert!(widest > 0.33, "{:?}: {widest}", f.projection);
+        }
+        // Orthographic: the bounding sphere spans the smaller extent (height here: aspect 2).
+        let (f, _) = fit(&ortho(), min, max);
+        assert!((f.ortho_height - (max - min).length()).abs() < 1e-4);
+    }
+
+    #[test]
+    fn orthographic_zoom_scales_ortho_height_and_keeps_the_cursor_point() {
+        let c = ortho();
+        let z = zoom_to(&c, c.ray(150.0, 50.0), 0.5);
+        assert!((z.ortho_height - 3.0).abs() < 1e-5, "zoom in halves the height");
+        assert!(
+            close(eye(&z) - target(&z), eye(&c) - target(&c)),
+            "the eye plane stays"
+        );
+        // The point under the cursor on the target plane projects to the same pixel.
+        let (o, d) = c.ray(150.0, 50.0);
+        let p = o + d * (target(&c) - o).dot(d);
+        let (o2, d2) = z.ray(150.0, 50.0);
+        let p2 = o2 + d2 * (target(&z) - o2).dot(d2);
+        assert!(close(p, p2), "{p} vs {p2}");
+        let out = zoom_to(&c, c.ray(99.5, 49.5), 2.0);
+        assert!((out.ortho_height - 12.0).abs() < 1e-4);
+        assert!(
+            close(target(&out), target(&c)),
+            "zoom about the centre keeps the target"
+        );
+        // Pan in ortho moves by ortho_height / height per pixel.
+        let p = pan(&c, 10.0, 0.0, 100.0);
+        assert!(close(target(&p) - target(&c), -right(&c) * 0.6));
+    }
+
+    #[test]
+    fn switching_projection_keeps_the_framing_at_the_pivot() {
+        let c = cam();
+        let pivot = Vec3::new(1.0, -4.0, 0.5); // depth 6 in front of the eye
+        let o = set_projection(&c, pivot, Projection::Orthographic);
+        let h = 2.0 * 6.0 * (30f32).to_radians().tan();
+        assert!((o.ortho_height - h).abs() < 1e-4);
+        assert!(close(eye(&o), eye(&c)) && close(forward(&o), forward(&c)));
+        // A point on the pivot's depth plane lands on the same pixel in both projections.
+        let q = pivot + right(&c) * 1.5 + cam_up(&c) * 0.7;
+        let (a, b) = (project(&c, q), project(&o, q));
+        assert!(
+            (a.0 - b.0).abs() < 1e-4 && (a.1 - b.1).abs() < 1e-4,
+            "{a:?} vs {b:?}"
+        );
+        // And back: the pivot's depth plane spans ortho_height again.
+        let narrow = Camera {
+            ortho_height: 2.0,
+            ..o
+        };
+        let p = set_projection(&narrow, pivot, Projection::Perspective);
+        assert_eq!(p.projection, Projection::Perspective);
+        let (x, y, _) = project(&p, q);
+        let (xo, yo, _) = project(&narrow, q);
+        assert!(
+            (x - xo).abs() < 1e-4 && (y - yo).abs() < 1e-4,
+            "({x}, {y}) vs ({xo}, {yo})"
+        );
+        assert!(p.validate().is_ok());
+    }
+
+    #[test]
+    fn standard_axis_views_are_orthographic() {
+        let (min, max) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        for v in [StdView::Front, StdView::Right, StdView::Top] {
+            let (c, _) = std_view(&cam(), v, UpAxis::Z, min, max);
+            assert_eq!(c.projection, Projection::Orthographic, "{v:?}");
+            assert!((c.ortho_height - 2.0 * 3f32.sqrt()).abs() < 1e-4);
+        }
+        assert_eq!(
+            std_view(&cam(), StdView::Iso, UpAxis::Z, min, max).0.projection,
+            Projection::Perspective
+        );
     }
 
     #[test]

@@ -4,6 +4,7 @@ use std::time::Instant;
 
 use egui::{Key, PointerButton};
 use glam::{Mat4, Vec3};
+use hrtao_core::camera::Projection;
 use hrtao_core::{Camera, Mode};
 
 use super::edits::{Action, Edit};
@@ -580,7 +581,27 @@ impl Viewer {
                 self.reset_view();
             }
         });
-        ui.add(egui::Slider::new(&mut self.nav.cam.fov_y_deg, 5.0..=120.0).text("field of view"));
+        ui.horizontal(|ui| {
+            let mut ortho = self.nav.cam.is_orthographic();
+            if ui
+                .checkbox(&mut ortho, "Orthographic (5)")
+                .on_hover_text("parallel projection; front/right/top views switch to it")
+                .changed()
+            {
+                self.toggle_projection();
+            }
+        });
+        if self.nav.cam.is_orthographic() {
+            let h = self.nav.cam.ortho_height;
+            ui.add(
+                egui::DragValue::new(&mut self.nav.cam.ortho_height)
+                    .speed(h * 0.01)
+                    .clamp_range(h * 1e-3..=h * 1e3)
+                    .prefix("view height "),
+            );
+        } else {
+            ui.add(egui::Slider::new(&mut self.nav.cam.fov_y_deg, 5.0..=120.0).text("field of view"));
+        }
         ui.horizontal(|ui| {
             ui.add(
                 egui::TextEdit::singleline(&mut self.bookmark_name)
@@ -722,9 +743,9 @@ impl Viewer {
         let scroll = ctx.input(|i| i.scroll_delta.y);
         if resp.hovered() && scroll != 0.0 {
             if let Some(pos) = resp.hover_pos() {
-                let dir = self.view_ray(pos, rect, ppp);
+                let ray = self.view_ray(pos, rect, ppp);
                 let factor = (-scroll * 0.0025).exp();
-                self.nav.cam = nav::zoom_to(&self.nav.cam, dir, factor);
+                self.nav.cam = nav::zoom_to(&self.nav.cam, ray, factor);
             }
         }
         if resp.double_clicked() {
@@ -750,8 +771,8 @@ impl Viewer {
         }
     }
 
-    /// World-space ray direction through a point of the view (egui points).
-    fn view_ray(&self, pos: egui::Pos2, rect: egui::Rect, ppp: f32) -> Vec3 {
+    /// World-space ray (origin, unit direction) through a point of the view (egui points).
+    fn view_ray(&self, pos: egui::Pos2, rect: egui::Rect, ppp: f32) -> (Vec3, Vec3) {
         let cam = Camera {
             width: self.view_rect[2].max(1) as u32,
             height: self.view_rect[3].max(1) as u32,
@@ -759,7 +780,20 @@ impl Viewer {
         };
         let x = (pos.x - rect.min.x) * ppp;
         let y = (pos.y - rect.min.y) * ppp;
-        cam.ray_dir(x - 0.5, y - 0.5)
+        cam.ray(x - 0.5, y - 0.5)
+    }
+
+    /// Switches perspective / orthographic keeping the framing at the pivot.
+    pub(crate) fn toggle_projection(&mut self) {
+        let next = match self.nav.cam.projection {
+            Projection::Perspective => Projection::Orthographic,
+            Projection::Orthographic => Projection::Perspective,
+        };
+        self.nav.cam = nav::set_projection(&self.nav.cam, self.nav.pivot, next);
+        log::info!(
+            "projection: {next:?} (view height at the pivot {:.4})",
+            nav::world_per_pixel(&self.nav.cam, 1.0)
+        );
     }
 
     /// Picks the surface under a view point from the last frame's G-buffer: (position, instance).
@@ -891,6 +925,7 @@ impl Viewer {
                 Key::Num3,
                 Key::Num7,
                 Key::Num9,
+                Key::Num5,
                 Key::Enter,
                 Key::Delete,
                 Key::H,
@@ -918,6 +953,7 @@ impl Viewer {
                 Key::Num3 => self.std_view(StdView::Right),
                 Key::Num7 => self.std_view(StdView::Top),
                 Key::Num9 => self.std_view(StdView::Iso),
+                Key::Num5 => self.toggle_projection(),
                 Key::Enter => self.reset_view(),
                 Key::Escape => self.set_selected(u32::MAX),
                 Key::Z if mods.command && mods.shift => self.edit(Action::Redo),
