@@ -19,6 +19,8 @@ layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
 layout(set = 0, binding = 1, scalar) readonly buffer GlobalsBlock { FrameGlobals g; };
 layout(push_constant) uniform Push { uvec4 push; };
 
+#include "section.glsl"
+
 layout(buffer_reference, scalar) buffer GBufferRef { GPixel px[]; };
 layout(buffer_reference, scalar) readonly buffer InstanceRef { InstanceInfo v[]; };
 layout(buffer_reference, scalar) readonly buffer GeometryRef { GeometryInfo v[]; };
@@ -98,11 +100,13 @@ uvec2 pixel_shift(uint index) {
     return uvec2(h_check(index * 2u + 0x9e3779b9u), h_index(index * 2u + 1u + 0x7f4a7c15u));
 }
 
-// True when the ray from p along dir hits nothing within tmax.
+// True when the ray from p along dir hits nothing within tmax. Instances are opaque (first hit ends the ray)
+// except those a section plane crosses, whose candidate hits count only where no plane cuts them.
 bool ray_unoccluded(vec3 p, vec3 dir, float tmax) {
     rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, 0.0, dir, tmax);
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, 0.0, dir, tmax);
     while (rayQueryProceedEXT(rq)) {
+        if (section_keeps(p + rayQueryGetIntersectionTEXT(rq, false) * dir)) rayQueryConfirmIntersectionEXT(rq);
     }
     return rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT;
 }

@@ -5,13 +5,14 @@ use std::time::Instant;
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
-use hrtao_scene::Scene;
+use hrtao_scene::{Aabb, Scene};
 
 use crate::buffer::{full_barrier, Buffer};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{GeometryInfo, InstanceInfo};
 use crate::raster::RasterScene;
+use crate::section::{Sections, Side};
 
 /// An acceleration structure with its backing buffer; destroyed on drop.
 pub struct AccelStruct {
@@ -117,6 +118,13 @@ pub struct SceneGpu {
     pub stats: BuildStats,
     /// Bumped by every `update_instances` (edits, visibility, selection): an image of an older version is stale.
     version: u64,
+    /// Object-space bounds per mesh (classified against the section planes).
+    mesh_bounds: Vec<Aabb>,
+    sections: Sections,
+    /// Section plane changes so far: each is a scene change (the renderer adds it to F, eq. 6).
+    section_changes: u32,
+    /// Instances per `Side` in the current TLAS (kept, crossing, cut).
+    pub section_sides: [usize; 3],
 }
 
 /// Maximum instance id stored in a TLAS instance's 24-bit custom index.
@@ -433,6 +441,10 @@ impl SceneGpu {
             tlas: placeholder,
             raster,
             version: 0,
+            mesh_bounds: scene.meshes.iter().map(|m| m.local_bounds()).collect(),
+            sections: Sections::default(),
+            section_changes: 0,
+            section_sides: [0; 3],
             stats: BuildStats {
                 blas_count: per_mesh.iter().filter(|g| !g.is_empty()).count(),
                 geometry_count: table.len(),
@@ -451,12 +463,35 @@ impl SceneGpu {
         self.blas.iter().filter(|b| b.is_some()).count()
     }
 
-    /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
-    /// `selected` is the instance to highlight (u32::MAX for none).
     /// How many times the instance tables were updated (see `version`).
     pub fn version(&self) -> u64 {
         self.version
     }
+
+    pub fn sections(&self) -> &Sections {
+        &self.sections
+    }
+
+    /// Section plane changes so far (a plane change is a scene change: the renderer adds this to F).
+    pub fn section_changes(&self) -> u32 {
+        self.section_changes
+    }
+
+    /// Sets the section planes and rebuilds the TLAS for them (instances they cut away leave it, instances they
+    /// cross become non-opaque). No-op when the planes are unchanged. Must not be called while a frame using
+    /// the scene is in flight.
+    pub fn set_sections(&mut self, scene: &Scene, sections: &Sections, selected: u32) -> Result<()> {
+        sections.validate().map_err(CoreError::Invalid)?;
+        if *sections == self.sections {
+            return Ok(());
+        }
+        self.sections = sections.clone();
+        self.section_changes = self.section_changes.wrapping_add(1);
+        self.update_instances(scene, selected)
+    }
+
+    /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
+    /// `selected` is the instance to highlight (u32::MAX for none).
 
     pub fn update_instances(&mut self, scene: &Scene, selected: u32) -> Result<()> {
         self.version += 1;
@@ -489,6 +524,8 @@ impl SceneGpu {
         }
         let mut infos = Vec::with_capacity(scene.instances.len());
         let mut raw: Vec<u8> = Vec::with_capacity(scene.instances.len() * 64);
+        let mut drawn = vec![false; scene.instances.len()];
+        let mut sides = [0usize; 3];
         let mut count = 0u32;
         for (i, inst) in scene.instances.iter().enumerate() {
             let base = self.geometry_base.get(inst.mesh as usize).copied().flatten();
@@ -513,6 +550,19 @@ impl SceneGpu {
                     "instance {i} has a non-finite transform"
                 )));
             }
+            let bounds = self
+                .mesh_bounds
+                .get(inst.mesh as usize)
+                .copied()
+                .unwrap_or_default();
+            let side = self.sections.side(&bounds, &m);
+            sides[side as usize] += 1;
+            let flags = match side {
+                Side::Cut => continue,
+                Side::Crossing => vk::GeometryInstanceFlagsKHR::FORCE_NO_OPAQUE,
+                Side::Kept => vk::GeometryInstanceFlagsKHR::empty(),
+            } | vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE;
+            drawn[i] = true;
             let mut matrix = [0f32; 12];
             for r in 0..3 {
                 for c in 0..4 {
@@ -524,7 +574,7 @@ impl SceneGpu {
                 instance_custom_index_and_mask: vk::Packed24_8::new(i as u32, 0xff),
                 instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
                     0,
-                    vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
+                    flags.as_raw() as u8,
                 ),
                 acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
                     device_handle: blas.address,
@@ -544,7 +594,8 @@ impl SceneGpu {
             infos.push(InstanceInfo::default());
         }
         self.instance_info.write(&infos)?;
-        self.raster.update(&gpu, scene)?;
+        self.raster.update(&gpu, scene, &drawn)?;
+        self.section_sides = sides;
         self.tlas_instances.write_bytes(0, &raw)?;
 
         let t0 = Instant::now();

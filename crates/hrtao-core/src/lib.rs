@@ -20,6 +20,7 @@ pub mod metrics;
 pub mod pass;
 pub mod raster;
 pub mod renderer;
+pub mod section;
 pub mod settings;
 pub mod timer;
 
@@ -29,4 +30,5 @@ pub use context::{ContextOptions, DeviceInfo, Gpu};
 pub use error::{CoreError, Result};
 pub use raster::Primary;
 pub use renderer::{FrameReport, Renderer};
+pub use section::{SectionPlane, Sections};
 pub use settings::{AoSettings, Mode};

@@ -362,10 +362,16 @@ impl Renderer {
             stats: self.stats.address,
             ray_queue: t.ray_queue.address,
             dispatch_args: self.dispatch_args.address,
+            section0: [0.0; 4],
+            section1: [0.0; 4],
+            section2: [0.0; 4],
+            section_count: 0,
+            _section_pad: 0,
         }
     }
 
     fn still_key_for(&self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> StillKey {
+        let scene_f = Self::effective_f(scene, scene_f);
         StillKey {
             camera: Camera {
                 width: self.targets.width,
@@ -389,6 +395,12 @@ impl Renderer {
         self.last_converged && self.still_key.as_ref() == Some(&self.still_key_for(scene, scene_f, camera))
     }
 
+    /// The F the frame hashes with (eq. 6): the caller's, plus one per section plane change, since moving a
+    /// plane changes the AO as an edit does. Both only grow, so the sum changes whenever either does.
+    pub fn effective_f(scene: &SceneGpu, scene_f: u32) -> u32 {
+        scene_f.wrapping_add(scene.section_changes())
+    }
+
     /// Prepares the frame's globals and records all passes into `cmd` (the caller submits and then calls
     /// `finish_frame`). The output is left in `output_buffer()`.
     pub fn record_frame(
@@ -399,6 +411,7 @@ impl Renderer {
         camera: &Camera,
     ) -> Result<()> {
         let key = self.still_key_for(scene, scene_f, camera);
+        let scene_f = Self::effective_f(scene, scene_f);
         if self.still_key.as_ref() == Some(&key) {
             self.still_index = self.still_index.saturating_add(1);
         } else {
@@ -412,6 +425,9 @@ impl Renderer {
         let mut globals = self.globals_for(camera, scene_f);
         globals.instances = scene.instance_info.address;
         globals.geometries = scene.geometries.address;
+        let ([s0, s1, s2], count) = scene.sections().gpu();
+        (globals.section0, globals.section1, globals.section2) = (s0, s1, s2);
+        globals.section_count = count;
         self.globals.write(&[globals])?;
         self.passes.bind_tlas(scene.tlas.raw);
 
@@ -431,7 +447,7 @@ impl Renderer {
                 let near = Rasterizer::near_plane(
                     (glam::Vec3::from(camera.target) - glam::Vec3::from(camera.eye)).length(),
                 );
-                raster.record(&mut rec, &scene.raster, &globals, near);
+                raster.record(&mut rec, &scene.raster, &globals, self.globals.address, near);
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
         }
