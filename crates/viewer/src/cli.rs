@@ -2,7 +2,9 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use hrtao_core::{AoSettings, Mode};
+use hrtao_core::{AoSettings, Mode, SectionPlane, Sections};
+use hrtao_scene::glam::DVec3;
+use hrtao_scene::Scene;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -38,6 +40,31 @@ pub struct DeviceArgs {
     /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
     #[arg(long)]
     pub validation: bool,
+}
+
+/// Section planes, for `render`, `bench` and `view`.
+#[derive(Args, Debug, Clone, Default)]
+pub struct SectionArgs {
+    /// Section plane NX,NY,NZ,D in the file's coordinates: geometry where n·p > d is cut away (repeatable, at
+    /// most 3), e.g. `--section 0,0,1,2.5` removes everything above z = 2.5.
+    #[arg(long = "section", value_name = "NX,NY,NZ,D", allow_hyphen_values = true)]
+    pub section: Vec<SectionPlane>,
+}
+
+impl SectionArgs {
+    /// The planes in the scene's coordinates (the scene may be recentred from the file's, see `Scene::origin`).
+    pub fn sections(&self, scene: &Scene) -> Result<Sections, String> {
+        let planes = self
+            .section
+            .iter()
+            .map(|p| {
+                let n = DVec3::from(p.normal.map(f64::from));
+                let on_plane = scene.from_file(n * p.offset as f64);
+                SectionPlane::new(p.normal, hrtao_scene::glam::Vec3::from(p.normal).dot(on_plane))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Sections::new(planes)
+    }
 }
 
 #[derive(Args, Debug, Clone)]
@@ -128,6 +155,8 @@ pub struct RenderArgs {
     /// Frames to render with the same camera (per-pixel RTAO averages them; the HRTAO map persists).
     #[arg(long, default_value_t = 1)]
     pub frames: u32,
+    #[command(flatten)]
+    pub sections: SectionArgs,
     /// Shaded output image (.png).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -211,6 +240,8 @@ pub struct ViewArgs {
     /// Start with the side panel hidden (Tab toggles it).
     #[arg(long)]
     pub no_panel: bool,
+    #[command(flatten)]
+    pub sections: SectionArgs,
     /// Use the first device whose name contains this text.
     #[arg(long)]
     pub device: Option<String>,
@@ -296,6 +327,8 @@ pub struct BenchArgs {
     /// AO settings (--mode is ignored: the bench runs both HRTAO and per-pixel RTAO).
     #[command(flatten)]
     pub ao: AoArgs,
+    #[command(flatten)]
+    pub sections: SectionArgs,
     #[command(flatten)]
     pub device: DeviceArgs,
 }

@@ -55,8 +55,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let settings = args.ao.settings(bounds.diagonal().length());
     settings.validate().map_err(|e| anyhow::anyhow!(e))?;
 
+    let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
     let gpu = open_gpu(&args.device)?;
-    let scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    let mut scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    scene_gpu.set_sections(&scene, &sections, u32::MAX)?;
     log::info!(
         "acceleration structures: {} BLAS in {:.0} ms, TLAS of {} instances in {:.1} ms",
         scene_gpu.stats.blas_count,

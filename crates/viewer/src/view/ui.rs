@@ -40,6 +40,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Arrow keys / PgUp PgDn (Shift: x10)",
         "move the selection by 1% of the scene size",
     ),
+    (
+        "Alt+left drag",
+        "move the active section plane along its normal (Section planes panel)",
+    ),
     ("H", "hide / show the selection"),
     ("Delete", "delete the selection"),
     ("Esc", "deselect"),
@@ -163,6 +167,9 @@ impl Viewer {
         egui::CollapsingHeader::new("Statistics")
             .default_open(true)
             .show(ui, |ui| self.stats_section(ui));
+        egui::CollapsingHeader::new("Section planes")
+            .default_open(false)
+            .show(ui, |ui| self.sections_section(ui));
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
             .show(ui, |ui| self.selection_section(ui));
@@ -689,12 +696,14 @@ impl Viewer {
             return;
         }
         let ppp = ctx.pixels_per_point();
-        let (shift, ctrl) = ctx.input(|i| (i.modifiers.shift, i.modifiers.command));
+        let (shift, ctrl, alt) = ctx.input(|i| (i.modifiers.shift, i.modifiers.command, i.modifiers.alt));
         let delta = resp.drag_delta() * ppp;
         let world_up = self.nav.world_up.vector();
         let view_h = self.view_rect[3].max(1) as f32;
         if resp.dragged_by(PointerButton::Primary) && ctrl && self.selected != u32::MAX {
             self.drag_move(delta);
+        } else if resp.dragged_by(PointerButton::Primary) && alt {
+            self.drag_section(delta);
         } else if resp.dragged_by(PointerButton::Middle) || (resp.dragged_by(PointerButton::Primary) && shift)
         {
             // Pan moves the pivot with the view.
