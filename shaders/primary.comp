@@ -1,6 +1,6 @@
 #version 460
 // Primary visibility: one ray per pixel into the G-buffer (position, geometric normal facing the camera,
-// instance id, base colour). Candidate hits (instances a section plane crosses) count where no plane cuts them.
+// instance id, base colour). The ray is clipped to the region the section planes keep.
 #include "common.glsl"
 #include "gpixel.glsl"
 
@@ -10,13 +10,15 @@ void main() {
     if (!pixel_coords(pix, index)) return;
     vec3 dir = camera_dir(pix);
     vec3 origin = g.eye.xyz;
+    float tmin = 0.0;
+    float tmax = 1e30;
+    bool kept = section_clip(origin, dir, tmin, tmax);
     rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsNoneEXT, 0xFF, origin, 0.0, dir, 1e30);
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT, 0xFF, origin, tmin, dir, kept ? tmax : tmin);
     while (rayQueryProceedEXT(rq)) {
-        if (section_keeps(origin + rayQueryGetIntersectionTEXT(rq, false) * dir)) rayQueryConfirmIntersectionEXT(rq);
     }
     GPixel px = gpixel_miss();
-    if (rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
+    if (kept && rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
         uint instance = rayQueryGetIntersectionInstanceCustomIndexEXT(rq, true);
         uint geometry = InstanceRef(g.instances).v[instance].geometry_base +
                         rayQueryGetIntersectionGeometryIndexEXT(rq, true);

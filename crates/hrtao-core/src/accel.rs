@@ -557,11 +557,9 @@ impl SceneGpu {
                 .unwrap_or_default();
             let side = self.sections.side(&bounds, &m);
             sides[side as usize] += 1;
-            let flags = match side {
-                Side::Cut => continue,
-                Side::Crossing => vk::GeometryInstanceFlagsKHR::FORCE_NO_OPAQUE,
-                Side::Kept => vk::GeometryInstanceFlagsKHR::empty(),
-            } | vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE;
+            if side == Side::Cut {
+                continue;
+            }
             drawn[i] = true;
             let mut matrix = [0f32; 12];
             for r in 0..3 {
@@ -574,7 +572,7 @@ impl SceneGpu {
                 instance_custom_index_and_mask: vk::Packed24_8::new(i as u32, 0xff),
                 instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
                     0,
-                    flags.as_raw() as u8,
+                    vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
                 ),
                 acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
                     device_handle: blas.address,

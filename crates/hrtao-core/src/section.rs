@@ -2,8 +2,11 @@
 //! and AO rays alike (docs/algorithm.md, "Section planes").
 //!
 //! On the CPU the planes classify every instance by its world bounds (`Side`): instances entirely on the cut
-//! side of a plane leave the TLAS, instances a plane crosses are made non-opaque so the shaders test each
-//! candidate hit against the planes, and all others stay opaque (no cost).
+//! side of a plane leave the TLAS and the raster draws. On the GPU every ray (primary and AO) is clipped to the
+//! kept region, which is convex (an intersection of half-spaces), so one ray interval holds exactly the kept
+//! hits and the rays stay opaque (section.glsl); the rasterised primary clips with clip distances. (Making the
+//! instances a plane crosses non-opaque and testing each candidate hit costs about twice as much per AO ray on
+//! lavapipe: see docs/algorithm.md.)
 use glam::{Mat4, Vec3};
 use hrtao_scene::Aabb;
 use serde::{Deserialize, Serialize};
@@ -81,9 +84,9 @@ impl std::str::FromStr for SectionPlane {
 /// Where an instance's world bounds lie against the enabled planes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Side {
-    /// No plane touches it: opaque in the TLAS, no plane tests.
+    /// No plane touches it.
     Kept,
-    /// A plane crosses it: non-opaque, every candidate hit is tested against the planes.
+    /// A plane crosses it: the rays' clipping to the kept region hides its cut part.
     Crossing,
     /// Entirely on the cut side of a plane: left out of the TLAS and of the raster draws.
     Cut,

@@ -120,7 +120,7 @@ fn a_plane_cutting_a_box_away_gives_the_ao_of_the_scene_without_it() {
     let mut one_instance = a.clone();
     one_instance.extend(b.clone());
     // B as its own instance (cut away: out of the TLAS), and A, B and the floor in one instance (crossed by
-    // the plane: every candidate hit is tested).
+    // the plane: the rays are clipped to the kept half-space).
     let variants = [
         (scene(vec![a.clone(), b.clone()]), [1, 0, 1]),
         (scene(vec![one_instance]), [0, 1, 0]),

@@ -33,6 +33,9 @@ struct RenderStats<'a> {
     total_rays: u64,
     render_ms: f64,
     validation_messages: u32,
+    /// The section planes (scene coordinates) and the instances they keep, cross and cut away.
+    sections: &'a hrtao_core::Sections,
+    section_sides: [usize; 3],
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
@@ -119,6 +122,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frames: &frames,
             render_ms,
             validation_messages,
+            sections: &sections,
+            section_sides: scene_gpu.section_sides,
         };
         write_json(path, &stats)?;
     }
