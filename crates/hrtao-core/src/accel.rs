@@ -492,7 +492,6 @@ impl SceneGpu {
 
     /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
     /// `selected` is the instance to highlight (u32::MAX for none).
-
     pub fn update_instances(&mut self, scene: &Scene, selected: u32) -> Result<()> {
         self.version += 1;
         let gpu = self.gpu.clone();
