@@ -485,3 +485,51 @@ fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
     assert!(json["median_moving_wall_ms"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn section_planes_from_the_command_line_cut_the_view() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("sections");
+    // A closed 2 x 2 x 2 cube seen from above; cut at half height it shows its cap in the section colour.
+    let obj = dir.join("cube.obj");
+    let mut s = String::new();
+    for i in 0..8 {
+        let c = |bit: usize| if i & bit == 0 { -1 } else { 1 };
+        s += &format!("v {} {} {}\n", c(1), c(2), c(4) + 1);
+    }
+    s += "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    std::fs::write(&obj, s).unwrap();
+    let cam = dir.join("cam.json");
+    std::fs::write(
+        &cam,
+        r#"{"eye":[2,-4,6],"target":[0,0,1],"up":[0,0,1],"fov_y_deg":45,"width":320,"height":200}"#,
+    )
+    .unwrap();
+    let red = |sections: &[&str], name: &str| {
+        let shot = dir.join(name);
+        let mut args = vec![
+            obj.to_str().unwrap(),
+            "--camera",
+            cam.to_str().unwrap(),
+            "--size",
+            "320x200",
+            "--no-panel",
+            "--frames",
+            "2",
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ];
+        args.extend_from_slice(sections);
+        run_viewer(&args);
+        let img = image::open(&shot).unwrap().to_rgb8();
+        img.pixels()
+            .filter(|p| p[0] as i32 > p[1] as i32 + 60 && p[0] as i32 > p[2] as i32 + 60)
+            .count()
+    };
+    assert_eq!(red(&[], "whole.png"), 0, "no section colour without a plane");
+    let cap = red(&["--section", "0,0,1,1"], "cut.png");
+    assert!(cap > 1000, "the cap shows in the section colour: {cap} pixels");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -167,8 +167,9 @@ impl Viewer {
         egui::CollapsingHeader::new("Statistics")
             .default_open(true)
             .show(ui, |ui| self.stats_section(ui));
+        let cutting = self.section_state.planes.iter().any(|p| p.enabled);
         egui::CollapsingHeader::new("Section planes")
-            .default_open(false)
+            .default_open(cutting)
             .show(ui, |ui| self.sections_section(ui));
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
