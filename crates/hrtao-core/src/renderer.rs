@@ -105,7 +105,7 @@ pub struct FrameReport {
     pub capped_pixels: u32,
     pub occupied_cells: u32,
     pub load_factor: f64,
-    /// F of the scene when the frame was rendered (eq. 6).
+    /// F the frame hashed with (eq. 6): the scene's, plus its section plane changes (`Renderer::effective_f`).
     pub scene_f: u32,
     /// Frames accumulated for the current view (1 = a new view).
     pub accumulated_frames: u32,
@@ -498,7 +498,7 @@ impl Renderer {
             capped_pixels: c[gpu::STAT_CAPPED_PIXELS as usize],
             occupied_cells: occupied,
             load_factor: occupied as f64 / self.hash.capacity as f64,
-            scene_f,
+            scene_f: self.last_f.unwrap_or(scene_f),
             accumulated_frames: self.still_index + 1,
             refine_rays: c[gpu::STAT_REFINE_RAYS as usize] as u64,
             converged: self.last_converged,

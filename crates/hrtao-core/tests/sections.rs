@@ -156,6 +156,10 @@ fn a_plane_cutting_a_box_away_gives_the_ao_of_the_scene_without_it() {
                 render_cut(s, &cut, 0, &cam, settings.clone(), Primary::RayQuery, frames);
             assert_eq!(got_sides, *sides, "instances kept, crossing, cut");
             let e = mae(&with_plane.ao, &reference.ao);
+            eprintln!(
+                "{:?}, sides {sides:?}: MAE {e} against the scene without B",
+                settings.mode
+            );
             assert!(
                 e <= 0.01,
                 "{:?}, sides {sides:?}: MAE {e} against the scene without B",
@@ -216,6 +220,10 @@ fn a_plane_through_a_box_shows_a_section_cap_and_the_ao_of_the_cut_box() {
             let (cut_frame, sides) = render_cut(&full, &cut, 0, &cam, settings.clone(), primary, frames);
             assert_eq!(sides, [1, 1, 0], "the floor is kept, the box crossed");
             let e = mae(&cut_frame.ao, &reference.ao);
+            eprintln!(
+                "{:?} {primary:?}: MAE {e} against the half-height box",
+                settings.mode
+            );
             assert!(
                 e <= 0.01,
                 "{:?} {primary:?}: MAE {e} against the half-height box",
@@ -241,4 +249,36 @@ fn a_plane_through_a_box_shows_a_section_cap_and_the_ao_of_the_cut_box() {
             );
         }
     }
+}
+
+#[test]
+fn a_plane_change_is_a_scene_change() {
+    let gpu = gpu();
+    let (a, b) = two_boxes();
+    let s = scene(vec![a, b]);
+    let cam = camera([-0.6, -3.0, 3.5], [-0.6, 0.0, 0.5]);
+    let mut sg = SceneGpu::new(&gpu, &s).unwrap();
+    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, 1.0)).unwrap();
+    let f0 = r.render(&sg, s.f(), &cam).unwrap().scene_f;
+    assert_eq!(r.render(&sg, s.f(), &cam).unwrap().accumulated_frames, 2);
+    let tlas = sg.tlas.raw;
+    sg.set_sections(&s, &plane([1.0, 0.0, 0.0], 0.0), u32::MAX)
+        .unwrap();
+    assert_ne!(sg.tlas.raw, tlas, "the TLAS is rebuilt for the planes");
+    assert_eq!(sg.section_sides, [1, 0, 1]);
+    let report = r.render(&sg, s.f(), &cam).unwrap();
+    assert_eq!(report.scene_f, f0 + 1, "a plane change bumps F");
+    assert_eq!(report.accumulated_frames, 1, "and restarts the still image");
+    // The same planes again: nothing changes.
+    sg.set_sections(&s, &plane([1.0, 0.0, 0.0], 0.0), u32::MAX)
+        .unwrap();
+    let report = r.render(&sg, s.f(), &cam).unwrap();
+    assert_eq!((report.scene_f, report.accumulated_frames), (f0 + 1, 2));
+    // Bad planes are refused and leave the planes as they were.
+    let four = Sections {
+        planes: vec![SectionPlane::new([0.0, 0.0, 1.0], 0.0).unwrap(); 4],
+    };
+    assert!(sg.set_sections(&s, &four, u32::MAX).is_err());
+    assert_eq!(sg.section_changes(), 1);
+    assert_clean(&gpu);
 }

@@ -135,6 +135,12 @@ impl Viewer {
                 p.offset = from_file(scene, p.normal, d);
             });
         }
+        if let Some(sg) = &self.scene_gpu {
+            let [kept, crossing, cut] = sg.section_sides;
+            ui.label(format!(
+                "instances: {kept} untouched, {crossing} crossed, {cut} cut away"
+            ));
+        }
         ui.label(
             egui::RichText::new("Alt+left drag in the view moves the selected plane (radio button).").weak(),
         );
