@@ -19,6 +19,8 @@ pub(crate) struct SectionState {
     pub active: usize,
     /// The scene's bounds, for the offset range.
     pub bounds: Aabb,
+    /// The panel should open its section (planes came with the scene).
+    pub reveal: bool,
 }
 
 impl Default for SectionState {
@@ -30,6 +32,7 @@ impl Default for SectionState {
             }),
             active: 0,
             bounds: Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)),
+            reveal: false,
         }
     }
 }
@@ -42,6 +45,7 @@ impl SectionState {
     pub fn for_scene(bounds: Aabb, initial: &Sections) -> SectionState {
         let mut s = SectionState {
             bounds,
+            reveal: initial.any_enabled(),
             ..SectionState::default()
         };
         for (i, p) in s.planes.iter_mut().enumerate() {

@@ -167,9 +167,11 @@ impl Viewer {
         egui::CollapsingHeader::new("Statistics")
             .default_open(true)
             .show(ui, |ui| self.stats_section(ui));
-        let cutting = self.section_state.planes.iter().any(|p| p.enabled);
+        // Opened once when a scene comes with planes (--section).
+        let open = std::mem::take(&mut self.section_state.reveal).then_some(true);
         egui::CollapsingHeader::new("Section planes")
-            .default_open(cutting)
+            .default_open(false)
+            .open(open)
             .show(ui, |ui| self.sections_section(ui));
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
