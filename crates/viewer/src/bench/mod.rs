@@ -614,7 +614,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         width: w,
         height: h,
         camera,
-        settings: serde_json::to_value(&hrtao_settings)?,
+        settings: {
+            let mut v = serde_json::to_value(&hrtao_settings)?;
+            v["sections"] = serde_json::to_value(&sections.planes)?;
+            v
+        },
         navigation,
         nav_frames: nav_cams.len(),
         hrtao,

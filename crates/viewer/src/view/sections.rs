@@ -3,7 +3,7 @@
 //! rebuilds the TLAS for the planes and counts as a scene change (see hrtao_core::section).
 use glam::{DVec3, Vec3};
 use hrtao_core::gpu::MAX_SECTIONS;
-use hrtao_core::{SectionPlane, Sections};
+use hrtao_core::{Camera, SectionPlane, Sections};
 use hrtao_scene::{Aabb, Scene};
 
 use super::nav;
@@ -80,6 +80,20 @@ fn offset_range(b: &Aabb, normal: [f32; 3]) -> (f32, f32) {
     });
     let margin = ((hi - lo) * 0.05).max(1e-3);
     (lo - margin, hi + margin)
+}
+
+/// How far a drag of `delta` view pixels (x right, y down) moves a plane with `normal` along it: the drag
+/// projected on the normal's screen direction, in world units at the camera's focal distance; a normal pointing
+/// at the viewer takes vertical drags (up: along the normal).
+fn drag_amount(cam: &Camera, normal: Vec3, delta: egui::Vec2, view_h: f32) -> f32 {
+    let wpp = nav::world_per_pixel(cam, view_h);
+    let screen = glam::Vec2::new(normal.dot(nav::right(cam)), normal.dot(nav::cam_up(cam)));
+    let drag = glam::Vec2::new(delta.x, -delta.y);
+    if screen.length() > 0.2 {
+        drag.dot(screen.normalize()) * wpp / screen.length()
+    } else {
+        drag.y * wpp
+    }
 }
 
 /// A plane's offset in the file's coordinates (what `--section` takes) and back.
@@ -177,17 +191,8 @@ impl Viewer {
         if delta == egui::Vec2::ZERO || !p.enabled {
             return;
         }
-        let c = self.nav.cam;
-        let n = Vec3::from(p.normal);
-        let wpp = nav::world_per_pixel(&c, self.view_rect[3].max(1) as f32);
-        let screen = glam::Vec2::new(n.dot(nav::right(&c)), n.dot(nav::cam_up(&c)));
-        let drag = glam::Vec2::new(delta.x, -delta.y);
-        // A normal pointing at the viewer: vertical drags move the plane.
-        let amount = if screen.length() > 0.2 {
-            drag.dot(screen.normalize()) * wpp / screen.length()
-        } else {
-            drag.y * wpp
-        };
+        let view_h = self.view_rect[3].max(1) as f32;
+        let amount = drag_amount(&self.nav.cam, Vec3::from(p.normal), delta, view_h);
         let (lo, hi) = offset_range(&bounds, p.normal);
         p.offset = (p.offset + amount).clamp(lo, hi);
         self.apply_sections();
@@ -197,6 +202,31 @@ impl Viewer {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dragging_moves_a_plane_with_the_pointer() {
+        let cam = Camera {
+            eye: [0.0, -10.0, 0.0],
+            target: [0.0, 0.0, 0.0],
+            up: [0.0, 0.0, 1.0],
+            fov_y_deg: 45.0,
+            width: 200,
+            height: 100,
+        };
+        let wpp = nav::world_per_pixel(&cam, 100.0);
+        let right = drag_amount(&cam, Vec3::X, egui::vec2(50.0, 0.0), 100.0);
+        assert!(
+            (right - 50.0 * wpp).abs() < 1e-4 * right.abs(),
+            "{right} vs {}",
+            50.0 * wpp
+        );
+        assert!(drag_amount(&cam, -Vec3::X, egui::vec2(50.0, 0.0), 100.0) < 0.0);
+        let up = drag_amount(&cam, Vec3::Z, egui::vec2(0.0, -20.0), 100.0);
+        assert!((up - 20.0 * wpp).abs() < 1e-4 * up.abs());
+        // The normal points away from the viewer: vertical drags move it, horizontal ones do not.
+        assert!(drag_amount(&cam, Vec3::Y, egui::vec2(0.0, -20.0), 100.0) > 0.0);
+        assert_eq!(drag_amount(&cam, Vec3::Y, egui::vec2(30.0, 0.0), 100.0), 0.0);
+    }
 
     #[test]
     fn state_for_a_scene_and_offset_ranges() {
