@@ -1,5 +1,5 @@
 //! Section planes in the viewer: up to three planes, each on/off, with an axis-preset normal and an offset
-//! over the model's bounds (slider with numeric entry, a drag value, and Alt+drag in the 3D view). A change
+//! over the model's bounds (slider with numeric entry, a drag value, and Ctrl+Shift+drag in the 3D view). A change
 //! rebuilds the TLAS for the planes and counts as a scene change (see hrtao_core::section).
 use glam::{DVec3, Vec3};
 use hrtao_core::gpu::MAX_SECTIONS;
@@ -15,7 +15,7 @@ const PLANES: usize = MAX_SECTIONS as usize;
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct SectionState {
     pub planes: [SectionPlane; PLANES],
-    /// The plane Alt+drag moves.
+    /// The plane Ctrl+Shift+drag moves.
     pub active: usize,
     /// The scene's bounds, for the offset range.
     pub bounds: Aabb,
@@ -137,7 +137,7 @@ impl Viewer {
                         p.offset = -p.offset;
                     }
                     ui.radio_value(&mut s.active, i, "")
-                        .on_hover_text("Alt+drag in the view moves this plane");
+                        .on_hover_text("Ctrl+Shift+drag in the view moves this plane");
                 });
                 let (lo, hi) = offset_range(&bounds, p.normal);
                 let mut d = to_file(scene, p);
@@ -160,7 +160,8 @@ impl Viewer {
             ));
         }
         ui.label(
-            egui::RichText::new("Alt+left drag in the view moves the selected plane (radio button).").weak(),
+            egui::RichText::new("Ctrl+Shift+left drag in the view moves the selected plane (radio button).")
+                .weak(),
         );
         if s != self.section_state {
             self.section_state = s;
@@ -176,14 +177,25 @@ impl Viewer {
                 return;
             }
             self.gpu.wait_idle();
-            if let Err(e) = sg.set_sections(scene, &sections, self.selected) {
-                let msg = format!("section planes: {e}");
-                self.toast(msg, true);
+            match sg.set_sections(scene, &sections, self.selected) {
+                Ok(()) => log::info!(
+                    "section planes: {:?}; instances untouched, crossed, cut away: {:?}",
+                    sections
+                        .planes
+                        .iter()
+                        .map(|p| (p.normal, p.offset))
+                        .collect::<Vec<_>>(),
+                    sg.section_sides
+                ),
+                Err(e) => {
+                    let msg = format!("section planes: {e}");
+                    self.toast(msg, true);
+                }
             }
         }
     }
 
-    /// Alt+drag: moves the active plane along its normal by the drag projected on the normal's screen direction.
+    /// Ctrl+Shift+drag: moves the active plane along its normal by the drag projected on the normal's screen direction.
     pub(super) fn drag_section(&mut self, delta: egui::Vec2) {
         let state = &mut self.section_state;
         let bounds = state.bounds;

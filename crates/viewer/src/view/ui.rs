@@ -41,7 +41,7 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "move the selection by 1% of the scene size",
     ),
     (
-        "Alt+left drag",
+        "Ctrl+Shift+left drag",
         "move the active section plane along its normal (Section planes panel)",
     ),
     ("H", "hide / show the selection"),
@@ -699,14 +699,14 @@ impl Viewer {
             return;
         }
         let ppp = ctx.pixels_per_point();
-        let (shift, ctrl, alt) = ctx.input(|i| (i.modifiers.shift, i.modifiers.command, i.modifiers.alt));
+        let (shift, ctrl) = ctx.input(|i| (i.modifiers.shift, i.modifiers.command));
         let delta = resp.drag_delta() * ppp;
         let world_up = self.nav.world_up.vector();
         let view_h = self.view_rect[3].max(1) as f32;
-        if resp.dragged_by(PointerButton::Primary) && ctrl && self.selected != u32::MAX {
-            self.drag_move(delta);
-        } else if resp.dragged_by(PointerButton::Primary) && alt {
+        if resp.dragged_by(PointerButton::Primary) && ctrl && shift {
             self.drag_section(delta);
+        } else if resp.dragged_by(PointerButton::Primary) && ctrl && self.selected != u32::MAX {
+            self.drag_move(delta);
         } else if resp.dragged_by(PointerButton::Middle) || (resp.dragged_by(PointerButton::Primary) && shift)
         {
             // Pan moves the pivot with the view.
