@@ -332,3 +332,29 @@ pub struct BenchArgs {
     #[command(flatten)]
     pub device: DeviceArgs,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn section_planes_are_given_in_file_coordinates() {
+        let mut scene = Scene::new("far");
+        scene.origin = [1.0e6, -2.0e6, 0.0];
+        let args = SectionArgs {
+            section: vec![
+                "2,0,0,2000010".parse().unwrap(),
+                "0,-1,0,2000003".parse().unwrap(),
+            ],
+        };
+        let s = args.sections(&scene).unwrap();
+        // x > 1e6 + 5 in the file is x > 5 in the scene; -y > 2e6 + 3 is -y > 3.
+        assert_eq!(s.planes[0].normal, [1.0, 0.0, 0.0]);
+        assert!((s.planes[0].offset - 5.0).abs() < 1e-3, "{:?}", s.planes[0]);
+        assert!((s.planes[1].offset - 3.0).abs() < 1e-3, "{:?}", s.planes[1]);
+        let four = SectionArgs {
+            section: vec!["1,0,0,0".parse().unwrap(); 4],
+        };
+        assert!(four.sections(&scene).unwrap_err().contains("at most 3"));
+    }
+}

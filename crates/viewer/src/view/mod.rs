@@ -72,6 +72,12 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         [k, wh] => Some((k.parse::<u32>().context("--resize-at-frame K")?, parse_size(wh)?)),
         _ => bail!("--resize-at-frame takes K and WxH"),
     };
+    if args.sections.section.len() > hrtao_core::gpu::MAX_SECTIONS as usize {
+        bail!(
+            "at most {} section planes are supported",
+            hrtao_core::gpu::MAX_SECTIONS
+        );
+    }
     if let Some(s) = args.render_scale {
         if !(0.05..=2.0).contains(&s) {
             bail!("--render-scale must be within 0.05..=2");
