@@ -477,9 +477,9 @@ impl SceneGpu {
         self.section_changes
     }
 
-    /// Sets the section planes and rebuilds the TLAS for them (instances they cut away leave it, instances they
-    /// cross become non-opaque). No-op when the planes are unchanged. Must not be called while a frame using
-    /// the scene is in flight.
+    /// Sets the section planes and rebuilds the TLAS for them (instances they cut away entirely leave it and the
+    /// raster draws; the shaders clip the rays to the kept region). No-op when the planes are unchanged. Must not
+    /// be called while a frame using the scene is in flight.
     pub fn set_sections(&mut self, scene: &Scene, sections: &Sections, selected: u32) -> Result<()> {
         sections.validate().map_err(CoreError::Invalid)?;
         if *sections == self.sections {
@@ -555,7 +555,7 @@ impl SceneGpu {
                 .copied()
                 .unwrap_or_default();
             let side = self.sections.side(&bounds, &m);
-            sides[side as usize] += 1;
+            sides[side as usize] += 1; // Kept, Crossing, Cut
             if side == Side::Cut {
                 continue;
             }

@@ -147,7 +147,7 @@ impl Sections {
 
     /// Classifies the object-space box `local` under `transform` by its eight world corners.
     pub fn side(&self, local: &Aabb, transform: &Mat4) -> Side {
-        if local.is_empty() {
+        if local.is_empty() || !self.any_enabled() {
             return Side::Kept;
         }
         let corners: [Vec3; 8] = std::array::from_fn(|i| {
