@@ -19,6 +19,8 @@ layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
 layout(set = 0, binding = 1, scalar) readonly buffer GlobalsBlock { FrameGlobals g; };
 layout(push_constant) uniform Push { uvec4 push; };
 
+#include "section.glsl"
+
 layout(buffer_reference, scalar) buffer GBufferRef { GPixel px[]; };
 layout(buffer_reference, scalar) readonly buffer InstanceRef { InstanceInfo v[]; };
 layout(buffer_reference, scalar) readonly buffer GeometryRef { GeometryInfo v[]; };
@@ -116,10 +118,13 @@ uvec2 pixel_shift(uint index) {
     return uvec2(h_check(index * 2u + 0x9e3779b9u), h_index(index * 2u + 1u + 0x7f4a7c15u));
 }
 
-// True when the ray from p along dir hits nothing within tmax.
+// True when the ray from p along dir hits nothing within tmax (nor where a section plane cuts it away: the ray
+// is clipped to the kept region).
 bool ray_unoccluded(vec3 p, vec3 dir, float tmax) {
+    float tmin = 0.0;
+    if (!section_clip(p, dir, tmin, tmax)) return true;
     rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, 0.0, dir, tmax);
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, tmin, dir, tmax);
     while (rayQueryProceedEXT(rq)) {
     }
     return rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT;

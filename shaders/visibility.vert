@@ -14,6 +14,10 @@ layout(push_constant, scalar) uniform Push { RasterPush pc; };
 layout(buffer_reference, scalar) readonly buffer GeometryRef { GeometryInfo v[]; };
 layout(buffer_reference, scalar) readonly buffer VertexRef { vec3 v[]; };
 layout(buffer_reference, scalar) readonly buffer CornerRef { uint v[]; };
+layout(buffer_reference, scalar) readonly buffer GlobalsRef { FrameGlobals g; };
+
+// Section planes clip the triangles: the clip distance is positive on the kept side (see section.glsl).
+out float gl_ClipDistance[MAX_SECTIONS];
 
 // (instance id, geometry, primitive, visible-instance slot): constant over the triangle.
 layout(location = 0) flat out uvec4 vis;
@@ -22,7 +26,13 @@ void main() {
     GeometryInfo geo = GeometryRef(pc.geometries).v[pc.geometry];
     uint corner = CornerRef(geo.indices).v[gl_VertexIndex];
     RasterInstance inst = RasterInstanceRef(pc.instances).v[gl_InstanceIndex];
-    vec3 d = raster_to_world(inst, VertexRef(geo.vertices).v[corner]) - pc.eye.xyz;
+    vec3 p = raster_to_world(inst, VertexRef(geo.vertices).v[corner]);
+    GlobalsRef globals = GlobalsRef(pc.globals);
+    vec4 planes[MAX_SECTIONS] = vec4[MAX_SECTIONS](globals.g.section0, globals.g.section1, globals.g.section2);
+    for (uint i = 0u; i < MAX_SECTIONS; ++i) {
+        gl_ClipDistance[i] = i < globals.g.section_count ? planes[i].w - dot(planes[i].xyz, p) : 1.0;
+    }
+    vec3 d = p - pc.eye.xyz;
     // Projection matching camera_ray(): x, y in [-1, 1] across the image (row 0 at the top, as Vulkan's
     // viewport). Perspective: reversed infinite depth near / distance. Orthographic: w = 1 and reversed linear
     // depth 1 - distance / far (points behind the eye plane or beyond the scene are clipped).

@@ -6,13 +6,14 @@ use std::time::Instant;
 use ash::vk;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
-use hrtao_scene::Scene;
+use hrtao_scene::{Aabb, Scene};
 
 use crate::buffer::{full_barrier, Buffer};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{GeometryInfo, InstanceInfo};
 use crate::raster::RasterScene;
+use crate::section::{Sections, Side};
 
 /// An acceleration structure with its backing buffer; destroyed on drop.
 pub struct AccelStruct {
@@ -122,6 +123,13 @@ pub struct SceneGpu {
     /// (from, to, world boxes or None when unknown), newest last: see `changes_between`.
     synced_f: u32,
     changes: std::collections::VecDeque<SyncedChange>,
+    /// Object-space bounds per mesh (classified against the section planes).
+    mesh_bounds: Vec<Aabb>,
+    sections: Sections,
+    /// Section plane changes so far: each is a scene change (the renderer adds it to F, eq. 6).
+    section_changes: u32,
+    /// Instances per `Side` in the current TLAS (kept, crossing, cut).
+    pub section_sides: [usize; 3],
 }
 
 /// The scene's F went from `from` to `to` between two `update_instances`, changing the world boxes `boxes`
@@ -451,6 +459,10 @@ impl SceneGpu {
             version: 0,
             synced_f: scene.f(),
             changes: Default::default(),
+            mesh_bounds: scene.meshes.iter().map(|m| m.local_bounds()).collect(),
+            sections: Sections::default(),
+            section_changes: 0,
+            section_sides: [0; 3],
             stats: BuildStats {
                 blas_count: per_mesh.iter().filter(|g| !g.is_empty()).count(),
                 geometry_count: table.len(),
@@ -490,6 +502,28 @@ impl SceneGpu {
             to = c.from;
         }
         (to == f0).then_some(out)
+    }
+
+    pub fn sections(&self) -> &Sections {
+        &self.sections
+    }
+
+    /// Section plane changes so far (a plane change is a scene change: the renderer adds this to F).
+    pub fn section_changes(&self) -> u32 {
+        self.section_changes
+    }
+
+    /// Sets the section planes and rebuilds the TLAS for them (instances they cut away entirely leave it and the
+    /// raster draws; the shaders clip the rays to the kept region). No-op when the planes are unchanged. Must not
+    /// be called while a frame using the scene is in flight.
+    pub fn set_sections(&mut self, scene: &Scene, sections: &Sections, selected: u32) -> Result<()> {
+        sections.validate().map_err(CoreError::Invalid)?;
+        if *sections == self.sections {
+            return Ok(());
+        }
+        self.sections = sections.clone();
+        self.section_changes = self.section_changes.wrapping_add(1);
+        self.update_instances(scene, selected)
     }
 
     /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
@@ -539,6 +573,8 @@ impl SceneGpu {
         }
         let mut infos = Vec::with_capacity(scene.instances.len());
         let mut raw: Vec<u8> = Vec::with_capacity(scene.instances.len() * 64);
+        let mut drawn = vec![false; scene.instances.len()];
+        let mut sides = [0usize; 3];
         let mut count = 0u32;
         for (i, inst) in scene.instances.iter().enumerate() {
             let base = self.geometry_base.get(inst.mesh as usize).copied().flatten();
@@ -563,6 +599,17 @@ impl SceneGpu {
                     "instance {i} has a non-finite transform"
                 )));
             }
+            let bounds = self
+                .mesh_bounds
+                .get(inst.mesh as usize)
+                .copied()
+                .unwrap_or_default();
+            let side = self.sections.side(&bounds, &m);
+            sides[side as usize] += 1; // Kept, Crossing, Cut
+            if side == Side::Cut {
+                continue;
+            }
+            drawn[i] = true;
             let mut matrix = [0f32; 12];
             for r in 0..3 {
                 for c in 0..4 {
@@ -594,7 +641,8 @@ impl SceneGpu {
             infos.push(InstanceInfo::default());
         }
         self.instance_info.write(&infos)?;
-        self.raster.update(&gpu, scene)?;
+        self.raster.update(&gpu, scene, &drawn)?;
+        self.section_sides = sides;
         self.tlas_instances.write_bytes(0, &raw)?;
 
         let t0 = Instant::now();

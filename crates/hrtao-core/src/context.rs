@@ -232,6 +232,10 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
     if f2.features.shader_int64 == 0 {
         lacking.push("shaderInt64");
     }
+    if f2.features.shader_clip_distance == 0 {
+        // Section planes clip the rasterised primary visibility.
+        lacking.push("shaderClipDistance");
+    }
     if v12.shader_buffer_int64_atomics == 0 {
         // The hash map claims and stamps a cell with one 64-bit compare-and-swap (hash_map.glsl).
         lacking.push("shaderBufferInt64Atomics");
@@ -416,7 +420,10 @@ impl Gpu {
             .scalar_block_layout(true)
             .host_query_reset(supported_v12.host_query_reset == vk::TRUE)
             .shader_buffer_int64_atomics(true);
-        let base = vk::PhysicalDeviceFeatures::builder().shader_int64(true).build();
+        let base = vk::PhysicalDeviceFeatures::builder()
+            .shader_int64(true)
+            .shader_clip_distance(true)
+            .build();
         let mut features2 = vk::PhysicalDeviceFeatures2::builder()
             .features(base)
             .push_next(&mut rq)

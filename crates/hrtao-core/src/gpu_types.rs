@@ -36,6 +36,10 @@ gpu_consts! {
     PROJECTION_ORTHOGRAPHIC: u32 = 1;
     /// `InstanceInfo::flags` bits.
     INSTANCE_SELECTED: u32 = 1;
+    /// Section planes at most (`FrameGlobals::section0..2`).
+    MAX_SECTIONS: u32 = 3;
+    /// `GPixel::flags` bits: the pixel shows the cap of a solid cut open by a section plane.
+    GPIXEL_SECTION: u32 = 1;
     /// `GPixel::instance` of a pixel whose primary ray hit nothing.
     NO_INSTANCE: u32 = 0xffff_ffff;
     /// Hash cell checksum value of a free cell (checksums are never 0: see hash.glsl).
@@ -158,6 +162,13 @@ gpu_structs! {
         view_height: u32,
         /// Feature-edge line width in view pixels (`EDGE_WIDTH`), drawn at any render scale.
         edge_width: f32,
+        /// Section planes (section.rs): xyz the unit normal, w the offset d; geometry where n·p > d is cut away.
+        /// The first `section_count` are in use.
+        section0: [f32; 4],
+        section1: [f32; 4],
+        section2: [f32; 4],
+        section_count: u32,
+        _section_pad: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -172,7 +183,8 @@ gpu_structs! {
         instance: u32,
         /// Linear base colour.
         color: [f32; 3],
-        _pad: u32,
+        /// `GPIXEL_*` bits.
+        flags: u32,
     }
 
     /// Per scene instance: where its mesh's geometries start in the geometry table.
@@ -218,6 +230,8 @@ gpu_structs! {
         /// This frame's sub-pixel jitter (`FrameGlobals::jitter`) in normalised device coordinates, so the
         /// rasteriser samples where the jittered camera rays go.
         jitter_ndc: [f32; 2],
+        /// Address of the frame's `FrameGlobals` (the section planes clip the draws).
+        globals: u64,
     }
 
     /// One cell of the world-space hash map (paper §1).

@@ -21,6 +21,7 @@ pub mod pass;
 pub mod raster;
 pub mod regions;
 pub mod renderer;
+pub mod section;
 pub mod settings;
 pub mod timer;
 
@@ -30,4 +31,5 @@ pub use context::{ContextOptions, DeviceInfo, Gpu};
 pub use error::{CoreError, Result};
 pub use raster::Primary;
 pub use renderer::{FrameReport, Renderer};
+pub use section::{SectionPlane, Sections};
 pub use settings::{AoSettings, Mode};

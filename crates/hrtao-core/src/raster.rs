@@ -88,11 +88,12 @@ impl RasterScene {
 
     /// Collects the visible instances of meshes with triangles (those the TLAS holds), grouped by mesh.
     /// Must not be called while a frame using the scene is in flight.
-    pub(crate) fn update(&mut self, gpu: &Arc<Gpu>, scene: &Scene) -> Result<()> {
+    /// `drawn[i]` is false for instances left out (hidden, or cut away by a section plane).
+    pub(crate) fn update(&mut self, gpu: &Arc<Gpu>, scene: &Scene, drawn: &[bool]) -> Result<()> {
         let mut by_mesh: Vec<Vec<u32>> = vec![Vec::new(); self.mesh_geometries.len()];
         for (i, inst) in scene.instances.iter().enumerate() {
             let m = inst.mesh as usize;
-            if inst.visible && self.mesh_geometries.get(m).is_some_and(|g| !g.is_empty()) {
+            if drawn[i] && self.mesh_geometries.get(m).is_some_and(|g| !g.is_empty()) {
                 by_mesh[m].push(i as u32);
             }
         }
@@ -373,13 +374,15 @@ impl Rasterizer {
     }
 
     /// Records the visibility draws, the copy of the visibility image and the G-buffer resolve, all timed as
-    /// primary visibility. `globals` are the frame's (camera and size); `target_distance` is the camera's
-    /// eye-target distance (it sets the perspective near plane). Panics if `prepare` was not called for this size.
+    /// primary visibility. `globals` are the frame's (camera and size), at device address `globals_address`
+    /// (the draws read the section planes there); `target_distance` is the camera's eye-target distance (it
+    /// sets the perspective near plane). Panics if `prepare` was not called for this size.
     pub fn record(
         &self,
         rec: &mut Recorder,
         scene: &RasterScene,
         globals: &FrameGlobals,
+        globals_address: u64,
         target_distance: f32,
     ) {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
@@ -411,6 +414,7 @@ impl Rasterizer {
                 2.0 * globals.jitter[0] / w as f32,
                 2.0 * globals.jitter[1] / h as f32,
             ],
+            globals: globals_address,
         };
         let extent = vk::Extent2D { width: w, height: h };
         rec.commands(Pass::Primary.section(), |d, cmd| unsafe {

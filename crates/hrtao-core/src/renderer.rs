@@ -110,7 +110,7 @@ pub struct FrameReport {
     pub capped_pixels: u32,
     pub occupied_cells: u32,
     pub load_factor: f64,
-    /// F of the scene when the frame was rendered (eq. 6).
+    /// F the frame hashed with (eq. 6): the scene's, plus its section plane changes (`Renderer::effective_f`).
     pub scene_f: u32,
     /// Frames accumulated for the current view (1 = a new view).
     pub accumulated_frames: u32,
@@ -139,7 +139,7 @@ pub struct Renderer {
     still_index: u32,
     still_key: Option<StillKey>,
     /// F of the previous frame, and the frame_index of the first frame rendered with it (eq. 6).
-    last_f: Option<u32>,
+    last_f: Option<(u32, u32)>,
     f_start_frame: u32,
     /// The F cells are keyed with (eq. 6): the scene's F after a global change; local edits leave it and
     /// bump region epochs instead (`regions`).
@@ -406,10 +406,16 @@ impl Renderer {
             s_w_base: feature_size.base,
             view_height,
             edge_width: EDGE_WIDTH,
+            section0: [0.0; 4],
+            section1: [0.0; 4],
+            section2: [0.0; 4],
+            section_count: 0,
+            _section_pad: 0,
         }
     }
 
     fn still_key_for(&self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> StillKey {
+        let scene_f = Self::effective_f(scene, scene_f);
         StillKey {
             camera: Camera {
                 width: self.targets.width,
@@ -431,6 +437,12 @@ impl Renderer {
     /// present the output again instead of rendering (expose events, UI repaints).
     pub fn shows_final(&self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> bool {
         self.last_converged && self.still_key.as_ref() == Some(&self.still_key_for(scene, scene_f, camera))
+    }
+
+    /// The F the frame hashes with (eq. 6): the caller's, plus one per section plane change, since moving a
+    /// plane changes the AO as an edit does. Both only grow, so the sum changes whenever either does.
+    pub fn effective_f(scene: &SceneGpu, scene_f: u32) -> u32 {
+        scene_f.wrapping_add(scene.section_changes())
     }
 
     /// Prepares the frame's globals and records all passes into `cmd` (the caller submits and then calls
@@ -477,6 +489,9 @@ impl Renderer {
         }
         globals.instances = scene.instance_info.address;
         globals.geometries = scene.geometries.address;
+        let ([s0, s1, s2], count) = scene.sections().gpu();
+        (globals.section0, globals.section1, globals.section2) = (s0, s1, s2);
+        globals.section_count = count;
         self.globals.write(&[globals])?;
         self.passes.bind_tlas(scene.tlas.raw);
 
@@ -493,7 +508,13 @@ impl Renderer {
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (self.primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
-                raster.record(&mut rec, &scene.raster, &globals, camera.distance());
+                raster.record(
+                    &mut rec,
+                    &scene.raster,
+                    &globals,
+                    self.globals.address,
+                    camera.distance(),
+                );
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
         }
@@ -526,27 +547,25 @@ impl Renderer {
     /// so every cell whose AO can change) got new epochs; cells elsewhere keep their keys. Otherwise, as the
     /// paper does, the new F re-keys every cell and the old ones become reclaimable.
     fn scene_changed(&mut self, scene: &SceneGpu, scene_f: u32) -> bool {
-        let Some(last) = self.last_f else {
-            self.last_f = Some(scene_f);
-            self.key_f = scene_f;
-            self.f_start_frame = self.frame_index;
-            return false;
-        };
-        if last == scene_f {
+        let now = (scene_f, scene.section_changes());
+        let last = self.last_f.replace(now);
+        if last == Some(now) {
             return false;
         }
-        self.last_f = Some(scene_f);
-        if self.settings.local_edits {
-            if let Some(boxes) = scene.changes_between(last, scene_f) {
-                if self
-                    .regions
-                    .invalidate(&boxes, self.settings.ao_radius, self.frame_index)
-                {
-                    return true;
+        if let Some((f0, sections0)) = last {
+            // Located edits, and no section plane change (planes re-key everything, as the paper's F does).
+            if self.settings.local_edits && sections0 == now.1 {
+                if let Some(boxes) = scene.changes_between(f0, scene_f) {
+                    if self
+                        .regions
+                        .invalidate(&boxes, self.settings.ao_radius, self.frame_index)
+                    {
+                        return true;
+                    }
                 }
             }
         }
-        self.key_f = scene_f;
+        self.key_f = Self::effective_f(scene, scene_f);
         self.f_start_frame = self.frame_index;
         false
     }
@@ -574,7 +593,9 @@ impl Renderer {
             capped_pixels: c[gpu::STAT_CAPPED_PIXELS as usize],
             occupied_cells: occupied,
             load_factor: occupied as f64 / self.hash.capacity as f64,
-            scene_f,
+            scene_f: self
+                .last_f
+                .map_or(scene_f, |(f, sections)| f.wrapping_add(sections)),
             accumulated_frames: self.still_index + 1,
             refine_rays: c[gpu::STAT_REFINE_RAYS as usize] as u64,
             cell_rays: c[gpu::STAT_CELL_RAYS as usize] as u64,
@@ -766,7 +787,7 @@ impl Renderer {
     /// cell_finder.comp for tests of the map).
     pub fn pixel_cell_keys(&self, camera: &Camera, scene_f: u32, px: &GPixel) -> [crate::hash::CellKey; 4] {
         // The F cells are keyed with: the renderer's after a local edit of this F, else `scene_f`.
-        let key_f = if self.last_f == Some(scene_f) {
+        let key_f = if self.last_f.map(|l| l.0) == Some(scene_f) {
             self.key_f
         } else {
             scene_f

@@ -90,7 +90,7 @@ fn orthographic_feature_size_does_not_depend_on_distance() {
         normal: [0.0, 0.0, 1.0],
         instance: 0,
         color: [1.0; 3],
-        _pad: 0,
+        flags: 0,
     };
     // Orthographic: the same cell at 1 and 1000 units from the eye plane; its size is s_p ortho_height / R_y.
     let cam = ortho_top_down(10.0, 4.0, 64, 64);

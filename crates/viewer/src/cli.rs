@@ -2,7 +2,9 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use hrtao_core::{AoSettings, Mode};
+use hrtao_core::{AoSettings, Mode, SectionPlane, Sections};
+use hrtao_scene::glam::DVec3;
+use hrtao_scene::Scene;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -38,6 +40,31 @@ pub struct DeviceArgs {
     /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
     #[arg(long)]
     pub validation: bool,
+}
+
+/// Section planes, for `render`, `bench` and `view`.
+#[derive(Args, Debug, Clone, Default)]
+pub struct SectionArgs {
+    /// Section plane NX,NY,NZ,D in the file's coordinates: geometry where n·p > d is cut away (repeatable, at
+    /// most 3), e.g. `--section 0,0,1,2.5` removes everything above z = 2.5.
+    #[arg(long = "section", value_name = "NX,NY,NZ,D", allow_hyphen_values = true)]
+    pub section: Vec<SectionPlane>,
+}
+
+impl SectionArgs {
+    /// The planes in the scene's coordinates (the scene may be recentred from the file's, see `Scene::origin`).
+    pub fn sections(&self, scene: &Scene) -> Result<Sections, String> {
+        let planes = self
+            .section
+            .iter()
+            .map(|p| {
+                let n = DVec3::from(p.normal.map(f64::from));
+                let on_plane = scene.from_file(n * p.offset as f64);
+                SectionPlane::new(p.normal, hrtao_scene::glam::Vec3::from(p.normal).dot(on_plane))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Sections::new(planes)
+    }
 }
 
 #[derive(Args, Debug, Clone)]
@@ -129,6 +156,8 @@ pub struct RenderArgs {
     /// Frames to render with the same camera (per-pixel RTAO averages them; the HRTAO map persists).
     #[arg(long, default_value_t = 1)]
     pub frames: u32,
+    #[command(flatten)]
+    pub sections: SectionArgs,
     /// Shaded output image (.png).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -212,6 +241,8 @@ pub struct ViewArgs {
     /// Start with the side panel hidden (Tab toggles it).
     #[arg(long)]
     pub no_panel: bool,
+    #[command(flatten)]
+    pub sections: SectionArgs,
     /// Use the first device whose name contains this text.
     #[arg(long)]
     pub device: Option<String>,
@@ -299,5 +330,33 @@ pub struct BenchArgs {
     #[command(flatten)]
     pub ao: AoArgs,
     #[command(flatten)]
+    pub sections: SectionArgs,
+    #[command(flatten)]
     pub device: DeviceArgs,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn section_planes_are_given_in_file_coordinates() {
+        let mut scene = Scene::new("far");
+        scene.origin = [1.0e6, -2.0e6, 0.0];
+        let args = SectionArgs {
+            section: vec![
+                "2,0,0,2000010".parse().unwrap(),
+                "0,-1,0,2000003".parse().unwrap(),
+            ],
+        };
+        let s = args.sections(&scene).unwrap();
+        // x > 1e6 + 5 in the file is x > 5 in the scene; -y > 2e6 + 3 is -y > 3.
+        assert_eq!(s.planes[0].normal, [1.0, 0.0, 0.0]);
+        assert!((s.planes[0].offset - 5.0).abs() < 1e-3, "{:?}", s.planes[0]);
+        assert!((s.planes[1].offset - 3.0).abs() < 1e-3, "{:?}", s.planes[1]);
+        let four = SectionArgs {
+            section: vec!["1,0,0,0".parse().unwrap(); 4],
+        };
+        assert!(four.sections(&scene).unwrap_err().contains("at most 3"));
+    }
 }

@@ -33,6 +33,9 @@ struct RenderStats<'a> {
     total_rays: u64,
     render_ms: f64,
     validation_messages: u32,
+    /// The section planes (scene coordinates) and the instances they keep, cross and cut away.
+    sections: &'a hrtao_core::Sections,
+    section_sides: [usize; 3],
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
@@ -55,8 +58,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let settings = args.ao.settings(bounds.diagonal().length());
     settings.validate().map_err(|e| anyhow::anyhow!(e))?;
 
+    let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
     let gpu = open_gpu(&args.device)?;
-    let scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    let mut scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    scene_gpu.set_sections(&scene, &sections, u32::MAX)?;
     log::info!(
         "acceleration structures: {} BLAS in {:.0} ms, TLAS of {} instances in {:.1} ms",
         scene_gpu.stats.blas_count,
@@ -117,6 +122,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frames: &frames,
             render_ms,
             validation_messages,
+            sections: &sections,
+            section_sides: scene_gpu.section_sides,
         };
         write_json(path, &stats)?;
     }

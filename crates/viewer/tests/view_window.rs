@@ -617,3 +617,138 @@ fn key_5_toggles_orthographic_keeping_the_framing_at_the_pivot() {
     drop(v);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn section_planes_from_the_command_line_cut_the_view() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("sections");
+    // A closed 2 x 2 x 2 cube seen from above; cut at half height it shows its cap in the section colour.
+    let obj = dir.join("cube.obj");
+    let mut s = String::new();
+    for i in 0..8 {
+        let c = |bit: usize| if i & bit == 0 { -1 } else { 1 };
+        s += &format!("v {} {} {}\n", c(1), c(2), c(4) + 1);
+    }
+    s += "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    std::fs::write(&obj, s).unwrap();
+    let cam = dir.join("cam.json");
+    std::fs::write(
+        &cam,
+        r#"{"eye":[2,-4,6],"target":[0,0,1],"up":[0,0,1],"fov_y_deg":45,"width":320,"height":200}"#,
+    )
+    .unwrap();
+    let red = |sections: &[&str], name: &str| {
+        let shot = dir.join(name);
+        let mut args = vec![
+            obj.to_str().unwrap(),
+            "--camera",
+            cam.to_str().unwrap(),
+            "--size",
+            "320x200",
+            "--no-panel",
+            "--frames",
+            "2",
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ];
+        args.extend_from_slice(sections);
+        run_viewer(&args);
+        let img = image::open(&shot).unwrap().to_rgb8();
+        img.pixels()
+            .filter(|p| p[0] as i32 > p[1] as i32 + 60 && p[0] as i32 > p[2] as i32 + 60)
+            .count()
+    };
+    assert_eq!(red(&[], "whole.png"), 0, "no section colour without a plane");
+    let cap = red(&["--section", "0,0,1,1"], "cut.png");
+    assert!(cap > 1000, "the cap shows in the section colour: {cap} pixels");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Ctrl+Shift+drag with real X events moves the active section plane: dragging up lifts a plane through a cube
+/// above it, and the cap (section colour) disappears.
+#[test]
+fn ctrl_shift_drag_moves_a_section_plane() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("section-drag");
+    let obj = dir.join("cube.obj");
+    let mut s = String::new();
+    for i in 0..8 {
+        let c = |bit: usize| if i & bit == 0 { -1 } else { 1 };
+        s += &format!("v {} {} {}\n", c(1), c(2), c(4) + 1);
+    }
+    s += "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    std::fs::write(&obj, s).unwrap();
+    let cam = dir.join("cam.json");
+    std::fs::write(
+        &cam,
+        r#"{"eye":[2,-4,6],"target":[0,0,1],"up":[0,0,1],"fov_y_deg":45,"width":400,"height":300}"#,
+    )
+    .unwrap();
+    let shots = dir.join("screenshots");
+    let mut v = Running::start(
+        &[
+            obj.to_str().unwrap(),
+            "--camera",
+            cam.to_str().unwrap(),
+            "--size",
+            "400x300",
+            "--no-panel",
+            "--section",
+            "0,0,1,1",
+        ],
+        &dir,
+    );
+    v.wait_for("opened", 1, std::time::Duration::from_secs(60));
+    let pid = v.child.id().to_string();
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--pid", &pid]);
+    let window = window
+        .lines()
+        .next()
+        .expect("the viewer's window")
+        .trim()
+        .to_string();
+    xdotool(&["windowfocus", "--sync", &window]);
+    let red = |path: &Path| {
+        let img = image::open(path).unwrap().to_rgb8();
+        img.pixels()
+            .filter(|p| p[0] as i32 > p[1] as i32 + 60 && p[0] as i32 > p[2] as i32 + 60)
+            .count()
+    };
+    let newest = |n: usize| {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&shots)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        files[n - 1].clone()
+    };
+    xdotool(&["key", "F12"]);
+    wait_for_screenshots(&shots, 1, &mut v);
+    let before = red(&newest(1));
+    assert!(before > 1000, "the cap shows before the drag: {before}");
+    xdotool(&["mousemove", "--window", &window, "200", "200"]);
+    xdotool(&["keydown", "ctrl+shift"]);
+    xdotool(&["mousedown", "1"]);
+    for _ in 0..10 {
+        xdotool(&["mousemove_relative", "--", "0", "-20"]);
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    xdotool(&["mouseup", "1"]);
+    xdotool(&["keyup", "ctrl+shift"]);
+    v.wait_for("section planes:", 1, std::time::Duration::from_secs(30));
+    xdotool(&["key", "F12"]);
+    wait_for_screenshots(&shots, 2, &mut v);
+    let after = red(&newest(2));
+    assert_eq!(
+        after, 0,
+        "the plane went up out of the cube: no cap left ({before} before)"
+    );
+    v.validation_clean();
+    drop(v);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -498,7 +498,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if !gpu.info.timestamps {
         log::warn!("the device has no timestamp queries: GPU times will be zero");
     }
-    let scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
+    let mut scene_gpu = SceneGpu::new(&gpu, &scene)?;
+    scene_gpu.set_sections(&scene, &sections, u32::MAX)?;
     let device_scene_bytes = gpu.device_memory_bytes();
     let scene_estimate = scene_device_estimate(&scene_gpu.stats);
     log::info!(
@@ -616,7 +618,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         width: w,
         height: h,
         camera,
-        settings: serde_json::to_value(&hrtao_settings)?,
+        settings: {
+            let mut v = serde_json::to_value(&hrtao_settings)?;
+            v["sections"] = serde_json::to_value(&sections.planes)?;
+            v
+        },
         navigation,
         nav_frames: nav_cams.len(),
         hrtao,

@@ -12,6 +12,7 @@ pub mod motion;
 pub mod nav;
 pub mod prefs;
 pub mod present;
+mod sections;
 pub mod stats;
 mod ui;
 
@@ -71,6 +72,12 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         [k, wh] => Some((k.parse::<u32>().context("--resize-at-frame K")?, parse_size(wh)?)),
         _ => bail!("--resize-at-frame takes K and WxH"),
     };
+    if args.sections.section.len() > hrtao_core::gpu::MAX_SECTIONS as usize {
+        bail!(
+            "at most {} section planes are supported",
+            hrtao_core::gpu::MAX_SECTIONS
+        );
+    }
     if let Some(s) = args.render_scale {
         if !(0.05..=2.0).contains(&s) {
             bail!("--render-scale must be within 0.05..=2");
@@ -325,6 +332,9 @@ pub(crate) struct Viewer {
     initial_camera: Option<PathBuf>,
     forced_up: Option<UpAxis>,
     args_radius: Option<f32>,
+    /// --section planes (file coordinates), applied to the first scene.
+    args_sections: crate::cli::SectionArgs,
+    section_state: sections::SectionState,
     // View.
     /// The user's render scale: the internal resolution of a still image, and the cap while moving.
     render_scale: f32,
@@ -434,6 +444,8 @@ impl Viewer {
             initial_camera: args.camera.clone(),
             forced_up,
             args_radius: args.radius,
+            args_sections: args.sections.clone(),
+            section_state: sections::SectionState::default(),
             render_scale,
             motion: motion::Motion::new(moving_scale.min(render_scale)),
             view_rect: [0, 0, 1, 1],
@@ -608,8 +620,12 @@ impl Viewer {
             bail!("the scene is empty");
         }
         self.gpu.wait_idle();
+        let initial_sections = std::mem::take(&mut self.args_sections)
+            .sections(&scene)
+            .map_err(|e| anyhow!(e))?;
+        let section_state = sections::SectionState::for_scene(bounds, &initial_sections);
         let mut scene_gpu = SceneGpu::new(&self.gpu, &scene)?;
-        scene_gpu.update_instances(&scene, u32::MAX)?;
+        scene_gpu.set_sections(&scene, &section_state.sections(), u32::MAX)?;
         let is_default = std::fs::canonicalize(spec).ok() == std::fs::canonicalize(default_spec()).ok();
         // Camera: --camera for the first scene, else NAME.camera.json beside the file, else fit.
         let beside = Path::new(spec).with_extension("camera.json");
@@ -679,6 +695,7 @@ impl Viewer {
             );
         }
         self.settings = settings;
+        self.section_state = section_state;
         self.scene_gpu = Some(scene_gpu);
         self.scene = Some(scene);
         self.scene_spec = spec.to_string();

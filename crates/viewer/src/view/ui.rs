@@ -41,6 +41,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Arrow keys / PgUp PgDn (Shift: x10)",
         "move the selection by 1% of the scene size",
     ),
+    (
+        "Ctrl+Shift+left drag",
+        "move the active section plane along its normal (Section planes panel)",
+    ),
     ("H", "hide / show the selection"),
     ("Delete", "delete the selection"),
     ("Esc", "deselect"),
@@ -164,6 +168,12 @@ impl Viewer {
         egui::CollapsingHeader::new("Statistics")
             .default_open(true)
             .show(ui, |ui| self.stats_section(ui));
+        // Opened once when a scene comes with planes (--section).
+        let open = std::mem::take(&mut self.section_state.reveal).then_some(true);
+        egui::CollapsingHeader::new("Section planes")
+            .default_open(false)
+            .open(open)
+            .show(ui, |ui| self.sections_section(ui));
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
             .show(ui, |ui| self.selection_section(ui));
@@ -714,7 +724,9 @@ impl Viewer {
         let delta = resp.drag_delta() * ppp;
         let world_up = self.nav.world_up.vector();
         let view_h = self.view_rect[3].max(1) as f32;
-        if resp.dragged_by(PointerButton::Primary) && ctrl && self.selected != u32::MAX {
+        if resp.dragged_by(PointerButton::Primary) && ctrl && shift {
+            self.drag_section(delta);
+        } else if resp.dragged_by(PointerButton::Primary) && ctrl && self.selected != u32::MAX {
             self.drag_move(delta);
         } else if resp.dragged_by(PointerButton::Middle) || (resp.dragged_by(PointerButton::Primary) && shift)
         {
