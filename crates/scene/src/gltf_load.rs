@@ -17,6 +17,7 @@ use crate::scene::{
     recentre_origin, relative_transform, transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene,
     DEFAULT_BASE_COLOR,
 };
+use crate::tree::NodeTree;
 
 /// Maximum node nesting depth.
 const MAX_DEPTH: usize = 256;
@@ -104,7 +105,7 @@ pub fn load_gltf(
         });
     }
 
-    let placed = flatten_nodes(&document).map_err(|e| match e {
+    let (placed, tree) = flatten_nodes(&document).map_err(|e| match e {
         Flatten::Invalid(m) => err(m),
         Flatten::TooLarge(m) => SceneError::TooLarge(format!("{}: {m}", path.display())),
     })?;
@@ -121,6 +122,7 @@ pub fn load_gltf(
             visible: true,
         })
         .collect();
+    scene.tree = tree;
     progress(LoadProgress {
         stage: "nodes",
         done: scene.instances.len() as u64,
@@ -594,9 +596,10 @@ fn placed_centre(meshes: &[Mesh], placed: &[Placed]) -> DVec3 {
     }
 }
 
-/// Flattens the default scene (else scene 0, else all root nodes) into instances.
-/// The node graph must be acyclic ([`check_acyclic`], run before by `load_gltf`).
-fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Placed>, Flatten> {
+/// Flattens the default scene (else scene 0, else all root nodes) into instances, and keeps the hierarchy as
+/// a model tree (one tree node per visit, so a node reached twice appears twice; nodes placing no mesh
+/// anywhere below are dropped). The node graph must be acyclic ([`check_acyclic`], run before by `load_gltf`).
+fn flatten_nodes(doc: &gltf::Document) -> Result<(Vec<Placed>, NodeTree), Flatten> {
     let roots = root_nodes(doc);
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut w = Walker {
@@ -605,11 +608,13 @@ fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Placed>, Flatten> {
         seen: vec![false; nodes.len()],
         visits: 0,
         out: Vec::new(),
+        tree: NodeTree::default(),
     };
     for r in roots {
-        w.visit(r, DMat4::IDENTITY, 0)?;
+        w.visit(r, DMat4::IDENTITY, None, 0)?;
     }
-    Ok(w.out)
+    w.tree.prune_empty();
+    Ok((w.out, w.tree))
 }
 
 /// Root nodes of the default scene (else scene 0, else all nodes that are nobody's child).
@@ -764,10 +769,17 @@ struct Walker<'a, 'd> {
     seen: Vec<bool>,
     visits: u64,
     out: Vec<Placed>,
+    tree: NodeTree,
 }
 
 impl Walker<'_, '_> {
-    fn visit(&mut self, idx: usize, parent: DMat4, depth: usize) -> Result<(), Flatten> {
+    fn visit(
+        &mut self,
+        idx: usize,
+        parent: DMat4,
+        parent_node: Option<u32>,
+        depth: usize,
+    ) -> Result<(), Flatten> {
         if depth > MAX_DEPTH {
             return Err(Flatten::Invalid(format!(
                 "node {idx}: node hierarchy deeper than {MAX_DEPTH}"
@@ -797,17 +809,22 @@ impl Walker<'_, '_> {
                 world.to_cols_array()
             )));
         }
+        let name = node
+            .name()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("node {idx}"));
+        let tree_node = self.tree.add(name.clone(), parent_node);
         if let Some(mesh) = node.mesh() {
             // The linear part decides singularity (the translation may be far from the origin).
             let linear = DMat4::from_mat3(glam::DMat3::from_mat4(world)).as_mat4();
             if transform_ok(&linear) {
+                self.tree.nodes[tree_node as usize]
+                    .instances
+                    .push(self.out.len() as u32);
                 self.out.push(Placed {
                     mesh: mesh.index() as u32,
                     world,
-                    name: node
-                        .name()
-                        .map(str::to_owned)
-                        .unwrap_or_else(|| format!("node {idx}")),
+                    name,
                 });
             } else {
                 log::warn!("node {idx}: singular world transform; skipping its mesh instance");
@@ -816,7 +833,7 @@ impl Walker<'_, '_> {
         self.on_path[idx] = true;
         let children: Vec<usize> = node.children().map(|c| c.index()).collect();
         for c in children {
-            self.visit(c, world, depth + 1)?;
+            self.visit(c, world, Some(tree_node), depth + 1)?;
         }
         self.on_path[idx] = false;
         Ok(())
