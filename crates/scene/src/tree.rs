@@ -66,7 +66,16 @@ impl NodeTree {
 
     /// Instances in each node's subtree (its own and all descendants'), per node.
     pub fn instance_counts(&self) -> Vec<u64> {
-        let mut counts: Vec<u64> = self.nodes.iter().map(|n| n.instances.len() as u64).collect();
+        self.counts_where(|_| true)
+    }
+
+    /// Instances for which `keep` holds in each node's subtree, per node (e.g. the visible ones).
+    pub fn counts_where(&self, keep: impl Fn(u32) -> bool) -> Vec<u64> {
+        let mut counts: Vec<u64> = self
+            .nodes
+            .iter()
+            .map(|n| n.instances.iter().filter(|&&i| keep(i)).count() as u64)
+            .collect();
         for i in (0..self.nodes.len()).rev() {
             if let Some(p) = self.nodes[i].parent {
                 counts[p as usize] += counts[i];
@@ -239,6 +248,7 @@ mod tests {
         let t = tree();
         t.validate(4).unwrap();
         assert_eq!(t.instance_counts(), vec![3, 2, 2, 1, 1]);
+        assert_eq!(t.counts_where(|i| i != 1), vec![2, 1, 1, 1, 1]);
         assert_eq!(t.subtree_instances(0), vec![0, 1, 2]);
         assert_eq!(t.subtree_instances(9), Vec::<u32>::new());
         assert_eq!(t.path(2), vec![0, 1, 2]);
