@@ -28,7 +28,7 @@ impl TaggedObj {
         for line in text.split_inclusive(|&b| b == b'\n') {
             let trimmed = line.trim_ascii_start();
             let kind = match trimmed.first() {
-                Some(&k @ (b'o' | b'g')) if trimmed.get(1).map_or(true, |b| b.is_ascii_whitespace()) => k,
+                Some(&k @ (b'o' | b'g')) if trimmed.get(1).is_none_or(|b| b.is_ascii_whitespace()) => k,
                 _ => {
                     out.extend_from_slice(line);
                     continue;

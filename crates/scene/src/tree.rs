@@ -43,7 +43,7 @@ impl NodeTree {
     /// Adds a node under `parent` (which must exist) and returns its id.
     pub fn add(&mut self, name: impl Into<String>, parent: Option<u32>) -> u32 {
         let id = self.nodes.len() as u32;
-        debug_assert!(parent.map_or(true, |p| p < id));
+        debug_assert!(parent.is_none_or(|p| p < id));
         if let Some(p) = parent {
             self.nodes[p as usize].children.push(id);
         }
