@@ -174,8 +174,9 @@ impl Viewer {
         });
         if let Some(m) = self.measure.result() {
             log::info!(
-                "measured {} (dx {}, dy {}, dz {})",
-                format_len(m.distance, self.measure.show_unit),
+                "measured distance {:.6} {} (dx {:.6}, dy {:.6}, dz {:.6})",
+                m.distance,
+                self.measure.show_unit.label(),
                 m.delta.x,
                 m.delta.y,
                 m.delta.z
