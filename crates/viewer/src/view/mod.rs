@@ -666,6 +666,11 @@ impl Viewer {
         self.selection = tree::Selection::default();
         self.tree_view = tree::TreeView::default();
         self.measure = measure::Measure::for_spec(spec);
+        if is_default {
+            // The bundled gearbox is a CAD export in millimetres (its glTF says metres).
+            self.measure.file_unit = measure::Unit::Mm;
+            self.measure.show_unit = measure::Unit::Mm;
+        }
         self.edits.clear();
         if self.renderer.is_none() {
             let (w, h) = self.internal_size();

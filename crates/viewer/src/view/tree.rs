@@ -148,19 +148,19 @@ impl Rows<'_> {
             }
         );
         let header = |ui: &mut egui::Ui, rows: &mut Self| {
-            let label = ui.selectable_label(rows.selected == Some(id), text.clone());
-            if label.clicked() {
-                rows.actions.push(TreeAction::Select(id));
-            }
-            if rows.reveal_path.last() == Some(&id) {
-                label.scroll_to_me(Some(egui::Align::Center));
-            }
             let all_visible = visible == count;
             if ui
                 .small_button(if all_visible { "hide" } else { "show" })
                 .clicked()
             {
                 rows.actions.push(TreeAction::Visible(id, !all_visible));
+            }
+            let label = ui.selectable_label(rows.selected == Some(id), text.clone());
+            if label.clicked() {
+                rows.actions.push(TreeAction::Select(id));
+            }
+            if rows.reveal_path.last() == Some(&id) {
+                label.scroll_to_me(Some(egui::Align::Center));
             }
         };
         if node.children.is_empty() {
