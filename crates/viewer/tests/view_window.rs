@@ -638,6 +638,24 @@ fn measuring_two_clicked_points_on_a_known_box() {
         (value - expected).abs() < 0.02 * expected,
         "measured {value} mm, expected {expected:.3} mm ({line})"
     );
+    // Out of measure mode, a click selects the box and reveals its node in the model tree (one node for STL).
+    xdotool(&["key", "m"]);
+    let (x, y) = pixel_of(eye, target, up, fov, w, h, [20.0, 10.0, 10.0]);
+    xdotool(&[
+        "mousemove",
+        "--window",
+        &window,
+        "--sync",
+        &x.to_string(),
+        &y.to_string(),
+    ]);
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    xdotool(&["click", "1"]);
+    v.wait_for(
+        "selected instance 0 (tree: box)",
+        1,
+        std::time::Duration::from_secs(30),
+    );
     v.validation_clean();
     drop(v);
     let _ = std::fs::remove_dir_all(&dir);

@@ -736,6 +736,15 @@ impl Viewer {
             return;
         };
         let selection = tree::Selection::of_instance(&scene.tree, sel);
+        if let Some(node) = selection.node {
+            let path: Vec<&str> = scene
+                .tree
+                .path(node)
+                .iter()
+                .map(|&n| scene.tree.nodes[n as usize].name.as_str())
+                .collect();
+            log::info!("selected instance {sel} (tree: {})", path.join(" / "));
+        }
         self.tree_view.reveal = selection.node;
         self.apply_selection(selection);
     }
