@@ -3,8 +3,15 @@
 //! path or a dropped file: in the background, and a broken file keeps the current scene.
 use std::path::PathBuf;
 use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 use super::Viewer;
+
+/// A dialog that returns nothing sooner than this never appeared (no portal, no zenity): say so.
+const NO_DIALOG: Duration = Duration::from_millis(400);
+
+/// What the dialog thread sends back: the chosen file (None: cancelled or no dialog) and how long it was open.
+pub type DialogResult = (Option<PathBuf>, Duration);
 
 /// The extensions the loaders read.
 pub const MODEL_EXTENSIONS: &[&str] = &["glb", "gltf", "obj", "stl", "ply"];
@@ -31,7 +38,8 @@ impl Viewer {
                 if let Some(dir) = start {
                     dialog = dialog.set_directory(dir);
                 }
-                let _ = tx.send(dialog.pick_file());
+                let t0 = Instant::now();
+                let _ = tx.send((dialog.pick_file(), t0.elapsed()));
                 ctx.request_repaint();
             });
         match spawned {
@@ -47,13 +55,22 @@ impl Viewer {
         };
         match rx.try_recv() {
             Err(mpsc::TryRecvError::Empty) => {}
-            Ok(Some(path)) => {
+            Ok((Some(path), _)) => {
                 self.open_dialog = None;
                 if self.loading.is_none() {
                     self.start_loading(path.display().to_string());
                 }
             }
-            Ok(None) | Err(mpsc::TryRecvError::Disconnected) => self.open_dialog = None,
+            Ok((None, open_for)) => {
+                self.open_dialog = None;
+                if open_for < NO_DIALOG {
+                    self.toast(
+                        "no file dialog could be shown (it needs xdg-desktop-portal or zenity): type the path or drop the file on the window",
+                        true,
+                    );
+                }
+            }
+            Err(mpsc::TryRecvError::Disconnected) => self.open_dialog = None,
         }
     }
 }

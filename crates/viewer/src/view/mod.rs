@@ -326,7 +326,7 @@ pub(crate) struct Viewer {
     tree_view: tree::TreeView,
     measure: measure::Measure,
     /// An Open… dialog running on its own thread: the chosen file arrives here.
-    open_dialog: Option<Receiver<Option<PathBuf>>>,
+    open_dialog: Option<Receiver<files::DialogResult>>,
     edits: EditStack,
     loading: Option<Loading>,
     load_error: Option<String>,

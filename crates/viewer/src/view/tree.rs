@@ -297,6 +297,22 @@ impl Viewer {
         self.finish_tree_edit(edit);
     }
 
+    /// A line naming a multi-instance selection (a tree node); false when there is none.
+    pub(crate) fn selection_summary(&self, ui: &mut egui::Ui) -> bool {
+        let (Some(scene), Some(node)) = (&self.scene, self.selection.node) else {
+            return false;
+        };
+        if self.selection.instances.len() < 2 {
+            return false;
+        }
+        ui.label(format!(
+            "{}: {} instances (H hide, I isolate)",
+            node_name(scene, node),
+            self.selection.instances.len()
+        ));
+        true
+    }
+
     fn finish_tree_edit(&mut self, edit: Option<Edit>) {
         if let Some(e) = edit {
             self.edit(Action::Apply(e));

@@ -534,7 +534,9 @@ impl Viewer {
             .and_then(|s| s.instances.get(sel as usize))
             .cloned()
         else {
-            ui.label("click an instance to select it");
+            if !self.selection_summary(ui) {
+                ui.label("click an instance (or a model tree node) to select it");
+            }
             return;
         };
         ui.label(format!(
