@@ -171,17 +171,21 @@ fn read_mtl(
     Ok(tobj::load_mtl_buf(&mut bytes.as_slice()))
 }
 
+/// Memory of one object/group header: its model tree node and name lookup entry (obj_groups.rs).
+const HEADER_BYTES: u64 = std::mem::size_of::<crate::tree::Node>() as u64 * 2 + 64;
+
 /// Memory tobj and this loader will take for the OBJ, from the counts its lines declare: `v`/`vn`/`vt`
 /// arrays, and per face corner an output vertex (position, normal, texcoord, our copy) plus the
-/// triangulated indices (face lists and the final list).
+/// triangulated indices (face lists and the final list), and per `o`/`g` line a model tree node.
 fn declared_bytes(text: &[u8]) -> u64 {
-    let (mut v, mut vn, mut vt, mut corners, mut tri) = (0u64, 0u64, 0u64, 0u64, 0u64);
+    let (mut v, mut vn, mut vt, mut corners, mut tri, mut headers) = (0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
     for line in text.split(|&b| b == b'\n') {
         let mut words = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
         match words.next() {
             Some(b"v") => v += 1,
             Some(b"vn") => vn += 1,
             Some(b"vt") => vt += 1,
+            Some(b"o" | b"g") => headers += 1,
             Some(b"f") => {
                 let k = words.count() as u64;
                 corners += k;
@@ -190,5 +194,5 @@ fn declared_bytes(text: &[u8]) -> u64 {
             _ => {}
         }
     }
-    v * 12 + vn * 12 + vt * 8 + corners * (12 + 12 + 8 + 12) + tri * 4 * 2
+    v * 12 + vn * 12 + vt * 8 + corners * (12 + 12 + 8 + 12) + tri * 4 * 2 + headers * HEADER_BYTES
 }
