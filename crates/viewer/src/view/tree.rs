@@ -452,3 +452,68 @@ mod tests {
         assert_eq!(s.tree, tree);
     }
 }
+
+#[cfg(test)]
+mod gpu_tests {
+    use super::*;
+    use crate::view::edits::{run_action, EditStack};
+    use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Renderer, SceneGpu};
+
+    /// Hiding a tree node through the UI's edit path rebuilds the TLAS: its instances vanish from the next
+    /// frame (with the node's instances highlighted), and undo brings them back.
+    #[test]
+    fn hiding_a_node_removes_its_instances_from_the_image() {
+        let gpu = Gpu::new(&ContextOptions::from_env()).expect("Vulkan device (lavapipe)");
+        let mut scene = hrtao_scene::load("gen:slab", &mut |_| {}).unwrap();
+        // gen:slab: ground (0) and slab (1); make the slab its own node under the root.
+        let mut t = NodeTree::default();
+        let root = t.add("site", None);
+        let slab = t.add("slab", Some(root));
+        t.nodes[root as usize].instances = vec![0];
+        t.nodes[slab as usize].instances = vec![1];
+        scene.tree = t;
+        let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+        let b = scene.bounds();
+        let cam = Camera::fit(b.min, b.max, hrtao_core::camera::UpAxis::Z, 40.0, 64, 48);
+        let settings = AoSettings {
+            ao_radius: 2.0,
+            hash_capacity: 1 << 12,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, 64, 48, settings).unwrap();
+        let mut ids = |r: &mut Renderer, sg: &SceneGpu, f: u32| {
+            r.render(sg, f, &cam).unwrap();
+            let mut v: Vec<u32> = r.read_gbuffer().unwrap().iter().map(|p| p.instance).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let before = ids(&mut r, &sg, scene.f());
+        assert!(before.contains(&0) && before.contains(&1), "{before:?}");
+        let sel = Selection::of_node(&scene.tree, slab);
+        let mut stack = EditStack::default();
+        let hide = set_node_visible(&scene, slab, false).unwrap();
+        run_action(
+            &mut stack,
+            &mut scene,
+            &mut sg,
+            sel.instances.as_slice(),
+            Action::Apply(hide),
+        )
+        .unwrap();
+        let hidden = ids(&mut r, &sg, scene.f());
+        assert!(!hidden.contains(&1) && hidden.contains(&0), "{hidden:?}");
+        run_action(
+            &mut stack,
+            &mut scene,
+            &mut sg,
+            sel.instances.as_slice(),
+            Action::Undo,
+        )
+        .unwrap();
+        assert_eq!(ids(&mut r, &sg, scene.f()), before);
+        drop(r);
+        drop(sg);
+        assert_eq!(gpu.validation_messages(), 0);
+    }
+}
