@@ -481,7 +481,7 @@ mod gpu_tests {
             ..Default::default()
         };
         let mut r = Renderer::new(&gpu, 64, 48, settings).unwrap();
-        let mut ids = |r: &mut Renderer, sg: &SceneGpu, f: u32| {
+        let ids = |r: &mut Renderer, sg: &SceneGpu, f: u32| {
             r.render(sg, f, &cam).unwrap();
             let mut v: Vec<u32> = r.read_gbuffer().unwrap().iter().map(|p| p.instance).collect();
             v.sort_unstable();
