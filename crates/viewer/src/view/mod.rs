@@ -745,7 +745,7 @@ impl Viewer {
                 .collect();
             log::info!("selected instance {sel} (tree: {})", path.join(" / "));
         }
-        self.tree_view.reveal = selection.node;
+        self.tree_view.reveal(selection.node);
         self.apply_selection(selection);
     }
 

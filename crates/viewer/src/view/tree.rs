@@ -98,14 +98,30 @@ pub fn show_all(scene: &Scene) -> Option<Edit> {
 #[derive(Default)]
 pub struct TreeView {
     pub search: String,
-    /// Open this node's ancestors and scroll to it in the next frame (after a pick in the view).
-    pub reveal: Option<u32>,
+    /// Open this node's ancestors and scroll to it (after a pick in the view), for a few frames so the
+    /// opening animation has laid the row out.
+    reveal: Option<(u32, u8)>,
     cache_key: Option<(u32, usize)>,
     counts: Vec<u64>,
     visible: Vec<u64>,
 }
 
+/// Frames during which a revealed node is scrolled to.
+const REVEAL_FRAMES: u8 = 8;
+
 impl TreeView {
+    /// Opens the path to `node` and scrolls to it (None: nothing to reveal).
+    pub fn reveal(&mut self, node: Option<u32>) {
+        self.reveal = node.map(|n| (n, REVEAL_FRAMES));
+    }
+
+    /// The node to reveal this frame, counting the frames down.
+    fn reveal_now(&mut self) -> Option<u32> {
+        let (node, left) = self.reveal?;
+        self.reveal = (left > 1).then_some((node, left - 1));
+        Some(node)
+    }
+
     fn refresh(&mut self, scene: &Scene) {
         let key = (scene.f(), scene.instances.len());
         if self.cache_key != Some(key) || self.counts.len() != scene.tree.len() {
@@ -239,8 +255,7 @@ impl Viewer {
         });
         let reveal_path = self
             .tree_view
-            .reveal
-            .take()
+            .reveal_now()
             .map(|n| scene.tree.path(n))
             .unwrap_or_default();
         let mut rows = Rows {
@@ -251,9 +266,11 @@ impl Viewer {
             actions: Vec::new(),
         };
         let query = self.tree_view.search.trim();
-        egui::ScrollArea::vertical()
+        let revealing = !rows.reveal_path.is_empty();
+        let area = egui::ScrollArea::vertical()
             .id_source("model-tree")
             .max_height(320.0)
+            .min_scrolled_height(240.0)
             .auto_shrink([false, true])
             .show(ui, |ui| {
                 if query.is_empty() {
@@ -281,6 +298,10 @@ impl Viewer {
                     }
                 }
             });
+        if revealing {
+            // The tree's own scroll area took the row's scroll request; the panel scrolls to the tree.
+            ui.scroll_to_rect(area.inner_rect, Some(egui::Align::Center));
+        }
         for action in std::mem::take(&mut rows.actions) {
             match action {
                 TreeAction::Select(n) => {
