@@ -527,8 +527,8 @@ impl SceneGpu {
     }
 
     /// Rewrites the instance tables and rebuilds the TLAS from the scene's instances (after edits).
-    /// `selected` is the instance to highlight (u32::MAX for none).
-    pub fn update_instances(&mut self, scene: &Scene, selected: u32) -> Result<()> {
+    /// `selected` are the instances to highlight: one id (u32::MAX for none) or a sorted slice of ids.
+    pub fn update_instances(&mut self, scene: &Scene, selected: impl Highlight) -> Result<()> {
         self.version += 1;
         if scene.f() != self.synced_f {
             let boxes = scene
@@ -578,7 +578,7 @@ impl SceneGpu {
         let mut count = 0u32;
         for (i, inst) in scene.instances.iter().enumerate() {
             let base = self.geometry_base.get(inst.mesh as usize).copied().flatten();
-            let flags = if i as u32 == selected {
+            let flags = if selected.contains(i as u32) {
                 crate::gpu::INSTANCE_SELECTED
             } else {
                 0
@@ -699,5 +699,24 @@ impl SceneGpu {
         self.stats.tlas_ms = t0.elapsed().as_secs_f64() * 1e3;
         self.stats.tlas_instances = count as usize;
         Ok(())
+    }
+}
+
+/// The instances `SceneGpu::update_instances` highlights.
+pub trait Highlight {
+    fn contains(&self, instance: u32) -> bool;
+}
+
+/// One instance (u32::MAX: none).
+impl Highlight for u32 {
+    fn contains(&self, instance: u32) -> bool {
+        *self == instance
+    }
+}
+
+/// A sorted list of instances (a model tree node's subtree).
+impl Highlight for &[u32] {
+    fn contains(&self, instance: u32) -> bool {
+        self.binary_search(&instance).is_ok()
     }
 }

@@ -17,6 +17,7 @@ use crate::scene::{
     recentre_origin, relative_transform, transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene,
     DEFAULT_BASE_COLOR,
 };
+use crate::tree::NodeTree;
 
 /// Maximum node nesting depth.
 const MAX_DEPTH: usize = 256;
@@ -26,6 +27,8 @@ const MAX_NODE_VISITS: u64 = 10_000_000;
 const MAX_IMPLICIT_COUNT: usize = 50_000_000;
 /// Memory of one instance (matrix, ids, a short name), for the memory estimate.
 const INSTANCE_BYTES: u64 = std::mem::size_of::<Instance>() as u64 + 32;
+/// Memory of one model tree node (name, child and instance lists), for the memory estimate.
+const TREE_NODE_BYTES: u64 = std::mem::size_of::<crate::tree::Node>() as u64 + 48;
 
 /// Loads a .gltf or .glb file. Unreferenced meshes are kept so that mesh ids equal glTF
 /// mesh indices. The file and its buffers are read through the guard ([`crate::guard`]); the memory
@@ -60,6 +63,11 @@ pub fn load_gltf(
     budget.reserve(
         instance_count(&document, &post_order).saturating_mul(INSTANCE_BYTES),
         "the node hierarchy's mesh instances",
+    )?;
+    let mesh_below = mesh_below(&document, &post_order);
+    budget.reserve(
+        tree_node_count(&document, &post_order, &mesh_below).saturating_mul(TREE_NODE_BYTES),
+        "the model tree",
     )?;
     let buffers = load_buffers(&document, path, blob, opts, &mut budget, progress)?;
     progress(LoadProgress {
@@ -104,7 +112,7 @@ pub fn load_gltf(
         });
     }
 
-    let placed = flatten_nodes(&document).map_err(|e| match e {
+    let (placed, tree) = flatten_nodes(&document, &mesh_below).map_err(|e| match e {
         Flatten::Invalid(m) => err(m),
         Flatten::TooLarge(m) => SceneError::TooLarge(format!("{}: {m}", path.display())),
     })?;
@@ -121,6 +129,7 @@ pub fn load_gltf(
             visible: true,
         })
         .collect();
+    scene.tree = tree;
     progress(LoadProgress {
         stage: "nodes",
         done: scene.instances.len() as u64,
@@ -594,9 +603,10 @@ fn placed_centre(meshes: &[Mesh], placed: &[Placed]) -> DVec3 {
     }
 }
 
-/// Flattens the default scene (else scene 0, else all root nodes) into instances.
-/// The node graph must be acyclic ([`check_acyclic`], run before by `load_gltf`).
-fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Placed>, Flatten> {
+/// Flattens the default scene (else scene 0, else all root nodes) into instances, and keeps the hierarchy as
+/// a model tree (one tree node per visit, so a node reached twice appears twice; nodes placing no mesh
+/// anywhere below are dropped). The node graph must be acyclic ([`check_acyclic`], run before by `load_gltf`).
+fn flatten_nodes(doc: &gltf::Document, mesh_below: &[bool]) -> Result<(Vec<Placed>, NodeTree), Flatten> {
     let roots = root_nodes(doc);
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut w = Walker {
@@ -605,11 +615,14 @@ fn flatten_nodes(doc: &gltf::Document) -> Result<Vec<Placed>, Flatten> {
         seen: vec![false; nodes.len()],
         visits: 0,
         out: Vec::new(),
+        tree: NodeTree::default(),
+        mesh_below,
     };
     for r in roots {
-        w.visit(r, DMat4::IDENTITY, 0)?;
+        w.visit(r, DMat4::IDENTITY, None, 0)?;
     }
-    Ok(w.out)
+    w.tree.prune_empty();
+    Ok((w.out, w.tree))
 }
 
 /// Root nodes of the default scene (else scene 0, else all nodes that are nobody's child).
@@ -642,6 +655,34 @@ fn instance_count(doc: &gltf::Document, post_order: &[usize]) -> u64 {
     root_nodes(doc)
         .into_iter()
         .fold(0u64, |acc, r| acc.saturating_add(below[r]))
+}
+
+/// Whether each node has a mesh at or below it, over the acyclic graph's post-order.
+fn mesh_below(doc: &gltf::Document, post_order: &[usize]) -> Vec<bool> {
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut below = vec![false; nodes.len()];
+    for &n in post_order {
+        below[n] = nodes[n].mesh().is_some() || nodes[n].children().any(|c| below[c.index()]);
+    }
+    below
+}
+
+/// Number of model tree nodes flattening will create: the paths from the roots to every node with a mesh at or
+/// below it (parents before children in reverse post-order); saturates instead of overflowing.
+fn tree_node_count(doc: &gltf::Document, post_order: &[usize], mesh_below: &[bool]) -> u64 {
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut paths = vec![0u64; nodes.len()];
+    for r in root_nodes(doc) {
+        paths[r] = paths[r].saturating_add(1);
+    }
+    for &n in post_order.iter().rev() {
+        for c in nodes[n].children() {
+            paths[c.index()] = paths[c.index()].saturating_add(paths[n]);
+        }
+    }
+    (0..nodes.len())
+        .filter(|&n| mesh_below[n])
+        .fold(0u64, |acc, n| acc.saturating_add(paths[n]))
 }
 
 /// Bytes the decoded triangle primitives will take, from the accessor counts the file declares
@@ -764,10 +805,19 @@ struct Walker<'a, 'd> {
     seen: Vec<bool>,
     visits: u64,
     out: Vec<Placed>,
+    tree: NodeTree,
+    /// Nodes with a mesh at or below them: only those get a tree node.
+    mesh_below: &'a [bool],
 }
 
 impl Walker<'_, '_> {
-    fn visit(&mut self, idx: usize, parent: DMat4, depth: usize) -> Result<(), Flatten> {
+    fn visit(
+        &mut self,
+        idx: usize,
+        parent: DMat4,
+        parent_node: Option<u32>,
+        depth: usize,
+    ) -> Result<(), Flatten> {
         if depth > MAX_DEPTH {
             return Err(Flatten::Invalid(format!(
                 "node {idx}: node hierarchy deeper than {MAX_DEPTH}"
@@ -797,17 +847,22 @@ impl Walker<'_, '_> {
                 world.to_cols_array()
             )));
         }
-        if let Some(mesh) = node.mesh() {
+        let name = node
+            .name()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("node {idx}"));
+        let tree_node = self.mesh_below[idx].then(|| self.tree.add(name.clone(), parent_node));
+        if let (Some(mesh), Some(tree_node)) = (node.mesh(), tree_node) {
             // The linear part decides singularity (the translation may be far from the origin).
             let linear = DMat4::from_mat3(glam::DMat3::from_mat4(world)).as_mat4();
             if transform_ok(&linear) {
+                self.tree.nodes[tree_node as usize]
+                    .instances
+                    .push(self.out.len() as u32);
                 self.out.push(Placed {
                     mesh: mesh.index() as u32,
                     world,
-                    name: node
-                        .name()
-                        .map(str::to_owned)
-                        .unwrap_or_else(|| format!("node {idx}")),
+                    name,
                 });
             } else {
                 log::warn!("node {idx}: singular world transform; skipping its mesh instance");
@@ -816,7 +871,7 @@ impl Walker<'_, '_> {
         self.on_path[idx] = true;
         let children: Vec<usize> = node.children().map(|c| c.index()).collect();
         for c in children {
-            self.visit(c, world, depth + 1)?;
+            self.visit(c, world, tree_node, depth + 1)?;
         }
         self.on_path[idx] = false;
         Ok(())

@@ -11,10 +11,12 @@ mod gltf_load;
 mod guard;
 #[cfg(feature = "hostile-corpus")]
 pub mod hostile;
+mod obj_groups;
 mod obj_load;
 mod ply_load;
 mod scene;
 mod stl_load;
+mod tree;
 
 use std::path::Path;
 
@@ -27,6 +29,7 @@ pub use guard::{default_max_memory, LoadOptions};
 pub use scene::{
     Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR, EXACT_BOUNDS_VERTEX_BUDGET,
 };
+pub use tree::{Node, NodeTree};
 
 /// Loads a glTF 2.0 file (`.gltf` or `.glb`), validated and non-empty, with the default [`LoadOptions`].
 pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
@@ -101,11 +104,14 @@ pub fn load_with(
 }
 
 /// Validates and rejects scenes without any triangle; errors name the source.
-fn finish(scene: Scene, source: &str) -> Result<Scene, SceneError> {
+fn finish(mut scene: Scene, source: &str) -> Result<Scene, SceneError> {
     scene.validate().map_err(|e| match e {
         SceneError::Invalid(m) => SceneError::Invalid(format!("{source}: {m}")),
         other => other,
     })?;
+    if scene.tree.is_empty() {
+        scene.tree = NodeTree::single(scene.name.clone(), scene.instances.len());
+    }
     if scene.unique_triangle_count() == 0 {
         return Err(SceneError::Empty(format!("scene {source} has no triangles")));
     }

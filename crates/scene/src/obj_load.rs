@@ -8,6 +8,7 @@ use glam::{DVec3, Mat4};
 
 use crate::error::SceneError;
 use crate::guard::{read_model, resolve_reference, Budget, Fetch, LoadOptions, Target};
+use crate::obj_groups::TaggedObj;
 use crate::scene::{recentre_origin, Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR};
 
 pub fn load_obj(
@@ -17,7 +18,13 @@ pub fn load_obj(
 ) -> Result<Scene, SceneError> {
     let (text, mut budget) = read_model(path, opts, progress)?;
     budget.reserve(declared_bytes(&text), "the declared geometry (v and f lines)")?;
+    budget.reserve(
+        text.len() as u64,
+        "the object and group names (a tagged copy of the file)",
+    )?;
     opts.check_cancel(path)?;
+    let mut tagged = TaggedObj::new(&text);
+    drop(text);
     // `..Default::default()` keeps this compiling if tobj's optional features add fields.
     #[allow(clippy::needless_update)]
     let load_opts = tobj::LoadOptions {
@@ -43,7 +50,7 @@ pub fn load_obj(
             }
         }
     };
-    let parsed = tobj::load_obj_buf(&mut text.as_slice(), &load_opts, load_mtl);
+    let parsed = tobj::load_obj_buf(&mut tagged.text.as_slice(), &load_opts, load_mtl);
     if let Some(e) = mtl_error.into_inner() {
         return Err(e);
     }
@@ -51,7 +58,7 @@ pub fn load_obj(
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
-    drop(text);
+    tagged.text = Vec::new();
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
@@ -106,8 +113,12 @@ pub fn load_obj(
             .map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 1.0])
             .unwrap_or(DEFAULT_BASE_COLOR);
         let mesh_id = scene.meshes.len() as u32;
+        let (node, name) = tagged.node_of(&model.name);
+        tagged.tree.nodes[node as usize]
+            .instances
+            .push(scene.instances.len() as u32);
         scene.meshes.push(Mesh {
-            name: model.name.clone(),
+            name: name.clone(),
             primitives: vec![Primitive {
                 positions,
                 indices: m.indices,
@@ -117,7 +128,7 @@ pub fn load_obj(
         scene.instances.push(Instance {
             mesh: mesh_id,
             transform: Mat4::IDENTITY,
-            name: model.name,
+            name,
             visible: true,
         });
         progress(LoadProgress {
@@ -126,6 +137,8 @@ pub fn load_obj(
             total,
         });
     }
+    scene.tree = tagged.tree;
+    scene.tree.prune_empty();
     Ok(scene)
 }
 
@@ -158,17 +171,21 @@ fn read_mtl(
     Ok(tobj::load_mtl_buf(&mut bytes.as_slice()))
 }
 
+/// Memory of one object/group header: its model tree node and name lookup entry (obj_groups.rs).
+const HEADER_BYTES: u64 = std::mem::size_of::<crate::tree::Node>() as u64 * 2 + 64;
+
 /// Memory tobj and this loader will take for the OBJ, from the counts its lines declare: `v`/`vn`/`vt`
 /// arrays, and per face corner an output vertex (position, normal, texcoord, our copy) plus the
-/// triangulated indices (face lists and the final list).
+/// triangulated indices (face lists and the final list), and per `o`/`g` line a model tree node.
 fn declared_bytes(text: &[u8]) -> u64 {
-    let (mut v, mut vn, mut vt, mut corners, mut tri) = (0u64, 0u64, 0u64, 0u64, 0u64);
+    let (mut v, mut vn, mut vt, mut corners, mut tri, mut headers) = (0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
     for line in text.split(|&b| b == b'\n') {
         let mut words = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
         match words.next() {
             Some(b"v") => v += 1,
             Some(b"vn") => vn += 1,
             Some(b"vt") => vt += 1,
+            Some(b"o" | b"g") => headers += 1,
             Some(b"f") => {
                 let k = words.count() as u64;
                 corners += k;
@@ -177,5 +194,5 @@ fn declared_bytes(text: &[u8]) -> u64 {
             _ => {}
         }
     }
-    v * 12 + vn * 12 + vt * 8 + corners * (12 + 12 + 8 + 12) + tri * 4 * 2
+    v * 12 + vn * 12 + vt * 8 + corners * (12 + 12 + 8 + 12) + tri * 4 * 2 + headers * HEADER_BYTES
 }

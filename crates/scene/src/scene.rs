@@ -7,6 +7,7 @@ use glam::{DMat4, DVec3, Mat4, Vec3};
 
 use crate::aabb::Aabb;
 use crate::error::SceneError;
+use crate::tree::NodeTree;
 
 /// Default colour for geometry without material or vertex colours.
 pub const DEFAULT_BASE_COLOR: [f32; 4] = [0.8, 0.8, 0.8, 1.0];
@@ -82,6 +83,8 @@ pub struct Scene {
     /// sit 10^5-10^7 units away): loaders then compose transforms in f64 and re-centre (`recentre`), so the
     /// GPU works near zero in f32. Cameras, picks and reported positions convert with it.
     pub origin: [f64; 3],
+    /// The file's node hierarchy and which instances each node owns (see [`NodeTree`]).
+    pub tree: NodeTree,
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     f: u32,
     /// The world bounds each recent edit changed, with the F it produced (newest last, at most
@@ -151,6 +154,7 @@ impl Scene {
             instances: Vec::new(),
             name: name.into(),
             origin: [0.0; 3],
+            tree: NodeTree::default(),
             f: 0,
             changes: Default::default(),
         }
@@ -175,9 +179,10 @@ impl Scene {
         scene.instances.push(Instance {
             mesh: 0,
             transform: Mat4::IDENTITY,
-            name,
+            name: name.clone(),
             visible: true,
         });
+        scene.tree = NodeTree::single(name, 1);
         scene
     }
 
@@ -363,7 +368,7 @@ impl Scene {
                 )));
             }
         }
-        Ok(())
+        self.tree.validate(self.instances.len())
     }
 
     fn check_instance(&self, instance: u32) -> Result<usize, SceneError> {
@@ -408,17 +413,43 @@ impl Scene {
         Ok(())
     }
 
+    /// Sets the visibility of several instances as one edit (F increments once). All ids are checked
+    /// before anything changes.
+    pub fn set_visibility(&mut self, changes: &[(u32, bool)]) -> Result<(), SceneError> {
+        for &(i, _) in changes {
+            self.check_instance(i)?;
+        }
+        for &(i, v) in changes {
+            self.instances[i as usize].visible = v;
+        }
+        let changed = changes.iter().map(|&(i, _)| self.instance_bounds(i)).collect();
+        self.edited(changed);
+        Ok(())
+    }
+
     /// Removes an instance (later ids shift down by one) and returns it for undo.
     pub fn remove_instance(&mut self, instance: u32) -> Result<Instance, SceneError> {
         let i = self.check_instance(instance)?;
         let bounds = self.instance_bounds(instance);
         let inst = self.instances.remove(i);
+        self.tree.instance_removed(instance);
         self.edited(vec![bounds]);
         Ok(inst)
     }
 
-    /// Inserts an instance at position `at` (`at == instances.len()` appends); undo of remove.
+    /// Inserts an instance at position `at` (`at == instances.len()` appends), owned by no tree node.
     pub fn insert_instance(&mut self, at: u32, inst: Instance) -> Result<(), SceneError> {
+        self.insert_instance_in(at, inst, None)
+    }
+
+    /// Inserts an instance at position `at` owned by tree node `owner` (undo of remove; see
+    /// [`NodeTree::owner_of`]).
+    pub fn insert_instance_in(
+        &mut self,
+        at: u32,
+        inst: Instance,
+        owner: Option<u32>,
+    ) -> Result<(), SceneError> {
         if at as usize > self.instances.len() {
             return Err(SceneError::OutOfRange {
                 what: "insert position",
@@ -428,6 +459,7 @@ impl Scene {
         }
         self.check_new_instance(&inst)?;
         self.instances.insert(at as usize, inst);
+        self.tree.instance_inserted(at, owner);
         self.edited(vec![self.instance_bounds(at)]);
         Ok(())
     }

@@ -752,3 +752,178 @@ fn ctrl_shift_drag_moves_a_section_plane() {
     drop(v);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Writes an ASCII STL of the box from `min` to `max` (12 triangles).
+fn write_box_stl(path: &Path, min: [f32; 3], max: [f32; 3]) {
+    let c = |i: usize| {
+        [
+            if i & 1 == 0 { min[0] } else { max[0] },
+            if i & 2 == 0 { min[1] } else { max[1] },
+            if i & 4 == 0 { min[2] } else { max[2] },
+        ]
+    };
+    let tris = [
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    let mut s = String::from("solid box\n");
+    for t in tris {
+        s += " facet normal 0 0 0\n  outer loop\n";
+        for v in t {
+            let p = c(v);
+            s += &format!("   vertex {} {} {}\n", p[0], p[1], p[2]);
+        }
+        s += "  endloop\n endfacet\n";
+    }
+    s += "endsolid box\n";
+    std::fs::write(path, s).unwrap();
+}
+
+/// The pixel (row 0 at the top) where a world point appears for a pinhole camera (eye, target, up, fov).
+fn pixel_of(
+    eye: [f32; 3],
+    target: [f32; 3],
+    up: [f32; 3],
+    fov_deg: f32,
+    w: u32,
+    h: u32,
+    p: [f32; 3],
+) -> (i32, i32) {
+    let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let cross = |a: [f32; 3], b: [f32; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let norm = |a: [f32; 3]| {
+        let l = dot(a, a).sqrt();
+        [a[0] / l, a[1] / l, a[2] / l]
+    };
+    let fwd = norm(sub(target, eye));
+    let right = norm(cross(fwd, up));
+    let cam_up = cross(right, fwd);
+    let d = sub(p, eye);
+    let t = (fov_deg.to_radians() * 0.5).tan();
+    let nx = dot(d, right) / (dot(d, fwd) * t * w as f32 / h as f32);
+    let ny = dot(d, cam_up) / (dot(d, fwd) * t);
+    (
+        ((nx + 1.0) * 0.5 * w as f32) as i32,
+        ((1.0 - ny) * 0.5 * h as f32) as i32,
+    )
+}
+
+/// Measure mode with real X input: M, then clicks at the pixels of two known points on the top face of a
+/// 40 × 20 × 10 mm STL box give their distance (31.62 mm) in the log the panel shows too.
+#[test]
+fn measuring_two_clicked_points_on_a_known_box() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("measure");
+    let stl = dir.join("box.stl");
+    write_box_stl(&stl, [0.0; 3], [40.0, 20.0, 10.0]);
+    let (eye, target, up, fov, w, h) = (
+        [20.0, -30.0, 60.0],
+        [20.0, 10.0, 10.0],
+        [0.0, 0.0, 1.0],
+        45.0,
+        560,
+        300,
+    );
+    let cam = dir.join("cam.json");
+    std::fs::write(
+        &cam,
+        format!(
+            r#"{{"eye":{eye:?},"target":{target:?},"up":{up:?},"fov_y_deg":{fov},"width":{w},"height":{h}}}"#
+        ),
+    )
+    .unwrap();
+    let size = format!("{w}x{h}");
+    let args = [
+        stl.to_str().unwrap(),
+        "--camera",
+        cam.to_str().unwrap(),
+        "--size",
+        &size,
+        "--no-panel",
+    ];
+    let mut v = Running::start(&args, &dir);
+    v.wait_for("at rest", 1, std::time::Duration::from_secs(90));
+    let pid = v.child.id().to_string();
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--pid", &pid]);
+    let window = window
+        .lines()
+        .next()
+        .expect("the viewer's window")
+        .trim()
+        .to_string();
+    xdotool(&["windowfocus", "--sync", &window]);
+    xdotool(&["key", "m"]);
+    let (a, b) = ([5.0f32, 5.0, 10.0], [35.0f32, 15.0, 10.0]);
+    for p in [a, b] {
+        let (x, y) = pixel_of(eye, target, up, fov, w, h, p);
+        xdotool(&[
+            "mousemove",
+            "--window",
+            &window,
+            "--sync",
+            &x.to_string(),
+            &y.to_string(),
+        ]);
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        xdotool(&["click", "1"]);
+        // Apart enough not to be a double click (which sets the pivot).
+        std::thread::sleep(std::time::Duration::from_millis(700));
+    }
+    v.wait_for("measured distance", 1, std::time::Duration::from_secs(30));
+    let log = v.log_text();
+    let line = log.lines().find(|l| l.contains("measured distance")).unwrap();
+    let value: f64 = line
+        .split("measured distance ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no distance in {line}"));
+    eprintln!("{line}");
+    let expected = (30.0f64 * 30.0 + 10.0 * 10.0).sqrt();
+    assert!(line.contains(" mm "), "STL lengths default to mm: {line}");
+    assert!(
+        (value - expected).abs() < 0.02 * expected,
+        "measured {value} mm, expected {expected:.3} mm ({line})"
+    );
+    // Out of measure mode, a click selects the box and reveals its node in the model tree (one node for STL).
+    xdotool(&["key", "m"]);
+    let (x, y) = pixel_of(eye, target, up, fov, w, h, [20.0, 10.0, 10.0]);
+    xdotool(&[
+        "mousemove",
+        "--window",
+        &window,
+        "--sync",
+        &x.to_string(),
+        &y.to_string(),
+    ]);
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    xdotool(&["click", "1"]);
+    v.wait_for(
+        "selected instance 0 (tree: box)",
+        1,
+        std::time::Duration::from_secs(30),
+    );
+    v.validation_clean();
+    drop(v);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -14,10 +14,16 @@ pub enum Edit {
     },
     /// Show or hide an instance.
     Visibility { instance: u32, visible: bool },
-    /// Remove an instance (`removed` is filled in when applied, for undo).
+    /// Remove an instance (`removed` is filled in when applied, for undo: the instance and its tree node).
     Delete {
         instance: u32,
-        removed: Option<Instance>,
+        removed: Option<(Instance, Option<u32>)>,
+    },
+    /// Set the visibility of several instances as one step (hide, isolate, show all in the model tree).
+    /// Only instances whose visibility changes are listed, so undo flips each back.
+    Visibilities {
+        label: String,
+        changes: Vec<(u32, bool)>,
     },
 }
 
@@ -29,6 +35,7 @@ impl Edit {
                 format!("{} #{instance}", if *visible { "show" } else { "hide" })
             }
             Edit::Delete { instance, .. } => format!("delete #{instance}"),
+            Edit::Visibilities { label, changes } => format!("{label} ({} instances)", changes.len()),
         }
     }
 }
@@ -44,7 +51,11 @@ fn apply(scene: &mut Scene, edit: &mut Edit) -> Result<()> {
     match edit {
         Edit::Transform { instance, after, .. } => scene.set_transform(*instance, *after)?,
         Edit::Visibility { instance, visible } => scene.set_visible(*instance, *visible)?,
-        Edit::Delete { instance, removed } => *removed = Some(scene.remove_instance(*instance)?),
+        Edit::Delete { instance, removed } => {
+            let owner = scene.tree.owner_of(*instance);
+            *removed = Some((scene.remove_instance(*instance)?, owner));
+        }
+        Edit::Visibilities { changes, .. } => scene.set_visibility(changes)?,
     }
     Ok(())
 }
@@ -54,8 +65,12 @@ fn revert(scene: &mut Scene, edit: &Edit) -> Result<()> {
         Edit::Transform { instance, before, .. } => scene.set_transform(*instance, *before)?,
         Edit::Visibility { instance, visible } => scene.set_visible(*instance, !*visible)?,
         Edit::Delete { instance, removed } => {
-            let inst = removed.clone().ok_or_else(|| anyhow!("nothing to restore"))?;
-            scene.insert_instance(*instance, inst)?
+            let (inst, owner) = removed.clone().ok_or_else(|| anyhow!("nothing to restore"))?;
+            scene.insert_instance_in(*instance, inst, owner)?
+        }
+        Edit::Visibilities { changes, .. } => {
+            let back: Vec<(u32, bool)> = changes.iter().map(|&(i, v)| (i, !v)).collect();
+            scene.set_visibility(&back)?
         }
     }
     Ok(())
@@ -265,7 +280,7 @@ pub fn run_action(
     stack: &mut EditStack,
     scene: &mut Scene,
     scene_gpu: &mut hrtao_core::SceneGpu,
-    selected: u32,
+    selected: impl hrtao_core::accel::Highlight,
     action: Action,
 ) -> Result<Option<String>> {
     let done = match action {

@@ -8,12 +8,15 @@
 //! - `ui`: the panel, navigation and picking input, toasts.
 pub mod budget;
 pub mod edits;
+mod files;
+pub mod measure;
 pub mod motion;
 pub mod nav;
 pub mod prefs;
 pub mod present;
 mod sections;
 pub mod stats;
+pub mod tree;
 mod ui;
 
 use std::path::{Path, PathBuf};
@@ -324,7 +327,13 @@ pub(crate) struct Viewer {
     nav: Nav,
     home: Camera,
     default_radius: f32,
+    /// The instance move and delete act on (u32::MAX: none); `selection` holds what is highlighted.
     selected: u32,
+    selection: tree::Selection,
+    tree_view: tree::TreeView,
+    measure: measure::Measure,
+    /// An Open… dialog running on its own thread: the chosen file arrives here.
+    open_dialog: Option<Receiver<files::DialogResult>>,
     edits: EditStack,
     loading: Option<Loading>,
     load_error: Option<String>,
@@ -437,6 +446,10 @@ impl Viewer {
             home: Camera::default(),
             default_radius: 1.0,
             selected: u32::MAX,
+            selection: tree::Selection::default(),
+            tree_view: tree::TreeView::default(),
+            measure: measure::Measure::for_spec(&spec),
+            open_dialog: None,
             edits: EditStack::default(),
             loading: None,
             load_error: None,
@@ -670,6 +683,14 @@ impl Viewer {
         };
         self.home = cam;
         self.selected = u32::MAX;
+        self.selection = tree::Selection::default();
+        self.tree_view = tree::TreeView::default();
+        self.measure = measure::Measure::for_spec(spec);
+        if is_default {
+            // The bundled gearbox is a CAD export in millimetres (its glTF says metres).
+            self.measure.file_unit = measure::Unit::Mm;
+            self.measure.show_unit = measure::Unit::Mm;
+        }
         self.edits.clear();
         if self.renderer.is_none() {
             let (w, h) = self.internal_size();
@@ -729,12 +750,33 @@ impl Viewer {
         (w.min(16384), h.min(16384))
     }
 
-    /// Updates the selection highlight (TLAS instance flags) after a selection change.
+    /// Selects one instance (u32::MAX: nothing), as a pick in the view does, and reveals its tree node.
     pub(crate) fn set_selected(&mut self, sel: u32) {
-        self.selected = sel;
+        let Some(scene) = &self.scene else {
+            self.selected = sel;
+            return;
+        };
+        let selection = tree::Selection::of_instance(&scene.tree, sel);
+        if let Some(node) = selection.node {
+            let path: Vec<&str> = scene
+                .tree
+                .path(node)
+                .iter()
+                .map(|&n| scene.tree.nodes[n as usize].name.as_str())
+                .collect();
+            log::info!("selected instance {sel} (tree: {})", path.join(" / "));
+        }
+        self.tree_view.reveal(selection.node);
+        self.apply_selection(selection);
+    }
+
+    /// Makes `selection` current and updates the highlight (TLAS instance flags).
+    pub(crate) fn apply_selection(&mut self, selection: tree::Selection) {
+        self.selected = selection.primary();
+        self.selection = selection;
         if let (Some(sg), Some(scene)) = (&mut self.scene_gpu, &self.scene) {
             self.gpu.wait_idle();
-            if let Err(e) = sg.update_instances(scene, sel) {
+            if let Err(e) = sg.update_instances(scene, self.selection.instances.as_slice()) {
                 let msg = format!("selection: {e}");
                 self.toast(msg, true);
             }
@@ -747,14 +789,21 @@ impl Viewer {
             return;
         };
         self.gpu.wait_idle();
-        let result = edits::run_action(&mut self.edits, scene, sg, self.selected, action);
+        let count = scene.instances.len();
+        let highlight = self.selection.instances.as_slice();
+        let result = edits::run_action(&mut self.edits, scene, sg, highlight, action);
         match result {
             Ok(Some(label)) => {
-                // Deletes shift later ids: keep the selection valid.
-                let n = scene.instances.len() as u32;
                 log::debug!("{label}: F = {}", scene.f());
-                if self.selected != u32::MAX && self.selected >= n {
-                    self.set_selected(u32::MAX);
+                // Deletes (and their undo) shift later ids: select the node again, or nothing.
+                if scene.instances.len() != count {
+                    let again = match self.selection.node {
+                        Some(n) if self.selection.instances.len() > 1 => {
+                            tree::Selection::of_node(&scene.tree, n)
+                        }
+                        _ => tree::Selection::default(),
+                    };
+                    self.apply_selection(again);
                 }
             }
             Ok(None) => {}

@@ -45,9 +45,14 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Ctrl+Shift+left drag",
         "move the active section plane along its normal (Section planes panel)",
     ),
-    ("H", "hide / show the selection"),
+    ("H", "hide / show the selection (a tree node: its whole subtree)"),
+    ("I / U", "isolate the selection / show all"),
+    (
+        "M",
+        "measure mode: click two surface points (distance and dx dy dz over the view)",
+    ),
     ("Delete", "delete the selection"),
-    ("Esc", "deselect"),
+    ("Esc", "deselect (in measure mode: clear the points)"),
     ("Ctrl+Z / Ctrl+Y (Ctrl+Shift+Z)", "undo / redo"),
     ("F12", "screenshot of the 3D view (PNG, no UI)"),
     (
@@ -79,6 +84,7 @@ impl Viewer {
         if let Some(p) = dropped.into_iter().next() {
             self.start_loading(p.display().to_string());
         }
+        self.poll_open_dialog();
         if self.show_panel {
             egui::SidePanel::right("panel")
                 .resizable(true)
@@ -101,6 +107,7 @@ impl Viewer {
                 self.laid_out = true;
                 let resp = ui.allocate_rect(rect, egui::Sense::click_and_drag());
                 self.view_input(ctx, &resp, rect);
+                self.measure_overlay(ui.painter(), rect);
                 if let Some(l) = &self.loading {
                     let text = format!(
                         "Loading {} … {} ({:.0} s)",
@@ -174,9 +181,15 @@ impl Viewer {
             .default_open(false)
             .open(open)
             .show(ui, |ui| self.sections_section(ui));
+        egui::CollapsingHeader::new("Model tree")
+            .default_open(true)
+            .show(ui, |ui| self.tree_section(ui));
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
             .show(ui, |ui| self.selection_section(ui));
+        egui::CollapsingHeader::new("Measure")
+            .default_open(true)
+            .show(ui, |ui| self.measure_section(ui));
         egui::CollapsingHeader::new("Camera")
             .default_open(false)
             .show(ui, |ui| self.camera_section(ui));
@@ -208,6 +221,13 @@ impl Viewer {
                 let p = self.open_path.trim().to_string();
                 self.start_loading(p);
             }
+            if ui
+                .add_enabled(self.open_dialog.is_none(), egui::Button::new("Open…"))
+                .on_hover_text("Choose a file (desktop portal, or zenity when no portal runs)")
+                .clicked()
+            {
+                self.open_file_dialog();
+            }
         })
         .response
         .on_hover_text(
@@ -235,6 +255,7 @@ impl Viewer {
         }
         if let Some(scene) = &self.scene {
             ui.label(format!("{}  ({})", scene.name, self.scene_spec));
+            self.dimensions_row(ui);
         }
     }
 
@@ -524,7 +545,9 @@ impl Viewer {
             .and_then(|s| s.instances.get(sel as usize))
             .cloned()
         else {
-            ui.label("click an instance to select it");
+            if !self.selection_summary(ui) {
+                ui.label("click an instance (or a model tree node) to select it");
+            }
             return;
         };
         ui.label(format!(
@@ -774,6 +797,10 @@ impl Viewer {
                     false,
                 );
             }
+        } else if resp.clicked() && self.measure.active {
+            if let Some(hit) = resp.interact_pointer_pos().and_then(|p| self.pick(p, rect, ppp)) {
+                self.measure_pick(hit.0);
+            }
         } else if resp.clicked() {
             let hit = resp.interact_pointer_pos().and_then(|p| self.pick(p, rect, ppp));
             let sel = hit.map(|h| h.1).unwrap_or(u32::MAX);
@@ -941,6 +968,9 @@ impl Viewer {
                 Key::Enter,
                 Key::Delete,
                 Key::H,
+                Key::I,
+                Key::U,
+                Key::M,
                 Key::Escape,
                 Key::Z,
                 Key::Y,
@@ -967,7 +997,19 @@ impl Viewer {
                 Key::Num9 => self.std_view(StdView::Iso),
                 Key::Num5 => self.toggle_projection(),
                 Key::Enter => self.reset_view(),
+                Key::Escape if self.measure.active => self.measure.points.clear(),
                 Key::Escape => self.set_selected(u32::MAX),
+                Key::M => self.measure.active = !self.measure.active,
+                Key::H | Key::I | Key::U => {
+                    let edit = self.scene.as_ref().and_then(|scene| match k {
+                        Key::H => self.hide_selection_edit(scene),
+                        Key::I => self.isolate_edit(scene),
+                        _ => super::tree::show_all(scene),
+                    });
+                    if let Some(e) = edit {
+                        self.edit(Action::Apply(e));
+                    }
+                }
                 Key::Z if mods.command && mods.shift => self.edit(Action::Redo),
                 Key::Z if mods.command => self.edit(Action::Undo),
                 Key::Y if mods.command => self.edit(Action::Redo),
@@ -977,19 +1019,6 @@ impl Viewer {
                     self.edit(Action::Apply(Edit::Delete {
                         instance: sel,
                         removed: None,
-                    }));
-                }
-                Key::H if self.selected != u32::MAX => {
-                    let sel = self.selected;
-                    let visible = self
-                        .scene
-                        .as_ref()
-                        .and_then(|s| s.instances.get(sel as usize))
-                        .map(|i| i.visible)
-                        .unwrap_or(true);
-                    self.edit(Action::Apply(Edit::Visibility {
-                        instance: sel,
-                        visible: !visible,
                     }));
                 }
                 Key::ArrowLeft

@@ -1,0 +1,540 @@
+//! The model tree: the selection it shares with the 3D view (a node selects its subtree's instances, a pick
+//! selects one instance and reveals its node), the hide / isolate / show-all edits (one undo step each, through
+//! the edit stack, so F increments and the AO follows), and the panel that shows it with a name search.
+use egui::collapsing_header::CollapsingState;
+use hrtao_scene::{NodeTree, Scene};
+
+use super::edits::{Action, Edit};
+use super::Viewer;
+
+/// Children listed under one node before "… N more" (a search finds the rest).
+const MAX_ROWS_PER_NODE: usize = 200;
+/// Search results listed.
+const MAX_SEARCH_ROWS: usize = 200;
+
+/// What is selected and highlighted.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Selection {
+    /// The tree node selected (clicked in the tree) or revealed (owner of the picked instance).
+    pub node: Option<u32>,
+    /// The highlighted instances, sorted.
+    pub instances: Vec<u32>,
+}
+
+impl Selection {
+    /// A tree node: every instance of its subtree.
+    pub fn of_node(tree: &NodeTree, node: u32) -> Self {
+        Self {
+            node: Some(node).filter(|&n| (n as usize) < tree.len()),
+            instances: tree.subtree_instances(node),
+        }
+    }
+
+    /// A picked instance (u32::MAX: nothing) and the node that owns it.
+    pub fn of_instance(tree: &NodeTree, instance: u32) -> Self {
+        if instance == u32::MAX {
+            return Self::default();
+        }
+        Self {
+            node: tree.owner_of(instance),
+            instances: vec![instance],
+        }
+    }
+
+    /// The single selected instance (what move and delete act on), u32::MAX when none or several.
+    pub fn primary(&self) -> u32 {
+        match self.instances.as_slice() {
+            [one] => *one,
+            _ => u32::MAX,
+        }
+    }
+}
+
+/// An edit setting each instance's visibility to `want(instance)` (None: unchanged); None if nothing changes.
+fn visibility_edit(scene: &Scene, label: String, want: impl Fn(u32) -> Option<bool>) -> Option<Edit> {
+    let changes: Vec<(u32, bool)> = scene
+        .instances
+        .iter()
+        .enumerate()
+        .filter_map(|(i, inst)| {
+            let v = want(i as u32)?;
+            (v != inst.visible).then_some((i as u32, v))
+        })
+        .collect();
+    (!changes.is_empty()).then_some(Edit::Visibilities { label, changes })
+}
+
+fn node_name(scene: &Scene, node: u32) -> String {
+    scene
+        .tree
+        .nodes
+        .get(node as usize)
+        .map(|n| n.name.clone())
+        .unwrap_or_default()
+}
+
+/// Shows (`visible`) or hides a node's subtree.
+pub fn set_node_visible(scene: &Scene, node: u32, visible: bool) -> Option<Edit> {
+    let ids = scene.tree.subtree_instances(node);
+    let verb = if visible { "show" } else { "hide" };
+    visibility_edit(scene, format!("{verb} {}", node_name(scene, node)), |i| {
+        ids.binary_search(&i).is_ok().then_some(visible)
+    })
+}
+
+/// Shows the given instances (sorted) and hides every other one.
+pub fn isolate(scene: &Scene, instances: &[u32], what: String) -> Option<Edit> {
+    visibility_edit(scene, format!("isolate {what}"), |i| {
+        Some(instances.binary_search(&i).is_ok())
+    })
+}
+
+/// Shows every instance.
+pub fn show_all(scene: &Scene) -> Option<Edit> {
+    visibility_edit(scene, "show all".into(), |_| Some(true))
+}
+
+/// Panel state: the search text, the node to reveal, and per-node counts cached per scene version.
+#[derive(Default)]
+pub struct TreeView {
+    pub search: String,
+    /// Open this node's ancestors and scroll to it (after a pick in the view), for a few frames so the
+    /// opening animation has laid the row out.
+    reveal: Option<(u32, u8)>,
+    cache_key: Option<(u32, usize)>,
+    counts: Vec<u64>,
+    visible: Vec<u64>,
+}
+
+/// Frames during which a revealed node is scrolled to.
+const REVEAL_FRAMES: u8 = 8;
+
+impl TreeView {
+    /// Opens the path to `node` and scrolls to it (None: nothing to reveal).
+    pub fn reveal(&mut self, node: Option<u32>) {
+        self.reveal = node.map(|n| (n, REVEAL_FRAMES));
+    }
+
+    /// The node to reveal this frame, counting the frames down.
+    fn reveal_now(&mut self) -> Option<u32> {
+        let (node, left) = self.reveal?;
+        self.reveal = (left > 1).then_some((node, left - 1));
+        Some(node)
+    }
+
+    fn refresh(&mut self, scene: &Scene) {
+        let key = (scene.f(), scene.instances.len());
+        if self.cache_key != Some(key) || self.counts.len() != scene.tree.len() {
+            self.counts = scene.tree.instance_counts();
+            self.visible = scene
+                .tree
+                .counts_where(|i| scene.instances.get(i as usize).is_some_and(|x| x.visible));
+            self.cache_key = Some(key);
+        }
+    }
+}
+
+/// What a click in the tree asks for (applied after drawing, when the scene is no longer borrowed).
+enum TreeAction {
+    Select(u32),
+    Visible(u32, bool),
+}
+
+/// Draws the rows of the tree; clicks go to `actions`.
+struct Rows<'a> {
+    tree: &'a NodeTree,
+    view: &'a TreeView,
+    selected: Option<u32>,
+    reveal_path: Vec<u32>,
+    actions: Vec<TreeAction>,
+}
+
+impl Rows<'_> {
+    fn row(&mut self, ui: &mut egui::Ui, id: u32) {
+        let i = id as usize;
+        let node = &self.tree.nodes[i];
+        let (count, visible) = (self.view.counts[i], self.view.visible[i]);
+        let text = format!(
+            "{}  ({count}{})",
+            node.name,
+            if visible < count {
+                format!(", {} hidden", count - visible)
+            } else {
+                String::new()
+            }
+        );
+        let header = |ui: &mut egui::Ui, rows: &mut Self| {
+            let all_visible = visible == count;
+            if ui
+                .small_button(if all_visible { "hide" } else { "show" })
+                .clicked()
+            {
+                rows.actions.push(TreeAction::Visible(id, !all_visible));
+            }
+            let label = ui.selectable_label(rows.selected == Some(id), text.clone());
+            if label.clicked() {
+                rows.actions.push(TreeAction::Select(id));
+            }
+            if rows.reveal_path.last() == Some(&id) {
+                label.scroll_to_me(Some(egui::Align::Center));
+            }
+        };
+        if node.children.is_empty() {
+            ui.horizontal(|ui| {
+                ui.add_space(ui.spacing().indent);
+                header(ui, self)
+            });
+            return;
+        }
+        let key = ui.make_persistent_id(("tree-node", id));
+        let mut state = CollapsingState::load_with_default_open(ui.ctx(), key, node.parent.is_none());
+        if self.reveal_path[..self.reveal_path.len().saturating_sub(1)].contains(&id) {
+            state.set_open(true);
+        }
+        state.show_header(ui, |ui| header(ui, self)).body(|ui| {
+            let children = &self.tree.nodes[i].children;
+            for &c in children.iter().take(MAX_ROWS_PER_NODE) {
+                self.row(ui, c);
+            }
+            if children.len() > MAX_ROWS_PER_NODE {
+                ui.weak(format!(
+                    "… {} more (search by name)",
+                    children.len() - MAX_ROWS_PER_NODE
+                ));
+            }
+        });
+    }
+}
+
+impl Viewer {
+    /// Selects a tree node: its subtree's instances are highlighted; a node of one instance also makes it the
+    /// instance that move and delete act on.
+    pub(crate) fn select_node(&mut self, node: u32) {
+        let Some(scene) = &self.scene else {
+            return;
+        };
+        let sel = Selection::of_node(&scene.tree, node);
+        self.apply_selection(sel);
+    }
+
+    pub(crate) fn tree_section(&mut self, ui: &mut egui::Ui) {
+        let Some(scene) = &self.scene else {
+            ui.label("no scene");
+            return;
+        };
+        self.tree_view.refresh(scene);
+        let node = self.selection.node;
+        ui.horizontal(|ui| {
+            ui.label("Search");
+            ui.add(egui::TextEdit::singleline(&mut self.tree_view.search).desired_width(160.0));
+        });
+        let mut edit = None;
+        ui.horizontal(|ui| {
+            let has = !self.selection.instances.is_empty();
+            if ui
+                .add_enabled(has, egui::Button::new("Hide"))
+                .on_hover_text("Hide the selection (H)")
+                .clicked()
+            {
+                edit = self.hide_selection_edit(scene);
+            }
+            if ui
+                .add_enabled(has, egui::Button::new("Isolate"))
+                .on_hover_text("Show only the selection (I)")
+                .clicked()
+            {
+                edit = self.isolate_edit(scene);
+            }
+            if ui
+                .button("Show all")
+                .on_hover_text("Show every instance (U)")
+                .clicked()
+            {
+                edit = show_all(scene);
+            }
+        });
+        let reveal_path = self
+            .tree_view
+            .reveal_now()
+            .map(|n| scene.tree.path(n))
+            .unwrap_or_default();
+        let mut rows = Rows {
+            tree: &scene.tree,
+            view: &self.tree_view,
+            selected: node,
+            reveal_path,
+            actions: Vec::new(),
+        };
+        let query = self.tree_view.search.trim();
+        let revealing = !rows.reveal_path.is_empty();
+        let area = egui::ScrollArea::vertical()
+            .id_source("model-tree")
+            .max_height(320.0)
+            .min_scrolled_height(240.0)
+            .auto_shrink([false, true])
+            .show(ui, |ui| {
+                if query.is_empty() {
+                    let roots: Vec<u32> = rows.tree.roots().collect();
+                    for r in roots {
+                        rows.row(ui, r);
+                    }
+                } else {
+                    let hits = rows.tree.search(query);
+                    if hits.is_empty() {
+                        ui.weak("no node matches");
+                    }
+                    for &h in hits.iter().take(MAX_SEARCH_ROWS) {
+                        let n = &rows.tree.nodes[h as usize];
+                        let label = ui.selectable_label(
+                            rows.selected == Some(h),
+                            format!("{}  ({})", n.name, rows.view.counts[h as usize]),
+                        );
+                        if label.clicked() {
+                            rows.actions.push(TreeAction::Select(h));
+                        }
+                    }
+                    if hits.len() > MAX_SEARCH_ROWS {
+                        ui.weak(format!("… {} more", hits.len() - MAX_SEARCH_ROWS));
+                    }
+                }
+            });
+        if revealing {
+            // The tree's own scroll area took the row's scroll request; the panel scrolls to the tree.
+            ui.scroll_to_rect(area.inner_rect, Some(egui::Align::Center));
+        }
+        for action in std::mem::take(&mut rows.actions) {
+            match action {
+                TreeAction::Select(n) => {
+                    self.select_node(n);
+                    return self.finish_tree_edit(edit);
+                }
+                TreeAction::Visible(n, v) => {
+                    if let Some(scene) = &self.scene {
+                        edit = set_node_visible(scene, n, v);
+                    }
+                }
+            }
+        }
+        self.finish_tree_edit(edit);
+    }
+
+    /// A line naming a multi-instance selection (a tree node); false when there is none.
+    pub(crate) fn selection_summary(&self, ui: &mut egui::Ui) -> bool {
+        let (Some(scene), Some(node)) = (&self.scene, self.selection.node) else {
+            return false;
+        };
+        if self.selection.instances.len() < 2 {
+            return false;
+        }
+        ui.label(format!(
+            "{}: {} instances (H hide, I isolate)",
+            node_name(scene, node),
+            self.selection.instances.len()
+        ));
+        true
+    }
+
+    fn finish_tree_edit(&mut self, edit: Option<Edit>) {
+        if let Some(e) = edit {
+            self.edit(Action::Apply(e));
+        }
+    }
+
+    /// Hide the selection (a node: its subtree; else the picked instance) or show it if all of it is hidden.
+    pub(crate) fn hide_selection_edit(&self, scene: &Scene) -> Option<Edit> {
+        let all_hidden = self
+            .selection
+            .instances
+            .iter()
+            .all(|&i| scene.instances.get(i as usize).is_some_and(|x| !x.visible));
+        match self.selection.node {
+            Some(n) if self.selection.instances.len() > 1 => set_node_visible(scene, n, all_hidden),
+            _ => visibility_edit(scene, if all_hidden { "show" } else { "hide" }.into(), |i| {
+                self.selection
+                    .instances
+                    .binary_search(&i)
+                    .is_ok()
+                    .then_some(all_hidden)
+            }),
+        }
+    }
+
+    pub(crate) fn isolate_edit(&self, scene: &Scene) -> Option<Edit> {
+        if self.selection.instances.is_empty() {
+            return None;
+        }
+        let what = match (self.selection.node, self.selection.instances.len()) {
+            (Some(n), k) if k > 1 => node_name(scene, n),
+            _ => self
+                .selection
+                .instances
+                .first()
+                .and_then(|&i| scene.instances.get(i as usize))
+                .map(|i| i.name.clone())
+                .unwrap_or_default(),
+        };
+        isolate(scene, &self.selection.instances, what)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::edits::EditStack;
+
+    /// assembly(0) ─ left(1) [0, 1] ; right(2) [2] ; lone(3) [3]
+    fn scene() -> Scene {
+        let mut s = hrtao_scene::load("gen:slab", &mut |_| {}).unwrap();
+        let inst = s.instances[0].clone();
+        while s.instances.len() < 4 {
+            s.add_instance(inst.clone()).unwrap();
+        }
+        let mut t = NodeTree::default();
+        let a = t.add("assembly", None);
+        let l = t.add("left", Some(a));
+        let r = t.add("right", Some(a));
+        let lone = t.add("lone", None);
+        t.nodes[l as usize].instances = vec![0, 1];
+        t.nodes[r as usize].instances = vec![2];
+        t.nodes[lone as usize].instances = vec![3];
+        s.tree = t;
+        s.validate().unwrap();
+        s
+    }
+
+    fn visible(s: &Scene) -> Vec<bool> {
+        s.instances.iter().map(|i| i.visible).collect()
+    }
+
+    #[test]
+    fn node_selects_its_instances_and_picks_reveal_the_node() {
+        let s = scene();
+        let sel = Selection::of_node(&s.tree, 0);
+        assert_eq!(sel.instances, vec![0, 1, 2]);
+        assert_eq!(sel.primary(), u32::MAX, "several instances: nothing to move");
+        let right = Selection::of_node(&s.tree, 2);
+        assert_eq!((right.node, right.primary()), (Some(2), 2));
+        let pick = Selection::of_instance(&s.tree, 1);
+        assert_eq!(pick.node, Some(1));
+        assert_eq!(
+            s.tree.path(pick.node.unwrap()),
+            vec![0, 1],
+            "the path the panel opens"
+        );
+        assert_eq!(pick.primary(), 1);
+        assert_eq!(Selection::of_instance(&s.tree, u32::MAX), Selection::default());
+    }
+
+    #[test]
+    fn hide_isolate_show_all_are_edits_with_undo() {
+        let mut s = scene();
+        let mut stack = EditStack::default();
+        let f0 = s.f();
+        let hide = set_node_visible(&s, 1, false).unwrap();
+        stack.apply(&mut s, hide).unwrap();
+        assert_eq!(visible(&s), [false, false, true, true]);
+        assert!(s.f() > f0, "hiding bumps F");
+        assert!(
+            set_node_visible(&s, 1, false).is_none(),
+            "already hidden: no edit"
+        );
+        let sel = Selection::of_node(&s.tree, 2);
+        let iso = isolate(&s, &sel.instances, "right".into()).unwrap();
+        stack.apply(&mut s, iso).unwrap();
+        assert_eq!(visible(&s), [false, false, true, false]);
+        let all = show_all(&s).unwrap();
+        stack.apply(&mut s, all).unwrap();
+        assert_eq!(visible(&s), [true; 4]);
+        stack.undo(&mut s).unwrap();
+        assert_eq!(visible(&s), [false, false, true, false], "undo show all");
+        stack.undo(&mut s).unwrap();
+        assert_eq!(visible(&s), [false, false, true, true], "undo isolate");
+        stack.undo(&mut s).unwrap();
+        assert_eq!(visible(&s), [true; 4]);
+    }
+
+    #[test]
+    fn delete_undo_restores_tree_ownership() {
+        let mut s = scene();
+        let tree = s.tree.clone();
+        let mut stack = EditStack::default();
+        stack
+            .apply(
+                &mut s,
+                Edit::Delete {
+                    instance: 1,
+                    removed: None,
+                },
+            )
+            .unwrap();
+        assert_eq!(s.tree.nodes[1].instances, vec![0]);
+        assert_eq!(s.tree.nodes[2].instances, vec![1], "later ids shift down");
+        stack.undo(&mut s).unwrap();
+        assert_eq!(s.tree, tree);
+    }
+}
+
+#[cfg(test)]
+mod gpu_tests {
+    use super::*;
+    use crate::view::edits::{run_action, EditStack};
+    use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Renderer, SceneGpu};
+
+    /// Hiding a tree node through the UI's edit path rebuilds the TLAS: its instances vanish from the next
+    /// frame (with the node's instances highlighted), and undo brings them back.
+    #[test]
+    fn hiding_a_node_removes_its_instances_from_the_image() {
+        let gpu = Gpu::new(&ContextOptions::from_env()).expect("Vulkan device (lavapipe)");
+        let mut scene = hrtao_scene::load("gen:slab", &mut |_| {}).unwrap();
+        // gen:slab: ground (0) and slab (1); make the slab its own node under the root.
+        let mut t = NodeTree::default();
+        let root = t.add("site", None);
+        let slab = t.add("slab", Some(root));
+        t.nodes[root as usize].instances = vec![0];
+        t.nodes[slab as usize].instances = vec![1];
+        scene.tree = t;
+        let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+        let b = scene.bounds();
+        let cam = Camera::fit(b.min, b.max, hrtao_core::camera::UpAxis::Z, 40.0, 64, 48);
+        let settings = AoSettings {
+            ao_radius: 2.0,
+            hash_capacity: 1 << 12,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu, 64, 48, settings).unwrap();
+        let ids = |r: &mut Renderer, sg: &SceneGpu, f: u32| {
+            r.render(sg, f, &cam).unwrap();
+            let mut v: Vec<u32> = r.read_gbuffer().unwrap().iter().map(|p| p.instance).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let before = ids(&mut r, &sg, scene.f());
+        assert!(before.contains(&0) && before.contains(&1), "{before:?}");
+        let sel = Selection::of_node(&scene.tree, slab);
+        let mut stack = EditStack::default();
+        let hide = set_node_visible(&scene, slab, false).unwrap();
+        run_action(
+            &mut stack,
+            &mut scene,
+            &mut sg,
+            sel.instances.as_slice(),
+            Action::Apply(hide),
+        )
+        .unwrap();
+        let hidden = ids(&mut r, &sg, scene.f());
+        assert!(!hidden.contains(&1) && hidden.contains(&0), "{hidden:?}");
+        run_action(
+            &mut stack,
+            &mut scene,
+            &mut sg,
+            sel.instances.as_slice(),
+            Action::Undo,
+        )
+        .unwrap();
+        assert_eq!(ids(&mut r, &sg, scene.f()), before);
+        drop(r);
+        drop(sg);
+        assert_eq!(gpu.validation_messages(), 0);
+    }
+}
