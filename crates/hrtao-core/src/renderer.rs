@@ -17,6 +17,7 @@ use crate::gpu::{
 use crate::pass::{Pass, PassSet, Recorder};
 use crate::raster::{Primary, Rasterizer};
 use crate::settings::{AoSettings, Mode};
+use crate::tile::Tile;
 use crate::timer::GpuTimer;
 
 /// Buffers whose size follows the image resolution.
@@ -81,6 +82,7 @@ struct StillKey {
     view_height: u32,
     jitter: bool,
     primary: Primary,
+    tile: Option<Tile>,
 }
 
 /// The world-space hash map (paper §1), persistent across frames.
@@ -149,6 +151,9 @@ pub struct Renderer {
     pub primary: Primary,
     /// Created on the first rasterised frame.
     raster: Option<Rasterizer>,
+    /// Render this window of a larger image (large screenshots); None = the camera's whole image. A tile always
+    /// uses ray-query primary visibility (the rasteriser's projection is the camera's own).
+    pub tile: Option<Tile>,
 }
 
 impl Renderer {
@@ -201,6 +206,7 @@ impl Renderer {
             check_bounds: false,
             primary: Primary::default(),
             raster: None,
+            tile: None,
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
@@ -277,11 +283,31 @@ impl Renderer {
             height: t.height,
             ..*camera
         };
-        let f = cam.frame();
+        let (f, view_height, (top, bottom)) = match self.tile {
+            // A tile: the full image's rays, cells sized for the full image's pixels.
+            Some(tile) => (
+                tile.frame(
+                    &Camera {
+                        width: tile.full.0,
+                        height: tile.full.1,
+                        ..*camera
+                    }
+                    .frame(),
+                    (t.width, t.height),
+                ),
+                tile.full.1,
+                tile.gradient(self.background_top, self.background_bottom, t.height),
+            ),
+            None => (
+                cam.frame(),
+                t.height,
+                (self.background_top, self.background_bottom),
+            ),
+        };
         let view_height = if self.view_height > 0 {
             self.view_height
         } else {
-            t.height
+            view_height
         };
         let mut flags = 0;
         if self.output_bgra {
@@ -346,8 +372,8 @@ impl Renderer {
             filter_iterations: s.filter_iterations,
             prior_rays: s.prior_rays,
             crease_cos: s.crease_deg.to_radians().cos(),
-            background_top: c4(self.background_top),
-            background_bottom: c4(self.background_bottom),
+            background_top: c4(top),
+            background_bottom: c4(bottom),
             gbuffer: t.gbuffer.address,
             instances: 0,
             geometries: 0,
@@ -379,6 +405,7 @@ impl Renderer {
             view_height: self.view_height,
             jitter: self.jitter,
             primary: self.primary,
+            tile: self.tile,
         }
     }
 
@@ -416,7 +443,12 @@ impl Renderer {
         self.passes.bind_tlas(scene.tlas.raw);
 
         let (w, h) = self.size();
-        if self.primary == Primary::Raster {
+        let primary = if self.tile.is_some() {
+            Primary::RayQuery
+        } else {
+            self.primary
+        };
+        if primary == Primary::Raster {
             let raster = match &mut self.raster {
                 Some(r) => r,
                 None => self.raster.insert(Rasterizer::new(&self.gpu)?),
@@ -426,7 +458,7 @@ impl Renderer {
         let mode = self.settings.mode;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
-        match (self.primary, &self.raster) {
+        match (primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
                 let near = Rasterizer::near_plane(
                     (glam::Vec3::from(camera.target) - glam::Vec3::from(camera.eye)).length(),
