@@ -831,8 +831,16 @@ impl Viewer {
             self.toast("a screenshot is already in progress", true);
             return;
         }
-        let result = match (&self.scene_gpu, &self.renderer) {
-            (Some(_), Some(_)) => {
+        // The folder first: a bad destination fails now, not after minutes of rendering.
+        let folder = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            Some(dir) => {
+                std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
+            }
+            None => Ok(()),
+        };
+        let result = match (&self.scene_gpu, &self.renderer, folder) {
+            (_, _, Err(e)) => Err(e),
+            (Some(_), Some(_), Ok(())) => {
                 // A tile costs about what a still frame of the view costs.
                 let (w, h) = self.internal_size();
                 shot::BackgroundShot::new(
@@ -923,14 +931,8 @@ impl Viewer {
         let (path, [w, h]) = (summary.path.clone(), summary.size);
         let rgba = done.rgba;
         std::thread::spawn(move || {
-            let result = (|| -> Result<()> {
-                if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-                    std::fs::create_dir_all(dir)
-                        .with_context(|| format!("cannot create {}", dir.display()))?;
-                }
-                hrtao_core::imageio::write_png(&path, w, h, &rgba)
-                    .with_context(|| format!("cannot write {}", path.display()))
-            })();
+            let result = hrtao_core::imageio::write_png(&path, w, h, &rgba)
+                .with_context(|| format!("cannot write {}", path.display()));
             let _ = tx.send(result.map_err(|e| format!("{e:#}")));
         });
         self.saving = Some(Saving { summary, rx });
