@@ -67,11 +67,17 @@ pub struct BackgroundShot {
 }
 
 /// Hash capacity for `pixels`: about 12 % of the pixels become cells at 4 LODs (measured at 3840×2160 on the
-/// bundled scene), so half the pixel count keeps the load near 25 %; never below the viewer's own.
+/// bundled scene), so half the pixel count keeps the load near 25 %; never below the viewer's own, and at most
+/// 2^25 cells (1 GiB): beyond that, cells of finished tiles go stale and are reclaimed (eq. 6) for later tiles.
 pub fn hash_capacity_for(pixels: u64, viewer: u32) -> u32 {
-    let want = (pixels / 2).next_power_of_two().clamp(1024, 1 << 28) as u32;
+    let want = (pixels / 2)
+        .next_power_of_two()
+        .clamp(1024, MAX_HASH_CAPACITY as u64) as u32;
     want.max(viewer)
 }
+
+/// The largest map a screenshot allocates by itself.
+pub const MAX_HASH_CAPACITY: u32 = 1 << 25;
 
 /// Pixels rendered around each tile: what the à-trous filter (2^i steps of 2 pixels) and the edges (1 pixel) see.
 fn margin_for(settings: &AoSettings) -> u32 {
@@ -166,6 +172,18 @@ impl BackgroundShot {
         }
         let px = self.renderer.read_rgba()?;
         self.grid.copy_inner(self.tile, &px, &mut self.image);
+        log::info!(
+            "screenshot tile {}/{} kept after {} frames ({}), {:.1} s so far",
+            self.tile + 1,
+            self.grid.len(),
+            self.tile_frames,
+            if report.converged {
+                "converged"
+            } else {
+                "frame cap"
+            },
+            self.started.elapsed().as_secs_f64()
+        );
         self.tile += 1;
         self.tile_frames = 0;
         if self.tile < self.grid.len() {
@@ -218,7 +236,8 @@ mod tests {
         // 3840×2160: 4 M cells (about 1 M are used there), never less than the viewer's map.
         assert_eq!(hash_capacity_for(3840 * 2160, 1 << 20), 1 << 22);
         assert_eq!(hash_capacity_for(640 * 360, 1 << 20), 1 << 20);
-        assert_eq!(hash_capacity_for(16384 * 16384, 1 << 20), 1 << 28);
+        assert_eq!(hash_capacity_for(16384 * 16384, 1 << 20), MAX_HASH_CAPACITY);
+        assert_eq!(hash_capacity_for(64, 1 << 26), 1 << 26);
         let s = AoSettings::default();
         // Two filter passes reach 2 + 4 pixels; the edges one more.
         assert_eq!(margin_for(&s), 7);
