@@ -508,12 +508,12 @@ fn a_big_screenshot_renders_in_the_background_while_the_window_draws() {
         "--screenshot",
         shot.to_str().unwrap(),
         "--screenshot-size",
-        "300x200",
+        "280x180",
         "--stats",
         stats.to_str().unwrap(),
     ]);
     println!("background screenshot run: {:.1} s", t0.elapsed().as_secs_f64());
-    check_image(&shot, 300, 200);
+    check_image(&shot, 280, 180);
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     let s = &json["screenshot"];
     println!("{s}");

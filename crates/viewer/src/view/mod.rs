@@ -841,8 +841,8 @@ impl Viewer {
         let result = match (&self.scene_gpu, &self.renderer, folder) {
             (_, _, Err(e)) => Err(e),
             (Some(_), Some(_), Ok(())) => {
-                // A tile costs about what a still frame of the view costs.
-                let (w, h) = self.internal_size();
+                // A slice costs about what a moving frame of the view costs (the frame-time target).
+                let (w, h) = self.internal_size_at(self.motion.moving_scale.min(self.render_scale));
                 shot::BackgroundShot::new(
                     &self.gpu,
                     &self.settings,

@@ -90,7 +90,7 @@ fn margin_for(settings: &AoSettings) -> u32 {
 }
 
 impl BackgroundShot {
-    /// A shot of `camera`'s pose at `size`, in tiles of about `slice_pixels` (a viewer frame's worth of work).
+    /// A shot of `camera`'s pose at `size`, in tiles of about `slice_pixels` (a moving viewer frame's work).
     pub fn new(
         gpu: &Arc<Gpu>,
         settings: &AoSettings,
@@ -102,11 +102,13 @@ impl BackgroundShot {
         let pixels = size.0 as u64 * size.1 as u64;
         let mut settings = settings.clone();
         settings.hash_capacity = hash_capacity_for(pixels, settings.hash_capacity);
-        // Enough rays per frame that a pixel has its own `still_samples` once the tile is anti-aliased.
-        settings.rays_per_pixel = settings
-            .rays_per_pixel
-            .max(settings.still_samples.div_ceil(AA_FRAMES))
-            .min(64);
+        // With refinement: just enough rays per frame that a pixel has its own `still_samples` once the tile is
+        // anti-aliased (more would not end it sooner). The viewer's budget follows its own resolution.
+        if settings.refine {
+            settings.rays_per_pixel = settings.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
+        } else {
+            settings.rays_per_pixel = settings.rays_per_pixel.max(1);
+        }
         let grid = TileGrid::new(
             size.0,
             size.1,
