@@ -183,7 +183,8 @@ pub struct ViewArgs {
     /// Scripted mode: save the whole window including the UI to this PNG after --frames.
     #[arg(long)]
     pub screenshot_ui: Option<PathBuf>,
-    /// Scripted mode: extra frames rendered for --screenshot (the hash map keeps converging).
+    /// Scripted mode: extra frames rendered for --screenshot at window size (the hash map keeps converging);
+    /// with --screenshot-size each tile renders until converged instead.
     #[arg(long, default_value_t = 4)]
     pub screenshot_frames: u32,
     /// Scripted mode: resize the window to WxH after frame K (tests resizing), e.g. `--resize-at-frame 2 320x200`.
