@@ -7,6 +7,7 @@
 //! - `raster`: rasterised primary visibility (the ray-query pass's G-buffer from instanced draws).
 //! - `renderer`: the frame (primary visibility, per-pixel RTAO, HRTAO passes, composite).
 //! - `hash`: CPU mirror of the shaders' hash functions (paper eq. 1-6).
+//! - `tile`: a window of a larger image (large screenshots rendered tile by tile).
 //! - `camera`, `settings`, `imageio`, `headless`: inputs and outputs.
 pub mod accel;
 pub mod buffer;
@@ -23,6 +24,7 @@ pub mod regions;
 pub mod renderer;
 pub mod section;
 pub mod settings;
+pub mod tile;
 pub mod timer;
 
 pub use accel::SceneGpu;

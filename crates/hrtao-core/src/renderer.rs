@@ -18,6 +18,7 @@ use crate::pass::{Pass, PassSet, Recorder};
 use crate::raster::{Primary, Rasterizer};
 use crate::regions::RegionTable;
 use crate::settings::{AoSettings, Mode};
+use crate::tile::Tile;
 use crate::timer::GpuTimer;
 
 /// Buffers whose size follows the image resolution.
@@ -86,6 +87,7 @@ struct StillKey {
     view_height: u32,
     jitter: bool,
     primary: Primary,
+    tile: Option<Tile>,
 }
 
 /// The world-space hash map (paper §1), persistent across frames.
@@ -162,6 +164,9 @@ pub struct Renderer {
     pub primary: Primary,
     /// Created on the first rasterised frame.
     raster: Option<Rasterizer>,
+    /// Render this window of a larger image (large screenshots); None = the camera's whole image. A tile always
+    /// uses ray-query primary visibility (the rasteriser's projection is the camera's own).
+    pub tile: Option<Tile>,
 }
 
 impl Renderer {
@@ -217,6 +222,7 @@ impl Renderer {
             check_bounds: false,
             primary: Primary::default(),
             raster: None,
+            tile: None,
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
@@ -314,11 +320,32 @@ impl Renderer {
             height: t.height,
             ..*camera
         };
-        let f = cam.frame();
+        let (f, view_height, (top, bottom)) = match self.tile {
+            // A tile: the full image's rays, cells sized for the full image's pixels.
+            Some(tile) => (
+                tile.frame(
+                    &Camera {
+                        width: tile.full.0,
+                        height: tile.full.1,
+                        ..*camera
+                    }
+                    .frame(),
+                    (t.width, t.height),
+                    camera.is_orthographic(),
+                ),
+                tile.full.1,
+                tile.gradient(self.background_top, self.background_bottom, t.height),
+            ),
+            None => (
+                cam.frame(),
+                t.height,
+                (self.background_top, self.background_bottom),
+            ),
+        };
         let view_height = if self.view_height > 0 {
             self.view_height
         } else {
-            t.height
+            view_height
         };
         let feature_size = crate::hash::FeatureSize::for_camera(&cam, view_height, s.s_p);
         let mut flags = 0;
@@ -382,8 +409,8 @@ impl Renderer {
             filter_sigma: s.filter_sigma,
             region_lod: self.regions.region_lod,
             crease_cos: s.crease_deg.to_radians().cos(),
-            background_top: c4(self.background_top),
-            background_bottom: c4(self.background_bottom),
+            background_top: c4(top),
+            background_bottom: c4(bottom),
             gbuffer: t.gbuffer.address,
             instances: 0,
             geometries: 0,
@@ -429,6 +456,7 @@ impl Renderer {
             view_height: self.view_height,
             jitter: self.jitter,
             primary: self.primary,
+            tile: self.tile,
         }
     }
 
@@ -484,7 +512,9 @@ impl Renderer {
             } else {
                 b.corners().to_vec()
             };
-            let start = camera.ortho_ray_plane(&corners);
+            // A tile's eye is moved across the image plane (`Tile::frame`): keep that offset.
+            let offset = glam::Vec3::from_slice(&globals.eye[..3]) - glam::Vec3::from(camera.eye);
+            let start = camera.ortho_ray_plane(&corners) + offset;
             globals.eye = [start.x, start.y, start.z, 0.0];
         }
         globals.instances = scene.instance_info.address;
@@ -496,7 +526,12 @@ impl Renderer {
         self.passes.bind_tlas(scene.tlas.raw);
 
         let (w, h) = self.size();
-        if self.primary == Primary::Raster {
+        let primary = if self.tile.is_some() {
+            Primary::RayQuery
+        } else {
+            self.primary
+        };
+        if primary == Primary::Raster {
             let raster = match &mut self.raster {
                 Some(r) => r,
                 None => self.raster.insert(Rasterizer::new(&self.gpu)?),
@@ -506,7 +541,7 @@ impl Renderer {
         let mode = self.settings.mode;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
-        match (self.primary, &self.raster) {
+        match (primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
                 raster.record(
                     &mut rec,

@@ -206,10 +206,15 @@ pub struct ViewArgs {
     /// Scripted mode: save the 3D view (no UI) at window resolution to this PNG after --frames.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
+    /// Scripted mode: render --screenshot at this size in the background (tiles, one frame per viewer frame,
+    /// each tile until converged) while the window keeps drawing; the run ends once the PNG is written.
+    #[arg(long, value_name = "WxH", requires = "screenshot")]
+    pub screenshot_size: Option<String>,
     /// Scripted mode: save the whole window including the UI to this PNG after --frames.
     #[arg(long)]
     pub screenshot_ui: Option<PathBuf>,
-    /// Scripted mode: extra frames rendered for --screenshot (the hash map keeps converging).
+    /// Scripted mode: extra frames rendered for --screenshot at window size (the hash map keeps converging);
+    /// with --screenshot-size each tile renders until converged instead.
     #[arg(long, default_value_t = 4)]
     pub screenshot_frames: u32,
     /// Scripted mode: resize the window to WxH after frame K (tests resizing), e.g. `--resize-at-frame 2 320x200`.

@@ -927,3 +927,69 @@ fn measuring_two_clicked_points_on_a_known_box() {
     drop(v);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A screenshot larger than the window renders in the background (tiles, each until converged) while the window
+/// keeps drawing: the PNG has the asked size and AO shading, and the window drew a frame per slice meanwhile.
+/// A shot that cannot be written fails with a message and exit status 1.
+#[test]
+fn a_big_screenshot_renders_in_the_background_while_the_window_draws() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("background-shot");
+    let shot = dir.join("big.png");
+    let stats = dir.join("stats.json");
+    let t0 = std::time::Instant::now();
+    run_viewer(&[
+        "--size",
+        "240x150",
+        "--no-panel",
+        "--frames",
+        "2",
+        "--screenshot",
+        shot.to_str().unwrap(),
+        "--screenshot-size",
+        "280x180",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    println!("background screenshot run: {:.1} s", t0.elapsed().as_secs_f64());
+    check_image(&shot, 280, 180);
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let s = &json["screenshot"];
+    println!("{s}");
+    let tiles = s["tiles"].as_u64().unwrap();
+    assert!(
+        tiles >= 2,
+        "bigger than a viewer frame's work: several tiles\n{s}"
+    );
+    assert_eq!(s["unconverged_tiles"], 0, "every tile converged\n{s}");
+    assert_eq!(s["failed_inserts"], 0, "{s}");
+    // A tile converges once anti-aliased (AA_FRAMES = 16 frames at least); the window drew (and rendered) one
+    // frame per slice.
+    let shot_frames = s["frames"].as_u64().unwrap();
+    assert!(shot_frames >= 16 * tiles, "{s}");
+    assert!(s["viewer_frames"].as_u64().unwrap() >= shot_frames, "{s}");
+    assert!(s["viewer_rendered"].as_u64().unwrap() >= shot_frames, "{s}");
+    let frames = json["frames"].as_array().unwrap().len() as u64;
+    assert!(frames >= shot_frames + 2, "{frames} frames in the log");
+
+    // An unwritable folder fails at once; a full disk once the image is rendered (on the writer thread).
+    for (dest, size) in [("/dev/null/big.png", "3840x2160"), ("/dev/full", "64x40")] {
+        let t0 = std::time::Instant::now();
+        let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+            .args(["view", "--size", "160x100", "--no-panel", "--frames", "1"])
+            .args(["--screenshot", dest, "--screenshot-size", size])
+            .args(["--no-config", "--exit"])
+            .env("HRTAO_VALIDATION", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        println!("{dest}: failed in {:.1} s", t0.elapsed().as_secs_f64());
+        assert!(!err.contains("panicked"), "{dest}: panic\n{err}");
+        assert_eq!(out.status.code(), Some(1), "{dest}: exit 1\n{err}");
+        assert!(err.contains("screenshot failed"), "{dest}: message\n{err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

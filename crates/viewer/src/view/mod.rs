@@ -5,6 +5,7 @@
 //! - `edits`: scene edits with undo/redo (F increments, TLAS rebuild).
 //! - `prefs`: persisted settings and camera bookmarks.
 //! - `present`: swapchain, the scaled blit of the renderer's output, readback of the presented image.
+//! - `shot`: custom-size screenshots rendered in the background, tile by tile, while the window keeps drawing.
 //! - `ui`: the panel, navigation and picking input, toasts.
 pub mod budget;
 pub mod edits;
@@ -15,6 +16,7 @@ pub mod nav;
 pub mod prefs;
 pub mod present;
 mod sections;
+pub mod shot;
 pub mod stats;
 pub mod tree;
 mod ui;
@@ -70,6 +72,9 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         Some(s) => parse_size(s)?,
         None => (1280, 800),
     };
+    if let Some(s) = &args.screenshot_size {
+        parse_size(s).context("--screenshot-size")?;
+    }
     let resize = match args.resize_at_frame.as_slice() {
         [] => None,
         [k, wh] => Some((k.parse::<u32>().context("--resize-at-frame K")?, parse_size(wh)?)),
@@ -296,6 +301,9 @@ struct Script {
     screenshot: Option<PathBuf>,
     screenshot_ui: Option<PathBuf>,
     screenshot_frames: u32,
+    /// --screenshot-size: --screenshot is rendered in the background at this size (started once).
+    screenshot_size: Option<(u32, u32)>,
+    shot_started: bool,
     resize: Option<(u32, (u32, u32))>,
     open: Option<(u32, String)>,
     exit: bool,
@@ -303,6 +311,12 @@ struct Script {
     rendered: u32,
     done: bool,
     ui_capture_pending: bool,
+}
+
+/// A background screenshot's PNG being written on its own thread.
+pub(crate) struct Saving {
+    summary: shot::ShotSummary,
+    rx: Receiver<std::result::Result<(), String>>,
 }
 
 /// A screenshot asked for by F12/the button, taken before the next frame.
@@ -372,6 +386,9 @@ pub(crate) struct Viewer {
     // Messages.
     toasts: Vec<Toast>,
     shot: Option<ShotRequest>,
+    /// A custom-size screenshot rendering in the background, then its PNG being written.
+    pub(crate) background_shot: Option<shot::BackgroundShot>,
+    saving: Option<Saving>,
     script: Script,
     pending_ui_readback: Option<(PathBuf, Buffer, u32, u32, bool)>,
     shut_down: bool,
@@ -479,6 +496,8 @@ impl Viewer {
             prefs_saved_at: Instant::now(),
             toasts: Vec::new(),
             shot: None,
+            background_shot: None,
+            saving: None,
             script: Script {
                 frames: args.frames.or(args.orbit.map(|_| 0)),
                 orbit_left: args.orbit.unwrap_or(0),
@@ -487,6 +506,8 @@ impl Viewer {
                 screenshot: args.screenshot.clone(),
                 screenshot_ui: args.screenshot_ui.clone(),
                 screenshot_frames: args.screenshot_frames,
+                screenshot_size: args.screenshot_size.as_deref().and_then(|s| parse_size(s).ok()),
+                shot_started: false,
                 resize,
                 open: match args.open_at_frame.as_slice() {
                     [k, file] => k.parse::<u32>().ok().map(|k| (k, file.clone())),
@@ -637,6 +658,7 @@ impl Viewer {
             .sections(&scene)
             .map_err(|e| anyhow!(e))?;
         let section_state = sections::SectionState::for_scene(bounds, &initial_sections);
+        self.cancel_background_shot(": another scene was opened");
         let mut scene_gpu = SceneGpu::new(&self.gpu, &scene)?;
         scene_gpu.set_sections(&scene, &section_state.sections(), u32::MAX)?;
         let is_default = std::fs::canonicalize(spec).ok() == std::fs::canonicalize(default_spec()).ok();
@@ -858,21 +880,168 @@ impl Viewer {
             .join(screenshot_name(jiff::Zoned::now()))
     }
 
+    /// F12/the button: a custom size renders in the background; the window's size right away.
     pub(crate) fn request_screenshot(&mut self) {
-        let size = self
-            .prefs
-            .screenshot_custom
-            .then_some((self.prefs.screenshot_width, self.prefs.screenshot_height));
-        let frames = if size.is_some() {
-            self.prefs.screenshot_frames
-        } else {
-            self.prefs.screenshot_frames.min(4)
-        };
+        let path = self.screenshot_path();
+        if self.prefs.screenshot_custom {
+            let size = (self.prefs.screenshot_width, self.prefs.screenshot_height);
+            self.start_background_shot(size, path);
+            return;
+        }
         self.shot = Some(ShotRequest {
-            size,
-            frames,
-            path: self.screenshot_path(),
+            size: None,
+            frames: self.prefs.screenshot_frames.min(4),
+            path,
         });
+    }
+
+    /// Starts a background screenshot of the current view at `size` (one at a time).
+    pub(crate) fn start_background_shot(&mut self, size: (u32, u32), path: PathBuf) {
+        if self.background_shot.is_some() || self.saving.is_some() {
+            self.toast("a screenshot is already in progress", true);
+            return;
+        }
+        // The folder first: a bad destination fails now, not after minutes of rendering.
+        let folder = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            Some(dir) => {
+                std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
+            }
+            None => Ok(()),
+        };
+        let result = match (&self.scene_gpu, &self.renderer, folder) {
+            (_, _, Err(e)) => Err(e),
+            (Some(_), Some(_), Ok(())) => {
+                // A slice costs about what a moving frame of the view costs (the frame-time target).
+                let (w, h) = self.internal_size_at(self.motion.moving_scale.min(self.render_scale));
+                shot::BackgroundShot::new(
+                    &self.gpu,
+                    &self.settings,
+                    &self.nav.cam,
+                    size,
+                    path,
+                    w as u64 * h as u64,
+                )
+            }
+            _ => Err(anyhow!("no scene is open")),
+        };
+        match result {
+            Ok(s) => {
+                self.toast(
+                    format!(
+                        "rendering a {}×{} screenshot in the background ({} tiles)",
+                        size.0,
+                        size.1,
+                        s.tiles()
+                    ),
+                    false,
+                );
+                self.background_shot = Some(s);
+            }
+            Err(e) => self.shot_failed(format!("{e:#}")),
+        }
+    }
+
+    /// Cancel button (or a new scene): the background screenshot is dropped.
+    pub(crate) fn cancel_background_shot(&mut self, why: &str) {
+        if self.background_shot.take().is_some() {
+            // Its last frame was waited for with the viewer's frame: nothing of it is in flight.
+            self.toast(format!("screenshot cancelled{why}"), false);
+        }
+    }
+
+    /// A failed background screenshot: a toast (fatal in a scripted run); the viewer keeps running.
+    fn shot_failed(&mut self, msg: String) {
+        self.background_shot = None;
+        let msg = format!("screenshot failed: {msg}");
+        if self.script.screenshot_size.is_some() && self.script.frames.is_some() {
+            self.fatal(msg);
+        } else {
+            self.toast(msg, true);
+        }
+    }
+
+    /// Background screenshot: the progress for the panel (fraction, text), or the PNG being written.
+    pub(crate) fn shot_progress(&self) -> Option<(f32, String)> {
+        if let Some(s) = &self.background_shot {
+            return Some((s.progress(), s.status()));
+        }
+        self.saving.as_ref().map(|s| {
+            let [w, h] = s.summary.size;
+            (1.0, format!("{w}×{h}: writing the PNG"))
+        })
+    }
+
+    /// After the viewer's frame completed: the background screenshot's frame; a finished image is written on a
+    /// thread. Returns the shot's GPU milliseconds.
+    fn finish_shot_frame(&mut self, viewer_rendered: bool) -> f64 {
+        let Some(s) = &mut self.background_shot else {
+            return 0.0;
+        };
+        s.viewer_frames += 1;
+        s.viewer_rendered += viewer_rendered as u32;
+        let f = self.scene.as_ref().map_or(0, |sc| sc.f());
+        match s.finish(f) {
+            Ok(None) => s.last_gpu_ms,
+            Ok(Some(done)) => {
+                let ms = s.last_gpu_ms;
+                self.background_shot = None;
+                self.save_in_background(done);
+                ms
+            }
+            Err(e) => {
+                self.shot_failed(format!("{e:#}"));
+                0.0
+            }
+        }
+    }
+
+    fn save_in_background(&mut self, done: shot::Finished) {
+        let (tx, rx) = mpsc::channel();
+        let summary = done.summary;
+        let (path, [w, h]) = (summary.path.clone(), summary.size);
+        let rgba = done.rgba;
+        std::thread::spawn(move || {
+            let result = hrtao_core::imageio::write_png(&path, w, h, &rgba)
+                .with_context(|| format!("cannot write {}", path.display()));
+            let _ = tx.send(result.map_err(|e| format!("{e:#}")));
+        });
+        self.saving = Some(Saving { summary, rx });
+    }
+
+    /// Polls the PNG writer of a background screenshot.
+    fn poll_saving(&mut self) {
+        let Some(saving) = &self.saving else {
+            return;
+        };
+        let result = match saving.rx.try_recv() {
+            Ok(r) => r,
+            Err(mpsc::TryRecvError::Empty) => return,
+            Err(mpsc::TryRecvError::Disconnected) => Err("the PNG writer stopped".into()),
+        };
+        let Some(saving) = self.saving.take() else {
+            return;
+        };
+        let sm = &saving.summary;
+        match result {
+            Ok(()) => {
+                self.toast(
+                    format!(
+                        "screenshot saved: {} ({}×{}, {} tiles, {} frames, {:.1} s)",
+                        sm.path.display(),
+                        sm.size[0],
+                        sm.size[1],
+                        sm.tiles,
+                        sm.frames,
+                        sm.seconds
+                    ),
+                    false,
+                );
+                if let Some(log) = &mut self.script.stats {
+                    log.screenshot = Some(saving.summary);
+                }
+            }
+            Err(e) => self.shot_failed(e),
+        }
     }
 
     /// The per-frame work: swapchain upkeep, the renderer's passes, the blit, egui, present, statistics.
@@ -889,6 +1058,7 @@ impl Viewer {
             std::thread::sleep(Duration::from_millis(30));
             return Ok(());
         }
+        self.poll_saving();
         if let Some(req) = self.shot.take() {
             match self.take_screenshot(req) {
                 Ok(p) => self.toast(format!("screenshot saved: {}", p.display()), false),
@@ -950,6 +1120,11 @@ impl Viewer {
             height: ih,
             ..self.nav.cam
         };
+        let mut shot_error = None;
+        if let (Some(s), Some(sg), Some(scene)) = (&mut self.background_shot, &self.scene_gpu, &self.scene) {
+            // One frame of the background screenshot's current tile, before the view's own passes.
+            shot_error = s.record(cmd, sg, scene.f()).err();
+        }
         if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
             r.resize(iw, ih)?;
             r.output_bgra = bgra_direct;
@@ -996,6 +1171,11 @@ impl Viewer {
         }
         self.presenter.submit_and_present(index)?;
         let gpu_wall = t0.elapsed().as_secs_f64() * 1e3;
+        let shot_ms = self.finish_shot_frame(rendered);
+        if let Some(e) = shot_error {
+            // Dropped only now: its commands were in the frame just completed.
+            self.shot_failed(format!("{e:#}"));
+        }
         if let Some((path, buf, w, h, bgra)) = readback {
             let mut px: Vec<u8> = buf.read((w * h * 4) as usize)?;
             if bgra {
@@ -1037,7 +1217,8 @@ impl Viewer {
             self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
             self.last_report = Some(report);
             if moving {
-                self.frame_time_target(wall_ms);
+                // The background screenshot's share of the frame is not the view's.
+                self.frame_time_target((wall_ms - shot_ms).max(0.0));
             }
             self.script_step();
         }
@@ -1085,6 +1266,8 @@ impl Viewer {
         let converging = viewing && !self.converged_full();
         let busy = script_running
             || self.shot.is_some()
+            || self.background_shot.is_some()
+            || self.saving.is_some()
             || self.script.ui_capture_pending
             || converging
             || (viewing && self.motion.moving(now));
@@ -1140,8 +1323,23 @@ impl Viewer {
             return;
         }
         if n >= frames {
+            if let (Some(size), Some(path)) = (self.script.screenshot_size, self.script.screenshot.clone()) {
+                // Rendered in the background while the window keeps drawing: the run ends once it is written.
+                if !self.script.shot_started {
+                    self.script.shot_started = true;
+                    self.start_background_shot(size, path);
+                }
+                if self.background_shot.is_some() || self.saving.is_some() {
+                    return;
+                }
+            }
             self.script.done = true;
-            if let Some(path) = self.script.screenshot.clone() {
+            if let Some(path) = self
+                .script
+                .screenshot
+                .clone()
+                .filter(|_| self.script.screenshot_size.is_none())
+            {
                 let req = ShotRequest {
                     size: None,
                     frames: self.script.screenshot_frames,
@@ -1249,6 +1447,7 @@ impl Viewer {
         self.write_stats();
         self.gpu.wait_idle();
         self.pending_ui_readback = None;
+        self.background_shot = None;
         self.renderer = None;
         self.scene_gpu = None;
         self.presenter.destroy();

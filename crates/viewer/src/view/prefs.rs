@@ -30,7 +30,7 @@ pub struct Prefs {
     pub screenshot_custom: bool,
     pub screenshot_width: u32,
     pub screenshot_height: u32,
-    /// Frames rendered for an offscreen screenshot (the hash map keeps converging over them).
+    /// Frames rendered for a window-size screenshot, at most 4 (a custom size renders until converged).
     pub screenshot_frames: u32,
     pub bookmarks: Vec<Bookmark>,
     pub dark_theme: bool,

@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
+use super::shot::ShotSummary;
+
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FrameStat {
     /// The whole frame on the CPU clock: UI, the renderer's passes, the blit, egui, present.
@@ -25,11 +27,14 @@ struct StatsFile<'a> {
     frames: &'a [FrameStat],
     median_moving_wall_ms: Option<f64>,
     median_still_wall_ms: Option<f64>,
+    /// A background screenshot (--screenshot-size) written during the run.
+    screenshot: Option<&'a ShotSummary>,
 }
 
 pub struct StatsLog {
     path: PathBuf,
     pub frames: Vec<FrameStat>,
+    pub screenshot: Option<ShotSummary>,
 }
 
 impl StatsLog {
@@ -37,6 +42,7 @@ impl StatsLog {
         StatsLog {
             path,
             frames: Vec::new(),
+            screenshot: None,
         }
     }
 
@@ -62,6 +68,7 @@ impl StatsLog {
             frames: &self.frames,
             median_moving_wall_ms: self.median_wall_ms(true),
             median_still_wall_ms: self.median_wall_ms(false),
+            screenshot: self.screenshot.as_ref(),
         };
         if let Some(dir) = self.path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;

@@ -132,6 +132,7 @@ impl Viewer {
             });
         self.keyboard(ctx);
         self.draw_toasts(ctx);
+        self.draw_shot_overlay(ctx);
     }
 
     /// Keys that act whatever has the keyboard focus, read before any widget runs: Tab toggles the panel and
@@ -692,7 +693,10 @@ impl Viewer {
             }
         });
         ui.checkbox(&mut self.prefs.screenshot_custom, "custom resolution")
-            .on_hover_text("Rendered offscreen at this size (else the 3D view's window resolution)");
+            .on_hover_text(
+                "Rendered in the background at this size, tile by tile, each tile until its still image has \
+             converged (anti-aliased), while the view keeps drawing; else the 3D view's window resolution",
+            );
         ui.add_enabled_ui(self.prefs.screenshot_custom, |ui| {
             ui.horizontal(|ui| {
                 ui.add(egui::DragValue::new(&mut self.prefs.screenshot_width).clamp_range(16..=16384));
@@ -700,13 +704,39 @@ impl Viewer {
                 ui.add(egui::DragValue::new(&mut self.prefs.screenshot_height).clamp_range(16..=16384));
             });
         });
-        ui.add(egui::Slider::new(&mut self.prefs.screenshot_frames, 1..=256).text("frames"))
-            .on_hover_text(
-                "Frames rendered for the screenshot: finer cells at higher resolution need more samples to \
-                 converge (window-resolution shots use at most 4; the cache is already warm).",
-            );
-        if ui.button("Take screenshot (F12)").clicked() {
+        ui.add_enabled_ui(!self.prefs.screenshot_custom, |ui| {
+            ui.add(egui::Slider::new(&mut self.prefs.screenshot_frames, 1..=4).text("frames"))
+                .on_hover_text(
+                    "Frames rendered for a window-resolution screenshot (the cache is already warm); a custom \
+                     size renders until converged.",
+                );
+        });
+        if let Some((fraction, status)) = self.shot_progress() {
+            ui.add(egui::ProgressBar::new(fraction).text(status));
+            if self.background_shot.is_some() && ui.button("Cancel screenshot").clicked() {
+                self.cancel_background_shot("");
+            }
+        } else if ui.button("Take screenshot (F12)").clicked() {
             self.request_screenshot();
+        }
+    }
+
+    /// A background screenshot's progress and Cancel over the 3D view while the panel is hidden.
+    fn draw_shot_overlay(&mut self, ctx: &egui::Context) {
+        let Some((fraction, status)) = self.shot_progress().filter(|_| !self.show_panel) else {
+            return;
+        };
+        let mut cancel = false;
+        egui::Area::new("screenshot progress")
+            .anchor(egui::Align2::RIGHT_TOP, [-10.0, 10.0])
+            .show(ctx, |ui| {
+                egui::Frame::popup(ui.style()).show(ui, |ui| {
+                    ui.add(egui::ProgressBar::new(fraction).desired_width(260.0).text(status));
+                    cancel = self.background_shot.is_some() && ui.button("Cancel screenshot").clicked();
+                });
+            });
+        if cancel {
+            self.cancel_background_shot("");
         }
     }
 
