@@ -162,3 +162,58 @@ fn render_accepts_an_orthographic_camera_file() {
         .iter()
         .all(|&(x, y)| (16..48).contains(&x) && (16..48).contains(&y)));
 }
+
+/// STL (binary and ASCII) and PLY (ASCII and binary) of the reference model render the same AO image as its glTF
+/// (`hrtao render`, the same auto-framed camera, HRTAO and per-pixel RTAO).
+#[test]
+fn stl_and_ply_render_the_same_ao_as_gltf() {
+    let dir = tmp("same-model");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases = hrtao_scene::hostile::write_corpus(&dir).unwrap();
+    let path = |name: &str| cases.iter().find(|c| c.name == name).unwrap().path.clone();
+    for mode in ["hrtao", "rtao"] {
+        let render = |file: &std::path::Path| {
+            let ao = dir.join(format!(
+                "{}.{mode}.pfm",
+                file.file_name().unwrap().to_string_lossy()
+            ));
+            let out = hrtao(&[
+                "render",
+                "--scene",
+                file.to_str().unwrap(),
+                "--width",
+                "96",
+                "--height",
+                "64",
+                "--mode",
+                mode,
+                "--rays",
+                "4",
+                "--frames",
+                "2",
+                "--out",
+                dir.join("x.png").to_str().unwrap(),
+                "--ao-out",
+                ao.to_str().unwrap(),
+            ]);
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            hrtao_core::imageio::read_pfm(&ao).unwrap().2
+        };
+        let gltf = render(&path("valid_reference"));
+        assert!(
+            gltf.iter().any(|&a| a < 0.9),
+            "{mode}: the reference model shows occlusion"
+        );
+        for name in ["stl_binary", "stl_ascii", "ply_ascii", "ply_binary"] {
+            let other = render(&path(name));
+            let worst = gltf
+                .iter()
+                .zip(&other)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f32, f32::max);
+            assert!(worst < 1e-5, "{mode} {name}: AO differs by up to {worst}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

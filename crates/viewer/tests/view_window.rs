@@ -873,6 +873,7 @@ fn measuring_two_clicked_points_on_a_known_box() {
         .to_string();
     xdotool(&["windowfocus", "--sync", &window]);
     xdotool(&["key", "m"]);
+    v.wait_for("measure mode on", 1, std::time::Duration::from_secs(30));
     let (a, b) = ([5.0f32, 5.0, 10.0], [35.0f32, 15.0, 10.0]);
     for p in [a, b] {
         let (x, y) = pixel_of(eye, target, up, fov, w, h, p);
@@ -906,7 +907,9 @@ fn measuring_two_clicked_points_on_a_known_box() {
         "measured {value} mm, expected {expected:.3} mm ({line})"
     );
     // Out of measure mode, a click selects the box and reveals its node in the model tree (one node for STL).
+    // (Wait for the key to act: on a busy machine a key and a click can land in one frame.)
     xdotool(&["key", "m"]);
+    v.wait_for("measure mode off", 1, std::time::Duration::from_secs(30));
     let (x, y) = pixel_of(eye, target, up, fov, w, h, [20.0, 10.0, 10.0]);
     xdotool(&[
         "mousemove",

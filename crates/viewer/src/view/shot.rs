@@ -241,7 +241,8 @@ mod tests {
         assert_eq!(hash_capacity_for(16384 * 16384, 1 << 20), MAX_HASH_CAPACITY);
         assert_eq!(hash_capacity_for(64, 1 << 26), 1 << 26);
         let s = AoSettings::default();
-        // Two filter passes reach 2 + 4 pixels; the edges one more.
-        assert_eq!(margin_for(&s), 7);
+        // Three filter passes (the default) reach 2 + 4 + 8 pixels; the edges one more.
+        assert_eq!(s.filter_iterations, 3);
+        assert_eq!(margin_for(&s), 15);
     }
 }

@@ -358,6 +358,19 @@ impl Viewer {
             "Ours (docs/algorithm.md): while the view rests, each pixel traces its own rays and its AO converges \
              from the cell estimate to the ray-traced value, with anti-aliasing. Off: the paper's behaviour.",
         );
+        ui.checkbox(&mut s.local_edits, "edits keep untouched AO").on_hover_text(
+            "Ours (docs/algorithm.md): moving, hiding or deleting a part re-keys only the hash cells within the \
+             AO radius of it; the rest of the image keeps its converged AO. Off: the paper's eq. 6 (every edit \
+             empties the map).",
+        );
+        ui.horizontal(|ui| {
+            ui.label("filter σ");
+            ui.add(egui::DragValue::new(&mut s.filter_sigma).speed(0.05).clamp_range(0.0..=10.0))
+                .on_hover_text(
+                    "Ours: the filter stops where neighbours differ by more than this many standard deviations of \
+                     the cells' noise. 0: the paper's filter (bounded by the cell footprint).",
+                );
+        });
         let mut log2 = s.hash_capacity.trailing_zeros();
         ui.add(
             egui::Slider::new(&mut log2, 10..=26)
@@ -1029,7 +1042,11 @@ impl Viewer {
                 Key::Enter => self.reset_view(),
                 Key::Escape if self.measure.active => self.measure.points.clear(),
                 Key::Escape => self.set_selected(u32::MAX),
-                Key::M => self.measure.active = !self.measure.active,
+                Key::M => {
+                    self.measure.active = !self.measure.active;
+                    let state = if self.measure.active { "on" } else { "off" };
+                    log::info!("measure mode {state}");
+                }
                 Key::H | Key::I | Key::U => {
                     let edit = self.scene.as_ref().and_then(|scene| match k {
                         Key::H => self.hide_selection_edit(scene),
