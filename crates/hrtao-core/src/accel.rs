@@ -128,6 +128,9 @@ pub struct SceneGpu {
     sections: Sections,
     /// Section plane changes so far: each is a scene change (the renderer adds it to F, eq. 6).
     section_changes: u32,
+    /// Per recent plane change (newest last): the count it produced and where geometry appeared or
+    /// disappeared (None: not located), see `section_changes_between`.
+    section_log: std::collections::VecDeque<(u32, Option<Vec<(Vec3, Vec3)>>)>,
     /// Instances per `Side` in the current TLAS (kept, crossing, cut).
     pub section_sides: [usize; 3],
 }
@@ -462,6 +465,7 @@ impl SceneGpu {
             mesh_bounds: scene.meshes.iter().map(|m| m.local_bounds()).collect(),
             sections: Sections::default(),
             section_changes: 0,
+            section_log: Default::default(),
             section_sides: [0; 3],
             stats: BuildStats {
                 blas_count: per_mesh.iter().filter(|g| !g.is_empty()).count(),
@@ -504,6 +508,28 @@ impl SceneGpu {
         (to == f0).then_some(out)
     }
 
+    /// Where the plane changes from count `c0` to `c1` made geometry appear or disappear (world boxes), or
+    /// None when one of them is not located or too old.
+    pub fn section_changes_between(&self, c0: u32, c1: u32) -> Option<Vec<(Vec3, Vec3)>> {
+        let n = c1.wrapping_sub(c0) as usize;
+        if n > self.section_log.len() {
+            return None;
+        }
+        let mut out = Vec::new();
+        for (i, (c, boxes)) in self
+            .section_log
+            .iter()
+            .skip(self.section_log.len() - n)
+            .enumerate()
+        {
+            if *c != c0.wrapping_add(i as u32 + 1) {
+                return None;
+            }
+            out.extend(boxes.as_ref()?.iter().copied());
+        }
+        Some(out)
+    }
+
     pub fn sections(&self) -> &Sections {
         &self.sections
     }
@@ -521,8 +547,18 @@ impl SceneGpu {
         if *sections == self.sections {
             return Ok(());
         }
+        let b = scene.bounds_conservative();
+        let boxes = if b.is_empty() {
+            Some(Vec::new())
+        } else {
+            self.sections.changed_boxes(sections, (b.min, b.max))
+        };
         self.sections = sections.clone();
         self.section_changes = self.section_changes.wrapping_add(1);
+        if self.section_log.len() == SYNCED_CHANGES {
+            self.section_log.pop_front();
+        }
+        self.section_log.push_back((self.section_changes, boxes));
         self.update_instances(scene, selected)
     }
 

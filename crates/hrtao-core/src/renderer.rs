@@ -588,15 +588,17 @@ impl Renderer {
             return false;
         }
         if let Some((f0, sections0)) = last {
-            // Located edits, and no section plane change (planes re-key everything, as the paper's F does).
-            if self.settings.local_edits && sections0 == now.1 {
-                if let Some(boxes) = scene.changes_between(f0, scene_f) {
-                    if self
-                        .regions
-                        .invalidate(&boxes, self.settings.ao_radius, self.frame_index)
-                    {
-                        return true;
-                    }
+            // Located edits and plane moves: only the regions within reach of them.
+            let located = scene.changes_between(f0, scene_f).and_then(|mut boxes| {
+                boxes.extend(scene.section_changes_between(sections0, now.1)?);
+                Some(boxes)
+            });
+            if let (true, Some(boxes)) = (self.settings.local_edits, located) {
+                if self
+                    .regions
+                    .invalidate(&boxes, self.settings.ao_radius, self.frame_index)
+                {
+                    return true;
                 }
             }
         }

@@ -98,7 +98,67 @@ pub struct Sections {
     pub planes: Vec<SectionPlane>,
 }
 
+/// The world box of the points of `bounds` a plane cuts away (n·p > d), when its normal is an axis (±x, ±y,
+/// ±z); None otherwise (the cut region's box is then the whole of `bounds`).
+fn cut_box(p: &SectionPlane, bounds: (Vec3, Vec3)) -> Option<(Vec3, Vec3)> {
+    let n = Vec3::from(p.normal);
+    let k = (0..3).find(|&k| n[k].abs() > 1.0 - 1e-6)?;
+    let (mut lo, mut hi) = bounds;
+    if n[k] > 0.0 {
+        lo[k] = lo[k].max(p.offset);
+    } else {
+        hi[k] = hi[k].min(-p.offset);
+    }
+    Some((lo, hi))
+}
+
 impl Sections {
+    /// Where geometry of `bounds` (world min, max) appears or disappears when the planes change from `self` to
+    /// `next`: for each changed plane, the slab between its old and new offsets, or the region it cut away
+    /// before or after. None when a changed plane is not axis-aligned (then anything in `bounds` may change).
+    /// Empty boxes are dropped.
+    pub fn changed_boxes(&self, next: &Sections, bounds: (Vec3, Vec3)) -> Option<Vec<(Vec3, Vec3)>> {
+        let off = SectionPlane::default();
+        let mut out = Vec::new();
+        for i in 0..self.planes.len().max(next.planes.len()) {
+            let a = self.planes.get(i).filter(|p| p.enabled).unwrap_or(&off);
+            let b = next.planes.get(i).filter(|p| p.enabled).unwrap_or(&off);
+            if a == b || (!a.enabled && !b.enabled) {
+                continue;
+            }
+            if a.enabled && b.enabled && a.normal == b.normal {
+                // The same plane moved: what lies between the two positions.
+                let (mut lo, mut hi) = cut_box(
+                    &SectionPlane {
+                        offset: a.offset.min(b.offset),
+                        ..*a
+                    },
+                    bounds,
+                )?;
+                let (far_lo, far_hi) = cut_box(
+                    &SectionPlane {
+                        offset: a.offset.max(b.offset),
+                        ..*a
+                    },
+                    bounds,
+                )?;
+                let k = (0..3).find(|&k| a.normal[k].abs() > 0.5)?;
+                if a.normal[k] > 0.0 {
+                    hi[k] = far_lo[k];
+                } else {
+                    lo[k] = far_hi[k];
+                }
+                out.push((lo, hi));
+            } else {
+                for p in [a, b].into_iter().filter(|p| p.enabled) {
+                    out.push(cut_box(p, bounds)?);
+                }
+            }
+        }
+        out.retain(|(lo, hi)| lo.cmple(*hi).all());
+        Some(out)
+    }
+
     /// Planes from the command line (each enabled), at most `MAX_SECTIONS`.
     pub fn new(planes: Vec<SectionPlane>) -> Result<Sections, String> {
         let s = Sections { planes };

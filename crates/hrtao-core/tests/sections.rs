@@ -254,12 +254,17 @@ fn a_plane_through_a_box_shows_a_section_cap_and_the_ao_of_the_cut_box() {
 
 #[test]
 fn a_plane_change_is_a_scene_change() {
+    // The paper's eq. 6 (local edits off): a plane change bumps F and restarts the still image.
     let gpu = gpu();
     let (a, b) = two_boxes();
     let s = scene(vec![a, b]);
     let cam = camera([-0.6, -3.0, 3.5], [-0.6, 0.0, 0.5]);
     let mut sg = SceneGpu::new(&gpu, &s).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, 1.0)).unwrap();
+    let paper = AoSettings {
+        local_edits: false,
+        ..hrtao(4, 1.0)
+    };
+    let mut r = Renderer::new(&gpu, cam.width, cam.height, paper).unwrap();
     let f0 = r.render(&sg, s.f(), &cam).unwrap().scene_f;
     assert_eq!(r.render(&sg, s.f(), &cam).unwrap().accumulated_frames, 2);
     let tlas = sg.tlas.raw;
@@ -281,5 +286,70 @@ fn a_plane_change_is_a_scene_change() {
     };
     assert!(sg.set_sections(&s, &four, u32::MAX).is_err());
     assert_eq!(sg.section_changes(), 1);
+    assert_clean(&gpu);
+}
+
+#[test]
+fn a_moved_plane_invalidates_only_its_slab() {
+    // Local edits (ours): an axis plane moving from x = 1.5 (beyond both boxes) to x = 0 (cutting B away)
+    // changes geometry only in the slab 0 < x < 1.5; the still image goes on elsewhere, and the AO converges to
+    // that of the scene without B as rendered from an empty map.
+    let (a, b) = two_boxes();
+    let s = scene(vec![a.clone(), b]);
+    let cam = camera([-0.6, -3.0, 3.5], [-0.6, 0.0, 0.5]);
+    let before = plane([1.0, 0.0, 0.0], 1.5);
+    let after = plane([1.0, 0.0, 0.0], 0.0);
+    let bounds = (Vec3::new(-3.1, -3.0, 0.0), Vec3::new(1.15, 3.0, 2.0));
+    assert_eq!(
+        before.changed_boxes(&after, bounds),
+        Some(vec![(Vec3::new(0.0, -3.0, 0.0), Vec3::new(1.5, 3.0, 2.0))])
+    );
+    let tilted = plane([1.0, 1.0, 0.0], 0.0);
+    assert_eq!(
+        before.changed_boxes(&tilted, bounds),
+        None,
+        "not an axis: not located"
+    );
+    let gpu = gpu();
+    let mut sg = SceneGpu::new(&gpu, &s).unwrap();
+    sg.set_sections(&s, &before, u32::MAX).unwrap();
+    // Cells full after 64 rays: after 8 frames only new cells take rays.
+    let settings = AoSettings {
+        max_samples: 64,
+        ..hrtao(8, 1.0)
+    };
+    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+    let first = r.render(&sg, s.f(), &cam).unwrap();
+    for _ in 0..7 {
+        r.render(&sg, s.f(), &cam).unwrap();
+    }
+    sg.set_sections(&s, &after, u32::MAX).unwrap();
+    let report = r.render(&sg, s.f(), &cam).unwrap();
+    assert_eq!(report.accumulated_frames, 9, "the still image goes on");
+    assert!(
+        report.cell_rays * 2 < first.cell_rays,
+        "only the slab's cells restart: {} cell rays after the move, {} from an empty map",
+        report.cell_rays,
+        first.cell_rays
+    );
+    for _ in 0..11 {
+        r.render(&sg, s.f(), &cam).unwrap();
+    }
+    let moved = r.read_ao().unwrap();
+    let (fresh, _) = render_cut(
+        &scene(vec![a]),
+        &Sections::default(),
+        0,
+        &cam,
+        settings,
+        Primary::RayQuery,
+        12,
+    );
+    let e = mae(&moved, &fresh.ao);
+    println!(
+        "after moving the plane: {} cell rays (empty map: {}), MAE {e:.4} against a fresh render",
+        report.cell_rays, first.cell_rays
+    );
+    assert!(e <= 0.02, "MAE {e} against the scene without B");
     assert_clean(&gpu);
 }

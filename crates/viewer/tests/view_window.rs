@@ -978,6 +978,43 @@ fn a_big_screenshot_renders_in_the_background_while_the_window_draws() {
     let frames = json["frames"].as_array().unwrap().len() as u64;
     assert!(frames >= shot_frames + 2, "{frames} frames in the log");
 
+    // Cancel (Esc, as the panel's Cancel button): the shot stops after its first tile, no file is written, the
+    // scripted run ends normally and the window kept drawing meanwhile.
+    let cancelled = dir.join("cancelled.png");
+    let mut v = Running::start(
+        &[
+            "--size",
+            "240x150",
+            "--no-panel",
+            "--frames",
+            "2",
+            "--screenshot",
+            cancelled.to_str().unwrap(),
+            "--screenshot-size",
+            "1920x1080",
+            "--exit",
+        ],
+        &dir,
+    );
+    v.wait_for("screenshot tile 1/", 1, std::time::Duration::from_secs(120));
+    let window = xdotool(&["search", "--sync", "--pid", &v.child.id().to_string()])
+        .lines()
+        .next()
+        .expect("the viewer's window")
+        .trim()
+        .to_string();
+    xdotool(&["windowfocus", "--sync", &window]);
+    xdotool(&["key", "Escape"]);
+    v.wait_for(
+        "screenshot cancelled (Esc)",
+        1,
+        std::time::Duration::from_secs(60),
+    );
+    let status = v.child.wait().unwrap();
+    assert!(status.success(), "{status}\n{}", v.log_text());
+    assert!(!cancelled.exists(), "a cancelled screenshot writes no file");
+    v.validation_clean();
+
     // An unwritable folder fails at once; a full disk once the image is rendered (on the writer thread).
     for (dest, size) in [("/dev/null/big.png", "3840x2160"), ("/dev/full", "64x40")] {
         let t0 = std::time::Instant::now();

@@ -52,7 +52,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "measure mode: click two surface points (distance and dx dy dz over the view)",
     ),
     ("Delete", "delete the selection"),
-    ("Esc", "deselect (in measure mode: clear the points)"),
+    (
+        "Esc",
+        "deselect (in measure mode: clear the points; during a background screenshot: cancel it)",
+    ),
     ("Ctrl+Z / Ctrl+Y (Ctrl+Shift+Z)", "undo / redo"),
     ("F12", "screenshot of the 3D view (PNG, no UI)"),
     (
@@ -1040,6 +1043,7 @@ impl Viewer {
                 Key::Num9 => self.std_view(StdView::Iso),
                 Key::Num5 => self.toggle_projection(),
                 Key::Enter => self.reset_view(),
+                Key::Escape if self.background_shot.is_some() => self.cancel_background_shot(" (Esc)"),
                 Key::Escape if self.measure.active => self.measure.points.clear(),
                 Key::Escape => self.set_selected(u32::MAX),
                 Key::M => {
