@@ -130,7 +130,7 @@ pub struct SceneGpu {
     section_changes: u32,
     /// Per recent plane change (newest last): the count it produced and where geometry appeared or
     /// disappeared (None: not located), see `section_changes_between`.
-    section_log: std::collections::VecDeque<(u32, Option<Vec<(Vec3, Vec3)>>)>,
+    section_log: std::collections::VecDeque<(u32, Option<Vec<WorldBox>>)>,
     /// Instances per `Side` in the current TLAS (kept, crossing, cut).
     pub section_sides: [usize; 3],
 }
@@ -142,6 +142,9 @@ struct SyncedChange {
     to: u32,
     boxes: Option<Vec<(Vec3, Vec3)>>,
 }
+
+/// A world-space box (min, max) where geometry changed.
+pub type WorldBox = (Vec3, Vec3);
 
 /// Synced changes `SceneGpu::changes_between` can look back over.
 const SYNCED_CHANGES: usize = 64;
