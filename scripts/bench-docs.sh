@@ -4,6 +4,7 @@
 # About 10-15 minutes on Mesa lavapipe with 2 cores. Environment:
 #   BENCH_SIZE=WxH (320x180)   BENCH_RAYS=B (10, the paper's budget)   BENCH_SCENES="rod cycloidal ..."
 #   BENCH_SCALE="rows:cols ..." (racks sizes)   BENCH_QUICK=1 (tiny settings, to check the script itself)
+#   BENCH_HRTAO_FRAMES=N (32: still frames of HRTAO, ours and the paper's mode, for the error curves and flicker)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SHARED=${SHARED:-../shared}
@@ -19,7 +20,7 @@ sf:scenes/san_francisco/san_francisco.glb:15"
 SCENES=${BENCH_SCENES:-rod cycloidal engine duplex sf}
 # racks rows:cols (40 servers per rack of 2500 triangles): ~1e3 to ~4e5 instances, 2.5M to 1e9 triangles.
 SCALE=${BENCH_SCALE:-"5:5 10:25 25:40 50:50 100:100"}
-QUALITY="--max-rays 384 --ref-rays 768 --hrtao-frames 8"
+QUALITY="--max-rays 384 --ref-rays 768 --hrtao-frames ${BENCH_HRTAO_FRAMES:-32}"
 NAV="--orbit 16 --repeat 3"
 if [ -n "${BENCH_QUICK:-}" ]; then
   QUALITY="--max-rays 16 --ref-rays 32 --hrtao-frames 2"

@@ -667,8 +667,9 @@ fn time_hrtao(
     for i in 0..args.settle {
         let rep = r.render(scene_gpu, sf, camera)?;
         settle.push(FrameRecord::new(i as usize + 1, "settle", &rep));
-        // Settled once the cells take few rays (the still-camera refinement's own rays do not count).
-        if ((rep.rays - rep.refine_rays) as f64) < args.settle_until * first_rays {
+        // Settled once the cells take few rays (the still-camera refinement's own rays, which every pixel
+        // traces while the view rests, do not count; the cells take some of them).
+        if (rep.cell_rays as f64) < args.settle_until * first_rays {
             break;
         }
     }
