@@ -7,7 +7,8 @@
 // Ours (filter_sigma > 0, docs/algorithm.md): every iteration runs, and a neighbour also stops the filter when
 // its AO differs from the pixel's by more than filter_sigma standard deviations of the cell's binomial noise
 // (SVGF's luminance edge-stopping with the variance the sample count gives), so young, noisy cells are
-// smoothed over several cells while real AO gradients (contact shadows) stay.
+// smoothed over several cells while real AO gradients (contact shadows) stay. Pixels of full cells are left
+// as they are.
 #include "common.glsl"
 #include "hash_map.glsl"
 
@@ -49,7 +50,14 @@ void main() {
     float stop = 0.0;
     if (guided) {
         uint c = PixelCellRef(g.pixel_cells).v[index].cells[used];
-        float n = c == INVALID_CELL || !slot_in_bounds(c) ? 1.0 : float(max(CellRef(g.hash_cells).v[c].samples, 1u));
+        uint samples = c == INVALID_CELL || !slot_in_bounds(c) ? 1u : max(CellRef(g.hash_cells).v[c].samples, 1u);
+        // A full cell (max_samples, §6) holds its final estimate: nothing left to smooth, and settled
+        // navigation frames, whose cells are mostly full, cost what the paper's filter costs.
+        if (samples >= max(g.max_samples, 1u)) {
+            dst.v[index] = center;
+            return;
+        }
+        float n = float(samples);
         float p = clamp(center, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
         float variance = p * (1.0 - p) / n * exp2(-float(iteration));
         stop = 1.0 / (g.filter_sigma * sqrt(2.0 * variance));
