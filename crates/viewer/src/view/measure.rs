@@ -176,6 +176,7 @@ impl Viewer {
             scene: scene_p,
             file: scene.to_file(scene_p),
         });
+        log::info!("measure point {} picked", self.measure.points.len());
         if let Some(m) = self.measure.result() {
             log::info!(
                 "measured distance {:.6} {} (dx {:.6}, dy {:.6}, dz {:.6})",
