@@ -228,7 +228,8 @@ gpu_structs! {
         /// 1 / the far plane distance, depth stays linear and reversed).
         projection: u32,
         /// This frame's sub-pixel jitter (`FrameGlobals::jitter`) in normalised device coordinates, so the
-        /// rasteriser samples where the jittered camera rays go.
+        /// rasteriser samples where the jittered camera rays go, plus a perspective tile's centre
+        /// (`Tile::ndc_offset`): the image moves by minus this.
         jitter_ndc: [f32; 2],
         /// Address of the frame's `FrameGlobals` (the section planes clip the draws).
         globals: u64,

@@ -384,6 +384,7 @@ impl Rasterizer {
         globals: &FrameGlobals,
         globals_address: u64,
         target_distance: f32,
+        off_axis: Option<(glam::Vec3, [f32; 2])>,
     ) {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
         let (w, h) = t.size;
@@ -405,15 +406,21 @@ impl Rasterizer {
             eye: [globals.eye[0], globals.eye[1], globals.eye[2], depth],
             cam_u: scaled(globals.cam_u),
             cam_v: scaled(globals.cam_v),
-            cam_w: globals.cam_w,
+            cam_w: match off_axis {
+                Some((axis, _)) => [axis.x, axis.y, axis.z, 0.0],
+                None => globals.cam_w,
+            },
             geometries: globals.geometries,
             instances: scene.instances.address,
             geometry: 0,
             projection: globals.projection,
-            jitter_ndc: [
-                2.0 * globals.jitter[0] / w as f32,
-                2.0 * globals.jitter[1] / h as f32,
-            ],
+            jitter_ndc: {
+                let [ox, oy] = off_axis.map_or([0.0; 2], |(_, o)| o);
+                [
+                    2.0 * globals.jitter[0] / w as f32 + ox,
+                    2.0 * globals.jitter[1] / h as f32 + oy,
+                ]
+            },
             globals: globals_address,
         };
         let extent = vk::Extent2D { width: w, height: h };

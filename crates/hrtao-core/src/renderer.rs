@@ -164,8 +164,8 @@ pub struct Renderer {
     pub primary: Primary,
     /// Created on the first rasterised frame.
     raster: Option<Rasterizer>,
-    /// Render this window of a larger image (large screenshots); None = the camera's whole image. A tile always
-    /// uses ray-query primary visibility (the rasteriser's projection is the camera's own).
+    /// Render this window of a larger image (large screenshots); None = the camera's whole image. Both primary
+    /// visibilities draw tiles (the rasteriser as an off-axis frustum).
     pub tile: Option<Tile>,
 }
 
@@ -526,11 +526,7 @@ impl Renderer {
         self.passes.bind_tlas(scene.tlas.raw);
 
         let (w, h) = self.size();
-        let primary = if self.tile.is_some() {
-            Primary::RayQuery
-        } else {
-            self.primary
-        };
+        let primary = self.primary;
         if primary == Primary::Raster {
             let raster = match &mut self.raster {
                 Some(r) => r,
@@ -543,12 +539,28 @@ impl Renderer {
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
+                // A perspective tile is an off-axis part of the full image's frustum: the full image's axis,
+                // moved by the tile's centre (an orthographic tile moves its eye instead, as its rays do).
+                let off_axis = match self.tile {
+                    Some(tile) if !camera.is_orthographic() => Some((
+                        Camera {
+                            width: tile.full.0,
+                            height: tile.full.1,
+                            ..*camera
+                        }
+                        .frame()
+                        .w,
+                        tile.ndc_offset((w, h)),
+                    )),
+                    _ => None,
+                };
                 raster.record(
                     &mut rec,
                     &scene.raster,
                     &globals,
                     self.globals.address,
                     camera.distance(),
+                    off_axis,
                 );
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),

@@ -34,6 +34,14 @@ impl Tile {
         }
     }
 
+    /// A perspective tile's centre in the tile's own NDC units: the rasteriser projects with the full image's
+    /// axis and moves the image by this offset (an off-axis frustum), as `frame` moves `w` for the rays.
+    pub fn ndc_offset(&self, size: (u32, u32)) -> [f32; 2] {
+        let (sx, ox) = axis(self.full.0, self.origin.0, size.0);
+        let (sy, oy) = axis(self.full.1, self.origin.1, size.1);
+        [ox / sx, oy / sy]
+    }
+
     /// The background gradient's top and bottom colours over this tile's rows (the gradient is linear in y).
     pub fn gradient(&self, top: [f32; 3], bottom: [f32; 3], height: u32) -> ([f32; 3], [f32; 3]) {
         let at = |y: i32| {

@@ -234,9 +234,10 @@ pub struct ViewArgs {
     /// Scripted mode: exit after --frames (exit status 1 if anything failed or validation reported messages).
     #[arg(long)]
     pub exit: bool,
-    /// Scripted mode: fail if the run has not finished after this many seconds.
-    #[arg(long, default_value_t = 600)]
-    pub timeout: u64,
+    /// Scripted mode: fail if the run has not finished after this many seconds (0 = never). Default: 600, plus
+    /// 600 per million pixels of --screenshot-size (a 3840×2160 shot takes minutes to tens of minutes on a CPU).
+    #[arg(long)]
+    pub timeout: Option<u64>,
     /// Settings/bookmarks file (default: ~/.config/hrtao/viewer.json).
     #[arg(long)]
     pub config: Option<PathBuf>,

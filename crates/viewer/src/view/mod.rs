@@ -43,6 +43,17 @@ use nav::Nav;
 use prefs::Prefs;
 use present::Presenter;
 
+/// Seconds a scripted run may take: --timeout, or 600 plus 600 per million pixels of a background screenshot.
+fn scripted_timeout(args: &ViewArgs) -> u64 {
+    let shot_pixels = args
+        .screenshot_size
+        .as_deref()
+        .and_then(|s| parse_size(s).ok())
+        .map_or(0, |(w, h)| w as u64 * h as u64);
+    args.timeout
+        .unwrap_or(600 + 600 * shot_pixels.div_ceil(1_000_000))
+}
+
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -514,8 +525,9 @@ impl Viewer {
                     _ => None,
                 },
                 exit: args.exit,
-                deadline: (args.exit && args.timeout > 0)
-                    .then(|| Instant::now() + Duration::from_secs(args.timeout)),
+                deadline: Some(scripted_timeout(args))
+                    .filter(|&t| args.exit && t > 0)
+                    .map(|t| Instant::now() + Duration::from_secs(t)),
                 rendered: 0,
                 done: false,
                 ui_capture_pending: false,
@@ -910,7 +922,7 @@ impl Viewer {
         };
         let result = match (&self.scene_gpu, &self.renderer, folder) {
             (_, _, Err(e)) => Err(e),
-            (Some(_), Some(_), Ok(())) => {
+            (Some(_), Some(renderer), Ok(())) => {
                 // A slice costs about what a moving frame of the view costs (the frame-time target).
                 let (w, h) = self.internal_size_at(self.motion.moving_scale.min(self.render_scale));
                 shot::BackgroundShot::new(
@@ -920,6 +932,7 @@ impl Viewer {
                     size,
                     path,
                     w as u64 * h as u64,
+                    renderer.primary,
                 )
             }
             _ => Err(anyhow!("no scene is open")),

@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use ash::vk;
 use hrtao_core::renderer::AA_FRAMES;
 use hrtao_core::tile::TileGrid;
-use hrtao_core::{AoSettings, Camera, Gpu, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, Gpu, Primary, Renderer, SceneGpu};
 use serde::Serialize;
 
 /// A tile that has not converged after this many frames is kept as it is (a safety net: with refinement a tile
@@ -90,7 +90,8 @@ fn margin_for(settings: &AoSettings) -> u32 {
 }
 
 impl BackgroundShot {
-    /// A shot of `camera`'s pose at `size`, in tiles of about `slice_pixels` (a moving viewer frame's work).
+    /// A shot of `camera`'s pose at `size`, in tiles of about `slice_pixels` (a moving viewer frame's work), with
+    /// the primary visibility the viewer measured faster for this scene.
     pub fn new(
         gpu: &Arc<Gpu>,
         settings: &AoSettings,
@@ -98,6 +99,7 @@ impl BackgroundShot {
         size: (u32, u32),
         path: PathBuf,
         slice_pixels: u64,
+        primary: Primary,
     ) -> Result<BackgroundShot> {
         let pixels = size.0 as u64 * size.1 as u64;
         let mut settings = settings.clone();
@@ -119,6 +121,7 @@ impl BackgroundShot {
         let mut renderer =
             Renderer::new(gpu, tw, th, settings).context("cannot create the screenshot's renderer")?;
         renderer.jitter = true;
+        renderer.primary = primary;
         renderer.tile = Some(grid.tile(0));
         Ok(BackgroundShot {
             renderer,

@@ -1,0 +1,95 @@
+//! Cost of one background-screenshot tile (a development tool): renders tile K of a WxH shot of the bundled scene
+//! until converged, as `view/shot.rs` does, and prints GPU milliseconds per pass summed over the tile's frames.
+//!
+//! `cargo run -p hrtao-core --example tile_profile -- [--size 3840x2160] [--slice 84560] [--tile 60]
+//! [--set '{"filter_sigma": 0}'] [--primary raster|rayquery]`
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use hrtao_core::renderer::AA_FRAMES;
+use hrtao_core::tile::TileGrid;
+use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Primary, Renderer, SceneGpu};
+
+fn main() -> anyhow::Result<()> {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut take = |flag: &str, default: &str| -> String {
+        match args.iter().position(|a| a == flag) {
+            Some(i) => {
+                let v = args.remove(i + 1);
+                args.remove(i);
+                v
+            }
+            None => default.to_string(),
+        }
+    };
+    let size = take("--size", "3840x2160");
+    let slice: u64 = take("--slice", "84560").parse()?;
+    let tile: usize = take("--tile", "60").parse()?;
+    let extra = take("--set", "{}");
+    let raster = take("--primary", "raster") == "raster";
+    let (w, h) = size.split_once('x').unwrap();
+    let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
+    let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {})?;
+    let camera = Camera {
+        width: w,
+        height: h,
+        ..Camera::load(&assets.join("default.camera.json"))?
+    };
+    let mut v = serde_json::to_value(AoSettings::default())?;
+    for (k, x) in serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&extra)? {
+        v[k] = x;
+    }
+    let mut settings: AoSettings = serde_json::from_value(v)?;
+    settings.rays_per_pixel = settings.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
+    let margin = if settings.filter {
+        2 * ((1u32 << settings.filter_iterations.min(8)) - 1) + 1
+    } else {
+        1
+    };
+    let grid = TileGrid::new(w, h, slice, margin);
+    let (tw, th) = grid.render_size();
+    let gpu = Gpu::new(&ContextOptions::default())?;
+    let sg = SceneGpu::new(&gpu, &scene)?;
+    let mut r = Renderer::new(&gpu, tw, th, settings)?;
+    r.jitter = true;
+    r.primary = if raster {
+        Primary::Raster
+    } else {
+        Primary::RayQuery
+    };
+    r.tile = Some(grid.tile(tile.min(grid.len() - 1)));
+    println!("{} tiles of {tw}x{th} (margin {margin})", grid.len());
+    let mut sums: BTreeMap<String, f64> = BTreeMap::new();
+    let t0 = std::time::Instant::now();
+    let (mut frames, mut gpu_total, mut rays) = (0, 0.0, 0u64);
+    loop {
+        let rep = r.render(&sg, scene.f(), &camera)?;
+        frames += 1;
+        gpu_total += rep.gpu_total_ms;
+        rays += rep.rays;
+        for (k, ms) in &rep.gpu_ms {
+            *sums.entry(k.clone()).or_default() += ms;
+        }
+        if frames == 1 {
+            println!(
+                "frame 1: {:.0} ms wall, {:.0} ms GPU",
+                rep.wall_ms, rep.gpu_total_ms
+            );
+        }
+        if rep.converged || frames >= 64 {
+            break;
+        }
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    println!(
+        "{frames} frames, {wall:.1} s wall, {:.1} s GPU, {:.1} Mrays ({:.2} Mrays/s)",
+        gpu_total / 1000.0,
+        rays as f64 / 1e6,
+        rays as f64 / 1e6 / wall
+    );
+    for (k, ms) in sums {
+        println!("  {k:>14}: {:7.0} ms", ms);
+    }
+    Ok(())
+}
