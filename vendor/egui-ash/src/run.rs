@@ -192,10 +192,14 @@ pub fn run<C: AppCreator<A> + 'static, A: Allocator + 'static>(
     let exit_code_clone = exit_code.clone();
     event_loop
         .run(move |event, event_loop| {
-            if let Some(code) = exit_signal_rx.try_recv().ok() {
-                *exit_code_clone.lock().unwrap() = code;
-                event_loop.exit();
-                return;
+            // hrtao patch: never on `LoopExiting`, which must reach `integration.destroy()` below (a second exit
+            // signal sent after the first one swallowed it, leaking egui-ash's Vulkan objects).
+            if !matches!(event, winit::event::Event::LoopExiting) {
+                if let Some(code) = exit_signal_rx.try_recv().ok() {
+                    *exit_code_clone.lock().unwrap() = code;
+                    event_loop.exit();
+                    return;
+                }
             }
             match event {
                 winit::event::Event::NewEvents(start_cause) => {
