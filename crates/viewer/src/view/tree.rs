@@ -182,7 +182,7 @@ enum TreeAction {
 impl TreeAction {
     /// A click on a node's row: Shift or Ctrl toggles it in the selection, a plain click selects it.
     fn click(ui: &egui::Ui, node: u32) -> Self {
-        let m = ui.input(|i| i.modifiers);
+        let m = super::ui::click_modifiers(ui.ctx());
         if m.shift || m.command {
             TreeAction::Toggle(node)
         } else {

@@ -73,6 +73,25 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ),
 ];
 
+/// The modifiers held when the last primary button event of this frame happened (a quick Shift+click can press
+/// and release Shift within one frame's events, so the frame's final modifiers may no longer hold it).
+pub(crate) fn click_modifiers(ctx: &egui::Context) -> egui::Modifiers {
+    ctx.input(|i| {
+        i.events
+            .iter()
+            .rev()
+            .find_map(|e| match e {
+                egui::Event::PointerButton {
+                    button: PointerButton::Primary,
+                    modifiers,
+                    ..
+                } => Some(*modifiers),
+                _ => None,
+            })
+            .unwrap_or(i.modifiers)
+    })
+}
+
 impl Viewer {
     pub(crate) fn ui(&mut self, ctx: &egui::Context) {
         self.frame_started = Instant::now();
@@ -857,7 +876,7 @@ impl Viewer {
         } else if resp.clicked() {
             let hit = resp.interact_pointer_pos().and_then(|p| self.pick(p, rect, ppp));
             let sel = hit.map(|h| h.1).unwrap_or(u32::MAX);
-            let m = ctx.input(|i| i.modifiers);
+            let m = click_modifiers(ctx);
             if m.shift || m.command {
                 self.toggle_selected(sel);
             } else if sel != self.selected {
@@ -1032,14 +1051,35 @@ impl Viewer {
                 Key::PageUp,
                 Key::PageDown,
             ];
-            let pressed: Vec<Key> = keys.into_iter().filter(|k| i.key_pressed(*k)).collect();
+            // Each key with the modifiers held when it was pressed (a quick Ctrl+Z can press and release Ctrl
+            // within one frame's events).
+            let held = |k: Key| {
+                i.events
+                    .iter()
+                    .rev()
+                    .find_map(|e| match e {
+                        egui::Event::Key {
+                            key,
+                            pressed: true,
+                            modifiers,
+                            ..
+                        } if *key == k => Some(*modifiers),
+                        _ => None,
+                    })
+                    .unwrap_or(i.modifiers)
+            };
+            let pressed: Vec<(Key, egui::Modifiers)> = keys
+                .into_iter()
+                .filter(|k| i.key_pressed(*k))
+                .map(|k| (k, held(k)))
+                .collect();
             let down: Vec<Key> = [Key::W, Key::A, Key::S, Key::D, Key::Q, Key::E]
                 .into_iter()
                 .filter(|k| i.key_down(*k))
                 .collect();
             (pressed, down, i.modifiers, i.stable_dt.min(0.25))
         });
-        for k in pressed {
+        for (k, mods) in pressed {
             match k {
                 Key::F | Key::Home => self.fit_all(),
                 Key::Num1 => self.std_view(StdView::Front),
