@@ -137,7 +137,7 @@ mod tests {
         assert_eq!((b.max - b.min).to_array(), [2.0, 3.0, 0.0]);
         // Nothing dropped; only a non-model file; a directory named like a model: clear errors, no load.
         assert_eq!(dropped_model(&[]), Ok(None));
-        let err = dropped_model(&[mtl.clone()]).unwrap_err();
+        let err = dropped_model(std::slice::from_ref(&mtl)).unwrap_err();
         assert!(
             err.contains("part.mtl") && err.contains("not a model file"),
             "{err}"
