@@ -1113,8 +1113,8 @@ fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
         [15.0, 5.0, 5.0],
         [0.0, 0.0, 1.0],
         45.0,
-        480,
-        300,
+        320,
+        200,
     );
     let cam = dir.join("cam.json");
     std::fs::write(
@@ -1188,7 +1188,7 @@ fn the_open_dialog_loads_a_typed_path_through_zenity() {
     write_box_stl(&stl, [0.0; 3], [40.0, 20.0, 10.0]);
     let args = ["gen:slab", "--size", "320x200", "--no-panel"];
     let mut v = Running::start_with(&args, &dir, &[("DBUS_SESSION_BUS_ADDRESS", None)]);
-    v.wait_for("at rest", 1, std::time::Duration::from_secs(90));
+    v.wait_for("opened gen:slab", 1, std::time::Duration::from_secs(90));
     v.focus_window();
     xdotool(&["key", "ctrl+o"]);
     v.wait_for("file dialog opened", 1, std::time::Duration::from_secs(30));
