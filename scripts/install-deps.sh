@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the system packages hrtao needs on Debian 12 (bookworm) / Ubuntu, skipping what is present.
 # Vulkan loader, Mesa lavapipe with VK_KHR_ray_query (Mesa >= 23; on Debian 12 from bookworm-backports),
-# glslc (shader compiler), Xvfb (windows without a display), xdotool (X input in tests), Khronos validation layers.
+# glslc (shader compiler), Xvfb (windows without a display), xdotool (X input in tests), zenity (the Open…
+# dialog without a desktop portal), Khronos validation layers.
 set -euo pipefail
 
 SUDO=""
@@ -9,8 +10,9 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 need=()
 have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
-# xdotool: the window tests send real X input events.
-for p in libvulkan1 vulkan-tools glslc xvfb vulkan-validationlayers xauth libxkbcommon-x11-0 libx11-xcb1 xdotool; do
+# xdotool: the window tests send real X input events. zenity: the Open… dialog when no desktop portal runs
+# (rfd's fallback; the window tests drive it).
+for p in libvulkan1 vulkan-tools glslc xvfb vulkan-validationlayers xauth libxkbcommon-x11-0 libx11-xcb1 xdotool zenity; do
   have_pkg "$p" || need+=("$p")
 done
 

@@ -545,7 +545,12 @@ impl SceneGpu {
     /// Sets the section planes and rebuilds the TLAS for them (instances they cut away entirely leave it and the
     /// raster draws; the shaders clip the rays to the kept region). No-op when the planes are unchanged. Must not
     /// be called while a frame using the scene is in flight.
-    pub fn set_sections(&mut self, scene: &Scene, sections: &Sections, selected: u32) -> Result<()> {
+    pub fn set_sections(
+        &mut self,
+        scene: &Scene,
+        sections: &Sections,
+        selected: impl Highlight,
+    ) -> Result<()> {
         sections.validate().map_err(CoreError::Invalid)?;
         if *sections == self.sections {
             return Ok(());

@@ -12,6 +12,7 @@
 pub mod accel;
 pub mod buffer;
 pub mod camera;
+pub mod clip;
 pub mod context;
 pub mod error;
 pub mod gpu;

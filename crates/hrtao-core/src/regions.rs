@@ -25,6 +25,9 @@ use crate::hash;
 /// entry with them); a larger change invalidates the whole map (F, eq. 6).
 pub const MAX_REGIONS_PER_EDIT: u64 = REGION_COUNT as u64 / 8;
 
+/// At most this many regions, counted per box (overlaps counted again), are listed for one edit.
+const LISTED_REGIONS_PER_EDIT: u64 = 8 * MAX_REGIONS_PER_EDIT;
+
 pub struct RegionTable {
     buffer: Buffer,
     /// The GPU layout: REGION_COUNT epochs; the last edit's frame index and box count and two unused words;
@@ -72,8 +75,10 @@ impl RegionTable {
 
     /// Bumps, on every grid, the epochs of the regions that meet a box of `boxes` grown by `reach` (the AO
     /// radius), and marks them edited at `frame`. Returns false (and changes nothing) when that is more than
-    /// MAX_REGIONS_PER_EDIT regions or a box is not finite: the caller invalidates globally then.
+    /// MAX_REGIONS_PER_EDIT entries of the table or a box is not finite: the caller invalidates globally then.
     pub fn invalidate(&mut self, boxes: &[(Vec3, Vec3)], reach: f32, frame: u32) -> bool {
+        // Boxes may overlap (a tilted plane's columns grown by R): the limit is on distinct entries, and the
+        // sum over boxes only bounds the work of listing them.
         let mut ranges = Vec::new();
         let mut count = 0u64;
         for grid in self.region_lod..self.region_lod + LOD_COUNT as i32 {
@@ -86,7 +91,7 @@ impl RegionTable {
                 let (a, b) = ((lo / edge).floor(), (hi / edge).floor());
                 let n = (b - a + Vec3::ONE).as_dvec3();
                 count = count.saturating_add((n.x * n.y * n.z).min(1e18) as u64);
-                if count > MAX_REGIONS_PER_EDIT {
+                if count > LISTED_REGIONS_PER_EDIT {
                     return false;
                 }
                 ranges.push((grid, a.as_ivec3(), b.as_ivec3()));
@@ -101,6 +106,9 @@ impl RegionTable {
                     }
                 }
             }
+        }
+        if touched.len() as u64 > MAX_REGIONS_PER_EDIT {
+            return false;
         }
         for i in touched {
             let e = &mut self.table[i as usize];

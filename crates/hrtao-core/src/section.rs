@@ -11,6 +11,7 @@ use glam::{Mat4, Vec3};
 use hrtao_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
+use crate::clip::{self, HalfSpace};
 use crate::gpu::MAX_SECTIONS;
 
 /// One section plane: geometry where `normal · p > offset` is cut away.
@@ -59,6 +60,16 @@ impl SectionPlane {
         self.enabled && self.distance(p) > 0.0
     }
 
+    /// The kept half-space n·p ≤ d.
+    fn kept(&self) -> HalfSpace {
+        HalfSpace::new(Vec3::from(self.normal), self.offset)
+    }
+
+    /// The cut half-space n·p ≥ d.
+    fn cut(&self) -> HalfSpace {
+        HalfSpace::new(-Vec3::from(self.normal), -self.offset)
+    }
+
     /// The plane as the shaders take it: xyz the normal, w the offset.
     pub fn gpu(&self) -> [f32; 4] {
         [self.normal[0], self.normal[1], self.normal[2], self.offset]
@@ -98,64 +109,44 @@ pub struct Sections {
     pub planes: Vec<SectionPlane>,
 }
 
-/// The world box of the points of `bounds` a plane cuts away (n·p > d), when its normal is an axis (±x, ±y,
-/// ±z); None otherwise (the cut region's box is then the whole of `bounds`).
-fn cut_box(p: &SectionPlane, bounds: (Vec3, Vec3)) -> Option<(Vec3, Vec3)> {
-    let n = Vec3::from(p.normal);
-    let k = (0..3).find(|&k| n[k].abs() > 1.0 - 1e-6)?;
-    let (mut lo, mut hi) = bounds;
-    if n[k] > 0.0 {
-        lo[k] = lo[k].max(p.offset);
-    } else {
-        hi[k] = hi[k].min(-p.offset);
-    }
-    Some((lo, hi))
-}
+/// A tilted plane change is not located when its boxes add up to more than this fraction of the model's box
+/// (then most of the model may change: the global F is as good).
+pub const MAX_TILTED_SHARE: f32 = 0.5;
 
 impl Sections {
     /// Where geometry of `bounds` (world min, max) appears or disappears when the planes change from `self` to
-    /// `next`: for each changed plane, the slab between its old and new offsets, or the region it cut away
-    /// before or after. None when a changed plane is not axis-aligned (then anything in `bounds` may change).
-    /// Empty boxes are dropped.
+    /// `next`: for each changed plane, the slab between its old and new positions, or the region one of them cut
+    /// away and the other did not (the cut region when a plane is switched on or off), clipped to `bounds`
+    /// (`clip::region_boxes`: one exact box for axis planes, columns for tilted ones). None when the boxes of
+    /// tilted planes cover more than `MAX_TILTED_SHARE` of `bounds`. Empty regions are dropped.
     pub fn changed_boxes(&self, next: &Sections, bounds: (Vec3, Vec3)) -> Option<Vec<(Vec3, Vec3)>> {
         let off = SectionPlane::default();
-        let mut out = Vec::new();
+        let floor = 1e-3 * (bounds.1 - bounds.0).max_element();
+        let (mut out, mut tilted) = (Vec::new(), 0.0f32);
         for i in 0..self.planes.len().max(next.planes.len()) {
             let a = self.planes.get(i).filter(|p| p.enabled).unwrap_or(&off);
             let b = next.planes.get(i).filter(|p| p.enabled).unwrap_or(&off);
             if a == b || (!a.enabled && !b.enabled) {
                 continue;
             }
-            if a.enabled && b.enabled && a.normal == b.normal {
-                // The same plane moved: what lies between the two positions.
-                let (mut lo, mut hi) = cut_box(
-                    &SectionPlane {
-                        offset: a.offset.min(b.offset),
-                        ..*a
-                    },
-                    bounds,
-                )?;
-                let (far_lo, far_hi) = cut_box(
-                    &SectionPlane {
-                        offset: a.offset.max(b.offset),
-                        ..*a
-                    },
-                    bounds,
-                )?;
-                let k = (0..3).find(|&k| a.normal[k].abs() > 0.5)?;
-                if a.normal[k] > 0.0 {
-                    hi[k] = far_lo[k];
-                } else {
-                    lo[k] = far_hi[k];
+            // Each region: the points one position cuts away and the other keeps.
+            let regions = match (a.enabled, b.enabled) {
+                (true, true) => vec![vec![a.cut(), b.kept()], vec![b.cut(), a.kept()]],
+                (true, false) => vec![vec![a.cut()]],
+                _ => vec![vec![b.cut()]],
+            };
+            let axis = [a, b].iter().all(|p| !p.enabled || p.kept().axis_aligned());
+            for cuts in regions {
+                let boxes = clip::region_boxes(bounds, &cuts);
+                if !axis {
+                    tilted += boxes.iter().map(|&b| clip::volume(b, floor)).sum::<f32>();
                 }
-                out.push((lo, hi));
-            } else {
-                for p in [a, b].into_iter().filter(|p| p.enabled) {
-                    out.push(cut_box(p, bounds)?);
-                }
+                out.extend(boxes);
             }
         }
-        out.retain(|(lo, hi)| lo.cmple(*hi).all());
+        if tilted > MAX_TILTED_SHARE * clip::volume(bounds, floor) {
+            return None;
+        }
         Some(out)
     }
 

@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use glam::{Mat4, Vec3};
-use hrtao_core::{AoSettings, Camera, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, Renderer, SceneGpu, SectionPlane, Sections};
 use hrtao_scene::{Instance, Mesh, Primitive, Scene};
 
 /// A closed axis-aligned box of half extents `h` centred at the origin.
@@ -34,7 +34,12 @@ fn cube(h: Vec3) -> Primitive {
 
 /// A floor (instance 0) with a row of 2 x 2 x 2 blocks (instances 1..) standing on it along x, 12 apart.
 fn yard() -> Scene {
-    let mut s = scene_of(vec![floor()]);
+    yard_on(floor())
+}
+
+/// The yard on a given floor.
+fn yard_on(floor: Primitive) -> Scene {
+    let mut s = scene_of(vec![floor]);
     s.meshes.push(Mesh {
         name: "block".into(),
         primitives: vec![cube(Vec3::ONE)],
@@ -70,32 +75,52 @@ fn box_distance(p: Vec3, lo: Vec3, hi: Vec3) -> f32 {
 }
 
 struct EditRun {
-    /// Mean |ΔAO| over the pixels farther than 2R from the moved part's old and new bounds, and the largest,
-    /// between the frame after the edit and the same frame of a control run without the edit (the still
-    /// refinement keeps changing pixels from frame to frame: only the edit's effect is measured).
+    /// Mean |ΔAO| over the pixels farther than 2R from what the edit changed, and the largest, between the
+    /// frame after the edit and the same frame of a control run without the edit (the still refinement keeps
+    /// changing pixels from frame to frame: only the edit's effect is measured).
     far_mean: f32,
     far_max: f32,
     far_pixels: usize,
     /// Rays the cells took in the frame after the edit, and in a frame from an empty map.
     cell_rays_after: u64,
     cell_rays_empty: u64,
-    /// MAE after 16 more frames near the part against a render of the edited scene from an empty map.
+    /// MAE after 16 more frames near the change against a render of the edited scene from an empty map.
     near_mae: f32,
+    near_pixels: usize,
 }
+
+/// Distance from a world point to the geometry an edit changed.
+type Reach = Box<dyn Fn(Vec3) -> f32>;
 
 /// The edit: block 4 (in the middle of the row) moves by 3 units along y.
 const PART: u32 = 4;
-fn moved(scene: &Scene) -> Mat4 {
-    Mat4::from_translation(Vec3::new(0.0, 3.0, 0.0)) * scene.instances[PART as usize].transform
+fn move_part(scene: &mut Scene, sg: &mut SceneGpu) -> Reach {
+    let old = scene.instance_bounds(PART);
+    let moved = Mat4::from_translation(Vec3::new(0.0, 3.0, 0.0)) * scene.instances[PART as usize].transform;
+    scene.set_transform(PART, moved).unwrap();
+    sg.update_instances(scene, u32::MAX).unwrap();
+    let new = scene.instance_bounds(PART);
+    Box::new(move |p| box_distance(p, old.min, old.max).min(box_distance(p, new.min, new.max)))
 }
 
-fn run(settings: AoSettings) -> EditRun {
+/// `yard` cut by `sections` rendered 24 frames, edited by `edit`, and compared with a control run without
+/// the edit (next frame) and with the edited scene rendered from an empty map (16 frames later).
+fn run(
+    yard: fn() -> Scene,
+    settings: AoSettings,
+    sections: &Sections,
+    edit: impl FnOnce(&mut Scene, &mut SceneGpu) -> Reach,
+) -> EditRun {
     let gpu = gpu();
     let cam = camera();
     let mut scene = yard();
     let control_scene = yard();
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let control_sg = SceneGpu::new(&gpu, &control_scene).unwrap();
+    let mut control_sg = SceneGpu::new(&gpu, &control_scene).unwrap();
+    sg.set_sections(&scene, sections, u32::MAX).unwrap();
+    control_sg
+        .set_sections(&control_scene, sections, u32::MAX)
+        .unwrap();
     let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
     let mut control = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
     let mut cell_rays_empty = 0;
@@ -106,22 +131,15 @@ fn run(settings: AoSettings) -> EditRun {
             cell_rays_empty = rep.cell_rays;
         }
     }
-    let old = scene.instance_bounds(PART);
-    scene.set_transform(PART, moved(&scene)).unwrap();
-    sg.update_instances(&scene, u32::MAX).unwrap();
-    let new = scene.instance_bounds(PART);
+    let reach = edit(&mut scene, &mut sg);
     let rep = r.render(&sg, scene.f(), &cam).unwrap();
     control.render(&control_sg, control_scene.f(), &cam).unwrap();
     let (after, kept) = (r.read_ao().unwrap(), control.read_ao().unwrap());
     let (gbuf, gbuf_kept) = (r.read_gbuffer().unwrap(), control.read_gbuffer().unwrap());
-    let near_part = |p: Vec3| box_distance(p, old.min, old.max).min(box_distance(p, new.min, new.max));
     let (mut sum, mut max, mut n) = (0.0f32, 0.0f32, 0usize);
     for i in 0..after.len() {
         let (p, q) = (&gbuf[i], &gbuf_kept[i]);
-        if p.t < 0.0
-            || q.t < 0.0
-            || p.instance != q.instance
-            || near_part(Vec3::from(p.position)) <= 2.0 * RADIUS
+        if p.t < 0.0 || q.t < 0.0 || p.instance != q.instance || reach(Vec3::from(p.position)) <= 2.0 * RADIUS
         {
             continue;
         }
@@ -134,11 +152,16 @@ fn run(settings: AoSettings) -> EditRun {
         r.render(&sg, scene.f(), &cam).unwrap();
     }
     let edited = r.read_ao().unwrap();
-    // The edited scene from an empty map, same settings and frame count.
-    let (fresh, _) = render(&gpu, &scene, &cam, settings, 17);
+    // The edited scene (and planes) from an empty map, same settings and frame count.
+    let mut fresh_sg = SceneGpu::new(&gpu, &scene).unwrap();
+    fresh_sg.set_sections(&scene, sg.sections(), u32::MAX).unwrap();
+    let mut fresh = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    for _ in 0..17 {
+        fresh.render(&fresh_sg, scene.f(), &cam).unwrap();
+    }
     let fresh = fresh.read_ao().unwrap();
     let near: Vec<usize> = (0..edited.len())
-        .filter(|&i| gbuf[i].t >= 0.0 && near_part(Vec3::from(gbuf[i].position)) <= 2.0 * RADIUS)
+        .filter(|&i| gbuf[i].t >= 0.0 && reach(Vec3::from(gbuf[i].position)) <= 2.0 * RADIUS)
         .collect();
     let pick = |img: &[f32]| near.iter().map(|&i| img[i]).collect::<Vec<f32>>();
     assert_clean(&gpu);
@@ -149,48 +172,98 @@ fn run(settings: AoSettings) -> EditRun {
         cell_rays_after: rep.cell_rays,
         cell_rays_empty,
         near_mae: mae(&pick(&edited), &pick(&fresh)),
+        near_pixels: near.len(),
+    }
+}
+
+fn report(name: &str, e: &EditRun) {
+    println!(
+        "{name}: far pixels ({}) change by {:.4} on average, at most {:.4}; cell rays after the edit {} \
+         ({:.1} % of an empty map's {}); near it ({} pixels) after 16 frames: MAE {:.4} against a fresh render",
+        e.far_pixels,
+        e.far_mean,
+        e.far_max,
+        e.cell_rays_after,
+        100.0 * e.cell_rays_after as f64 / e.cell_rays_empty as f64,
+        e.cell_rays_empty,
+        e.near_pixels,
+        e.near_mae
+    );
+}
+
+/// What a local edit must keep: (a) the AO far from it, (b) near it the AO of the edited scene, (c) at most a
+/// quarter of the rays of a frame from an empty map.
+fn assert_local(e: &EditRun) {
+    assert!(e.far_pixels > 10_000, "most of the image is far from the edit");
+    assert!(e.far_mean < 0.001, "far pixels changed by {}", e.far_mean);
+    assert!(e.far_max < 0.01, "a far pixel changed by {}", e.far_max);
+    assert!(
+        e.near_pixels > 300,
+        "the edit is in sight: {} pixels",
+        e.near_pixels
+    );
+    assert!(e.near_mae <= 0.02, "near the edit: MAE {}", e.near_mae);
+    assert!(
+        4 * e.cell_rays_after <= e.cell_rays_empty,
+        "{} cell rays after the edit, {} from an empty map",
+        e.cell_rays_after,
+        e.cell_rays_empty
+    );
+}
+
+/// Cells full after 16 rays per pixel, so that after 24 frames only new cells take rays.
+fn settings() -> AoSettings {
+    AoSettings {
+        max_samples: 64,
+        ..hrtao(4, RADIUS)
     }
 }
 
 #[test]
 fn moving_one_part_keeps_the_ao_far_from_it() {
-    // Cells full after 16 rays per pixel, so that after 24 frames only new cells take rays.
-    let settings = AoSettings {
-        max_samples: 64,
-        ..hrtao(4, RADIUS)
-    };
-    let ours = run(settings.clone());
-    let paper = run(AoSettings {
-        local_edits: false,
-        ..settings
-    });
-    for (name, e) in [("local edits", &ours), ("global F (paper)", &paper)] {
-        println!(
-            "{name}: far pixels ({}) change by {:.4} on average, at most {:.4}; cell rays after the edit {} \
-             ({:.1} % of an empty map's {}); near the part after 16 frames: MAE {:.4} against a fresh render",
-            e.far_pixels,
-            e.far_mean,
-            e.far_max,
-            e.cell_rays_after,
-            100.0 * e.cell_rays_after as f64 / e.cell_rays_empty as f64,
-            e.cell_rays_empty,
-            e.near_mae
-        );
-    }
-    assert!(ours.far_pixels > 10_000, "most of the image is far from the part");
-    // (a) The AO far from the edit stays.
-    assert!(ours.far_mean < 0.001, "far pixels changed by {}", ours.far_mean);
-    assert!(ours.far_max < 0.01, "a far pixel changed by {}", ours.far_max);
-    // (b) Near the part, the AO is that of the edited scene.
-    assert!(ours.near_mae <= 0.02, "near the part: MAE {}", ours.near_mae);
-    // (c) The frame after the edit traces at most a quarter of the rays of a frame from an empty map.
-    assert!(
-        4 * ours.cell_rays_after <= ours.cell_rays_empty,
-        "{} cell rays after the edit, {} from an empty map",
-        ours.cell_rays_after,
-        ours.cell_rays_empty
+    let none = Sections::default();
+    let ours = run(yard, settings(), &none, move_part);
+    let paper = run(
+        yard,
+        AoSettings {
+            local_edits: false,
+            ..settings()
+        },
+        &none,
+        move_part,
     );
+    report("local edits", &ours);
+    report("global F (paper)", &paper);
+    assert_local(&ours);
     // The paper's global F restarts everything: the comparison shows what the regions save.
     assert!(paper.cell_rays_after * 2 > paper.cell_rays_empty);
     assert!(paper.far_mean > ours.far_mean);
+}
+
+/// The yard on a 100 x 50 floor: a tilted plane crossing the 200 x 200 floor sweeps a strip 200 long, more
+/// regions than one edit may bump (regions.rs), and falls back to the global F.
+fn small_yard() -> Scene {
+    yard_on(quad(Vec3::ZERO, Vec3::X * 50.0, Vec3::Y * 25.0))
+}
+
+#[test]
+fn moving_a_tilted_plane_keeps_the_ao_far_from_its_slab() {
+    // A plane leaning from x toward y and z crosses the floor between blocks 4 and 5 (x ≈ 18 at y = 0) and cuts
+    // away the blocks beyond; it moves by 0.5 toward the kept side.
+    let n = Vec3::new(1.0, 0.25, 0.5).normalize();
+    let (d0, d1) = (18.0 * n.x, 18.0 * n.x - 0.5);
+    let plane = |d: f32| Sections::new(vec![SectionPlane::new(n.to_array(), d).unwrap()]).unwrap();
+    let (before, after) = (plane(d0), plane(d1));
+    let bounds = small_yard().bounds_conservative();
+    let boxes = before
+        .changed_boxes(&after, (bounds.min, bounds.max))
+        .expect("a small move of a tilted plane is located");
+    assert!(boxes.len() > 1, "a tilted slab is bounded by columns");
+    let e = run(small_yard, settings(), &before, |scene, sg| {
+        sg.set_sections(scene, &after, u32::MAX).unwrap();
+        // Distance to the slab d1 ≤ n·p ≤ d0.
+        Box::new(move |p: Vec3| (d1 - n.dot(p)).max(n.dot(p) - d0).max(0.0))
+    });
+    report("tilted plane moved by 0.5", &e);
+    assert_local(&e);
 }

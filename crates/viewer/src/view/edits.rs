@@ -25,6 +25,9 @@ pub enum Edit {
         label: String,
         changes: Vec<(u32, bool)>,
     },
+    /// Several edits as one step (a move or delete of a multi-selection): applied in order, reverted in reverse
+    /// order, one undo step, and one TLAS rebuild (so one local invalidation covering all their boxes).
+    Group { label: String, edits: Vec<Edit> },
 }
 
 impl Edit {
@@ -36,7 +39,88 @@ impl Edit {
             }
             Edit::Delete { instance, .. } => format!("delete #{instance}"),
             Edit::Visibilities { label, changes } => format!("{label} ({} instances)", changes.len()),
+            Edit::Group { label, edits } => format!("{label} ({} instances)", edits.len()),
         }
+    }
+
+    /// `edits` as one step: None when empty, the edit itself when alone, else a group.
+    fn group(label: &str, mut edits: Vec<Edit>) -> Option<Edit> {
+        match edits.len() {
+            0 => None,
+            1 => edits.pop(),
+            _ => Some(Edit::Group {
+                label: label.into(),
+                edits,
+            }),
+        }
+    }
+
+    /// Moves each of `instances` by the world offset `d` (ids out of range are skipped).
+    pub fn move_all(scene: &Scene, instances: &[u32], d: glam::Vec3) -> Option<Edit> {
+        let moves = instances
+            .iter()
+            .filter_map(|&i| {
+                let before = scene.instances.get(i as usize)?.transform;
+                Some(Edit::Transform {
+                    instance: i,
+                    before,
+                    after: Mat4::from_translation(d) * before,
+                })
+            })
+            .collect();
+        Self::group("move", moves)
+    }
+
+    /// Deletes every one of `instances`: highest id first, so that each removal leaves the lower ids in place
+    /// (and undo, reinserting lowest first, restores every id).
+    pub fn delete_all(instances: &[u32]) -> Option<Edit> {
+        let mut ids = instances.to_vec();
+        ids.sort_unstable_by(|a, b| b.cmp(a));
+        ids.dedup();
+        let deletes = ids
+            .into_iter()
+            .map(|instance| Edit::Delete {
+                instance,
+                removed: None,
+            })
+            .collect();
+        Self::group("delete", deletes)
+    }
+
+    /// The instances a transform (or a group of transforms) moves, in order; None for other edits.
+    fn moved(&self) -> Option<Vec<u32>> {
+        match self {
+            Edit::Transform { instance, .. } => Some(vec![*instance]),
+            Edit::Group { edits, .. } => edits
+                .iter()
+                .map(|e| match e {
+                    Edit::Transform { instance, .. } => Some(*instance),
+                    _ => None,
+                })
+                .collect(),
+            _ => None,
+        }
+    }
+
+    /// Folds a later move of the same instances into this one (a drag is one undo step).
+    fn merge_move(&mut self, later: &Edit) -> bool {
+        if self.moved().is_none() || self.moved() != later.moved() {
+            return false;
+        }
+        let mine: Vec<&mut Edit> = match self {
+            Edit::Group { edits, .. } => edits.iter_mut().collect(),
+            one => vec![one],
+        };
+        let theirs: Vec<&Edit> = match later {
+            Edit::Group { edits, .. } => edits.iter().collect(),
+            one => vec![one],
+        };
+        for (a, b) in mine.into_iter().zip(theirs) {
+            if let (Edit::Transform { after: last, .. }, Edit::Transform { after, .. }) = (a, b) {
+                *last = *after;
+            }
+        }
+        true
     }
 }
 
@@ -56,6 +140,17 @@ fn apply(scene: &mut Scene, edit: &mut Edit) -> Result<()> {
             *removed = Some((scene.remove_instance(*instance)?, owner));
         }
         Edit::Visibilities { changes, .. } => scene.set_visibility(changes)?,
+        Edit::Group { edits, .. } => {
+            for i in 0..edits.len() {
+                if let Err(e) = apply(scene, &mut edits[i]) {
+                    // All or nothing: undo the part already applied.
+                    for done in edits[..i].iter().rev() {
+                        revert(scene, done)?;
+                    }
+                    return Err(e);
+                }
+            }
+        }
     }
     Ok(())
 }
@@ -72,29 +167,23 @@ fn revert(scene: &mut Scene, edit: &Edit) -> Result<()> {
             let back: Vec<(u32, bool)> = changes.iter().map(|&(i, v)| (i, !v)).collect();
             scene.set_visibility(&back)?
         }
+        Edit::Group { edits, .. } => {
+            for e in edits.iter().rev() {
+                revert(scene, e)?;
+            }
+        }
     }
     Ok(())
 }
 
 impl EditStack {
-    /// Applies `edit` to `scene` and records it (clears the redo stack). Consecutive moves of the same instance
-    /// merge into one undo step.
+    /// Applies `edit` to `scene` and records it (clears the redo stack). Consecutive moves of the same
+    /// instances merge into one undo step.
     pub fn apply(&mut self, scene: &mut Scene, mut edit: Edit) -> Result<()> {
         apply(scene, &mut edit)?;
         self.redo.clear();
-        if let (
-            Some(Edit::Transform {
-                instance: a,
-                after: last,
-                ..
-            }),
-            Edit::Transform {
-                instance: b, after, ..
-            },
-        ) = (self.undo.last_mut(), &edit)
-        {
-            if *a == *b {
-                *last = *after;
+        if let Some(last) = self.undo.last_mut() {
+            if last.merge_move(&edit) {
                 return Ok(());
             }
         }
@@ -228,6 +317,92 @@ mod tests {
             )
             .unwrap();
         assert!(!stack.can_redo());
+    }
+
+    /// gen:slab's two instances and two more copies: ids 0..4.
+    fn four() -> Scene {
+        let mut s = scene();
+        for i in 0..2 {
+            let mut inst = s.instances[i].clone();
+            inst.name = format!("copy {i}");
+            s.add_instance(inst).unwrap();
+        }
+        s
+    }
+
+    #[test]
+    fn deleting_several_instances_is_one_step() {
+        let mut s = four();
+        let original = s.instances.clone();
+        let mut stack = EditStack::default();
+        let edit = Edit::delete_all(&[0, 2]).unwrap();
+        assert_eq!(edit.label(), "delete (2 instances)");
+        let f0 = s.f();
+        stack.apply(&mut s, edit).unwrap();
+        assert_eq!(s.instances, vec![original[1].clone(), original[3].clone()]);
+        // One step, whose changes are both instances' boxes (one local invalidation).
+        let changed = s.changes_since(f0).unwrap();
+        assert_eq!(changed.len(), 2);
+        assert!(changed.contains(&original_bounds(&original, 0)));
+        assert!(changed.contains(&original_bounds(&original, 2)));
+        stack.undo(&mut s).unwrap();
+        assert_eq!(s.instances, original, "one undo brings both back, in place");
+        assert!(!stack.can_undo());
+        stack.redo(&mut s).unwrap();
+        assert_eq!(s.instances.len(), 2);
+        // One instance: a plain delete; none: no edit.
+        assert!(matches!(
+            Edit::delete_all(&[1]),
+            Some(Edit::Delete { instance: 1, .. })
+        ));
+        assert!(Edit::delete_all(&[]).is_none());
+    }
+
+    fn original_bounds(instances: &[Instance], i: usize) -> hrtao_scene::Aabb {
+        let mut s = scene();
+        s.instances = instances.to_vec();
+        s.instance_bounds(i as u32)
+    }
+
+    #[test]
+    fn moving_several_instances_merges_a_drag_and_fails_as_a_whole() {
+        let mut s = four();
+        let original = s.instances.clone();
+        let mut stack = EditStack::default();
+        for _ in 0..3 {
+            let m = Edit::move_all(&s, &[1, 3], Vec3::X).unwrap();
+            stack.apply(&mut s, m).unwrap();
+        }
+        let moved = |s: &Scene, i: usize| s.instances[i].transform.w_axis.x - original[i].transform.w_axis.x;
+        assert_eq!((moved(&s, 1), moved(&s, 3), moved(&s, 0)), (3.0, 3.0, 0.0));
+        stack.undo(&mut s).unwrap();
+        assert_eq!(s.instances, original, "one undo reverts the whole drag of both");
+        assert!(!stack.can_undo());
+        // A move of another set is its own step.
+        for ids in [&[1, 3][..], &[1]] {
+            let m = Edit::move_all(&s, ids, Vec3::Y).unwrap();
+            stack.apply(&mut s, m).unwrap();
+        }
+        stack.undo(&mut s).unwrap();
+        assert!(stack.can_undo());
+        stack.undo(&mut s).unwrap();
+        assert_eq!(s.instances, original);
+        // A group whose second part fails changes nothing.
+        let bad = Edit::Group {
+            label: "delete".into(),
+            edits: vec![
+                Edit::Delete {
+                    instance: 2,
+                    removed: None,
+                },
+                Edit::Delete {
+                    instance: 99,
+                    removed: None,
+                },
+            ],
+        };
+        assert!(stack.apply(&mut s, bad).is_err());
+        assert_eq!(s.instances, original);
     }
 
     #[test]

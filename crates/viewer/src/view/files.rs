@@ -1,6 +1,7 @@
-//! The Open… dialog: a native file chooser (rfd: the XDG desktop portal over D-Bus, zenity when no portal
-//! runs) on its own thread, so the view keeps rendering while it is open. The chosen file loads like a typed
-//! path or a dropped file: in the background, and a broken file keeps the current scene.
+//! The Open… dialog and dropped files. The dialog is a native file chooser (rfd: the XDG desktop portal over
+//! D-Bus, zenity when no portal runs) on its own thread, so the view keeps rendering while it is open. Files
+//! dropped on the window (winit's DroppedFile, through egui) go through `dropped_model`. Either loads like a
+//! typed path: in the background, and a broken file keeps the current scene.
 use std::path::PathBuf;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -16,7 +17,45 @@ pub type DialogResult = (Option<PathBuf>, Duration);
 /// The extensions the loaders read.
 pub const MODEL_EXTENSIONS: &[&str] = &["glb", "gltf", "obj", "stl", "ply"];
 
+/// The file to open from the paths dropped on the window: the first with a model extension (so dropping a
+/// model with its .mtl or textures opens the model); None when nothing was dropped; an error naming the
+/// paths when none is a model file.
+pub fn dropped_model(paths: &[PathBuf]) -> Result<Option<PathBuf>, String> {
+    if paths.is_empty() {
+        return Ok(None);
+    }
+    let is_model = |p: &&PathBuf| {
+        p.is_file()
+            && p.extension()
+                .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                .is_some_and(|e| MODEL_EXTENSIONS.contains(&e.as_str()))
+    };
+    match paths.iter().find(is_model) {
+        Some(p) => Ok(Some(p.clone())),
+        None => {
+            let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+            Err(format!(
+                "cannot open {}: not a model file ({})",
+                names.join(", "),
+                MODEL_EXTENSIONS.join(", ")
+            ))
+        }
+    }
+}
+
 impl Viewer {
+    /// Files dropped on the window: opens the model among them (the current scene stays if it fails).
+    pub(crate) fn open_dropped(&mut self, paths: &[PathBuf]) {
+        match dropped_model(paths) {
+            Ok(Some(p)) => {
+                log::info!("dropped file: {}", p.display());
+                self.start_loading(p.display().to_string());
+            }
+            Ok(None) => {}
+            Err(e) => self.toast(e, true),
+        }
+    }
+
     /// Opens the file chooser (one at a time).
     pub(crate) fn open_file_dialog(&mut self) {
         if self.open_dialog.is_some() {
@@ -39,6 +78,7 @@ impl Viewer {
                     dialog = dialog.set_directory(dir);
                 }
                 let t0 = Instant::now();
+                log::info!("file dialog opened");
                 let _ = tx.send((dialog.pick_file(), t0.elapsed()));
                 ctx.request_repaint();
             });
@@ -57,6 +97,7 @@ impl Viewer {
             Err(mpsc::TryRecvError::Empty) => {}
             Ok((Some(path), _)) => {
                 self.open_dialog = None;
+                log::info!("file dialog chose {}", path.display());
                 if self.loading.is_none() {
                     self.start_loading(path.display().to_string());
                 }
@@ -72,5 +113,38 @@ impl Viewer {
             }
             Err(mpsc::TryRecvError::Disconnected) => self.open_dialog = None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A real file on disk, as a drop delivers it: the model is picked among the dropped paths and loads.
+    #[test]
+    fn a_dropped_model_file_is_picked_and_loads() {
+        let dir = std::env::temp_dir().join(format!("hrtao-drop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let obj = dir.join("Part.OBJ");
+        std::fs::write(&obj, "o part\nv 0 0 0\nv 2 0 0\nv 0 3 0\nf 1 2 3\n").unwrap();
+        let mtl = dir.join("part.mtl");
+        std::fs::write(&mtl, "newmtl m\nKd 1 0 0\n").unwrap();
+        let picked = dropped_model(&[mtl.clone(), obj.clone()]).unwrap();
+        assert_eq!(picked.as_ref(), Some(&obj), "the model, not its .mtl");
+        let scene = hrtao_scene::load(picked.unwrap().to_str().unwrap(), &mut |_| {}).unwrap();
+        assert_eq!(scene.instances.len(), 1);
+        let b = scene.bounds();
+        assert_eq!((b.max - b.min).to_array(), [2.0, 3.0, 0.0]);
+        // Nothing dropped; only a non-model file; a directory named like a model: clear errors, no load.
+        assert_eq!(dropped_model(&[]), Ok(None));
+        let err = dropped_model(std::slice::from_ref(&mtl)).unwrap_err();
+        assert!(
+            err.contains("part.mtl") && err.contains("not a model file"),
+            "{err}"
+        );
+        let folder = dir.join("folder.stl");
+        std::fs::create_dir_all(&folder).unwrap();
+        assert!(dropped_model(&[folder]).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

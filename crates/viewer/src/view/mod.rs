@@ -804,6 +804,21 @@ impl Viewer {
         self.apply_selection(selection);
     }
 
+    /// Shift/Ctrl+click: adds the instance to the selection or removes it (u32::MAX: nothing changes).
+    pub(crate) fn toggle_selected(&mut self, instance: u32) {
+        let Some(scene) = &self.scene else {
+            return;
+        };
+        let selection = self.selection.toggled(&scene.tree, instance);
+        log::info!(
+            "selection: {} instances {:?}",
+            selection.instances.len(),
+            selection.instances
+        );
+        self.tree_view.reveal(selection.node);
+        self.apply_selection(selection);
+    }
+
     /// Makes `selection` current and updates the highlight (TLAS instance flags).
     pub(crate) fn apply_selection(&mut self, selection: tree::Selection) {
         self.selected = selection.primary();
@@ -828,7 +843,11 @@ impl Viewer {
         let result = edits::run_action(&mut self.edits, scene, sg, highlight, action);
         match result {
             Ok(Some(label)) => {
-                log::debug!("{label}: F = {}", scene.f());
+                log::info!(
+                    "edit: {label}: F = {}, {} instances",
+                    scene.f(),
+                    scene.instances.len()
+                );
                 // Deletes (and their undo) shift later ids: select the node again, or nothing.
                 if scene.instances.len() != count {
                     let again = match self.selection.node {

@@ -177,7 +177,7 @@ impl Viewer {
                 return;
             }
             self.gpu.wait_idle();
-            match sg.set_sections(scene, &sections, self.selected) {
+            match sg.set_sections(scene, &sections, self.selection.instances.as_slice()) {
                 Ok(()) => log::info!(
                     "section planes: {:?}; instances untouched, crossed, cut away: {:?}",
                     sections

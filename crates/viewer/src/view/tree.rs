@@ -41,6 +41,43 @@ impl Selection {
         }
     }
 
+    /// Shift/Ctrl+click on an instance (u32::MAX: the background, which changes nothing): adds it to the
+    /// selection, or removes it when it is selected.
+    pub fn toggled(&self, tree: &NodeTree, instance: u32) -> Self {
+        if instance == u32::MAX {
+            return self.clone();
+        }
+        self.with(tree, &[instance], !self.instances.contains(&instance))
+    }
+
+    /// Shift/Ctrl+click on a tree node: adds its subtree's instances, or removes them when all are selected.
+    pub fn toggled_node(&self, tree: &NodeTree, node: u32) -> Self {
+        if self.instances.is_empty() {
+            return Self::of_node(tree, node);
+        }
+        let ids = tree.subtree_instances(node);
+        let all = ids.iter().all(|i| self.instances.binary_search(i).is_ok());
+        self.with(tree, &ids, !all)
+    }
+
+    /// The selection with `ids` added (or removed). The node is kept only while it still names the selection
+    /// (one instance: its owner).
+    fn with(&self, tree: &NodeTree, ids: &[u32], add: bool) -> Self {
+        let mut instances = self.instances.clone();
+        if add {
+            instances.extend_from_slice(ids);
+            instances.sort_unstable();
+            instances.dedup();
+        } else {
+            instances.retain(|i| !ids.contains(i));
+        }
+        let node = match instances.as_slice() {
+            [one] => tree.owner_of(*one),
+            _ => None,
+        };
+        Self { node, instances }
+    }
+
     /// The single selected instance (what move and delete act on), u32::MAX when none or several.
     pub fn primary(&self) -> u32 {
         match self.instances.as_slice() {
@@ -137,7 +174,21 @@ impl TreeView {
 /// What a click in the tree asks for (applied after drawing, when the scene is no longer borrowed).
 enum TreeAction {
     Select(u32),
+    /// Shift/Ctrl+click: add the node's instances to the selection or remove them.
+    Toggle(u32),
     Visible(u32, bool),
+}
+
+impl TreeAction {
+    /// A click on a node's row: Shift or Ctrl toggles it in the selection, a plain click selects it.
+    fn click(ui: &egui::Ui, node: u32) -> Self {
+        let m = super::ui::click_modifiers(ui.ctx());
+        if m.shift || m.command {
+            TreeAction::Toggle(node)
+        } else {
+            TreeAction::Select(node)
+        }
+    }
 }
 
 /// Draws the rows of the tree; clicks go to `actions`.
@@ -173,7 +224,7 @@ impl Rows<'_> {
             }
             let label = ui.selectable_label(rows.selected == Some(id), text.clone());
             if label.clicked() {
-                rows.actions.push(TreeAction::Select(id));
+                rows.actions.push(TreeAction::click(ui, id));
             }
             if rows.reveal_path.last() == Some(&id) {
                 label.scroll_to_me(Some(egui::Align::Center));
@@ -290,7 +341,7 @@ impl Viewer {
                             format!("{}  ({})", n.name, rows.view.counts[h as usize]),
                         );
                         if label.clicked() {
-                            rows.actions.push(TreeAction::Select(h));
+                            rows.actions.push(TreeAction::click(ui, h));
                         }
                     }
                     if hits.len() > MAX_SEARCH_ROWS {
@@ -308,6 +359,13 @@ impl Viewer {
                     self.select_node(n);
                     return self.finish_tree_edit(edit);
                 }
+                TreeAction::Toggle(n) => {
+                    if let Some(scene) = &self.scene {
+                        let sel = self.selection.toggled_node(&scene.tree, n);
+                        self.apply_selection(sel);
+                    }
+                    return self.finish_tree_edit(edit);
+                }
                 TreeAction::Visible(n, v) => {
                     if let Some(scene) = &self.scene {
                         edit = set_node_visible(scene, n, v);
@@ -318,24 +376,37 @@ impl Viewer {
         self.finish_tree_edit(edit);
     }
 
-    /// A line naming a multi-instance selection (a tree node); false when there is none.
-    pub(crate) fn selection_summary(&self, ui: &mut egui::Ui) -> bool {
-        let (Some(scene), Some(node)) = (&self.scene, self.selection.node) else {
+    /// A line naming a multi-instance selection (a tree node, or instances added with Shift/Ctrl+click) and a
+    /// Delete button for all of it; false when there is none.
+    pub(crate) fn selection_summary(&mut self, ui: &mut egui::Ui) -> bool {
+        let Some(scene) = &self.scene else {
             return false;
         };
-        if self.selection.instances.len() < 2 {
+        let n = self.selection.instances.len();
+        if n < 2 {
             return false;
         }
-        ui.label(format!(
-            "{}: {} instances (H hide, I isolate)",
-            node_name(scene, node),
-            self.selection.instances.len()
-        ));
+        let what = match self.selection.node {
+            Some(node) => format!("{}: {n} instances", node_name(scene, node)),
+            None => format!("{n} instances selected"),
+        };
+        ui.label(format!("{what} (H hide, I isolate, Delete)"));
+        if ui.button("Delete").clicked() {
+            self.delete_selection();
+        }
         true
     }
 
     fn finish_tree_edit(&mut self, edit: Option<Edit>) {
         if let Some(e) = edit {
+            self.edit(Action::Apply(e));
+        }
+    }
+
+    /// Deletes every selected instance as one edit (one undo step) and clears the selection.
+    pub(crate) fn delete_selection(&mut self) {
+        if let Some(e) = Edit::delete_all(&self.selection.instances) {
+            self.apply_selection(Selection::default());
             self.edit(Action::Apply(e));
         }
     }
@@ -423,6 +494,46 @@ mod tests {
         );
         assert_eq!(pick.primary(), 1);
         assert_eq!(Selection::of_instance(&s.tree, u32::MAX), Selection::default());
+    }
+
+    #[test]
+    fn shift_click_adds_and_removes_instances_and_nodes() {
+        let s = scene();
+        let t = &s.tree;
+        let two = Selection::of_instance(t, 0).toggled(t, 3);
+        assert_eq!((two.instances.clone(), two.node), (vec![0, 3], None));
+        assert_eq!(two.primary(), u32::MAX, "several: no single instance");
+        assert_eq!(
+            two.toggled(t, u32::MAX),
+            two,
+            "shift+click on the background keeps it"
+        );
+        let back = two.toggled(t, 0);
+        assert_eq!(back, Selection::of_instance(t, 3), "one left: its node again");
+        assert_eq!(back.toggled(t, 3), Selection::default());
+        // Tree nodes: a node's subtree is added, or removed when all of it is selected.
+        let left = Selection::default().toggled_node(t, 1);
+        assert_eq!(left, Selection::of_node(t, 1));
+        let more = left.toggled_node(t, 3);
+        assert_eq!((more.instances.clone(), more.node), (vec![0, 1, 3], None));
+        assert_eq!(more.toggled_node(t, 1), Selection::of_instance(t, 3));
+        let partly = Selection::of_instance(t, 0).toggled_node(t, 0);
+        assert_eq!(
+            partly.instances,
+            vec![0, 1, 2],
+            "a partly selected node is completed"
+        );
+        // Hide and delete act on all of it as one edit.
+        let mut s = scene();
+        let mut stack = EditStack::default();
+        let del = Edit::delete_all(&more.instances).unwrap();
+        stack.apply(&mut s, del).unwrap();
+        assert_eq!(s.instances.len(), 1);
+        assert_eq!(s.tree.nodes[2].instances, vec![0], "instance 2 is now 0");
+        stack.undo(&mut s).unwrap();
+        let original = scene();
+        assert_eq!(s.instances, original.instances, "one undo restores all three");
+        assert_eq!(s.tree, original.tree, "and their nodes");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use egui::{Key, PointerButton};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use hrtao_core::camera::Projection;
 use hrtao_core::{Camera, Mode};
 
@@ -34,6 +34,11 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("Enter", "reset to the initial camera"),
     ("Click", "select an instance (click background: deselect)"),
     (
+        "Shift+click / Ctrl+click",
+        "add an instance (or a model tree node) to the selection, or remove it; move, hide and delete act on \
+         all of it as one undo step",
+    ),
+    (
         "Ctrl+left drag",
         "move the selection along the world axis closest to the drag",
     ),
@@ -57,12 +62,35 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "deselect (in measure mode: clear the points; during a background screenshot: cancel it)",
     ),
     ("Ctrl+Z / Ctrl+Y (Ctrl+Shift+Z)", "undo / redo"),
+    (
+        "Ctrl+O",
+        "Open… dialog (desktop portal, or zenity); drop a model file on the window to open it too",
+    ),
     ("F12", "screenshot of the 3D view (PNG, no UI)"),
     (
         "Tab",
         "show / hide the panel (also while a panel widget has the keyboard focus)",
     ),
 ];
+
+/// The modifiers held when the last primary button event of this frame happened (a quick Shift+click can press
+/// and release Shift within one frame's events, so the frame's final modifiers may no longer hold it).
+pub(crate) fn click_modifiers(ctx: &egui::Context) -> egui::Modifiers {
+    ctx.input(|i| {
+        i.events
+            .iter()
+            .rev()
+            .find_map(|e| match e {
+                egui::Event::PointerButton {
+                    button: PointerButton::Primary,
+                    modifiers,
+                    ..
+                } => Some(*modifiers),
+                _ => None,
+            })
+            .unwrap_or(i.modifiers)
+    })
+}
 
 impl Viewer {
     pub(crate) fn ui(&mut self, ctx: &egui::Context) {
@@ -84,9 +112,7 @@ impl Viewer {
                 .filter_map(|f| f.path.clone())
                 .collect()
         });
-        if let Some(p) = dropped.into_iter().next() {
-            self.start_loading(p.display().to_string());
-        }
+        self.open_dropped(&dropped);
         self.poll_open_dialog();
         if self.show_panel {
             egui::SidePanel::right("panel")
@@ -795,7 +821,7 @@ impl Viewer {
         let view_h = self.view_rect[3].max(1) as f32;
         if resp.dragged_by(PointerButton::Primary) && ctrl && shift {
             self.drag_section(delta);
-        } else if resp.dragged_by(PointerButton::Primary) && ctrl && self.selected != u32::MAX {
+        } else if resp.dragged_by(PointerButton::Primary) && ctrl && !self.selection.instances.is_empty() {
             self.drag_move(delta);
         } else if resp.dragged_by(PointerButton::Middle) || (resp.dragged_by(PointerButton::Primary) && shift)
         {
@@ -850,7 +876,10 @@ impl Viewer {
         } else if resp.clicked() {
             let hit = resp.interact_pointer_pos().and_then(|p| self.pick(p, rect, ppp));
             let sel = hit.map(|h| h.1).unwrap_or(u32::MAX);
-            if sel != self.selected {
+            let m = click_modifiers(ctx);
+            if m.shift || m.command {
+                self.toggle_selected(sel);
+            } else if sel != self.selected {
                 self.set_selected(sel);
             }
         }
@@ -910,22 +939,16 @@ impl Viewer {
             .max(1e-6)
     }
 
-    /// Moves the selection by a world offset (an edit: F increments, TLAS rebuilt; drags merge in undo).
+    /// Moves the selection by a world offset (one edit for all selected instances: F increments, TLAS rebuilt;
+    /// drags merge in undo).
     fn move_selected(&mut self, d: Vec3) {
-        let Some(inst) = self
+        let edit = self
             .scene
             .as_ref()
-            .and_then(|s| s.instances.get(self.selected as usize))
-        else {
-            return;
-        };
-        let before = inst.transform;
-        let after = Mat4::from_translation(d) * before;
-        self.edit(Action::Apply(Edit::Transform {
-            instance: self.selected,
-            before,
-            after,
-        }));
+            .and_then(|s| Edit::move_all(s, &self.selection.instances, d));
+        if let Some(e) = edit {
+            self.edit(Action::Apply(e));
+        }
     }
 
     /// Ctrl+drag: move along the world axis whose screen projection best matches the drag.
@@ -1020,6 +1043,7 @@ impl Viewer {
                 Key::Escape,
                 Key::Z,
                 Key::Y,
+                Key::O,
                 Key::ArrowLeft,
                 Key::ArrowRight,
                 Key::ArrowUp,
@@ -1027,14 +1051,35 @@ impl Viewer {
                 Key::PageUp,
                 Key::PageDown,
             ];
-            let pressed: Vec<Key> = keys.into_iter().filter(|k| i.key_pressed(*k)).collect();
+            // Each key with the modifiers held when it was pressed (a quick Ctrl+Z can press and release Ctrl
+            // within one frame's events).
+            let held = |k: Key| {
+                i.events
+                    .iter()
+                    .rev()
+                    .find_map(|e| match e {
+                        egui::Event::Key {
+                            key,
+                            pressed: true,
+                            modifiers,
+                            ..
+                        } if *key == k => Some(*modifiers),
+                        _ => None,
+                    })
+                    .unwrap_or(i.modifiers)
+            };
+            let pressed: Vec<(Key, egui::Modifiers)> = keys
+                .into_iter()
+                .filter(|k| i.key_pressed(*k))
+                .map(|k| (k, held(k)))
+                .collect();
             let down: Vec<Key> = [Key::W, Key::A, Key::S, Key::D, Key::Q, Key::E]
                 .into_iter()
                 .filter(|k| i.key_down(*k))
                 .collect();
             (pressed, down, i.modifiers, i.stable_dt.min(0.25))
         });
-        for k in pressed {
+        for (k, mods) in pressed {
             match k {
                 Key::F | Key::Home => self.fit_all(),
                 Key::Num1 => self.std_view(StdView::Front),
@@ -1064,21 +1109,15 @@ impl Viewer {
                 Key::Z if mods.command && mods.shift => self.edit(Action::Redo),
                 Key::Z if mods.command => self.edit(Action::Undo),
                 Key::Y if mods.command => self.edit(Action::Redo),
-                Key::Delete if self.selected != u32::MAX => {
-                    let sel = self.selected;
-                    self.set_selected(u32::MAX);
-                    self.edit(Action::Apply(Edit::Delete {
-                        instance: sel,
-                        removed: None,
-                    }));
-                }
+                Key::O if mods.command => self.open_file_dialog(),
+                Key::Delete => self.delete_selection(),
                 Key::ArrowLeft
                 | Key::ArrowRight
                 | Key::ArrowUp
                 | Key::ArrowDown
                 | Key::PageUp
                 | Key::PageDown
-                    if self.selected != u32::MAX =>
+                    if !self.selection.instances.is_empty() =>
                 {
                     let step = self.move_step() * if mods.shift { 10.0 } else { 1.0 };
                     let c = self.nav.cam;
