@@ -1163,8 +1163,12 @@ impl Viewer {
             // s_p counts view pixels: cells keep their size when the render scale changes.
             r.view_height = self.view_rect[3].max(1) as u32;
             // A converged image of this very view is already in the output: present it again (expose events,
-            // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render.
-            let scripted = self.script.frames.is_some() && !self.script.done;
+            // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render, except
+            // during a background screenshot, where the view rests once converged as it would for a user.
+            let scripted = self.script.frames.is_some()
+                && !self.script.done
+                && self.background_shot.is_none()
+                && self.saving.is_none();
             if scripted || !r.shows_final(sg, scene.f(), &cam) {
                 r.record_frame(cmd, sg, scene.f(), &cam)?;
                 rendered = true;
