@@ -35,7 +35,7 @@ pub struct CpuSplit {
     pub ui: f64,
     /// egui's tessellation and egui-ash's paint command, between the layout pass and the frame's drawing.
     pub tessellate: f64,
-    /// Swapchain upkeep and acquiring the next image.
+    /// Swapchain upkeep and acquiring the next image (and an F12 screenshot rendered this frame).
     pub acquire: f64,
     /// Recording the renderer's passes and the blit into the command buffer (and a background screenshot's tile).
     pub record: f64,
