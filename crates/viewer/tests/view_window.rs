@@ -560,6 +560,49 @@ fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
         assert!(iw as f64 >= 0.35 * vw as f64 - 1.0, "not below 0.35: {f}");
         assert!(f["wall_ms"].as_f64().unwrap() > 0.0);
     }
+    // Where each frame's wall time went: consecutive CPU spans that add up to at most the wall time, the device's
+    // share (the wait for the frame's fence) among them.
+    const SPANS: [&str; 8] = [
+        "ui",
+        "tessellate",
+        "acquire",
+        "record",
+        "egui_record",
+        "gpu_wait",
+        "present",
+        "finish",
+    ];
+    for f in frames {
+        let wall = f["wall_ms"].as_f64().unwrap();
+        let spans: Vec<f64> = SPANS
+            .iter()
+            .map(|k| {
+                f["cpu_ms"][k]
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("cpu_ms.{k} in {f}"))
+            })
+            .collect();
+        assert!(spans.iter().all(|&ms| ms >= 0.0), "{f}");
+        assert!(
+            spans.iter().sum::<f64>() <= wall + 1e-6,
+            "spans exceed wall_ms: {f}"
+        );
+        assert!(f["cpu_ms"]["gpu_wait"].as_f64().unwrap() > 0.0, "{f}");
+        assert!(f["interval_ms"].as_f64().unwrap() >= 0.0, "{f}");
+        assert!(f["gpu_sections_ms"].is_object(), "{f}");
+    }
+    // Rendered frames follow each other: from the second on, the interval covers the previous frame's wall time.
+    for w in frames.windows(2) {
+        let (prev, next) = (
+            w[0]["wall_ms"].as_f64().unwrap(),
+            w[1]["interval_ms"].as_f64().unwrap(),
+        );
+        assert!(next >= prev - 1e-6, "interval {next} < previous wall {prev}");
+    }
+    assert!(
+        json["median_moving_cpu_ms"]["gpu_wait"].as_f64().unwrap() > 0.0,
+        "{json}"
+    );
     let last = frames.last().unwrap();
     assert_eq!(last["moving"], false);
     assert_eq!(

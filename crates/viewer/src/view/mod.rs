@@ -253,7 +253,9 @@ impl App {
 
 impl egui_ash::App for App {
     fn ui(&mut self, ctx: &egui::Context) {
-        self.lock().ui(ctx);
+        let mut v = self.lock();
+        v.ui(ctx);
+        v.ui_done = Instant::now();
     }
 
     fn handle_event(&mut self, event: egui_ash::event::Event) {
@@ -380,6 +382,10 @@ pub(crate) struct Viewer {
     last_drawn_cam: Option<Camera>,
     /// When this frame's UI pass started (the frame's wall time runs from here to the present).
     frame_started: Instant,
+    /// When this frame's UI pass ended (egui's tessellation runs from here to `draw`).
+    ui_done: Instant,
+    /// When the previous rendered frame's UI pass started.
+    last_rendered_start: Option<Instant>,
     frame_ms_avg: f64,
     interval_ms_avg: f64,
     last_frame_at: Option<Instant>,
@@ -494,6 +500,8 @@ impl Viewer {
             last_report: None,
             last_drawn_cam: None,
             frame_started: Instant::now(),
+            ui_done: Instant::now(),
+            last_rendered_start: None,
             frame_ms_avg: 0.0,
             interval_ms_avg: 0.0,
             last_frame_at: None,
@@ -1085,6 +1093,12 @@ impl Viewer {
         if self.shut_down {
             return Ok(());
         }
+        let mut split = stats::CpuSplit {
+            ui: ms_between(self.frame_started, self.ui_done),
+            ..Default::default()
+        };
+        let mut laps = stats::Laps::start_at(self.ui_done);
+        split.tessellate = laps.lap();
         if size.width == 0 || size.height == 0 {
             // Minimised: nothing to present; don't spin.
             std::thread::sleep(Duration::from_millis(30));
@@ -1136,6 +1150,7 @@ impl Viewer {
         let bgra_direct = !self.presenter.blit_ok && self.presenter.is_bgra();
         let gpu = self.gpu.clone();
         let cmd = self.presenter.cmd;
+        split.acquire = laps.lap();
         let t0 = Instant::now();
         unsafe {
             gpu.device
@@ -1159,6 +1174,10 @@ impl Viewer {
         }
         if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
             r.resize(iw, ih)?;
+            let frame_settings = motion::frame_settings(&self.settings, moving);
+            if r.settings != frame_settings {
+                r.set_settings(frame_settings)?;
+            }
             r.output_bgra = bgra_direct;
             // s_p counts view pixels: cells keep their size when the render scale changes.
             r.view_height = self.view_rect[3].max(1) as u32;
@@ -1184,7 +1203,9 @@ impl Viewer {
             [0.93, 0.93, 0.94, 1.0]
         };
         self.presenter.record_view(cmd, index, src, rect, bg);
+        split.record = laps.lap();
         egui_cmd.record(cmd, index as usize);
+        split.egui_record = laps.lap();
         // Scripted UI capture: copy the presented image (3D view + UI).
         let mut readback = None;
         if self.script.ui_capture_pending && self.presenter.readback_ok {
@@ -1205,7 +1226,11 @@ impl Viewer {
         unsafe {
             gpu.device.end_command_buffer(cmd)?;
         }
-        self.presenter.submit_and_present(index)?;
+        split.record += laps.lap();
+        self.presenter.submit_and_wait(index)?;
+        split.gpu_wait = laps.lap();
+        self.presenter.present(index)?;
+        split.present = laps.lap();
         let gpu_wall = t0.elapsed().as_secs_f64() * 1e3;
         let shot_ms = self.finish_shot_frame(rendered);
         if let Some(e) = shot_error {
@@ -1239,15 +1264,23 @@ impl Viewer {
             let (r, scene) = (self.renderer.as_mut().unwrap(), self.scene.as_ref().unwrap());
             let report = r.finish_frame(scene.f(), gpu_wall)?;
             self.last_drawn_cam = Some(cam);
+            split.finish = laps.lap();
             let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;
+            let interval_ms = self
+                .last_rendered_start
+                .map_or(0.0, |t| ms_between(t, self.frame_started));
+            self.last_rendered_start = Some(self.frame_started);
             if let Some(log) = &mut self.script.stats {
                 log.frames.push(stats::FrameStat {
                     wall_ms,
                     gpu_ms: report.gpu_total_ms,
+                    gpu_sections_ms: report.gpu_ms.iter().cloned().collect(),
                     internal: [iw, ih],
                     view: [rect[2] as u32, rect[3] as u32],
                     moving: changed,
                     rays: report.rays,
+                    cpu_ms: split,
+                    interval_ms,
                 });
             }
             self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
@@ -1509,6 +1542,11 @@ fn same_view(a: &Camera, b: &Camera) -> bool {
         && a.fov_y_deg == b.fov_y_deg
         && a.projection == b.projection
         && a.ortho_height == b.ortho_height
+}
+
+/// Milliseconds from `a` to `b` (0 when `b` is earlier).
+fn ms_between(a: Instant, b: Instant) -> f64 {
+    b.saturating_duration_since(a).as_secs_f64() * 1e3
 }
 
 fn ema(avg: f64, x: f64) -> f64 {

@@ -2,7 +2,7 @@
 //! internal resolution that follows from motion (reduced while the camera moves, full once it rests).
 use std::time::{Duration, Instant};
 
-use hrtao_core::FrameReport;
+use hrtao_core::{AoSettings, FrameReport};
 
 /// The one place that decides whether the image still changes (more frames would refine it) or is done and the
 /// viewer may rest: the renderer's own end of the still-camera refinement (`Renderer::converged`).
@@ -12,6 +12,21 @@ pub fn image_converged(report: &FrameReport) -> bool {
 
 /// The smallest render scale while moving (the user's render-scale setting caps it from above).
 pub const MIN_MOVING_SCALE: f32 = 0.35;
+/// À-trous filter iterations while the camera moves (the user's setting caps it; still images get the setting).
+/// Each iteration is a full pass over the internal image: on lavapipe the filter's 3 default iterations were
+/// about a sixth of a moving frame (docs/benchmarks.md, viewer orbit), and a moving image is replaced a frame later.
+pub const MOVING_FILTER_ITERATIONS: u32 = 1;
+
+/// The renderer's settings for one frame: the user's `settings`, with the filter cut to
+/// `MOVING_FILTER_ITERATIONS` while `moving`.
+pub fn frame_settings(settings: &AoSettings, moving: bool) -> AoSettings {
+    let mut s = settings.clone();
+    if moving {
+        s.filter_iterations = s.filter_iterations.min(MOVING_FILTER_ITERATIONS);
+    }
+    s
+}
+
 /// The view counts as still once the camera has not changed for this long and for `STILL_FRAMES` frames.
 pub const STILL_AFTER: Duration = Duration::from_millis(150);
 pub const STILL_FRAMES: u32 = 1;
@@ -97,6 +112,34 @@ mod tests {
         assert_eq!(m.scale(1.0, later), 1.0);
         m.dragging = true;
         assert!(m.moving(later));
+    }
+
+    #[test]
+    fn moving_frames_filter_less_still_frames_keep_the_setting() {
+        let user = AoSettings {
+            filter_iterations: 4,
+            ..AoSettings::default()
+        };
+        assert_eq!(
+            frame_settings(&user, true).filter_iterations,
+            MOVING_FILTER_ITERATIONS
+        );
+        assert_eq!(frame_settings(&user, false), user);
+        // Only the filter changes, and a setting below the moving one stays.
+        let off = AoSettings {
+            filter_iterations: 0,
+            ..user.clone()
+        };
+        assert_eq!(frame_settings(&off, true), off);
+        let moving = frame_settings(&user, true);
+        assert_eq!(
+            AoSettings {
+                filter_iterations: 4,
+                ..moving
+            },
+            user
+        );
+        assert!(moving.validate().is_ok());
     }
 
     #[test]

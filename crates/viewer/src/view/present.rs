@@ -586,8 +586,8 @@ impl Presenter {
         }
     }
 
-    /// Submits `cmd` (waiting for the acquired image), waits for it, then presents image `index`.
-    pub fn submit_and_present(&mut self, index: u32) -> Result<()> {
+    /// Submits `cmd` (waiting for the acquired image) and waits for it; `present` shows image `index` next.
+    pub fn submit_and_wait(&mut self, index: u32) -> Result<()> {
         let d = &self.gpu.device;
         unsafe {
             let waits = [self.acquire];
@@ -605,6 +605,14 @@ impl Presenter {
             d.wait_for_fences(&[self.fence], true, 600_000_000_000)
                 .map_err(|e| anyhow!("vkWaitForFences: {e}"))?;
             d.reset_fences(&[self.fence])?;
+        }
+        Ok(())
+    }
+
+    /// Presents image `index` once the frame submitted by `submit_and_wait` signals its semaphore.
+    pub fn present(&mut self, index: u32) -> Result<()> {
+        unsafe {
+            let signals = [self.render_done[index as usize]];
             let swapchains = [self.swapchain];
             let indices = [index];
             let present = vk::PresentInfoKHR::builder()

@@ -1,5 +1,6 @@
 //! `--stats FILE`: one record per rendered frame of a scripted run (wall and GPU time, internal and view size,
 //! whether the camera moved), written as JSON when the run ends.
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -13,11 +14,75 @@ pub struct FrameStat {
     pub wall_ms: f64,
     /// The renderer's passes by GPU timestamps (0 when the device has none).
     pub gpu_ms: f64,
+    /// `gpu_ms` per section (the paper's Table 2 names).
+    pub gpu_sections_ms: BTreeMap<String, f64>,
     pub internal: [u32; 2],
     pub view: [u32; 2],
     pub moving: bool,
     /// Rays traced this frame.
     pub rays: u64,
+    /// Where `wall_ms` went on the CPU clock (consecutive spans: their sum is at most `wall_ms`).
+    pub cpu_ms: CpuSplit,
+    /// From the previous rendered frame's start to this one's (0 for the first): what a user sees as the frame
+    /// time, including the event loop between frames.
+    pub interval_ms: f64,
+}
+
+/// The consecutive parts of a frame's wall time, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct CpuSplit {
+    /// egui's layout pass: the panel, the view's input, the overlays (`App::ui`).
+    pub ui: f64,
+    /// egui's tessellation and egui-ash's paint command, between the layout pass and the frame's drawing.
+    pub tessellate: f64,
+    /// Swapchain upkeep and acquiring the next image (and an F12 screenshot rendered this frame).
+    pub acquire: f64,
+    /// Recording the renderer's passes and the blit into the command buffer (and a background screenshot's tile).
+    pub record: f64,
+    /// egui-ash's recording: texture updates, vertex and index upload, draw calls.
+    pub egui_record: f64,
+    /// Submission until the frame's fence signals: the device executing the frame (on a CPU device, the
+    /// rendering itself, the blit and egui's rasterisation).
+    pub gpu_wait: f64,
+    /// vkQueuePresentKHR.
+    pub present: f64,
+    /// After the present: reading back the renderer's statistics and timestamps, a background screenshot's
+    /// bookkeeping.
+    pub finish: f64,
+}
+
+impl CpuSplit {
+    /// The per-field medians of `splits` (None when empty).
+    pub fn medians<'a>(splits: impl Iterator<Item = &'a CpuSplit>) -> Option<CpuSplit> {
+        let v: Vec<&CpuSplit> = splits.collect();
+        let m = |f: fn(&CpuSplit) -> f64| median(v.iter().map(|s| f(s)).collect());
+        Some(CpuSplit {
+            ui: m(|s| s.ui)?,
+            tessellate: m(|s| s.tessellate)?,
+            acquire: m(|s| s.acquire)?,
+            record: m(|s| s.record)?,
+            egui_record: m(|s| s.egui_record)?,
+            gpu_wait: m(|s| s.gpu_wait)?,
+            present: m(|s| s.present)?,
+            finish: m(|s| s.finish)?,
+        })
+    }
+}
+
+/// A stopwatch of consecutive spans: each `lap` returns the milliseconds since the previous one.
+pub struct Laps(std::time::Instant);
+
+impl Laps {
+    pub fn start_at(t: std::time::Instant) -> Laps {
+        Laps(t)
+    }
+
+    pub fn lap(&mut self) -> f64 {
+        let now = std::time::Instant::now();
+        let ms = now.duration_since(self.0).as_secs_f64() * 1e3;
+        self.0 = now;
+        ms
+    }
 }
 
 #[derive(Serialize)]
@@ -27,6 +92,8 @@ struct StatsFile<'a> {
     frames: &'a [FrameStat],
     median_moving_wall_ms: Option<f64>,
     median_still_wall_ms: Option<f64>,
+    /// Per-field medians of the moving frames' `cpu_ms`.
+    median_moving_cpu_ms: Option<CpuSplit>,
     /// A background screenshot (--screenshot-size) written during the run.
     screenshot: Option<&'a ShotSummary>,
 }
@@ -68,6 +135,9 @@ impl StatsLog {
             frames: &self.frames,
             median_moving_wall_ms: self.median_wall_ms(true),
             median_still_wall_ms: self.median_wall_ms(false),
+            median_moving_cpu_ms: CpuSplit::medians(
+                self.frames.iter().filter(|f| f.moving).map(|f| &f.cpu_ms),
+            ),
             screenshot: self.screenshot.as_ref(),
         };
         if let Some(dir) = self.path.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -108,14 +178,55 @@ mod tests {
             log.frames.push(FrameStat {
                 wall_ms: ms,
                 gpu_ms: 0.0,
+                gpu_sections_ms: BTreeMap::new(),
                 internal: [1, 1],
                 view: [1, 1],
                 moving,
                 rays: 0,
+                cpu_ms: CpuSplit::default(),
+                interval_ms: 0.0,
             });
         }
         assert_eq!(log.median_wall_ms(true), Some(20.0));
         assert_eq!(log.median_wall_ms(false), Some(6.0));
         assert_eq!(median(Vec::new()), None);
+    }
+
+    #[test]
+    fn laps_are_consecutive_and_the_split_adds_up() {
+        let t0 = std::time::Instant::now();
+        let mut laps = Laps::start_at(t0);
+        std::thread::sleep(std::time::Duration::from_millis(2));
+        let a = laps.lap();
+        let b = laps.lap();
+        let whole = t0.elapsed().as_secs_f64() * 1e3;
+        assert!(a >= 2.0 && b >= 0.0 && a + b <= whole, "{a} {b} {whole}");
+        let a = CpuSplit {
+            ui: 1.0,
+            gpu_wait: 3.0,
+            ..CpuSplit::default()
+        };
+        let b = CpuSplit {
+            ui: 3.0,
+            gpu_wait: 1.0,
+            finish: 0.5,
+            ..CpuSplit::default()
+        };
+        let m = CpuSplit::medians([a, b].iter()).unwrap();
+        assert_eq!((m.ui, m.gpu_wait, m.finish, m.present), (2.0, 2.0, 0.25, 0.0));
+        assert_eq!(CpuSplit::medians(std::iter::empty()), None);
+        let json = serde_json::to_value(m).unwrap();
+        for k in [
+            "ui",
+            "tessellate",
+            "acquire",
+            "record",
+            "egui_record",
+            "gpu_wait",
+            "present",
+            "finish",
+        ] {
+            assert!(json[k].is_number(), "{k} in {json}");
+        }
     }
 }
