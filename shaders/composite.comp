@@ -99,7 +99,10 @@ float edge(uvec2 pix, GPixel px) {
 // pixel reads a slot written in the same dispatch), which share most of their cells' bias and so cut the
 // noise of the estimate. While o agrees with mean(c) within its noise, k is prior_rays_max (the cell, nearly
 // noise-free, dominates: no flicker); where the cell is biased, k falls toward prior_rays and the pixel
-// converges to its own rays. k moves continuously with o, so it does not flicker.
+// converges to its own rays. k moves continuously with o, so it does not flicker. k never exceeds the rays of
+// the cell the pixel used: a cell of N rays carries their noise, so it is worth at most N of the pixel's (times
+// CELLS_FILTERED, the cells the filter averages, as a rough count).
+const float CELLS_FILTERED = 2.0;
 float own_bias2(PixelAccum a, out float v) {
     float k_min = max(g.prior_rays, 1e-6);
     float cell = a.cell / a.frames;
@@ -111,7 +114,11 @@ float own_bias2(PixelAccum a, out float v) {
 
 float prior_weight(uvec2 pix, GPixel px, PixelAccum a) {
     float k_min = max(g.prior_rays, 1e-6);
-    float k_max = max(g.prior_rays_max, k_min);
+    // The cell's mean holds the noise of its own rays (and of the few neighbouring cells the filter averages in): as a prior it is worth at most that many rays.
+    uint used = UintRef(g.lod_used).v[pix.y * g.width + pix.x];
+    uint cell = used < LOD_COUNT ? PixelCellRef(g.pixel_cells).v[pix.y * g.width + pix.x].cells[used] : INVALID_CELL;
+    float cell_rays = cell != INVALID_CELL && slot_in_bounds(cell) ? float(CellRef(g.hash_cells).v[cell].samples) : 0.0;
+    float k_max = max(min(g.prior_rays_max, CELLS_FILTERED * cell_rays), k_min);
     FloatRef evidence = FloatRef(g.bias_evidence);
     uint n = g.width * g.height;
     uint index = pix.y * g.width + pix.x;
@@ -182,9 +189,11 @@ void main() {
         } else {
             a = accum.v[index];
         }
-        // Later frames' cell estimates count more (frame n weighs n): their cells hold more rays and have left
-        // the coarse fallbacks of the first frames, while the weighted mean still moves smoothly.
-        float wc = float(g.still_index + 1u);
+        // Later frames' cell estimates count more (the n-th frame of the pixel's accumulation weighs n): their
+        // cells hold more rays and have left the coarse fallbacks of the first frames, while the weighted mean
+        // still moves smoothly. n is counted from the pixel's last restart (a local edit restarts some pixels
+        // only): frames holds 1 + 2 + ... + (n - 1) = n (n - 1) / 2.
+        float wc = round(0.5 + sqrt(2.0 * a.frames + 0.25));
         a.shade_cell += wc * s * c;
         a.cell += wc * c;
         a.shade_open += s * open;
