@@ -163,7 +163,7 @@ impl Default for AoSettings {
             refine: true,
             prior_rays: 32.0,
             prior_rays_max: 1024.0,
-            prior_sigma: 0.9,
+            prior_sigma: 1.0,
             still_samples: 64,
             max_cell_fraction: 0.25,
             edges: true,
