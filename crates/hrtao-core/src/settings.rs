@@ -273,3 +273,36 @@ impl AoSettings {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adaptive_prior_settings_are_checked_and_named() {
+        assert!(AoSettings::default().validate().is_ok());
+        for bad in [-1.0, f32::NAN, f32::INFINITY] {
+            let e = AoSettings {
+                prior_rays_max: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("prior rays max"), "{e}");
+            let e = AoSettings {
+                prior_sigma: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("prior sigma"), "{e}");
+        }
+        // 0 keeps k fixed at prior_rays (the shader clamps k_max up to k_min).
+        assert!(AoSettings {
+            prior_rays_max: 0.0,
+            ..Default::default()
+        }
+        .validate()
+        .is_ok());
+    }
+}
