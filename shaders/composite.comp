@@ -3,7 +3,7 @@
 // accumulation over still frames (ours, docs/algorithm.md), which anti-aliases (each still frame's primary
 // sample is jittered) and, in HRTAO, moves each pixel from its cell estimate c (paper §4-5) to its own rays:
 //
-//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)),   k = prior_rays,
+//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)),   k = prior_weight (ours, adaptive),
 //
 // the cell estimate counting as k of the pixel's own rays. Colours weigh each sample's shade the same way.
 // Per-pixel RTAO is the same with k -> 0; the paper's behaviour (no refinement) shows the current frame's c.
@@ -91,6 +91,64 @@ float edge(uvec2 pix, GPixel px) {
     return 0.0;
 }
 
+// Ours: the cell estimate's weight k in rays of the pixel's own, by empirical Bayes. The pixel's own mean o over
+// s rays has binomial noise v/s (v = p(1-p)); the cell estimate mean(c) differs from the truth by a bias b.
+// Weighing them k : s with k = v / b^2 minimises the expected squared error. b^2 is estimated from the
+// discrepancy, (o - mean(c))^2 minus z^2 times the noise it contains (z = prior_sigma), and pooled over the
+// 3x3 neighbours on the pixel's surface (their estimates of the previous frame: two slots by parity, so no
+// pixel reads a slot written in the same dispatch), which share most of their cells' bias and so cut the
+// noise of the estimate. While o agrees with mean(c) within its noise, k is prior_rays_max (the cell, nearly
+// noise-free, dominates: no flicker); where the cell is biased, k falls toward prior_rays and the pixel
+// converges to its own rays. k moves continuously with o, so it does not flicker. k never exceeds the rays of
+// the cell the pixel used: a cell of N rays carries their noise, so it is worth at most N of the pixel's (times
+// CELLS_FILTERED, the cells the filter averages, as a rough count).
+const float CELLS_FILTERED = 2.0;
+float own_bias2(PixelAccum a, out float v) {
+    float k_min = max(g.prior_rays, 1e-6);
+    float cell = a.cell / a.frames;
+    float p = (k_min * cell + a.open) / (k_min + a.rays);
+    v = max(p * (1.0 - p), 1.0 / (k_min + a.rays));
+    float d = a.open / a.rays - cell;
+    return d * d - g.prior_sigma * g.prior_sigma * v / a.rays;
+}
+
+float prior_weight(uvec2 pix, GPixel px, PixelAccum a) {
+    float k_min = max(g.prior_rays, 1e-6);
+    // The cell's mean holds the noise of its own rays (and of the few neighbouring cells the filter averages in): as a prior it is worth at most that many rays.
+    uint used = UintRef(g.lod_used).v[pix.y * g.width + pix.x];
+    uint cell = used < LOD_COUNT ? PixelCellRef(g.pixel_cells).v[pix.y * g.width + pix.x].cells[used] : INVALID_CELL;
+    float cell_rays = cell != INVALID_CELL && slot_in_bounds(cell) ? float(CellRef(g.hash_cells).v[cell].samples) : 0.0;
+    float k_max = max(min(g.prior_rays_max, CELLS_FILTERED * cell_rays), k_min);
+    FloatRef evidence = FloatRef(g.bias_evidence);
+    uint n = g.width * g.height;
+    uint index = pix.y * g.width + pix.x;
+    uint write_slot = (g.still_index & 1u) * n;
+    if (a.rays <= 0.0 || k_max <= k_min) {
+        evidence.v[write_slot + index] = 0.0;
+        return k_min;
+    }
+    float v;
+    float own = own_bias2(a, v);
+    evidence.v[write_slot + index] = own;
+    float pooled = own;
+    float count = 1.0;
+    if (g.still_index > 1u) {
+        uint read_slot = n - write_slot;
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                ivec2 q = ivec2(pix) + ivec2(dx, dy);
+                if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+                uint qi = uint(q.y) * g.width + uint(q.x);
+                GPixel o = GBufferRef(g.gbuffer).px[qi];
+                if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) continue;
+                pooled += evidence.v[read_slot + qi];
+                count += 1.0;
+            }
+        }
+    }
+    return clamp(v / max(pooled / count, 1e-12), k_min, k_max);
+}
+
 const vec3 EDGE_COLOR = vec3(0.06, 0.07, 0.08);
 
 void main() {
@@ -131,16 +189,21 @@ void main() {
         } else {
             a = accum.v[index];
         }
-        a.shade_cell += s * c;
-        a.cell += c;
+        // Later frames' cell estimates count more (the n-th frame of the pixel's accumulation weighs n): their
+        // cells hold more rays and have left the coarse fallbacks of the first frames, while the weighted mean
+        // still moves smoothly. n is counted from the pixel's last restart (a local edit restarts some pixels
+        // only): frames holds 1 + 2 + ... + (n - 1) = n (n - 1) / 2.
+        float wc = round(0.5 + sqrt(2.0 * a.frames + 0.25));
+        a.shade_cell += wc * s * c;
+        a.cell += wc * c;
         a.shade_open += s * open;
         a.open += open;
         a.rays += traced;
-        a.frames += 1.0;
+        a.frames += wc;
         accum.v[index] = a;
         // k: the cell estimate's weight in rays (HRTAO), a vanishing weight otherwise (used only when the
         // pixel has no rays at all: AO off, a zero budget).
-        float k = hashed ? max(g.prior_rays, 1e-6) : 1e-6;
+        float k = hashed ? prior_weight(pix, px, a) : 1e-6;
         float ao = (k * a.cell / a.frames + a.open) / (k + a.rays);
         color = (k * a.shade_cell / a.frames + a.shade_open) / (k + a.rays);
         if (g.mode == MODE_NO_AO) {

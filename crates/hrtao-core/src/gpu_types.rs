@@ -168,7 +168,16 @@ gpu_structs! {
         section1: [f32; 4],
         section2: [f32; 4],
         section_count: u32,
-        _section_pad: u32,
+        /// Still-camera refinement (ours): the cell estimate's weight k in rays is adaptive, from `prior_rays`
+        /// (the pixel's own rays disagree with the cell) up to this (they agree); see composite.comp.
+        prior_rays_max: f32,
+        /// The disagreement that counts: the squared difference between the pixel's own mean and the cell
+        /// estimate beyond this many squared standard deviations of the own rays' binomial noise.
+        prior_sigma: f32,
+        _prior_pad: u32,
+        /// Per pixel, two slots (by still-frame parity): the pixel's estimate of its cell's squared bias,
+        /// written by the composite each frame and pooled over neighbours in the next (composite.comp).
+        bias_evidence: u64,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

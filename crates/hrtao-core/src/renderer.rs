@@ -31,6 +31,7 @@ struct Targets {
     filter_tmp: Buffer,
     pixel_rays: Buffer,
     accum: Buffer,
+    bias_evidence: Buffer,
     output: Buffer,
     pixel_cells: Buffer,
     ray_queue: Buffer,
@@ -57,6 +58,7 @@ impl Targets {
             filter_tmp: b("filter ping-pong", n * 4)?,
             pixel_rays: b("pixel rays", n * std::mem::size_of::<PixelRays>() as u64)?,
             accum: b("still accumulation", n * std::mem::size_of::<PixelAccum>() as u64)?,
+            bias_evidence: b("cell bias evidence", 2 * n * 4)?,
             output: b("output RGBA8", n * 4)?,
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
             ray_queue: b("ray queue", n * 4)?,
@@ -406,6 +408,8 @@ impl Renderer {
             stale_frames: s.stale_frames,
             filter_iterations: s.filter_iterations,
             prior_rays: s.prior_rays,
+            prior_rays_max: s.prior_rays_max,
+            prior_sigma: s.prior_sigma,
             filter_sigma: s.filter_sigma,
             region_lod: self.regions.region_lod,
             crease_cos: s.crease_deg.to_radians().cos(),
@@ -437,7 +441,8 @@ impl Renderer {
             section1: [0.0; 4],
             section2: [0.0; 4],
             section_count: 0,
-            _section_pad: 0,
+            _prior_pad: 0,
+            bias_evidence: t.bias_evidence.address,
         }
     }
 

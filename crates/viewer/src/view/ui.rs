@@ -387,6 +387,15 @@ impl Viewer {
             "Ours (docs/algorithm.md): while the view rests, each pixel traces its own rays and its AO converges \
              from the cell estimate to the ray-traced value, with anti-aliasing. Off: the paper's behaviour.",
         );
+        ui.horizontal(|ui| {
+            ui.label("cell weight (rays)");
+            ui.add(egui::DragValue::new(&mut s.prior_rays_max).speed(16.0).clamp_range(0.0..=16384.0))
+                .on_hover_text(
+                    "Ours: while a pixel's own rays agree with its cell, the cell counts as this many of the \
+                     pixel's rays (a steady still image); where they show the cell is biased the weight falls to \
+                     `prior_rays` (32). 0: always 32.",
+                );
+        });
         ui.checkbox(&mut s.local_edits, "edits keep untouched AO").on_hover_text(
             "Ours (docs/algorithm.md): moving, hiding or deleting a part re-keys only the hash cells within the \
              AO radius of it; the rest of the image keeps its converged AO. Off: the paper's eq. 6 (every edit \
