@@ -7,6 +7,7 @@
 //! Per scene: MAE of one frame from an empty map (per-pixel RTAO and HRTAO), MAE after N still frames (HRTAO,
 //! and per-pixel RTAO with the same total rays), and HRTAO's flicker (mean |ΔAO| between consecutive still
 //! frames after frame 4).
+mod cli_args;
 use std::path::PathBuf;
 
 use hrtao_core::{metrics, AoSettings, Camera, ContextOptions, Gpu, Mode, Renderer, SceneGpu};
@@ -18,29 +19,19 @@ fn shared(rel: &str) -> PathBuf {
 }
 
 fn main() -> anyhow::Result<()> {
-    let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let mut take = |flag: &str, default: &str| -> String {
-        match args.iter().position(|a| a == flag) {
-            Some(i) => {
-                let v = args.remove(i + 1);
-                args.remove(i);
-                v
-            }
-            None => default.to_string(),
-        }
-    };
-    let size = take("--size", "640x360");
-    let rays: u32 = take("--rays", "8").parse()?;
-    let frames: u32 = take("--frames", "32").parse()?;
-    let extra = take("--set", "{}");
-    let dump = take("--dump", "");
-    let keys = if args.is_empty() {
+    let mut args = cli_args::Args::from_env();
+    let size = args.take("--size", "640x360");
+    let rays: u32 = args.take("--rays", "8").parse()?;
+    let frames: u32 = args.take("--frames", "32").parse()?;
+    let extra = args.take("--set", "{}");
+    let dump = args.take("--dump", "");
+    let keys = if args.0.is_empty() {
         vec!["rod", "duplex", "cycloidal", "engine", "sf"]
             .into_iter()
             .map(String::from)
             .collect()
     } else {
-        args
+        args.0
     };
     let gpu = Gpu::new(&ContextOptions::default())?;
     let index: serde_json::Value =
@@ -64,13 +55,7 @@ fn main() -> anyhow::Result<()> {
             rays_per_pixel: rays,
             ..Default::default()
         };
-        let mut settings: AoSettings = serde_json::from_value({
-            let mut v = serde_json::to_value(&base)?;
-            for (k, x) in serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&extra)? {
-                v[k] = x;
-            }
-            v
-        })?;
+        let mut settings = cli_args::with_overrides(&base, &extra)?;
         settings.mode = Mode::Hrtao;
         // HRTAO: one frame, then still frames.
         let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone())?;

@@ -3,6 +3,7 @@
 //!
 //! `cargo run -p hrtao-core --example tile_profile -- [--size 3840x2160] [--slice 84560] [--tile 60]
 //! [--set '{"filter_sigma": 0}'] [--primary raster|rayquery]`
+mod cli_args;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -11,22 +12,12 @@ use hrtao_core::tile::TileGrid;
 use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Primary, Renderer, SceneGpu};
 
 fn main() -> anyhow::Result<()> {
-    let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let mut take = |flag: &str, default: &str| -> String {
-        match args.iter().position(|a| a == flag) {
-            Some(i) => {
-                let v = args.remove(i + 1);
-                args.remove(i);
-                v
-            }
-            None => default.to_string(),
-        }
-    };
-    let size = take("--size", "3840x2160");
-    let slice: u64 = take("--slice", "84560").parse()?;
-    let tile: usize = take("--tile", "60").parse()?;
-    let extra = take("--set", "{}");
-    let raster = take("--primary", "raster") == "raster";
+    let mut args = cli_args::Args::from_env();
+    let size = args.take("--size", "3840x2160");
+    let slice: u64 = args.take("--slice", "84560").parse()?;
+    let tile: usize = args.take("--tile", "60").parse()?;
+    let extra = args.take("--set", "{}");
+    let raster = args.take("--primary", "raster") == "raster";
     let (w, h) = size.split_once('x').unwrap();
     let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets");
@@ -36,11 +27,7 @@ fn main() -> anyhow::Result<()> {
         height: h,
         ..Camera::load(&assets.join("default.camera.json"))?
     };
-    let mut v = serde_json::to_value(AoSettings::default())?;
-    for (k, x) in serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&extra)? {
-        v[k] = x;
-    }
-    let mut settings: AoSettings = serde_json::from_value(v)?;
+    let mut settings = cli_args::with_overrides(&AoSettings::default(), &extra)?;
     settings.rays_per_pixel = settings.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
     let margin = if settings.filter {
         2 * ((1u32 << settings.filter_iterations.min(8)) - 1) + 1

@@ -1,0 +1,32 @@
+//! What the development examples share: `--flag value` arguments and `--set` overrides of `AoSettings`.
+use hrtao_core::AoSettings;
+
+/// The command line after the program name; `take` removes a flag and its value.
+pub struct Args(pub Vec<String>);
+
+impl Args {
+    pub fn from_env() -> Args {
+        Args(std::env::args().skip(1).collect())
+    }
+
+    /// The value after `flag` (removed with it), or `default`.
+    pub fn take(&mut self, flag: &str, default: &str) -> String {
+        match self.0.iter().position(|a| a == flag) {
+            Some(i) if i + 1 < self.0.len() => {
+                let v = self.0.remove(i + 1);
+                self.0.remove(i);
+                v
+            }
+            _ => default.to_string(),
+        }
+    }
+}
+
+/// `base` with the fields of the JSON object `overrides` replaced (e.g. `{"filter_sigma": 0}`).
+pub fn with_overrides(base: &AoSettings, overrides: &str) -> anyhow::Result<AoSettings> {
+    let mut v = serde_json::to_value(base)?;
+    for (k, x) in serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(overrides)? {
+        v[k] = x;
+    }
+    Ok(serde_json::from_value(v)?)
+}
