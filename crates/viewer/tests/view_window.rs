@@ -903,6 +903,38 @@ fn write_box_stl(path: &Path, min: [f32; 3], max: [f32; 3]) {
 }
 
 /// The pixel (row 0 at the top) where a world point appears for a pinhole camera (eye, target, up, fov).
+/// A viewer (no panel) on `model` through a perspective camera of `size` pixels, once its image is at rest.
+fn start_at_rest(
+    model: &std::path::Path,
+    dir: &std::path::Path,
+    eye: [f32; 3],
+    target: [f32; 3],
+    up: [f32; 3],
+    fov: f32,
+    (w, h): (u32, u32),
+) -> Running {
+    let cam = dir.join("cam.json");
+    std::fs::write(
+        &cam,
+        format!(
+            r#"{{"eye":{eye:?},"target":{target:?},"up":{up:?},"fov_y_deg":{fov},"width":{w},"height":{h}}}"#
+        ),
+    )
+    .unwrap();
+    let size = format!("{w}x{h}");
+    let args = [
+        model.to_str().unwrap(),
+        "--camera",
+        cam.to_str().unwrap(),
+        "--size",
+        &size,
+        "--no-panel",
+    ];
+    let mut v = Running::start(&args, dir);
+    v.wait_for("at rest", 1, std::time::Duration::from_secs(90));
+    v
+}
+
 fn pixel_of(
     eye: [f32; 3],
     target: [f32; 3],
@@ -957,25 +989,7 @@ fn measuring_two_clicked_points_on_a_known_box() {
         560,
         300,
     );
-    let cam = dir.join("cam.json");
-    std::fs::write(
-        &cam,
-        format!(
-            r#"{{"eye":{eye:?},"target":{target:?},"up":{up:?},"fov_y_deg":{fov},"width":{w},"height":{h}}}"#
-        ),
-    )
-    .unwrap();
-    let size = format!("{w}x{h}");
-    let args = [
-        stl.to_str().unwrap(),
-        "--camera",
-        cam.to_str().unwrap(),
-        "--size",
-        &size,
-        "--no-panel",
-    ];
-    let mut v = Running::start(&args, &dir);
-    v.wait_for("at rest", 1, std::time::Duration::from_secs(90));
+    let mut v = start_at_rest(&stl, &dir, eye, target, up, fov, (w, h));
     let window = v.focus_window();
     xdotool(&["key", "m"]);
     v.wait_for("measure mode on", 1, std::time::Duration::from_secs(30));
@@ -1171,25 +1185,7 @@ fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
         320,
         200,
     );
-    let cam = dir.join("cam.json");
-    std::fs::write(
-        &cam,
-        format!(
-            r#"{{"eye":{eye:?},"target":{target:?},"up":{up:?},"fov_y_deg":{fov},"width":{w},"height":{h}}}"#
-        ),
-    )
-    .unwrap();
-    let size = format!("{w}x{h}");
-    let args = [
-        obj.to_str().unwrap(),
-        "--camera",
-        cam.to_str().unwrap(),
-        "--size",
-        &size,
-        "--no-panel",
-    ];
-    let mut v = Running::start(&args, &dir);
-    v.wait_for("at rest", 1, std::time::Duration::from_secs(90));
+    let mut v = start_at_rest(&obj, &dir, eye, target, up, fov, (w, h));
     let window = v.focus_window();
     let left = pixel_of(eye, target, up, fov, w, h, [5.0, 5.0, 10.0]);
     let right = pixel_of(eye, target, up, fov, w, h, [25.0, 5.0, 10.0]);
