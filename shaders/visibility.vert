@@ -1,7 +1,8 @@
 #version 460
-// Rasterised primary visibility, vertex stage: pulls triangle corner gl_VertexIndex of the draw's geometry
-// (non-indexed draw of 3 corners per triangle, so gl_VertexIndex / 3 is the primitive index, as a ray query
-// reports it) for the visible instance gl_InstanceIndex, and projects it with the ray-traced camera.
+// Rasterised primary visibility, vertex stage: pulls vertex gl_VertexIndex of the draw's geometry (an indexed
+// draw over the geometry's own index buffer; the fragment stage reads the primitive index, as a ray query
+// reports it, from gl_PrimitiveID) for the visible instance gl_InstanceIndex, and projects it with the
+// ray-traced camera.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference2 : require
 #extension GL_EXT_scalar_block_layout : require
@@ -13,20 +14,18 @@
 layout(push_constant, scalar) uniform Push { RasterPush pc; };
 layout(buffer_reference, scalar) readonly buffer GeometryRef { GeometryInfo v[]; };
 layout(buffer_reference, scalar) readonly buffer VertexRef { vec3 v[]; };
-layout(buffer_reference, scalar) readonly buffer CornerRef { uint v[]; };
 layout(buffer_reference, scalar) readonly buffer GlobalsRef { FrameGlobals g; };
 
 // Section planes clip the triangles: the clip distance is positive on the kept side (see section.glsl).
 out float gl_ClipDistance[MAX_SECTIONS];
 
-// (instance id, geometry, primitive, visible-instance slot): constant over the triangle.
-layout(location = 0) flat out uvec4 vis;
+// (instance id, geometry, visible-instance slot): constant over the draw's instance.
+layout(location = 0) flat out uvec3 vis;
 
 void main() {
     GeometryInfo geo = GeometryRef(pc.geometries).v[pc.geometry];
-    uint corner = CornerRef(geo.indices).v[gl_VertexIndex];
     RasterInstance inst = RasterInstanceRef(pc.instances).v[gl_InstanceIndex];
-    vec3 p = raster_to_world(inst, VertexRef(geo.vertices).v[corner]);
+    vec3 p = raster_to_world(inst, VertexRef(geo.vertices).v[gl_VertexIndex]);
     GlobalsRef globals = GlobalsRef(pc.globals);
     vec4 planes[MAX_SECTIONS] = vec4[MAX_SECTIONS](globals.g.section0, globals.g.section1, globals.g.section2);
     for (uint i = 0u; i < MAX_SECTIONS; ++i) {
@@ -42,5 +41,5 @@ void main() {
     float w = ortho ? 1.0 : dist;
     vec2 xy = vec2(dot(d, pc.cam_u.xyz), -dot(d, pc.cam_v.xyz)) - pc.jitter_ndc * w;
     gl_Position = vec4(xy, ortho ? 1.0 - dist * pc.eye.w : pc.eye.w, w);
-    vis = uvec4(inst.instance, pc.geometry, uint(gl_VertexIndex) / 3u, uint(gl_InstanceIndex));
+    vis = uvec3(inst.instance, pc.geometry, uint(gl_InstanceIndex));
 }

@@ -12,7 +12,7 @@ use crate::buffer::{full_barrier, Buffer};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{GeometryInfo, InstanceInfo};
-use crate::raster::RasterScene;
+use crate::raster::{RasterGeometry, RasterScene};
 use crate::section::{Sections, Side};
 
 /// An acceleration structure with its backing buffer; destroyed on drop.
@@ -208,6 +208,7 @@ impl SceneGpu {
             vertex_count: u32,
             triangles: u32,
             color: [f32; 4],
+            double_sided: bool,
         }
         let mut per_mesh: Vec<Vec<Geo>> = Vec::with_capacity(scene.meshes.len());
         for mesh in &scene.meshes {
@@ -223,6 +224,7 @@ impl SceneGpu {
                     vertex_count: p.positions.len() as u32,
                     triangles: tris,
                     color: p.base_color,
+                    double_sided: p.double_sided,
                 });
                 vertices.extend_from_slice(&p.positions);
                 indices.extend_from_slice(&p.indices[..tris as usize * 3]);
@@ -231,7 +233,12 @@ impl SceneGpu {
         }
         let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
         let vbuf = Buffer::device_local_from_slice(gpu, "vertices", &vertices, input)?;
-        let ibuf = Buffer::device_local_from_slice(gpu, "indices", &indices, input)?;
+        let ibuf = Buffer::device_local_from_slice(
+            gpu,
+            "indices",
+            &indices,
+            input | vk::BufferUsageFlags::INDEX_BUFFER,
+        )?;
         let geometry_bytes = (vertices.len() * 12 + indices.len() * 4) as u64;
         drop(vertices);
         drop(indices);
@@ -263,10 +270,16 @@ impl SceneGpu {
                     let base = base.unwrap_or(0);
                     geos.iter()
                         .enumerate()
-                        .map(|(k, g)| (base + k as u32, g.triangles))
+                        .map(|(k, g)| RasterGeometry {
+                            geometry: base + k as u32,
+                            triangles: g.triangles,
+                            index_offset: g.index_offset,
+                            double_sided: g.double_sided,
+                        })
                         .collect()
                 })
                 .collect(),
+            ibuf.raw,
         )?;
 
         // 2. BLAS per mesh, in batches bounded by scratch memory, then compacted.

@@ -78,6 +78,9 @@ pub struct DeviceInfo {
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
     pub validation: bool,
+    /// The device has `geometryShader` (enabled): fragment shaders may read `gl_PrimitiveID`, which the
+    /// rasterised primary visibility needs for its indexed draws.
+    pub primitive_id_in_fragment: bool,
 }
 
 pub struct Gpu {
@@ -420,9 +423,11 @@ impl Gpu {
             .scalar_block_layout(true)
             .host_query_reset(supported_v12.host_query_reset == vk::TRUE)
             .shader_buffer_int64_atomics(true);
+        let primitive_id_in_fragment = supported.features.geometry_shader == vk::TRUE;
         let base = vk::PhysicalDeviceFeatures::builder()
             .shader_int64(true)
             .shader_clip_distance(true)
+            .geometry_shader(primitive_id_in_fragment)
             .build();
         let mut features2 = vk::PhysicalDeviceFeatures2::builder()
             .features(base)
@@ -483,6 +488,7 @@ impl Gpu {
             timestamp_period_ns: props.limits.timestamp_period,
             timestamps,
             validation,
+            primitive_id_in_fragment,
         };
         log::info!(
             "Vulkan device: {} ({}, {}), validation {}",

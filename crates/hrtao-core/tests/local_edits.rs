@@ -29,6 +29,7 @@ fn cube(h: Vec3) -> Primitive {
         positions,
         indices,
         base_color: [0.8, 0.8, 0.8, 1.0],
+        double_sided: true,
     }
 }
 

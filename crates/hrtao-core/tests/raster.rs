@@ -6,6 +6,7 @@ use std::sync::Arc;
 use common::*;
 use hrtao_core::camera::UpAxis;
 use hrtao_core::gpu::{GPixel, NO_INSTANCE};
+use hrtao_core::section::{SectionPlane, Sections};
 use hrtao_core::{AoSettings, Camera, Gpu, Primary, Renderer, SceneGpu};
 use hrtao_scene::Scene;
 
@@ -72,7 +73,22 @@ fn compare(label: &str, rq: &[GPixel], raster: &[GPixel]) -> f64 {
 
 /// Both G-buffers agree on ≥ 99.5 % of pixels and per-pixel RTAO over them agrees within MAE 0.01.
 fn check_scene(gpu: &Arc<Gpu>, label: &str, scene: &Scene, cam: &Camera, radius: f32) {
-    let sg = SceneGpu::new(gpu, scene).unwrap();
+    check_cut_scene(gpu, label, scene, None, cam, radius);
+}
+
+/// `check_scene` with the scene cut by `sections`.
+fn check_cut_scene(
+    gpu: &Arc<Gpu>,
+    label: &str,
+    scene: &Scene,
+    sections: Option<&Sections>,
+    cam: &Camera,
+    radius: f32,
+) {
+    let mut sg = SceneGpu::new(gpu, scene).unwrap();
+    if let Some(s) = sections {
+        sg.set_sections(scene, s, u32::MAX).unwrap();
+    }
     let settings = rtao(4, radius);
     let (g_rq, ao_rq) = render_with(gpu, &sg, scene, cam, &settings, Primary::RayQuery, 3);
     let (g_ra, ao_ra) = render_with(gpu, &sg, scene, cam, &settings, Primary::Raster, 3);
@@ -106,6 +122,45 @@ fn raster_gbuffer_matches_ray_queries_on_shared_scenes() {
         let (scene, cam, radius) = shared_scene(key, 320, 180);
         check_scene(&gpu, key, &scene, &cam, radius);
     }
+    assert_clean(&gpu);
+}
+
+/// The bundled scene's glTF materials are single-sided, so the rasteriser culls back faces there (and on
+/// mirrored instances the other way round); the G-buffer still matches the ray queries, which see both faces.
+#[test]
+fn culled_back_faces_keep_the_bundled_scene_identical() {
+    let gpu = gpu();
+    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let mut scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
+    assert!(
+        scene
+            .meshes
+            .iter()
+            .flat_map(|m| &m.primitives)
+            .all(|p| !p.double_sided),
+        "the bundled glTF declares no double-sided material"
+    );
+    let cam = Camera {
+        width: 320,
+        height: 200,
+        ..Camera::load(&assets.join("default.camera.json")).unwrap()
+    };
+    let b = scene.bounds();
+    let radius = 0.05 * (b.max - b.min).length();
+    check_scene(&gpu, "default", &scene, &cam, radius);
+    // A section plane through the middle opens the solids: their back faces show through the cut, in both.
+    let mid = 0.5 * (b.min + b.max);
+    let cut = Sections::new(vec![SectionPlane::new([1.0, 0.0, 0.0], mid.x).unwrap()]).unwrap();
+    check_cut_scene(&gpu, "default cut", &scene, Some(&cut), &cam, radius);
+    // Mirror every instance through its own centre's plane x = c: fronts now wind clockwise.
+    for inst in &mut scene.instances {
+        let c = inst.transform.w_axis.x;
+        let mirror = glam::Mat4::from_translation(glam::Vec3::X * c)
+            * glam::Mat4::from_scale(glam::Vec3::new(-1.0, 1.0, 1.0))
+            * glam::Mat4::from_translation(-glam::Vec3::X * c);
+        inst.transform = mirror * inst.transform;
+    }
+    check_scene(&gpu, "default mirrored", &scene, &cam, radius);
     assert_clean(&gpu);
 }
 

@@ -206,6 +206,7 @@ impl MeshBuilder {
                 positions: self.positions,
                 indices: self.indices,
                 base_color: [color[0], color[1], color[2], 1.0],
+                double_sided: true,
             }],
         }
     }

@@ -273,6 +273,7 @@ fn load_primitive(
         positions,
         indices,
         base_color,
+        double_sided: prim.material().double_sided(),
     }))
 }
 

@@ -123,6 +123,7 @@ pub fn load_obj(
                 positions,
                 indices: m.indices,
                 base_color,
+                double_sided: true,
             }],
         });
         scene.instances.push(Instance {

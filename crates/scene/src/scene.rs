@@ -20,6 +20,10 @@ pub struct Primitive {
     pub indices: Vec<u32>,
     /// Linear RGBA.
     pub base_color: [f32; 4],
+    /// Both faces are seen (glTF `doubleSided`). False promises closed, consistently wound geometry whose back
+    /// faces never show (glTF's default), so a rasteriser may cull them; formats that say nothing (OBJ, STL, PLY)
+    /// are double-sided.
+    pub double_sided: bool,
 }
 
 impl Primitive {
@@ -174,6 +178,7 @@ impl Scene {
                 positions,
                 indices,
                 base_color: DEFAULT_BASE_COLOR,
+                double_sided: true,
             }],
         });
         scene.instances.push(Instance {
@@ -498,6 +503,7 @@ mod tests {
                 positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
                 indices: vec![0, 1, 2],
                 base_color: DEFAULT_BASE_COLOR,
+                double_sided: true,
             }],
         });
         for x in 0..3 {

@@ -32,6 +32,7 @@ pub fn quad(center: Vec3, a: Vec3, b: Vec3) -> Primitive {
         positions: p.iter().map(|v| v.to_array()).collect(),
         indices: vec![0, 1, 2, 0, 2, 3],
         base_color: [0.8, 0.8, 0.8, 1.0],
+        double_sided: true,
     }
 }
 

@@ -405,6 +405,7 @@ mod gpu_tests {
                 positions,
                 indices,
                 base_color: DEFAULT_BASE_COLOR,
+                double_sided: true,
             }],
         });
         s.instances.push(Instance {
