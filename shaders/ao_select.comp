@@ -16,10 +16,15 @@ void main() {
     GPixel px = GBufferRef(g.gbuffer).px[index];
     if (px.t < 0.0) return;
     uint first;
-    if (pixel_traces(px, PixelCellRef(g.pixel_cells).v[index], first)) {
+    bool traces = pixel_traces(px, PixelCellRef(g.pixel_cells).v[index], first);
+    // Fractional budget (ours): outside refinement frames, a random subset of the pixels traces, a new one
+    // each frame (the pixel index hashed with the frame index).
+    bool picked = refine_frame() || g.trace_fraction >= 1.0
+        || float(h_check(index ^ h_index(g.frame_index))) < g.trace_fraction * 4294967296.0;
+    if (traces && picked) {
         uint slot = atomicAdd(StatsRef(g.stats).counters[STAT_RAY_QUEUE], 1u);
         UintRef(g.ray_queue).v[slot] = index;
-    } else if (first < LOD_COUNT && g.rays_per_pixel > 0u) {
+    } else if (!traces && first < LOD_COUNT && g.rays_per_pixel > 0u) {
         stat_add(STAT_CAPPED_PIXELS, 1u);
     }
 }

@@ -22,7 +22,10 @@ uint stamp_checksum(uint64_t s) { return unpackUint2x32(s).x; }
 uint stamp_frame(uint64_t s) { return unpackUint2x32(s).y; }
 
 // Atomic read of a cell's stamp (another thread may claim it in the same dispatch).
-uint64_t load_stamp(CellRef cells, uint slot) { return atomicAdd(cells.v[slot].stamp, uint64_t(0)); }
+// An atomic load (not a read-modify-write: a shared cell's line stays shared between the cores that read it).
+uint64_t load_stamp(CellRef cells, uint slot) {
+    return atomicLoad(cells.v[slot].stamp, gl_ScopeDevice, gl_StorageSemanticsBuffer, gl_SemanticsRelaxed);
+}
 
 // eq. (6)'s lazy removal: a cell may go to another key when it was last used before the first frame of the
 // current F (its F is old: no key of the current F can reach it) or more than `stale_frames` frames ago.
@@ -54,7 +57,15 @@ bool edited_near(vec3 p, float reach) {
     return false;
 }
 
-void note_probe(uint length) { atomicMax(StatsRef(g.stats).counters[STAT_MAX_PROBE], length); }
+// The longest probe run: most probes end at their first slot, so look before the atomic (which every pixel of
+// every level would otherwise contend for on one counter).
+void note_probe(uint length) {
+    StatsRef stats = StatsRef(g.stats);
+    if (atomicLoad(stats.counters[STAT_MAX_PROBE], gl_ScopeDevice, gl_StorageSemanticsBuffer, gl_SemanticsRelaxed)
+        < length) {
+        atomicMax(stats.counters[STAT_MAX_PROBE], length);
+    }
+}
 
 // Empties the counters of a cell this thread has just claimed (its stamp already names the new key).
 void reset_counters(CellRef cells, uint slot) {

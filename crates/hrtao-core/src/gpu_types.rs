@@ -178,6 +178,10 @@ gpu_structs! {
         /// Per pixel, two slots (by still-frame parity): the pixel's estimate of its cell's squared bias,
         /// written by the composite each frame and pooled over neighbours in the next (composite.comp).
         bias_evidence: u64,
+        /// Fractional ray budget (ours): outside refinement frames, a pixel whose cell takes rays traces this
+        /// frame with this probability (1 = every such pixel, as the paper), see ao_select.comp.
+        trace_fraction: f32,
+        _trace_pad: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

@@ -442,6 +442,8 @@ impl Renderer {
             section2: [0.0; 4],
             section_count: 0,
             _prior_pad: 0,
+            trace_fraction: s.trace_fraction,
+            _trace_pad: 0,
             bias_evidence: t.bias_evidence.address,
         }
     }

@@ -90,6 +90,10 @@ pub struct AoSettings {
     pub ao_radius: f32,
     /// Ray budget B: rays traced per pixel per frame (§3, §6).
     pub rays_per_pixel: u32,
+    /// Budgets below one ray per pixel (ours): the fraction of the pixels whose cells take rays that trace
+    /// `rays_per_pixel` rays this frame (a different random subset each frame); 1 = all of them, as the paper.
+    /// The cells still fill, since a cell pools the rays of all its pixels (§3). Refinement frames ignore it.
+    pub trace_fraction: f32,
     /// s_p: target feature size in pixels (eq. 2).
     pub s_p: f32,
     /// s_nd: normal discretisation (eq. 5).
@@ -149,6 +153,7 @@ impl Default for AoSettings {
             mode: Mode::Hrtao,
             ao_radius: 1.0,
             rays_per_pixel: 4,
+            trace_fraction: 1.0,
             s_p: 4.0,
             s_nd: 3.0,
             s_min: 1e-10,
@@ -224,6 +229,12 @@ impl AoSettings {
             return Err(format!(
                 "ray budget {} is above 1024 rays per pixel",
                 self.rays_per_pixel
+            ));
+        }
+        if !(self.trace_fraction > 0.0 && self.trace_fraction <= 1.0) {
+            return Err(format!(
+                "trace fraction must be in (0, 1], got {}",
+                self.trace_fraction
             ));
         }
         if self.max_probe == 0 || self.max_probe > 4096 {

@@ -9,12 +9,19 @@ pub const MAX_RAYS_PER_FRAME: u32 = 64_000_000;
 /// The renderer's per-pixel budget is an integer of at least 1 (0 would stop the AO update altogether).
 pub const MAX_RAYS_PER_PIXEL: u32 = 64;
 
-/// Rays per pixel for `rays_per_frame` spread over `width`×`height` internal pixels, rounded, within
-/// 1..=MAX_RAYS_PER_PIXEL. At full resolution the floor of one ray per pixel can exceed the budget until the
-/// renderer takes a fractional budget.
-pub fn rays_per_pixel(rays_per_frame: u32, width: u32, height: u32) -> u32 {
+/// The smallest fraction of the pixels that trace in a frame (`AoSettings::trace_fraction`): below it a cell of
+/// the finest level (a pixel or two while moving) would wait too many frames for a ray.
+pub const MIN_TRACE_FRACTION: f32 = 1.0 / 16.0;
+
+/// The renderer's budget for `rays_per_frame` spread over `width`×`height` internal pixels: rays per pixel,
+/// rounded, within 1..=MAX_RAYS_PER_PIXEL, and below one ray per pixel the fraction of the pixels that trace
+/// (at least MIN_TRACE_FRACTION), so the budget holds at full resolution too.
+pub fn per_pixel_budget(rays_per_frame: u32, width: u32, height: u32) -> (u32, f32) {
     let pixels = (width.max(1) as f64) * (height.max(1) as f64);
-    ((rays_per_frame as f64 / pixels).round() as u32).clamp(1, MAX_RAYS_PER_PIXEL)
+    let per_pixel = rays_per_frame as f64 / pixels;
+    let rpp = (per_pixel.round() as u32).clamp(1, MAX_RAYS_PER_PIXEL);
+    let fraction = (per_pixel as f32).clamp(MIN_TRACE_FRACTION, 1.0);
+    (rpp, fraction)
 }
 
 /// One step of the frame-time controller (the paper, §6: "the ray budget can be adjusted to match a target
@@ -37,12 +44,14 @@ mod tests {
 
     #[test]
     fn per_pixel_budget_follows_the_pixel_count() {
-        assert_eq!(rays_per_pixel(300_000, 302, 280), 4);
-        assert_eq!(rays_per_pixel(300_000, 151, 140), 14);
-        // Full resolution: the floor of 1 ray per pixel.
-        assert_eq!(rays_per_pixel(300_000, 862, 800), 1);
-        assert_eq!(rays_per_pixel(u32::MAX, 1, 1), MAX_RAYS_PER_PIXEL);
-        assert_eq!(rays_per_pixel(0, 0, 0), 1);
+        assert_eq!(per_pixel_budget(300_000, 302, 280), (4, 1.0));
+        assert_eq!(per_pixel_budget(300_000, 151, 140).0, 14);
+        // Full resolution: one ray per pixel, from 43.5 % of the pixels each frame.
+        let (rpp, fraction) = per_pixel_budget(300_000, 862, 800);
+        assert_eq!(rpp, 1);
+        assert!((fraction - 0.435).abs() < 0.001, "{fraction}");
+        assert_eq!(per_pixel_budget(u32::MAX, 1, 1), (MAX_RAYS_PER_PIXEL, 1.0));
+        assert_eq!(per_pixel_budget(0, 0, 0), (1, MIN_TRACE_FRACTION));
     }
 
     #[test]

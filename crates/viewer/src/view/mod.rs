@@ -1313,11 +1313,12 @@ impl Viewer {
 
     /// Converts the budget in rays per frame to the renderer's rays per pixel at `width`×`height`.
     fn apply_ray_budget(&mut self, width: u32, height: u32) {
-        let rpp = budget::rays_per_pixel(self.prefs.rays_per_frame, width, height);
-        if rpp == self.settings.rays_per_pixel {
+        let (rpp, fraction) = budget::per_pixel_budget(self.prefs.rays_per_frame, width, height);
+        if (rpp, fraction) == (self.settings.rays_per_pixel, self.settings.trace_fraction) {
             return;
         }
         self.settings.rays_per_pixel = rpp;
+        self.settings.trace_fraction = fraction;
         if let Some(r) = &mut self.renderer {
             if let Err(e) = r.set_settings(self.settings.clone()) {
                 self.toast(format!("settings: {e}"), true);
