@@ -369,7 +369,8 @@ pub struct Rasterizer {
 }
 
 impl Rasterizer {
-    pub fn new(gpu: &Arc<Gpu>) -> Result<Rasterizer> {
+    /// Whether the device can rasterise the visibility (otherwise primary visibility stays with ray queries).
+    pub fn available(gpu: &Gpu) -> Result<()> {
         let depth_features = unsafe {
             gpu.instance
                 .get_physical_device_format_properties(gpu.physical, DEPTH_FORMAT)
@@ -388,6 +389,11 @@ impl Rasterizer {
                 gpu.info.name
             )));
         }
+        Ok(())
+    }
+
+    pub fn new(gpu: &Arc<Gpu>) -> Result<Rasterizer> {
+        Self::available(gpu)?;
         let mut r = Rasterizer {
             gpu: gpu.clone(),
             render_pass: vk::RenderPass::null(),

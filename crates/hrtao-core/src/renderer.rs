@@ -672,13 +672,19 @@ impl Renderer {
     /// Chooses the faster primary visibility for `scene` by measurement: a frame without AO with each, timed
     /// on the wall clock (GPU timestamps after a render pass are unreliable on lavapipe), after a warm-up frame
     /// each (the first dispatch compiles pipelines). Keeps the choice in `self.primary` and returns it with the
-    /// two times in ms (ray queries, raster; NaN when a scene above `RASTER_TRIAL_TRIANGLES` is not tried).
+    /// two times in ms (ray queries, raster; NaN when a scene above `RASTER_TRIAL_TRIANGLES`, or a device that
+    /// cannot rasterise it, is not tried).
     pub fn pick_primary(
         &mut self,
         scene: &SceneGpu,
         scene_f: u32,
         camera: &Camera,
     ) -> Result<(Primary, f64, f64)> {
+        if let Err(e) = Rasterizer::available(&self.gpu) {
+            log::info!("{e}");
+            self.primary = Primary::RayQuery;
+            return Ok((self.primary, f64::NAN, f64::NAN));
+        }
         if scene.raster.triangles() > RASTER_TRIAL_TRIANGLES {
             self.primary = Primary::RayQuery;
             return Ok((self.primary, f64::NAN, f64::NAN));
