@@ -2,7 +2,7 @@
 //! frame at the viewer's moving size, with the viewer's moving settings (1 filter iteration, the default ray
 //! budget spread over the pixels), and prints the median GPU milliseconds per pass over frames 5.. .
 //!
-//! `cargo run --release -p hrtao-core --example orbit_profile -- [--size 323x280] [--frames 40] [--rays 3] [--fraction 1]
+//! `cargo run --release -p hrtao-core --example orbit_profile -- [--size 323x280] [--frames 40] [--rays 3] [--fraction 1] [--view-height 800]
 //! [--primary raster|rayquery] [--scene FILE] [--set '{"filter_iterations": 1}']`
 mod cli_args;
 use std::collections::BTreeMap;
@@ -26,6 +26,8 @@ fn main() -> anyhow::Result<()> {
     let frames: usize = args.take("--frames", "40").parse()?;
     let rays: u32 = args.take("--rays", "3").parse()?;
     let fraction: f32 = args.take("--fraction", "1").parse()?;
+    // The viewer's view is 800 pixels high: s_p counts view pixels, so its cells are that much finer.
+    let view_height: u32 = args.take("--view-height", "800").parse()?;
     let raster = args.take("--primary", "raster") == "raster";
     let extra = args.take("--set", r#"{"filter_iterations": 1}"#);
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets");
@@ -47,6 +49,7 @@ fn main() -> anyhow::Result<()> {
     let gpu = Gpu::new(&ContextOptions::default())?;
     let sg = SceneGpu::new(&gpu, &scene)?;
     let mut r = Renderer::new(&gpu, w, h, settings)?;
+    r.view_height = view_height;
     r.primary = if raster {
         Primary::Raster
     } else {
