@@ -105,7 +105,9 @@ impl BackgroundShot {
         let mut settings = settings.clone();
         settings.hash_capacity = hash_capacity_for(pixels, settings.hash_capacity);
         // With refinement: just enough rays per frame that a pixel has its own `still_samples` once the tile is
-        // anti-aliased (more would not end it sooner). The viewer's budget follows its own resolution.
+        // anti-aliased (more would not end it sooner). The viewer's budget follows its own resolution, and so
+        // does its fraction of tracing pixels: a tile's every pixel traces.
+        settings.trace_fraction = 1.0;
         if settings.refine {
             settings.rays_per_pixel = settings.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
         } else {
