@@ -8,6 +8,28 @@
 #include "common.glsl"
 #include "hash_map.glsl"
 
+const int NEAR_POOL = 0;
+
+// Near-field control variate (ours): the near-open rays and the rays the pixel and its 3x3 neighbours on the
+// same surface (normals agreeing, within a cell of the pixel's plane) traced this frame. Pooling the neighbours
+// cuts the noise of the pixel's own few rays while keeping a resolution finer than the cell.
+vec2 own_near_open(uvec2 pix, GPixel px, float cell) {
+    vec2 sum = vec2(0.0);
+    for (int dy = -NEAR_POOL; dy <= NEAR_POOL; ++dy) {
+        for (int dx = -NEAR_POOL; dx <= NEAR_POOL; ++dx) {
+            ivec2 q = ivec2(pix) + ivec2(dx, dy);
+            if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+            uint qi = uint(q.y) * g.width + uint(q.x);
+            GPixel qp = GBufferRef(g.gbuffer).px[qi];
+            if (qp.t < 0.0 || dot(qp.normal, px.normal) < 0.9) continue;
+            if (abs(dot(qp.position - px.position, px.normal)) > 0.25 * cell) continue;
+            PixelRays pr = PixelRaysRef(g.pixel_rays).v[qi];
+            sum += vec2(pr.near_open, pr.near_traced);
+        }
+    }
+    return sum;
+}
+
 void main() {
     uvec2 pix;
     uint index;
@@ -42,6 +64,7 @@ void main() {
             vec3 f = u - base;
             ivec3 b = ivec3(clamp(base, vec3(-2147483520.0), vec3(2147483520.0)));
             float sum = 0.0;
+            float near_sum = 0.0;   // the cells' near-open fractions, interpolated alike
             float wsum = 0.0;
             for (int corner = 0; corner < 8; ++corner) {
                 ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
@@ -55,10 +78,19 @@ void main() {
                 // Cells with few samples count less (they are noisy).
                 w *= min(1.0, float(s) / float(max(g.min_samples, 1u)));
                 sum += w * float(cells.v[c].unoccluded) / float(s);
+                near_sum += w * float(cells.v[c].near_open) / float(s);
                 wsum += w;
             }
             uint own = pc.cells[best];
-            ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / float(cells.v[own].samples);
+            float own_samples = float(cells.v[own].samples);
+            ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
+            // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
+            // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.
+            if (g.near_weight > 0.0) {
+                float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / own_samples;
+                vec2 near = own_near_open(pix, px, exp2(float(lod)));
+                if (near.y > 0.0) ao += g.near_weight * (near.x / near.y - cell_near);
+            }
         }
     }
     uint iterations = (g.flags & FLAG_FILTER) != 0u ? g.filter_iterations : 0u;

@@ -45,7 +45,11 @@ fn main() -> anyhow::Result<()> {
     let gpu = Gpu::new(&ContextOptions::default())?;
     let sg = SceneGpu::new(&gpu, &scene)?;
     let mut r = Renderer::new(&gpu, w, h, settings)?;
-    r.primary = if raster { Primary::Raster } else { Primary::RayQuery };
+    r.primary = if raster {
+        Primary::Raster
+    } else {
+        Primary::RayQuery
+    };
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut walls, mut rays_sum) = (Vec::new(), 0u64);
     let up = Vec3::from(camera.up).normalize();

@@ -178,6 +178,11 @@ gpu_structs! {
         /// Per pixel, two slots (by still-frame parity): the pixel's estimate of its cell's squared bias,
         /// written by the composite each frame and pooled over neighbours in the next (composite.comp).
         bias_evidence: u64,
+        /// Near-field control variate (ours, docs/algorithm.md): the weight β of the pixel's own near-open
+        /// fraction minus its cells' (0 = the paper's cell estimate alone).
+        near_weight: f32,
+        /// The near radius r_n in finest cells of the pixel (s_wd, eq. 3), at most the AO radius.
+        near_cells: f32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -258,7 +263,9 @@ gpu_structs! {
         /// Next index into the cell's QMC sequence (paper §3); rays are claimed from it in blocks, so it exceeds
         /// `max_samples` by at most one block per pixel of one frame.
         qmc_index: u32,
-        _pad: u32,
+        /// Rays that hit nothing within the near radius r_n (near-field control variate, ours; counted only
+        /// while `near_weight` > 0).
+        near_open: u32,
     }
 
     /// One CPU-vs-GPU hash test case: inputs, then the GPU's outputs (hash_test.comp).
@@ -288,6 +295,10 @@ gpu_structs! {
     struct PixelRays {
         traced: u32,
         unoccluded: u32,
+        /// Near-field control variate (ours): every ray the pixel traced this frame (into its cell or its own),
+        /// and those that hit nothing within the near radius r_n.
+        near_traced: u32,
+        near_open: u32,
     }
 
     /// Per pixel, the accumulation over still frames (composite.comp). With shade = base colour x light of

@@ -443,6 +443,8 @@ impl Renderer {
             section_count: 0,
             _prior_pad: 0,
             bias_evidence: t.bias_evidence.address,
+            near_weight: s.near_weight,
+            near_cells: s.near_cells,
         }
     }
 

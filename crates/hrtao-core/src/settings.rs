@@ -141,6 +141,13 @@ pub struct AoSettings {
     /// Ours (docs/algorithm.md, `regions.rs`): an edit invalidates only the cells within reach of what it
     /// changed (region epochs in the key); off = the paper's eq. (6), every edit empties the whole map.
     pub local_edits: bool,
+    /// Ours (docs/algorithm.md, near-field control variate): a pixel that traced rays this frame corrects its
+    /// cell estimate by this weight β times its own near-open fraction minus its cells' (rays that hit
+    /// nothing within `near_cells` finest cells), restoring the contact shadows a cell averages away.
+    /// 0 = the paper's cell estimate alone.
+    pub near_weight: f32,
+    /// The near radius r_n of the control variate, in finest cells s_wd of the pixel (at most the AO radius).
+    pub near_cells: f32,
 }
 
 impl Default for AoSettings {
@@ -170,6 +177,8 @@ impl Default for AoSettings {
             edges: true,
             crease_deg: 40.0,
             local_edits: true,
+            near_weight: 0.0,
+            near_cells: 1.0,
         }
     }
 }
@@ -182,6 +191,7 @@ impl AoSettings {
             refine: false,
             filter_sigma: 0.0,
             local_edits: false,
+            near_weight: 0.0,
             ..self.clone()
         }
     }
@@ -245,6 +255,7 @@ impl AoSettings {
         for (name, v) in [
             ("prior rays max", self.prior_rays_max),
             ("prior sigma", self.prior_sigma),
+            ("near cells", self.near_cells),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));
@@ -267,6 +278,9 @@ impl AoSettings {
                 "filter sigma must be a number >= 0, got {}",
                 self.filter_sigma
             ));
+        }
+        if !(self.near_weight.is_finite() && (0.0..=1.0).contains(&self.near_weight)) {
+            return Err(format!("near weight must be in 0..=1, got {}", self.near_weight));
         }
         if self.filter_iterations > 8 {
             return Err("at most 8 filter iterations".into());
