@@ -49,7 +49,7 @@ void main() {
         seq0 = qmc0;
     }
     vec3 origin = offset_ray(px.position, px.normal);
-    float r_near = g.near_weight > 0.0 ? min(g.near_cells * exp2(float(pixel_lod(px.t))), g.ao_radius) : 0.0;
+    float r_near = g.near_fraction * g.ao_radius;
     uvec3 all_rays = uvec3(rays, 0u, 0u);   // traced, open, open within r_near
     uvec3 cell_rays = uvec3(claimed, 0u, 0u);   // the same among the first `claimed` rays (the target cell's)
     for (uint r = 0u; r < rays; ++r) {

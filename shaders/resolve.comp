@@ -4,31 +4,10 @@
 // At that LOD the value is reconstructed by trilinear interpolation of the 8 cells around the pixel (cells
 // absent or empty drop out and the weights renormalise), so the cell grid does not show as blocks and the
 // AO is centred on the pixel rather than on its cell.
+// Ours (near_weight > 0): the near-field control variate corrects the cell estimate with the pixel's own rays.
 // Writes into the buffer the filter's ping-pong starts from (so an even or odd iteration count ends in `ao`).
 #include "common.glsl"
 #include "hash_map.glsl"
-
-const int NEAR_POOL = 0;
-
-// Near-field control variate (ours): the near-open rays and the rays the pixel and its 3x3 neighbours on the
-// same surface (normals agreeing, within a cell of the pixel's plane) traced this frame. Pooling the neighbours
-// cuts the noise of the pixel's own few rays while keeping a resolution finer than the cell.
-vec2 own_near_open(uvec2 pix, GPixel px, float cell) {
-    vec2 sum = vec2(0.0);
-    for (int dy = -NEAR_POOL; dy <= NEAR_POOL; ++dy) {
-        for (int dx = -NEAR_POOL; dx <= NEAR_POOL; ++dx) {
-            ivec2 q = ivec2(pix) + ivec2(dx, dy);
-            if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
-            uint qi = uint(q.y) * g.width + uint(q.x);
-            GPixel qp = GBufferRef(g.gbuffer).px[qi];
-            if (qp.t < 0.0 || dot(qp.normal, px.normal) < 0.9) continue;
-            if (abs(dot(qp.position - px.position, px.normal)) > 0.25 * cell) continue;
-            PixelRays pr = PixelRaysRef(g.pixel_rays).v[qi];
-            sum += vec2(pr.near_open, pr.near_traced);
-        }
-    }
-    return sum;
-}
 
 void main() {
     uvec2 pix;
@@ -86,10 +65,14 @@ void main() {
             ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
             // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
             // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.
-            if (g.near_weight > 0.0) {
+            // The residual is shrunk against the binomial noise of the pixel's few rays (Wiener: r^2/(r^2+v)).
+            PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
+            if (g.near_weight > 0.0 && pr.near_traced > 0u) {
+                float n = float(pr.near_traced);
                 float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / own_samples;
-                vec2 near = own_near_open(pix, px, exp2(float(lod)));
-                if (near.y > 0.0) ao += g.near_weight * (near.x / near.y - cell_near);
+                float r = float(pr.near_open) / n - cell_near;
+                float v = max(cell_near * (1.0 - cell_near), 0.5 / n) / n;
+                ao += g.near_weight * r * r * r / (r * r + v);
             }
         }
     }

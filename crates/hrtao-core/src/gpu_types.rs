@@ -181,8 +181,8 @@ gpu_structs! {
         /// Near-field control variate (ours, docs/algorithm.md): the weight β of the pixel's own near-open
         /// fraction minus its cells' (0 = the paper's cell estimate alone).
         near_weight: f32,
-        /// The near radius r_n in finest cells of the pixel (s_wd, eq. 3), at most the AO radius.
-        near_cells: f32,
+        /// The near radius r_n as a fraction of the AO radius.
+        near_fraction: f32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

@@ -444,7 +444,7 @@ impl Renderer {
             _prior_pad: 0,
             bias_evidence: t.bias_evidence.address,
             near_weight: s.near_weight,
-            near_cells: s.near_cells,
+            near_fraction: s.near_fraction,
         }
     }
 

@@ -143,11 +143,12 @@ pub struct AoSettings {
     pub local_edits: bool,
     /// Ours (docs/algorithm.md, near-field control variate): a pixel that traced rays this frame corrects its
     /// cell estimate by this weight β times its own near-open fraction minus its cells' (rays that hit
-    /// nothing within `near_cells` finest cells), restoring the contact shadows a cell averages away.
+    /// nothing within `near_fraction` x R), restoring the contact shadows a cell averages away.
     /// 0 = the paper's cell estimate alone.
     pub near_weight: f32,
-    /// The near radius r_n of the control variate, in finest cells s_wd of the pixel (at most the AO radius).
-    pub near_cells: f32,
+    /// The near radius r_n of the control variate as a fraction of the AO radius R (0.5: smaller radii make
+    /// the near-open fraction curve within a cell where the AO does not, which biases the correction).
+    pub near_fraction: f32,
 }
 
 impl Default for AoSettings {
@@ -162,7 +163,7 @@ impl Default for AoSettings {
             max_samples: 1000,
             min_samples: 8,
             filter: true,
-            filter_iterations: 3,
+            filter_iterations: 5,
             filter_sigma: 1.0,
             hash_capacity: 1 << 20,
             max_probe: 32,
@@ -177,8 +178,8 @@ impl Default for AoSettings {
             edges: true,
             crease_deg: 40.0,
             local_edits: true,
-            near_weight: 0.0,
-            near_cells: 1.0,
+            near_weight: 1.0,
+            near_fraction: 0.5,
         }
     }
 }
@@ -255,7 +256,7 @@ impl AoSettings {
         for (name, v) in [
             ("prior rays max", self.prior_rays_max),
             ("prior sigma", self.prior_sigma),
-            ("near cells", self.near_cells),
+            ("near fraction", self.near_fraction),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));
@@ -292,6 +293,29 @@ impl AoSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn near_field_settings_are_checked_named_and_off_in_the_paper_mode() {
+        let ours = AoSettings::default();
+        assert!(ours.near_weight > 0.0);
+        assert_eq!(ours.paper().near_weight, 0.0);
+        for bad in [-0.5, 1.5, f32::NAN] {
+            let e = AoSettings {
+                near_weight: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("near weight"), "{e}");
+        }
+        let e = AoSettings {
+            near_fraction: f32::INFINITY,
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err();
+        assert!(e.contains("near fraction"), "{e}");
+    }
 
     #[test]
     fn adaptive_prior_settings_are_checked_and_named() {
