@@ -66,8 +66,11 @@ void main() {
             // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
             // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.
             // The residual is shrunk against the binomial noise of the pixel's few rays (Wiener: r^2/(r^2+v)).
+            // Not in still-camera refinement frames: there the pixel's own rays enter the composite directly,
+            // and a correction from each frame's few rays would only add flicker.
             PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
-            if (g.near_weight > 0.0 && pr.near_traced > 0u) {
+            bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
+            if (g.near_weight > 0.0 && pr.near_traced > 0u && !refining) {
                 float n = float(pr.near_traced);
                 float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / own_samples;
                 float r = float(pr.near_open) / n - cell_near;
