@@ -256,7 +256,6 @@ impl AoSettings {
         for (name, v) in [
             ("prior rays max", self.prior_rays_max),
             ("prior sigma", self.prior_sigma),
-            ("near fraction", self.near_fraction),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));
@@ -278,6 +277,12 @@ impl AoSettings {
             return Err(format!(
                 "filter sigma must be a number >= 0, got {}",
                 self.filter_sigma
+            ));
+        }
+        if !(self.near_fraction.is_finite() && (0.0..=1.0).contains(&self.near_fraction)) {
+            return Err(format!(
+                "near fraction must be in 0..=1 (of the AO radius), got {}",
+                self.near_fraction
             ));
         }
         if !(self.near_weight.is_finite() && (0.0..=1.0).contains(&self.near_weight)) {
@@ -308,13 +313,15 @@ mod tests {
             .unwrap_err();
             assert!(e.contains("near weight"), "{e}");
         }
-        let e = AoSettings {
-            near_fraction: f32::INFINITY,
-            ..Default::default()
+        for bad in [-0.1, 1.5, f32::INFINITY] {
+            let e = AoSettings {
+                near_fraction: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("near fraction"), "{e}");
         }
-        .validate()
-        .unwrap_err();
-        assert!(e.contains("near fraction"), "{e}");
     }
 
     #[test]
