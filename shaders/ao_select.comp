@@ -12,6 +12,8 @@ void main() {
     PixelRays none;
     none.traced = 0u;
     none.unoccluded = 0u;
+    none.near_traced = 0u;
+    none.near_open = 0u;
     PixelRaysRef(g.pixel_rays).v[index] = none;
     GPixel px = GBufferRef(g.gbuffer).px[index];
     if (px.t < 0.0) return;

@@ -5,12 +5,16 @@
 // checksum), cosine-weighted around the pixel's normal. In still-camera refinement frames (ours) every pixel
 // traces its own R2 sequence instead, continued across the still frames; its rays also count for its cells.
 // Results go to the target cell (up to max_samples) and propagate to the coarser cells (§4, up to SAMPLE_CAP).
+// Near-field control variate (ours, near_weight > 0): each ray also tells whether it hit within the near radius
+// r_n; cells count the rays open within r_n, and the pixel keeps its own count for resolve.comp.
 #include "common.glsl"
 #include "ray_target.glsl"
 
-void add_rays(CellRef cells, uint c, uint traced, uint open) {
-    atomicAdd(cells.v[c].samples, traced);
-    atomicAdd(cells.v[c].unoccluded, open);
+// Ray counts of one pixel for one cell: traced, open, open within the near radius.
+void add_rays(CellRef cells, uint c, uvec3 rays) {
+    atomicAdd(cells.v[c].samples, rays.x);
+    atomicAdd(cells.v[c].unoccluded, rays.y);
+    if (g.near_weight > 0.0) atomicAdd(cells.v[c].near_open, rays.z);
 }
 
 void main() {
@@ -45,34 +49,36 @@ void main() {
         seq0 = qmc0;
     }
     vec3 origin = offset_ray(px.position, px.normal);
-    uint open = 0u;
-    uint open_claimed = 0u;   // among the first `claimed` rays (those the target cell takes)
+    float r_near = g.near_fraction * g.ao_radius;
+    uvec3 all_rays = uvec3(rays, 0u, 0u);   // traced, open, open within r_near
+    uvec3 cell_rays = uvec3(claimed, 0u, 0u);   // the same among the first `claimed` rays (the target cell's)
     for (uint r = 0u; r < rays; ++r) {
         vec3 dir = cosine_direction(px.normal, r2_point(seq0 + r, shift));
-        if (ray_unoccluded(origin, dir, g.ao_radius)) {
-            open++;
-            if (r < claimed) open_claimed++;
-        }
+        uint e = g.near_weight > 0.0 ? ray_escape(origin, dir, r_near, g.ao_radius)
+                                     : (ray_unoccluded(origin, dir, g.ao_radius) ? RAY_OPEN : RAY_NEAR_HIT);
+        uvec2 counts = uvec2(e == RAY_OPEN ? 1u : 0u, e != RAY_NEAR_HIT ? 1u : 0u);
+        all_rays.yz += counts;
+        if (r < claimed) cell_rays.yz += counts;
     }
     if (rays == 0u) return;
     stat_add(STAT_RAYS, rays);
+    PixelRaysRef(g.pixel_rays).v[index].near_traced = rays;
+    PixelRaysRef(g.pixel_rays).v[index].near_open = all_rays.z;
     if (own) {
         stat_add(STAT_REFINE_RAYS, rays);
-        PixelRays pr;
-        pr.traced = rays;
-        pr.unoccluded = open;
-        PixelRaysRef(g.pixel_rays).v[index] = pr;
+        PixelRaysRef(g.pixel_rays).v[index].traced = rays;
+        PixelRaysRef(g.pixel_rays).v[index].unoccluded = all_rays.y;
     }
     if (first >= LOD_COUNT) return;
     // The target cell takes the rays it granted; bottom-up propagation (§4): every coarser level takes all of
     // them until it holds SAMPLE_CAP.
     if (claimed > 0u) {
-        add_rays(cells, pc.cells[first], claimed, open_claimed);
+        add_rays(cells, pc.cells[first], cell_rays);
         stat_add(STAT_CELL_RAYS, claimed);
     }
     for (uint l = first + 1u; l < LOD_COUNT; ++l) {
         uint c = pc.cells[l];
         if (c == INVALID_CELL || !slot_in_bounds(c)) continue;
-        if (cells.v[c].samples < SAMPLE_CAP) add_rays(cells, c, rays, open);
+        if (cells.v[c].samples < SAMPLE_CAP) add_rays(cells, c, all_rays);
     }
 }

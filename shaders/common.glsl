@@ -119,16 +119,41 @@ uvec2 pixel_shift(uint index) {
     return uvec2(h_check(index * 2u + 0x9e3779b9u), h_index(index * 2u + 1u + 0x7f4a7c15u));
 }
 
+// The distance of some hit (not necessarily the closest: the query stops at the first it finds) on the segment
+// [tmin, tmax] of the ray from p along dir, or -1 when the segment hits nothing (no section clipping).
+float segment_first_hit(vec3 p, vec3 dir, float tmin, float tmax) {
+    if (tmax <= tmin) return -1.0;
+    rayQueryEXT rq;
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, tmin, dir, tmax);
+    while (rayQueryProceedEXT(rq)) {
+    }
+    if (rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT) return -1.0;
+    return rayQueryGetIntersectionTEXT(rq, true);
+}
+
 // True when the ray from p along dir hits nothing within tmax (nor where a section plane cuts it away: the ray
 // is clipped to the kept region).
 bool ray_unoccluded(vec3 p, vec3 dir, float tmax) {
     float tmin = 0.0;
     if (!section_clip(p, dir, tmin, tmax)) return true;
-    rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, tmin, dir, tmax);
-    while (rayQueryProceedEXT(rq)) {
-    }
-    return rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT;
+    return segment_first_hit(p, dir, tmin, tmax) < 0.0;
+}
+
+// `ray_escape` results: the ray hits within the near radius, hits beyond it (within tmax), or hits nothing.
+const uint RAY_NEAR_HIT = 0u;
+const uint RAY_FAR_HIT = 1u;
+const uint RAY_OPEN = 2u;
+
+// As ray_unoccluded, telling also whether the ray hits within r_near (near-field control variate, ours). An
+// open ray costs one query, as in ray_unoccluded; an occluded one whose first-found hit lies beyond r_near
+// (not necessarily the closest) is checked again over [0, r_near], a short query.
+uint ray_escape(vec3 p, vec3 dir, float r_near, float tmax) {
+    float tmin = 0.0;
+    if (!section_clip(p, dir, tmin, tmax)) return RAY_OPEN;
+    float t = segment_first_hit(p, dir, tmin, tmax);
+    if (t < 0.0) return RAY_OPEN;
+    if (t <= r_near) return RAY_NEAR_HIT;
+    return segment_first_hit(p, dir, tmin, min(r_near, tmax)) < 0.0 ? RAY_FAR_HIT : RAY_NEAR_HIT;
 }
 
 #endif

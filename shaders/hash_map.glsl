@@ -72,6 +72,7 @@ void reset_counters(CellRef cells, uint slot) {
     atomicExchange(cells.v[slot].samples, 0u);
     atomicExchange(cells.v[slot].unoccluded, 0u);
     atomicExchange(cells.v[slot].qmc_index, 0u);
+    atomicExchange(cells.v[slot].near_open, 0u);
 }
 
 // How many times a probe restarts after losing its candidate slot to another key (bounded work per thread).

@@ -4,6 +4,7 @@
 // At that LOD the value is reconstructed by trilinear interpolation of the 8 cells around the pixel (cells
 // absent or empty drop out and the weights renormalise), so the cell grid does not show as blocks and the
 // AO is centred on the pixel rather than on its cell.
+// Ours (near_weight > 0): the near-field control variate corrects the cell estimate with the pixel's own rays.
 // Writes into the buffer the filter's ping-pong starts from (so an even or odd iteration count ends in `ao`).
 #include "common.glsl"
 #include "hash_map.glsl"
@@ -42,6 +43,7 @@ void main() {
             vec3 f = u - base;
             ivec3 b = ivec3(clamp(base, vec3(-2147483520.0), vec3(2147483520.0)));
             float sum = 0.0;
+            float near_sum = 0.0;   // the cells' near-open fractions, interpolated alike
             float wsum = 0.0;
             for (int corner = 0; corner < 8; ++corner) {
                 ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
@@ -55,10 +57,26 @@ void main() {
                 // Cells with few samples count less (they are noisy).
                 w *= min(1.0, float(s) / float(max(g.min_samples, 1u)));
                 sum += w * float(cells.v[c].unoccluded) / float(s);
+                near_sum += w * float(cells.v[c].near_open) / float(s);
                 wsum += w;
             }
             uint own = pc.cells[best];
-            ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / float(cells.v[own].samples);
+            float own_samples = float(cells.v[own].samples);
+            ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
+            // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
+            // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.
+            // The residual is shrunk against the binomial noise of the pixel's few rays (Wiener: r^2/(r^2+v)).
+            // Not in still-camera refinement frames: there the pixel's own rays enter the composite directly,
+            // and a correction from each frame's few rays would only add flicker.
+            PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
+            bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
+            if (g.near_weight > 0.0 && pr.near_traced > 0u && !refining) {
+                float n = float(pr.near_traced);
+                float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / own_samples;
+                float r = float(pr.near_open) / n - cell_near;
+                float v = max(cell_near * (1.0 - cell_near), 0.5 / n) / n;
+                ao += g.near_weight * r * r * r / (r * r + v);
+            }
         }
     }
     uint iterations = (g.flags & FLAG_FILTER) != 0u ? g.filter_iterations : 0u;

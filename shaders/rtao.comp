@@ -12,6 +12,8 @@ void main() {
     PixelRays pr;
     pr.traced = 0u;
     pr.unoccluded = 0u;
+    pr.near_traced = 0u;
+    pr.near_open = 0u;
     if (px.t >= 0.0 && g.rays_per_pixel > 0u) {
         vec3 origin = offset_ray(px.position, px.normal);
         uvec2 shift = pixel_shift(index);

@@ -178,6 +178,11 @@ gpu_structs! {
         /// Per pixel, two slots (by still-frame parity): the pixel's estimate of its cell's squared bias,
         /// written by the composite each frame and pooled over neighbours in the next (composite.comp).
         bias_evidence: u64,
+        /// Near-field control variate (ours, docs/algorithm.md): the weight β of the pixel's own near-open
+        /// fraction minus its cells' (0 = the paper's cell estimate alone).
+        near_weight: f32,
+        /// The near radius r_n as a fraction of the AO radius.
+        near_fraction: f32,
         /// Fractional ray budget (ours): outside refinement frames, a pixel whose cell takes rays traces this
         /// frame with this probability (1 = every such pixel, as the paper), see ao_select.comp.
         trace_fraction: f32,
@@ -262,7 +267,9 @@ gpu_structs! {
         /// Next index into the cell's QMC sequence (paper §3); rays are claimed from it in blocks, so it exceeds
         /// `max_samples` by at most one block per pixel of one frame.
         qmc_index: u32,
-        _pad: u32,
+        /// Rays that hit nothing within the near radius r_n (near-field control variate, ours; counted only
+        /// while `near_weight` > 0).
+        near_open: u32,
     }
 
     /// One CPU-vs-GPU hash test case: inputs, then the GPU's outputs (hash_test.comp).
@@ -292,6 +299,10 @@ gpu_structs! {
     struct PixelRays {
         traced: u32,
         unoccluded: u32,
+        /// Near-field control variate (ours): every ray the pixel traced this frame (into its cell or its own),
+        /// and those that hit nothing within the near radius r_n.
+        near_traced: u32,
+        near_open: u32,
     }
 
     /// Per pixel, the accumulation over still frames (composite.comp). With shade = base colour x light of

@@ -445,6 +445,8 @@ impl Renderer {
             trace_fraction: s.trace_fraction,
             _trace_pad: 0,
             bias_evidence: t.bias_evidence.address,
+            near_weight: s.near_weight,
+            near_fraction: s.near_fraction,
         }
     }
 

@@ -145,6 +145,14 @@ pub struct AoSettings {
     /// Ours (docs/algorithm.md, `regions.rs`): an edit invalidates only the cells within reach of what it
     /// changed (region epochs in the key); off = the paper's eq. (6), every edit empties the whole map.
     pub local_edits: bool,
+    /// Ours (docs/algorithm.md, near-field control variate): a pixel that traced rays this frame corrects its
+    /// cell estimate by this weight β times its own near-open fraction minus its cells' (rays that hit
+    /// nothing within `near_fraction` x R), restoring the contact shadows a cell averages away.
+    /// 0 = the paper's cell estimate alone.
+    pub near_weight: f32,
+    /// The near radius r_n of the control variate as a fraction of the AO radius R (0.5: smaller radii make
+    /// the near-open fraction curve within a cell where the AO does not, which biases the correction).
+    pub near_fraction: f32,
 }
 
 impl Default for AoSettings {
@@ -160,7 +168,7 @@ impl Default for AoSettings {
             max_samples: 1000,
             min_samples: 8,
             filter: true,
-            filter_iterations: 3,
+            filter_iterations: 5,
             filter_sigma: 1.0,
             hash_capacity: 1 << 20,
             max_probe: 32,
@@ -175,6 +183,8 @@ impl Default for AoSettings {
             edges: true,
             crease_deg: 40.0,
             local_edits: true,
+            near_weight: 1.0,
+            near_fraction: 0.5,
         }
     }
 }
@@ -187,6 +197,7 @@ impl AoSettings {
             refine: false,
             filter_sigma: 0.0,
             local_edits: false,
+            near_weight: 0.0,
             ..self.clone()
         }
     }
@@ -279,6 +290,15 @@ impl AoSettings {
                 self.filter_sigma
             ));
         }
+        if !(self.near_fraction.is_finite() && (0.0..=1.0).contains(&self.near_fraction)) {
+            return Err(format!(
+                "near fraction must be in 0..=1 (of the AO radius), got {}",
+                self.near_fraction
+            ));
+        }
+        if !(self.near_weight.is_finite() && (0.0..=1.0).contains(&self.near_weight)) {
+            return Err(format!("near weight must be in 0..=1, got {}", self.near_weight));
+        }
         if self.filter_iterations > 8 {
             return Err("at most 8 filter iterations".into());
         }
@@ -289,6 +309,31 @@ impl AoSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn near_field_settings_are_checked_named_and_off_in_the_paper_mode() {
+        let ours = AoSettings::default();
+        assert!(ours.near_weight > 0.0);
+        assert_eq!(ours.paper().near_weight, 0.0);
+        for bad in [-0.5, 1.5, f32::NAN] {
+            let e = AoSettings {
+                near_weight: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("near weight"), "{e}");
+        }
+        for bad in [-0.1, 1.5, f32::INFINITY] {
+            let e = AoSettings {
+                near_fraction: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("near fraction"), "{e}");
+        }
+    }
 
     #[test]
     fn adaptive_prior_settings_are_checked_and_named() {

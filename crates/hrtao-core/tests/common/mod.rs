@@ -210,6 +210,16 @@ pub fn check_map(
             a.unoccluded,
             a.samples
         );
+        // Near-field control variate: a ray open within R is open within r_n <= R.
+        if s.near_weight > 0.0 {
+            assert!(
+                a.unoccluded <= a.near_open && a.near_open <= a.samples,
+                "cell {i}: {} unoccluded, {} open within r_n, {} samples",
+                a.unoccluded,
+                a.near_open,
+                a.samples
+            );
+        }
         assert!(
             a.samples <= gpu::SAMPLE_CAP + slack,
             "cell {i}: {} samples",

@@ -372,6 +372,11 @@ impl Viewer {
             )
             .on_hover_text("À-trous iterations (§5); each doubles the filter's reach.");
         });
+        ui.add(egui::Slider::new(&mut s.near_weight, 0.0..=1.0).text("contact correction"))
+            .on_hover_text(
+                "Ours (docs/algorithm.md): each pixel corrects its cell's AO with its own rays that hit within \
+                 half the AO radius, restoring contact shadows a cell averages away. 0: the paper's cells.",
+            );
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.edges, "edges").on_hover_text(
                 "Feature edges over the shading: silhouettes (depth and part changes) and creases. In \
