@@ -79,6 +79,9 @@ pub fn hash_capacity_for(pixels: u64, viewer: u32) -> u32 {
 /// The largest map a screenshot allocates by itself.
 pub const MAX_HASH_CAPACITY: u32 = 1 << 25;
 
+/// À-trous iterations of a refined tile at most (the default has 5, for the first still frames).
+pub const SHOT_FILTER_ITERATIONS: u32 = 3;
+
 /// Pixels rendered around each tile: what the à-trous filter (2^i steps of 2 pixels) and the edges (1 pixel) see.
 fn margin_for(settings: &AoSettings) -> u32 {
     let filter = if settings.filter {
@@ -109,6 +112,9 @@ impl BackgroundShot {
         // does its fraction of tracing pixels: a tile's every pixel traces.
         settings.trace_fraction = 1.0;
         if settings.refine {
+            // A refined tile runs until its pixels have their own rays, which is what the final image shows:
+            // the filter only smooths its first frames. Three iterations keep the tile margin at 15 pixels.
+            settings.filter_iterations = settings.filter_iterations.min(SHOT_FILTER_ITERATIONS);
             settings.rays_per_pixel = settings.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
         } else {
             settings.rays_per_pixel = settings.rays_per_pixel.max(1);
@@ -245,9 +251,11 @@ mod tests {
         assert_eq!(hash_capacity_for(640 * 360, 1 << 20), 1 << 20);
         assert_eq!(hash_capacity_for(16384 * 16384, 1 << 20), MAX_HASH_CAPACITY);
         assert_eq!(hash_capacity_for(64, 1 << 26), 1 << 26);
-        let s = AoSettings::default();
-        // Three filter passes (the default) reach 2 + 4 + 8 pixels; the edges one more.
-        assert_eq!(s.filter_iterations, 3);
+        // Three filter passes (a refined tile's) reach 2 + 4 + 8 pixels; the edges one more.
+        let s = AoSettings {
+            filter_iterations: SHOT_FILTER_ITERATIONS,
+            ..AoSettings::default()
+        };
         assert_eq!(margin_for(&s), 15);
     }
 }
