@@ -58,7 +58,7 @@ impl Targets {
             filter_tmp: b("filter ping-pong", n * 4)?,
             pixel_rays: b("pixel rays", n * std::mem::size_of::<PixelRays>() as u64)?,
             accum: b("still accumulation", n * std::mem::size_of::<PixelAccum>() as u64)?,
-            bias_evidence: b("cell bias evidence", 2 * n * 4)?,
+            bias_evidence: b("own-ray residuals", 2 * n * 16)?,
             output: b("output RGBA8", n * 4)?,
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
             ray_queue: b("ray queue", n * 4)?,
@@ -441,7 +441,9 @@ impl Renderer {
             section1: [0.0; 4],
             section2: [0.0; 4],
             section_count: 0,
-            _prior_pad: 0,
+            residual_sigma: s.residual_sigma,
+            still_smoothing: s.still_smoothing,
+            _still_pad: 0,
             bias_evidence: t.bias_evidence.address,
         }
     }
