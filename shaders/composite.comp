@@ -257,8 +257,8 @@ void main() {
             float mean_c = a.cell / a.frames;
             float r = a.rays > 0.0 ? a.open / a.rays - mean_c : 0.0;
             float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);
+            // A miss (mean(c) = 1, all rays open) has no residual.
             Evidence e = pooled_evidence(pix, px, r, px.t >= 0.0 ? a.rays : 0.0, p);
-            if (px.t < 0.0) e = Evidence(r, a.rays, 0.0);
             k = prior_weight(pix, p, e);
             ao = mean_c + e.s / (k + e.s) * e.r;
             ao = smoothed(index, ao, a.frames > 1.0);
