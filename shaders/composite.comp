@@ -3,9 +3,11 @@
 // accumulation over still frames (ours, docs/algorithm.md), which anti-aliases (each still frame's primary
 // sample is jittered) and, in HRTAO, moves each pixel from its cell estimate c (paper §4-5) to its own rays:
 //
-//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)),   k = prior_weight (ours, adaptive),
+//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)) = mean(c) + S / (k + S) r,   k = prior_weight (ours),
 //
-// the cell estimate counting as k of the pixel's own rays. Colours weigh each sample's shade the same way.
+// the cell estimate counting as k of the pixel's own rays (S of them, r = own mean - mean(c) the residual). The
+// residual is pooled with the neighbours' that agree (pooled_evidence), and the shown AO is smoothed over the
+// still frames (smoothed). Colours weigh each sample's shade the same way.
 // Per-pixel RTAO is the same with k -> 0; the paper's behaviour (no refinement) shows the current frame's c.
 // The final AO is written back to `ao` (what read_ao and --ao-out see).
 #include "common.glsl"
