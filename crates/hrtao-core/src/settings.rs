@@ -174,7 +174,7 @@ impl Default for AoSettings {
             prior_rays_max: 0.0,
             prior_sigma: 1.0,
             residual_sigma: 0.5,
-            still_smoothing: 0.2,
+            still_smoothing: 0.15,
             still_samples: 64,
             max_cell_fraction: 0.25,
             edges: true,
