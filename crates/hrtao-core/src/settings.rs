@@ -323,4 +323,34 @@ mod tests {
         .validate()
         .is_ok());
     }
+
+    #[test]
+    fn still_refinement_settings_are_checked_and_named() {
+        for bad in [-1.0, f32::NAN, f32::INFINITY] {
+            let e = AoSettings {
+                residual_sigma: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("residual sigma"), "{e}");
+        }
+        for bad in [0.0, -0.5, 1.5, f32::NAN] {
+            let e = AoSettings {
+                still_smoothing: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("still smoothing"), "{e}");
+        }
+        // 1 = no smoothing, 0 = no pooling: the refinement before them.
+        assert!(AoSettings {
+            still_smoothing: 1.0,
+            residual_sigma: 0.0,
+            ..Default::default()
+        }
+        .validate()
+        .is_ok());
+    }
 }
