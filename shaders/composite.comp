@@ -252,10 +252,10 @@ void main() {
         // pixel has no rays at all: AO off, a zero budget). AO = mean(c) + S / (k + S) * residual, the residual
         // pooled with the neighbours' in HRTAO (S its rays); without pooling this is
         // (k mean(c) + sum(unoccluded)) / (k + sum(rays)).
-        float k = 1e-6;
+        float k = hashed ? max(g.prior_rays, 1e-6) : 1e-6;
         float ao = (k * a.cell / a.frames + a.open) / (k + a.rays);
         color = (k * a.shade_cell / a.frames + a.shade_open) / (k + a.rays);
-        if (hashed) {
+        if (hashed && accumulates) {
             float mean_c = a.cell / a.frames;
             float r = a.rays > 0.0 ? a.open / a.rays - mean_c : 0.0;
             float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);
