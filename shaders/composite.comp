@@ -3,9 +3,11 @@
 // accumulation over still frames (ours, docs/algorithm.md), which anti-aliases (each still frame's primary
 // sample is jittered) and, in HRTAO, moves each pixel from its cell estimate c (paper §4-5) to its own rays:
 //
-//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)),   k = prior_weight (ours, adaptive),
+//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)) = mean(c) + S / (k + S) r,   k = prior_weight (ours),
 //
-// the cell estimate counting as k of the pixel's own rays. Colours weigh each sample's shade the same way.
+// the cell estimate counting as k of the pixel's own rays (S of them, r = own mean - mean(c) the residual). The
+// residual is pooled with the neighbours' that agree (pooled_evidence), and the shown AO is smoothed over the
+// still frames (smoothed). Colours weigh each sample's shade the same way.
 // Per-pixel RTAO is the same with k -> 0; the paper's behaviour (no refinement) shows the current frame's c.
 // The final AO is written back to `ao` (what read_ao and --ao-out see).
 #include "common.glsl"
@@ -91,49 +93,45 @@ float edge(uvec2 pix, GPixel px) {
     return 0.0;
 }
 
-// Ours: the cell estimate's weight k in rays of the pixel's own, by empirical Bayes. The pixel's own mean o over
-// s rays has binomial noise v/s (v = p(1-p)); the cell estimate mean(c) differs from the truth by a bias b.
-// Weighing them k : s with k = v / b^2 minimises the expected squared error. b^2 is estimated from the
-// discrepancy, (o - mean(c))^2 minus z^2 times the noise it contains (z = prior_sigma), and pooled over the
-// 3x3 neighbours on the pixel's surface (their estimates of the previous frame: two slots by parity, so no
-// pixel reads a slot written in the same dispatch), which share most of their cells' bias and so cut the
-// noise of the estimate. While o agrees with mean(c) within its noise, k is prior_rays_max (the cell, nearly
-// noise-free, dominates: no flicker); where the cell is biased, k falls toward prior_rays and the pixel
-// converges to its own rays. k moves continuously with o, so it does not flicker. k never exceeds the rays of
-// the cell the pixel used: a cell of N rays carries their noise, so it is worth at most N of the pixel's (times
-// CELLS_FILTERED, the cells the filter averages, as a rough count).
-const float CELLS_FILTERED = 2.0;
-float own_bias2(PixelAccum a, out float v) {
-    float k_min = max(g.prior_rays, 1e-6);
-    float cell = a.cell / a.frames;
-    float p = (k_min * cell + a.open) / (k_min + a.rays);
-    v = max(p * (1.0 - p), 1.0 / (k_min + a.rays));
-    float d = a.open / a.rays - cell;
-    return d * d - g.prior_sigma * g.prior_sigma * v / a.rays;
+// Ours: the own rays' evidence about the cell estimate, pooled over the pixel's 3x3 neighbours on its surface.
+// Each pixel stores (r, s) each frame: its residual r = o - mean(c) (own mean minus its mean cell estimate)
+// over its s own rays, in one of two slots by still-frame parity, so no pixel reads a slot written in the same
+// dispatch (neighbours are one frame behind).
+layout(buffer_reference, scalar) buffer Vec4Ref { vec4 v[]; };
+
+struct Evidence {
+    float r;    // the pooled residual
+    float s;    // the rays behind it
+    float b2;   // the squared cell bias, by empirical Bayes (for the adaptive k)
+};
+
+// The own mean's binomial noise variance v/s over s rays, about the blended estimate p.
+float own_noise(float p, float s) {
+    return max(p * (1.0 - p), 1.0 / (1.0 + s)) / s;
 }
 
-float prior_weight(uvec2 pix, GPixel px, PixelAccum a) {
-    float k_min = max(g.prior_rays, 1e-6);
-    // The cell's mean holds the noise of its own rays (and of the few neighbouring cells the filter averages in): as a prior it is worth at most that many rays.
-    uint used = UintRef(g.lod_used).v[pix.y * g.width + pix.x];
-    uint cell = used < LOD_COUNT ? PixelCellRef(g.pixel_cells).v[pix.y * g.width + pix.x].cells[used] : INVALID_CELL;
-    float cell_rays = cell != INVALID_CELL && slot_in_bounds(cell) ? float(CellRef(g.hash_cells).v[cell].samples) : 0.0;
-    float k_max = max(min(g.prior_rays_max, CELLS_FILTERED * cell_rays), k_min);
-    FloatRef evidence = FloatRef(g.bias_evidence);
+// Residual pooling (`residual_sigma` z_r > 0): a neighbour's residual joins, weighted by its rays and by
+// exp(-d^2 / (2 z_r^2 var(d))), d its difference from the pixel's own and var(d) the two own means' noise.
+// Residuals are the cells' bias seen through each pixel's own rays: neighbours sharing a cell share most of
+// it, so pooling cuts the own rays' noise (the still image's flicker) several times while it follows the bias.
+// As the own rays grow, var(d) shrinks and only neighbours with the same residual stay: the pixel converges
+// to its own ray-traced value. b^2 (the adaptive k): (r^2 - z^2 v/s), z = prior_sigma, averaged without
+// weights over the same neighbours.
+Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
+    Vec4Ref slots = Vec4Ref(g.bias_evidence);
     uint n = g.width * g.height;
     uint index = pix.y * g.width + pix.x;
     uint write_slot = (g.still_index & 1u) * n;
-    if (a.rays <= 0.0 || k_max <= k_min) {
-        evidence.v[write_slot + index] = 0.0;
-        return k_min;
-    }
-    float v;
-    float own = own_bias2(a, v);
-    evidence.v[write_slot + index] = own;
-    float pooled = own;
+    slots.v[write_slot + index].xy = vec2(r, s);
+    Evidence e;
+    e.r = r * s;
+    e.s = s;
+    float z2 = g.prior_sigma * g.prior_sigma;
+    e.b2 = r * r - z2 * own_noise(p, s);
     float count = 1.0;
-    if (g.still_index > 1u) {
+    if (s > 0.0 && g.still_index > 1u) {
         uint read_slot = n - write_slot;
+        float pixel_size = pixel_world_size(px.t);
         for (int dy = -1; dy <= 1; ++dy) {
             for (int dx = -1; dx <= 1; ++dx) {
                 ivec2 q = ivec2(pix) + ivec2(dx, dy);
@@ -141,12 +139,61 @@ float prior_weight(uvec2 pix, GPixel px, PixelAccum a) {
                 uint qi = uint(q.y) * g.width + uint(q.x);
                 GPixel o = GBufferRef(g.gbuffer).px[qi];
                 if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) continue;
-                pooled += evidence.v[read_slot + qi];
+                if (abs(dot(o.position - px.position, px.normal)) > 2.0 * pixel_size) continue;
+                vec2 rs = slots.v[read_slot + qi].xy;
+                if (rs.y <= 0.0) continue;
+                float vq = own_noise(p, rs.y);
+                e.b2 += rs.x * rs.x - z2 * vq;
                 count += 1.0;
+                if (g.residual_sigma > 0.0) {
+                    float d = rs.x - r;
+                    float var_d = own_noise(p, s) + vq;
+                    float w = exp(-d * d / (2.0 * g.residual_sigma * g.residual_sigma * var_d)) * rs.y;
+                    e.r += w * rs.x;
+                    e.s += w;
+                }
             }
         }
     }
-    return clamp(v / max(pooled / count, 1e-12), k_min, k_max);
+    e.r = e.s > 0.0 ? e.r / e.s : 0.0;
+    e.b2 /= count;
+    return e;
+}
+
+// Ours: the cell estimate's weight k in rays of the pixel's own. The own residual over s rays has binomial
+// noise v/s (v = p(1-p)); the cell estimate mean(c) differs from the truth by a bias b. Weighing them k : s with
+// k = v / b^2 minimises the expected squared error (b^2 from pooled_evidence). While the own rays agree with
+// mean(c) within their noise, k is prior_rays_max (the cell, nearly noise-free, dominates: no flicker); where
+// the cell is biased, k falls toward prior_rays and the pixel converges to its own rays. k moves continuously
+// with the evidence, so it does not flicker. k never exceeds the rays of the cell the pixel used: a cell of N
+// rays carries their noise, so it is worth at most N of the pixel's (times CELLS_FILTERED, the cells the filter
+// averages, as a rough count). prior_rays_max <= prior_rays: k = prior_rays.
+const float CELLS_FILTERED = 2.0;
+float prior_weight(uvec2 pix, float p, Evidence e) {
+    float k_min = max(g.prior_rays, 1e-6);
+    uint index = pix.y * g.width + pix.x;
+    uint used = UintRef(g.lod_used).v[index];
+    uint cell = used < LOD_COUNT ? PixelCellRef(g.pixel_cells).v[index].cells[used] : INVALID_CELL;
+    float cell_rays = cell != INVALID_CELL && slot_in_bounds(cell) ? float(CellRef(g.hash_cells).v[cell].samples) : 0.0;
+    float k_max = max(min(g.prior_rays_max, CELLS_FILTERED * cell_rays), k_min);
+    if (e.s <= 0.0 || k_max <= k_min) return k_min;
+    float v = max(p * (1.0 - p), 1.0 / (k_min + e.s));
+    return clamp(v / max(e.b2, 1e-12), k_min, k_max);
+}
+
+// Ours: the shown AO moves `still_smoothing` of the way to the new estimate each still frame (an exponential
+// moving average of the refined estimates; `continued`: the pixel showed one in the previous frame of this
+// accumulation). It keeps the own rays' noise from showing as flicker, for a lag of a few frames.
+float smoothed(uint index, float ao, bool continued) {
+    Vec4Ref slots = Vec4Ref(g.bias_evidence);
+    uint n = g.width * g.height;
+    uint write_slot = (g.still_index & 1u) * n;
+    if (continued && g.still_index > 0u) {
+        float shown = slots.v[n - write_slot + index].z;
+        ao = mix(shown, ao, g.still_smoothing);
+    }
+    slots.v[write_slot + index].z = ao;
+    return ao;
 }
 
 const vec3 EDGE_COLOR = vec3(0.06, 0.07, 0.08);
@@ -202,10 +249,26 @@ void main() {
         a.frames += wc;
         accum.v[index] = a;
         // k: the cell estimate's weight in rays (HRTAO), a vanishing weight otherwise (used only when the
-        // pixel has no rays at all: AO off, a zero budget).
-        float k = hashed ? prior_weight(pix, px, a) : 1e-6;
+        // pixel has no rays at all: AO off, a zero budget). AO = mean(c) + S / (k + S) * residual, the residual
+        // pooled with the neighbours' in HRTAO (S its rays); without pooling this is
+        // (k mean(c) + sum(unoccluded)) / (k + sum(rays)).
+        float k = hashed ? max(g.prior_rays, 1e-6) : 1e-6;
         float ao = (k * a.cell / a.frames + a.open) / (k + a.rays);
         color = (k * a.shade_cell / a.frames + a.shade_open) / (k + a.rays);
+        if (hashed && accumulates) {
+            float mean_c = a.cell / a.frames;
+            float r = a.rays > 0.0 ? a.open / a.rays - mean_c : 0.0;
+            float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);
+            // A miss (mean(c) = 1, all rays open) has no residual.
+            Evidence e = pooled_evidence(pix, px, r, px.t >= 0.0 ? a.rays : 0.0, p);
+            k = prior_weight(pix, p, e);
+            ao = mean_c + e.s / (k + e.s) * e.r;
+            ao = smoothed(index, ao, a.frames > 1.0);
+            // The colour: each sample's shade weighed as above, moved with the pooled AO.
+            float own_ao = (k * mean_c + a.open) / (k + a.rays);
+            vec3 shade_mean = (a.shade_cell + a.shade_open) / max(a.cell + a.open, 1e-6);
+            color = (k * a.shade_cell / a.frames + a.shade_open) / (k + a.rays) + shade_mean * (ao - own_ao);
+        }
         if (g.mode == MODE_NO_AO) {
             ao = 1.0;
             color = a.shade_cell / a.frames;

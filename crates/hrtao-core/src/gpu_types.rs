@@ -174,9 +174,16 @@ gpu_structs! {
         /// The disagreement that counts: the squared difference between the pixel's own mean and the cell
         /// estimate beyond this many squared standard deviations of the own rays' binomial noise.
         prior_sigma: f32,
-        _prior_pad: u32,
-        /// Per pixel, two slots (by still-frame parity): the pixel's estimate of its cell's squared bias,
-        /// written by the composite each frame and pooled over neighbours in the next (composite.comp).
+        /// Still-camera refinement (ours): neighbours' own-ray residuals within this many standard deviations
+        /// of the pixel's join its residual (composite.comp); 0 = the pixel's own only.
+        residual_sigma: f32,
+        /// Still-camera refinement (ours): the shown AO moves this fraction of the way to the new estimate
+        /// each still frame (1 = no smoothing).
+        still_smoothing: f32,
+        _still_pad: u32,
+        /// Per pixel, two slots (by still-frame parity) of (residual, rays, shown AO, 0): the pixel's own mean
+        /// minus its mean cell estimate over its own rays, written by the composite each frame and pooled
+        /// over neighbours in the next, and the AO it showed (composite.comp).
         bias_evidence: u64,
         /// Near-field control variate (ours, docs/algorithm.md): the weight β of the pixel's own near-open
         /// fraction minus its cells' (0 = the paper's cell estimate alone).

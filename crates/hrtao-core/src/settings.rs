@@ -133,6 +133,14 @@ pub struct AoSettings {
     pub prior_rays_max: f32,
     /// The own-ray noise (in standard deviations) that a difference from the cell must exceed to count as bias.
     pub prior_sigma: f32,
+    /// Ours (docs/algorithm.md): the refinement pools the pixel's own-ray residual (own mean minus cell
+    /// estimate) with its 3x3 neighbours' on the same surface whose residuals agree within this many standard
+    /// deviations of their noise, so the still image moves to the ray-traced value with less flicker. 0 = the
+    /// pixel's own residual only.
+    pub residual_sigma: f32,
+    /// Ours (docs/algorithm.md): each still frame the shown AO moves this fraction of the way to the refined
+    /// estimate (an exponential moving average, a lag of about 1/x - 1 frames), in (0, 1]; 1 = none.
+    pub still_smoothing: f32,
     /// A still image is final once every pixel has this many rays of its own (HRTAO refinement, per-pixel RTAO).
     pub still_samples: u32,
     /// The finest cell size s_w is at most this fraction of the AO radius R (eq. 2-3), so cells stay small
@@ -178,6 +186,8 @@ impl Default for AoSettings {
             prior_rays: 32.0,
             prior_rays_max: 0.0,
             prior_sigma: 1.0,
+            residual_sigma: 0.5,
+            still_smoothing: 0.15,
             still_samples: 64,
             max_cell_fraction: 0.25,
             edges: true,
@@ -267,10 +277,17 @@ impl AoSettings {
         for (name, v) in [
             ("prior rays max", self.prior_rays_max),
             ("prior sigma", self.prior_sigma),
+            ("residual sigma", self.residual_sigma),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));
             }
+        }
+        if !(self.still_smoothing > 0.0 && self.still_smoothing <= 1.0) {
+            return Err(format!(
+                "still smoothing must be in (0, 1], got {}",
+                self.still_smoothing
+            ));
         }
         if !(self.max_cell_fraction.is_finite() && self.max_cell_fraction > 0.0) {
             return Err(format!(
@@ -357,6 +374,36 @@ mod tests {
         // 0 keeps k fixed at prior_rays (the shader clamps k_max up to k_min).
         assert!(AoSettings {
             prior_rays_max: 0.0,
+            ..Default::default()
+        }
+        .validate()
+        .is_ok());
+    }
+
+    #[test]
+    fn still_refinement_settings_are_checked_and_named() {
+        for bad in [-1.0, f32::NAN, f32::INFINITY] {
+            let e = AoSettings {
+                residual_sigma: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("residual sigma"), "{e}");
+        }
+        for bad in [0.0, -0.5, 1.5, f32::NAN] {
+            let e = AoSettings {
+                still_smoothing: bad,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("still smoothing"), "{e}");
+        }
+        // 1 = no smoothing, 0 = no pooling: the refinement before them.
+        assert!(AoSettings {
+            still_smoothing: 1.0,
+            residual_sigma: 0.0,
             ..Default::default()
         }
         .validate()

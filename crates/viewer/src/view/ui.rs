@@ -401,6 +401,19 @@ impl Viewer {
                      `prior_rays` (32). 0: always 32.",
                 );
         });
+        ui.horizontal(|ui| {
+            ui.add(egui::Slider::new(&mut s.still_smoothing, 0.05..=1.0).text("still smoothing"))
+                .on_hover_text(
+                    "Ours: each still frame the shown AO moves this fraction of the way to the refined estimate \
+                     (less flicker, a lag of about 1/x - 1 frames). 1: none.",
+                );
+            ui.label("residual σ");
+            ui.add(egui::DragValue::new(&mut s.residual_sigma).speed(0.05).clamp_range(0.0..=4.0))
+                .on_hover_text(
+                    "Ours: a pixel's own-ray residual is pooled with its neighbours' that agree within this many \
+                     standard deviations of their noise. 0: its own only.",
+                );
+        });
         ui.checkbox(&mut s.local_edits, "edits keep untouched AO").on_hover_text(
             "Ours (docs/algorithm.md): moving, hiding or deleting a part re-keys only the hash cells within the \
              AO radius of it; the rest of the image keeps its converged AO. Off: the paper's eq. 6 (every edit \
