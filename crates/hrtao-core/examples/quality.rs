@@ -41,10 +41,12 @@ fn main() -> anyhow::Result<()> {
     let mut curves = Vec::new();
     for key in keys {
         let entry = &index[key.as_str()];
-        let scene = hrtao_scene::load(
-            shared(entry["scene"].as_str().unwrap()).to_str().unwrap(),
-            &mut |_| {},
-        )?;
+        let Some(file) = entry["scene"].as_str() else {
+            anyhow::bail!(
+                "no scene {key:?} in refs/index.json (keys such as rod, duplex, cycloidal, engine, sf)"
+            );
+        };
+        let scene = hrtao_scene::load(shared(file).to_str().unwrap(), &mut |_| {})?;
         let radius = entry["radius"].as_f64().unwrap() as f32;
         let cam = Camera::load(&shared(&format!("refs/{key}_{size}.camera.json")))?;
         let (_, _, reference) =
