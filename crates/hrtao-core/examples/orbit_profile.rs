@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use glam::{Quat, Vec3};
-use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Primary, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Renderer, SceneGpu};
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
@@ -28,7 +28,7 @@ fn main() -> anyhow::Result<()> {
     let fraction: f32 = args.take("--fraction", "1").parse()?;
     // The viewer's view is 800 pixels high: s_p counts view pixels, so its cells are that much finer.
     let view_height: u32 = args.take("--view-height", "800").parse()?;
-    let raster = args.take("--primary", "raster") == "raster";
+    let primary = args.primary();
     let extra = args.take("--set", r#"{"filter_iterations": 1}"#);
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let scene_path = args.take("--scene", assets.join("default.glb").to_str().unwrap());
@@ -50,11 +50,7 @@ fn main() -> anyhow::Result<()> {
     let sg = SceneGpu::new(&gpu, &scene)?;
     let mut r = Renderer::new(&gpu, w, h, settings)?;
     r.view_height = view_height;
-    r.primary = if raster {
-        Primary::Raster
-    } else {
-        Primary::RayQuery
-    };
+    r.primary = primary;
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut walls, mut rays_sum) = (Vec::new(), 0u64);
     let up = Vec3::from(camera.up).normalize();

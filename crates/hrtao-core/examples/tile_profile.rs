@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use hrtao_core::renderer::AA_FRAMES;
 use hrtao_core::tile::TileGrid;
-use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Primary, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Renderer, SceneGpu};
 
 fn main() -> anyhow::Result<()> {
     let mut args = cli_args::Args::from_env();
@@ -17,7 +17,7 @@ fn main() -> anyhow::Result<()> {
     let slice: u64 = args.take("--slice", "84560").parse()?;
     let tile: usize = args.take("--tile", "60").parse()?;
     let extra = args.take("--set", "{}");
-    let raster = args.take("--primary", "raster") == "raster";
+    let primary = args.primary();
     let (w, h) = size.split_once('x').unwrap();
     let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets");
@@ -40,11 +40,7 @@ fn main() -> anyhow::Result<()> {
     let sg = SceneGpu::new(&gpu, &scene)?;
     let mut r = Renderer::new(&gpu, tw, th, settings)?;
     r.jitter = true;
-    r.primary = if raster {
-        Primary::Raster
-    } else {
-        Primary::RayQuery
-    };
+    r.primary = primary;
     r.tile = Some(grid.tile(tile.min(grid.len() - 1)));
     println!("{} tiles of {tw}x{th} (margin {margin})", grid.len());
     let mut sums: BTreeMap<String, f64> = BTreeMap::new();

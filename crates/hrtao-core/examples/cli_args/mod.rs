@@ -1,5 +1,5 @@
 //! What the development examples share: `--flag value` arguments and `--set` overrides of `AoSettings`.
-use hrtao_core::AoSettings;
+use hrtao_core::{AoSettings, Primary};
 
 /// The command line after the program name; `take` removes a flag and its value.
 pub struct Args(pub Vec<String>);
@@ -18,6 +18,16 @@ impl Args {
                 v
             }
             _ => default.to_string(),
+        }
+    }
+
+    /// `--primary raster|rayquery` (default raster). Not every example including this module uses it.
+    #[allow(dead_code)]
+    pub fn primary(&mut self) -> Primary {
+        if self.take("--primary", "raster") == "raster" {
+            Primary::Raster
+        } else {
+            Primary::RayQuery
         }
     }
 }
