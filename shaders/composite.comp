@@ -12,6 +12,7 @@
 // The final AO is written back to `ao` (what read_ao and --ao-out see).
 #include "common.glsl"
 #include "hash_map.glsl"
+#include "filter_plan.glsl"
 
 vec3 linear_to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
@@ -171,10 +172,7 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
 const float CELLS_FILTERED = 2.0;
 float prior_weight(uvec2 pix, float p, Evidence e) {
     float k_min = max(g.prior_rays, 1e-6);
-    uint index = pix.y * g.width + pix.x;
-    uint used = UintRef(g.lod_used).v[index];
-    uint cell = used < LOD_COUNT ? PixelCellRef(g.pixel_cells).v[index].cells[used] : INVALID_CELL;
-    float cell_rays = cell != INVALID_CELL && slot_in_bounds(cell) ? float(CellRef(g.hash_cells).v[cell].samples) : 0.0;
+    float cell_rays = float(plan_samples(UintRef(g.filter_plan).v[pix.y * g.width + pix.x]));
     float k_max = max(min(g.prior_rays_max, CELLS_FILTERED * cell_rays), k_min);
     if (e.s <= 0.0 || k_max <= k_min) return k_min;
     float v = max(p * (1.0 - p), 1.0 / (k_min + e.s));

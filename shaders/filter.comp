@@ -4,13 +4,14 @@
 // hash criteria: world distance relative to the cell size, and normal agreement at the s_nd resolution.
 // The paper's filter (filter_sigma = 0): the kernel width follows the coarsest LOD used, so iteration i runs
 // only where 2 * 2^i pixels fit in the footprint of the pixel's cell.
-// Ours (filter_sigma > 0, docs/algorithm.md): every iteration runs, and a neighbour also stops the filter when
-// its AO differs from the pixel's by more than filter_sigma standard deviations of the cell's binomial noise
-// (SVGF's luminance edge-stopping with the variance the sample count gives), so young, noisy cells are
-// smoothed over several cells while real AO gradients (contact shadows) stay. Pixels of full cells are left
-// as they are.
+// Ours (filter_sigma > 0, docs/algorithm.md): the iterations that still leave visible noise run too, and a
+// neighbour also stops the filter when its AO differs from the pixel's by more than filter_sigma standard
+// deviations of the cell's binomial noise (SVGF's luminance edge-stopping with the variance the sample count
+// gives), so young, noisy cells are smoothed over several cells while real AO gradients (contact shadows) stay.
+// Pixels of full cells are left as they are. Which iterations a pixel takes is its plan (filter_plan.glsl).
 #include "common.glsl"
 #include "hash_map.glsl"
+#include "filter_plan.glsl"
 
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
 
@@ -23,41 +24,30 @@ void main() {
     bool src_is_tmp = ((iterations - iteration) & 1u) == 1u;
     FloatRef src = FloatRef(src_is_tmp ? g.filter_tmp : g.ao);
     FloatRef dst = FloatRef(src_is_tmp ? g.ao : g.filter_tmp);
+    float center = src.v[index];
+    // Misses, pixels without AO and those whose plan (resolve.comp, filter_plan.glsl) ends before this
+    // iteration keep their value.
+    uint plan = UintRef(g.filter_plan).v[index];
+    if (iteration >= plan_iterations(plan)) {
+        dst.v[index] = center;
+        return;
+    }
     GBufferRef gb = GBufferRef(g.gbuffer);
     GPixel px = gb.px[index];
-    float center = src.v[index];
     uint used = UintRef(g.lod_used).v[index];
-    if (px.t < 0.0 || used >= LOD_COUNT) {
-        dst.v[index] = center;
-        return;
-    }
-    // World size of the cell the AO came from, and of one pixel at this distance.
+    // World size of the cell the AO came from, and of one (internal) pixel at this distance.
     int lod = pixel_lod(px.t) + int(used);
     float cell = exp2(float(lod));
-    // World width of one (internal) pixel at this distance.
     float pixel_size = pixel_world_size(px.t);
-    float footprint = cell / max(pixel_size, 1e-30);   // cell width in pixels
     int step = 1 << iteration;
     bool guided = g.filter_sigma > 0.0;
-    if (!guided && float(2 * step) > footprint) {
-        dst.v[index] = center;
-        return;
-    }
     // World scale of the position weights: the cell, or in the guided filter the reach of this iteration.
     float scale = guided ? max(cell, 2.0 * float(step) * pixel_size) : cell;
     // Guided: the noise of the pixel's value, p(1-p)/n for the n rays of its cell (p kept off 0 and 1 so an
     // open or closed cell still admits its neighbours' noise), halved per iteration as the filter averages.
     float stop = 0.0;
     if (guided) {
-        uint c = PixelCellRef(g.pixel_cells).v[index].cells[used];
-        uint samples = c == INVALID_CELL || !slot_in_bounds(c) ? 1u : max(CellRef(g.hash_cells).v[c].samples, 1u);
-        // A full cell (max_samples, §6) holds its final estimate: nothing left to smooth, and settled
-        // navigation frames, whose cells are mostly full, cost what the paper's filter costs.
-        if (samples >= max(g.max_samples, 1u)) {
-            dst.v[index] = center;
-            return;
-        }
-        float n = float(samples);
+        float n = float(max(plan_samples(plan), 1u));
         float p = clamp(center, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
         float variance = p * (1.0 - p) / n * exp2(-float(iteration));
         stop = 1.0 / (g.filter_sigma * sqrt(2.0 * variance));

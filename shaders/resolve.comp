@@ -8,6 +8,7 @@
 // Writes into the buffer the filter's ping-pong starts from (so an even or odd iteration count ends in `ao`).
 #include "common.glsl"
 #include "hash_map.glsl"
+#include "filter_plan.glsl"
 
 void main() {
     uvec2 pix;
@@ -16,6 +17,8 @@ void main() {
     GPixel px = GBufferRef(g.gbuffer).px[index];
     float ao = 1.0;
     uint used = LOD_COUNT;
+    uint iterations = (g.flags & FLAG_FILTER) != 0u ? g.filter_iterations : 0u;
+    uint plan = 0u;
     if (px.t >= 0.0) {
         PixelCells pc = PixelCellRef(g.pixel_cells).v[index];
         CellRef cells = CellRef(g.hash_cells);
@@ -77,9 +80,12 @@ void main() {
                 float v = max(cell_near * (1.0 - cell_near), 0.5 / n) / n;
                 ao += g.near_weight * r * r * r / (r * r + v);
             }
+            float footprint = exp2(float(lod)) / max(pixel_world_size(px.t), 1e-30);   // cell width in pixels
+            uint own_rays = uint(own_samples);
+            plan = make_plan(planned_iterations(footprint, own_rays, iterations), own_rays);
         }
     }
-    uint iterations = (g.flags & FLAG_FILTER) != 0u ? g.filter_iterations : 0u;
+    UintRef(g.filter_plan).v[index] = plan;
     FloatRef dst = FloatRef((iterations & 1u) == 1u ? g.filter_tmp : g.ao);
     dst.v[index] = clamp(ao, 0.0, 1.0);
     UintRef(g.lod_used).v[index] = used;

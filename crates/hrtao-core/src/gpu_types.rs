@@ -29,6 +29,8 @@ gpu_consts! {
     FLAG_REFINE: u32 = 16;
     /// Feature edges (silhouettes and creases) drawn over the shading in the composite; never in the AO image.
     FLAG_EDGES: u32 = 32;
+    /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
+    FILTER_PLAN_BITS: u32 = 4;
     /// Most internal pixels a feature-edge line spans (bounds the composite's neighbour reads).
     MAX_EDGE_STEPS: u32 = 8;
     /// `FrameGlobals::projection` and `RasterPush::projection` values (camera.rs `Projection`).
@@ -194,6 +196,9 @@ gpu_structs! {
         /// frame with this probability (1 = every such pixel, as the paper), see ao_select.comp.
         trace_fraction: f32,
         _trace_pad: u32,
+        /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the
+        /// pixel takes and the rays of the cell its AO came from.
+        filter_plan: u64,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

@@ -392,7 +392,7 @@ pub fn scene_device_estimate(s: &hrtao_core::accel::BuildStats) -> u64 {
 pub fn renderer_device_estimate(w: u32, h: u32, hash_capacity: u32) -> u64 {
     use hrtao_core::gpu::{GPixel, HashCell, PixelCells};
     let n = w as u64 * h as u64;
-    n * (std::mem::size_of::<GPixel>() + std::mem::size_of::<PixelCells>() + 5 * 4) as u64
+    n * (std::mem::size_of::<GPixel>() + std::mem::size_of::<PixelCells>() + 6 * 4) as u64
         + hash_capacity as u64 * std::mem::size_of::<HashCell>() as u64
 }
 
@@ -522,13 +522,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         };
     let sf = scene.f();
 
-    // Warm-up (pipeline compilation, caches) for both modes.
+    // The paper's behaviour (our additions off) on a renderer of its own, so both run side by side.
+    let mut paper_r = Renderer::new(&gpu, w, h, hrtao_settings.paper())?;
+
+    // Warm-up (pipeline compilation, caches) for every mode.
     r.render(&scene_gpu, sf, &camera)?;
+    paper_r.render(&scene_gpu, sf, &camera)?;
     r.set_settings(rtao_settings.clone())?;
     r.render(&scene_gpu, sf, &camera)?;
 
-    // 1. Timing: HRTAO, then the paper's behaviour (our additions off) over the same cameras.
-    let hrtao = time_hrtao(&mut r, &scene_gpu, sf, &camera, &nav_cams, &hrtao_settings, args)?;
+    // 1. Timing: HRTAO and the paper's behaviour, frame by frame over the same cameras.
+    r.set_settings(hrtao_settings.clone())?;
+    let [hrtao, paper] = time_hrtao([&mut r, &mut paper_r], &scene_gpu, sf, &camera, &nav_cams, args)?;
+    drop(paper_r);
     log::info!(
         "HRTAO: first {:.1} ms (passes {:.1} ms), nav {:.1} ms (passes {:.1} ms), GPU medians",
         hrtao.first_stats.gpu_total_ms,
@@ -536,15 +542,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         hrtao.nav_stats.gpu_total_ms,
         hrtao.nav_stats.hrtao_passes_ms
     );
-    let paper = time_hrtao(
-        &mut r,
-        &scene_gpu,
-        sf,
-        &camera,
-        &nav_cams,
-        &hrtao_settings.paper(),
-        args,
-    )?;
     log::info!(
         "HRTAO, the paper's mode: first {:.1} ms, nav {:.1} ms (GPU medians)",
         paper.first_stats.gpu_total_ms,
@@ -644,41 +641,55 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// HRTAO timing with `settings`: the first frame `--repeat` times from an empty map, static frames until the
-/// map has settled, then the navigation cameras.
-fn time_hrtao(
-    r: &mut Renderer,
+/// HRTAO timing of N renderers (ours and the paper's mode, each with its settings), interleaved frame by frame
+/// so that a change of load on the machine hits them alike: the first frame `--repeat` times from an empty map,
+/// static frames until each map has settled, then the navigation cameras.
+fn time_hrtao<const N: usize>(
+    mut rs: [&mut Renderer; N],
     scene_gpu: &SceneGpu,
     sf: u32,
     camera: &Camera,
     nav_cams: &[Camera],
-    settings: &AoSettings,
     args: &BenchArgs,
-) -> Result<ModeRun> {
-    r.set_settings(settings.clone())?;
-    let mut first = Vec::new();
+) -> Result<[ModeRun; N]> {
+    let mut first: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
     for i in 0..args.repeat {
-        r.clear_cache()?;
-        let rep = r.render(scene_gpu, sf, camera)?;
-        first.push(FrameRecord::new(i as usize, "first", &rep));
+        for (r, first) in rs.iter_mut().zip(&mut first) {
+            r.clear_cache()?;
+            let rep = r.render(scene_gpu, sf, camera)?;
+            first.push(FrameRecord::new(i as usize, "first", &rep));
+        }
     }
-    let mut settle = Vec::new();
-    let first_rays = first.last().map(|f| f.rays).unwrap_or(0) as f64;
+    let mut settle: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
+    let mut settled = [false; N];
     for i in 0..args.settle {
-        let rep = r.render(scene_gpu, sf, camera)?;
-        settle.push(FrameRecord::new(i as usize + 1, "settle", &rep));
-        // Settled once the cells take few rays (the still-camera refinement's own rays, which every pixel
-        // traces while the view rests, do not count; the cells take some of them).
-        if (rep.cell_rays as f64) < args.settle_until * first_rays {
+        for k in 0..N {
+            if settled[k] {
+                continue;
+            }
+            let rep = rs[k].render(scene_gpu, sf, camera)?;
+            settle[k].push(FrameRecord::new(i as usize + 1, "settle", &rep));
+            // Settled once the cells take few rays (the still-camera refinement's own rays, which every pixel
+            // traces while the view rests, do not count; the cells take some of them).
+            let first_rays = first[k].last().map(|f| f.rays).unwrap_or(0) as f64;
+            settled[k] = (rep.cell_rays as f64) < args.settle_until * first_rays;
+        }
+        if settled.iter().all(|&s| s) {
             break;
         }
     }
-    let mut nav = Vec::new();
+    let mut nav: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
     for (i, cam) in nav_cams.iter().enumerate() {
-        let rep = r.render(scene_gpu, sf, cam)?;
-        nav.push(FrameRecord::new(i + 1, "nav", &rep));
+        for (r, nav) in rs.iter_mut().zip(&mut nav) {
+            let rep = r.render(scene_gpu, sf, cam)?;
+            nav.push(FrameRecord::new(i + 1, "nav", &rep));
+        }
     }
-    Ok(ModeRun::new(first, settle, nav))
+    let mut runs = first.into_iter().zip(settle).zip(nav);
+    Ok(std::array::from_fn(|_| {
+        let ((first, settle), nav) = runs.next().expect("N runs");
+        ModeRun::new(first, settle, nav)
+    }))
 }
 
 pub fn summarize(hrtao: &ModeRun, rtao: &ModeRun) -> Summary {

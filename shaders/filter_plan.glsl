@@ -1,0 +1,31 @@
+// A pixel's filter plan (written by resolve.comp, read by filter.comp and composite.comp): how many à-trous
+// iterations it takes, and the rays of the cell its AO came from (for the guided filter's noise and the still
+// refinement's prior). Deciding once per pixel keeps a skipped iteration to one read. Needs common.glsl.
+#ifndef HRTAO_FILTER_PLAN_GLSL
+#define HRTAO_FILTER_PLAN_GLSL
+
+uint plan_iterations(uint plan) { return plan & ((1u << FILTER_PLAN_BITS) - 1u); }
+uint plan_samples(uint plan) { return plan >> FILTER_PLAN_BITS; }
+
+// The iterations of a pixel whose cell (`samples` rays, estimate `ao`) spans `footprint` pixels, out of
+// `iterations`. The paper (§5): iteration i runs where 2 * 2^i pixels fit in the cell's footprint. Ours, the
+// guided filter (filter_sigma > 0): a full cell (max_samples, §6) holds its final estimate and takes none; a
+// cell of n rays also runs the iterations that bring its noise down to a full cell's (its binomial variance
+// p(1-p)/n halves per iteration: log2(max_samples / n) of them), so young cells are smoothed over several
+// cells while settled navigation frames cost what the paper's filter costs.
+uint planned_iterations(float footprint, uint samples, uint iterations) {
+    uint paper = 0u;
+    while (paper < iterations && float(2u << paper) <= footprint) paper++;
+    if (g.filter_sigma <= 0.0) return paper;
+    uint full = max(g.max_samples, 1u);
+    if (samples >= full) return 0u;
+    uint noisy = 0u;
+    while (noisy < iterations && (max(samples, 1u) << noisy) < full) noisy++;
+    return max(paper, noisy);
+}
+
+uint make_plan(uint iterations, uint samples) {
+    return min(iterations, (1u << FILTER_PLAN_BITS) - 1u) | (min(samples, 0xffffffffu >> FILTER_PLAN_BITS) << FILTER_PLAN_BITS);
+}
+
+#endif
