@@ -1,8 +1,10 @@
 #version 460
-// Cell finder (paper §4, Fig. 3): for each pixel, the hash cell at the target s_wd (level 0) or one of the
+// Cell finder (paper §4, Fig. 3): for each pixel, the hash cell at the target s_wd (level 0) and at the
 // LOD_COUNT - 1 successively coarser sizes (x2, x4, x8), found or inserted in the persistent world-space map.
-// One dispatch per level, push.x = level, coarsest first: under overload the coarse cells, shared by many
-// pixels, get the free slots, and pixels whose fine cells fail fall back to them (§4) instead of losing AO.
+// Levels push.x down to push.y (coarsest first): all of them in one pass while the map has room, one dispatch
+// per level after an overload (Renderer::cell_levels), so that the coarse cells, shared by many pixels, get the
+// free slots first. A failed level means the table is full here: finer cells would fail too, and the pixel
+// falls back to the coarser cells it has (§4) instead of losing AO.
 #include "common.glsl"
 #include "hash_map.glsl"
 
@@ -10,19 +12,22 @@ void main() {
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
-    uint level = push.x;
-    GPixel px = GBufferRef(g.gbuffer).px[index];
+    uint top = push.x;
+    uint bottom = push.y;
     PixelCellRef cells = PixelCellRef(g.pixel_cells);
-    if (level == LOD_COUNT - 1u) {
-        PixelCells pc;
-        pc.cells = uvec4(INVALID_CELL);
-        cells.v[index] = pc;
+    PixelCells pc;
+    pc.cells = uvec4(INVALID_CELL);
+    if (top < LOD_COUNT - 1u) pc = cells.v[index];
+    GPixel px = GBufferRef(g.gbuffer).px[index];
+    if (px.t >= 0.0 && (top == LOD_COUNT - 1u || pc.cells[top + 1u] != INVALID_CELL)) {
+        int lod = pixel_lod(px.t);
+        ivec3 nq = normal_coord(px.normal, g.s_nd);
+        for (int level = int(top); level >= int(bottom); --level) {
+            int l = lod + level;
+            uint c = find_or_insert(region_cell_key(cell_coord(px.position, l), l, nq));
+            pc.cells[level] = c;
+            if (c == INVALID_CELL) break;
+        }
     }
-    if (px.t < 0.0) return;
-    // A failed coarser level means the table is full here: finer cells would fail too.
-    if (level < LOD_COUNT - 1u && cells.v[index].cells[level + 1u] == INVALID_CELL) return;
-    int lod = pixel_lod(px.t);
-    int l = lod + int(level);
-    CellKey key = region_cell_key(cell_coord(px.position, l), l, normal_coord(px.normal, g.s_nd));
-    cells.v[index].cells[level] = find_or_insert(key);
+    cells.v[index] = pc;
 }

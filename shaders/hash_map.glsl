@@ -38,6 +38,7 @@ bool stamp_reclaimable(uint64_t s) {
 // Local edits (ours): the epoch of the region holding cell `c`, and the cell's key with it.
 layout(buffer_reference, scalar) buffer RegionRef { uint v[]; };
 uint region_epoch(ivec3 c, int lod) {
+    if ((g.flags & FLAG_REGION_EPOCHS) == 0u) return 0u;
     return RegionRef(g.regions).v[region_index(c, lod, g.region_lod)];
 }
 CellKey region_cell_key(ivec3 c, int lod, ivec3 nq) {

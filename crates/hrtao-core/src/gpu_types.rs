@@ -29,6 +29,9 @@ gpu_consts! {
     FLAG_REFINE: u32 = 16;
     /// Feature edges (silhouettes and creases) drawn over the shading in the composite; never in the AO image.
     FLAG_EDGES: u32 = 32;
+    /// Some region epoch is not 0 (local edits, ours): cell keys read the region table (hash_map.glsl); without
+    /// it every epoch is 0 and the keys are the paper's.
+    FLAG_REGION_EPOCHS: u32 = 64;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
     /// Most internal pixels a feature-edge line spans (bounds the composite's neighbour reads).

@@ -34,6 +34,8 @@ pub struct RegionTable {
     /// MAX_EDIT_BOXES boxes as (min.xyz, 0, max.xyz, 0) floats.
     table: Vec<u32>,
     dirty: bool,
+    /// Some epoch is not 0.
+    edited: bool,
     /// The LOD of the largest finest cell: grids region_lod ..= region_lod + LOD_COUNT - 1.
     pub region_lod: i32,
 }
@@ -51,6 +53,7 @@ impl RegionTable {
             buffer,
             table: vec![0; Self::WORDS],
             dirty: true,
+            edited: false,
             region_lod: 0,
         };
         t.upload()?;
@@ -66,6 +69,11 @@ impl RegionTable {
     /// `region_lod` for finest cells of at most `s_w_max` (eq. 2-3).
     pub fn region_lod_for(s_w_max: f32, log2_s_min: i32) -> i32 {
         hash::lod_of(s_w_max, log2_s_min)
+    }
+
+    /// Whether some epoch is not 0 (else every cell key is the paper's, and shaders skip the table).
+    pub fn any_edit(&self) -> bool {
+        self.edited
     }
 
     /// The epoch of entry `i`.
@@ -113,6 +121,7 @@ impl RegionTable {
         for i in touched {
             let e = &mut self.table[i as usize];
             *e = e.wrapping_add(1).max(1);
+            self.edited = true;
         }
         // The edit's boxes (several edits before one frame add up; beyond MAX_EDIT_BOXES they merge).
         let header = REGION_COUNT as usize;
@@ -153,6 +162,7 @@ impl RegionTable {
     /// Forgets every local edit (all epochs 0: the paper's keys), e.g. when the map is cleared.
     pub fn reset(&mut self) {
         self.table.fill(0);
+        self.edited = false;
         self.dirty = true;
     }
 

@@ -77,6 +77,9 @@ pub const RASTER_TRIAL_TRIANGLES: u64 = 20_000_000;
 /// larger than the view).
 pub const EDGE_WIDTH: f32 = 1.0;
 
+/// Frames the cell finder stays level by level after a failed insert (`Renderer::cell_levels`).
+const LEVELWISE_FRAMES: u32 = 64;
+
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
 
@@ -155,6 +158,8 @@ pub struct Renderer {
     edit_still_index: u32,
     /// The last finished frame reported `converged`.
     last_converged: bool,
+    /// Until this frame the cell finder runs level by level (the map was full somewhere, see `cell_levels`).
+    levelwise_until: u32,
     /// Jitter the primary samples of still frames (anti-aliasing). `hrtao render` keeps pixel centres.
     pub jitter: bool,
     /// Height of the view in pixels when the renderer works at a reduced internal resolution (0 = the internal
@@ -218,6 +223,7 @@ impl Renderer {
             regions: RegionTable::new(gpu)?,
             edit_still_index: 0,
             last_converged: false,
+            levelwise_until: 0,
             jitter: false,
             view_height: 0,
             background_top: [0.62, 0.68, 0.76],
@@ -370,6 +376,9 @@ impl Renderer {
         }
         if s.edges {
             flags |= gpu::FLAG_EDGES;
+        }
+        if self.regions.any_edit() {
+            flags |= gpu::FLAG_REGION_EPOCHS;
         }
         let jitter = if self.jitter && s.accumulates() && self.still_index > 0 {
             // R2 points in the pixel, frame after frame (the centre first).
@@ -549,6 +558,7 @@ impl Renderer {
             raster.prepare(w, h)?;
         }
         let mode = self.settings.mode;
+        let cell_levels = self.cell_levels();
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (primary, &self.raster) {
@@ -582,8 +592,8 @@ impl Renderer {
         if mode == Mode::Rtao {
             rec.dispatch(Pass::Rtao, w, h, [0; 4]);
         } else if mode.uses_hash() {
-            for level in (0..gpu::LOD_COUNT).rev() {
-                rec.dispatch(Pass::CellFinder, w, h, [level, 0, 0, 0]);
+            for &(top, bottom) in &cell_levels {
+                rec.dispatch(Pass::CellFinder, w, h, [top, bottom, 0, 0]);
             }
             // Compaction: only pixels whose cell still takes rays are traced, packed densely (no idle lanes).
             rec.dispatch(Pass::AoSelect, w, h, [0; 4]);
@@ -633,6 +643,22 @@ impl Renderer {
         false
     }
 
+    /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4). While the map has room every
+    /// level is found in one pass over the pixels. Where it may not (more pixels than half the capacity: cells
+    /// claimed in a frame stay live for `stale_frames`, so the first frame decides), and for LEVELWISE_FRAMES
+    /// frames after an insert failed, one dispatch per level, coarsest first: the coarse cells, shared by many
+    /// pixels, then take the free slots before any finer one, and pixels whose fine cells fail fall back to them.
+    fn cell_levels(&self) -> Vec<(u32, u32)> {
+        let top = gpu::LOD_COUNT - 1;
+        let crowded = self.pixel_count() as u64 > self.hash.capacity as u64 / 2;
+        // Frame numbers wrap: compare their difference.
+        if crowded || (self.levelwise_until.wrapping_sub(self.frame_index) as i32) > 0 {
+            (0..=top).rev().map(|l| (l, l)).collect()
+        } else {
+            vec![(top, 0)]
+        }
+    }
+
     /// Reads the statistics of the frame just completed.
     pub fn finish_frame(&mut self, scene_f: u32, wall_ms: f64) -> Result<FrameReport> {
         self.frame_index = self.frame_index.wrapping_add(1);
@@ -642,6 +668,9 @@ impl Renderer {
             None => Vec::new(),
         };
         let occupied = c[gpu::STAT_OCCUPIED as usize];
+        if c[gpu::STAT_FAILED_INSERTS as usize] > 0 {
+            self.levelwise_until = self.frame_index.wrapping_add(LEVELWISE_FRAMES);
+        }
         self.last_converged = self.converged(c[gpu::STAT_RAYS as usize]);
         Ok(FrameReport {
             gpu_total_ms: gpu_ms.iter().map(|(_, ms)| ms).sum(),
