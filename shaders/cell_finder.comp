@@ -4,9 +4,11 @@
 // Levels push.x down to push.y (coarsest first): all of them in one pass while the map has room, one dispatch
 // per level after an overload (Renderer::cell_levels), so that the coarse cells, shared by many pixels, get the
 // free slots first. A failed level means the table is full here: finer cells would fail too, and the pixel
-// falls back to the coarser cells it has (§4) instead of losing AO.
+// falls back to the coarser cells it has (§4) instead of losing AO. The dispatch that ends at level 0 also
+// queues the pixel for the ray-tracing update (ray_target.glsl `queue_for_rays`).
 #include "common.glsl"
 #include "hash_map.glsl"
+#include "ray_target.glsl"
 
 void main() {
     uvec2 pix;
@@ -30,4 +32,5 @@ void main() {
         }
     }
     cells.v[index] = pc;
+    if (bottom == 0u) queue_for_rays(index, px, pc);
 }

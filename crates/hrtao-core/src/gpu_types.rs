@@ -68,7 +68,7 @@ gpu_consts! {
     STAT_RECLAIMED: u32 = 4;
     STAT_BOUNDS_VIOLATIONS: u32 = 5;
     STAT_CAPPED_PIXELS: u32 = 6;
-    /// Pixels queued for the ray-tracing update this frame (compacted, see ao_select.comp).
+    /// Pixels queued for the ray-tracing update this frame (compacted, see ray_target.glsl `queue_for_rays`).
     STAT_RAY_QUEUE: u32 = 7;
     /// Rays traced by the still-camera refinement (included in STAT_RAYS).
     STAT_REFINE_RAYS: u32 = 8;
@@ -196,7 +196,7 @@ gpu_structs! {
         /// The near radius r_n as a fraction of the AO radius.
         near_fraction: f32,
         /// Fractional ray budget (ours): outside refinement frames, a pixel whose cell takes rays traces this
-        /// frame with this probability (1 = every such pixel, as the paper), see ao_select.comp.
+        /// frame with this probability (1 = every such pixel, as the paper), see ray_target.glsl.
         trace_fraction: f32,
         _trace_pad: u32,
         /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the

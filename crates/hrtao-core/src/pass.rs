@@ -25,7 +25,6 @@ pub enum Pass {
     Rtao,
     CellFinder,
     AoUpdate,
-    AoSelect,
     QueueArgs,
     Resolve,
     Filter,
@@ -34,13 +33,12 @@ pub enum Pass {
 }
 
 impl Pass {
-    pub const ALL: [Pass; 12] = [
+    pub const ALL: [Pass; 11] = [
         Pass::Clear,
         Pass::Primary,
         Pass::GbufferFromVis,
         Pass::Rtao,
         Pass::CellFinder,
-        Pass::AoSelect,
         Pass::QueueArgs,
         Pass::AoUpdate,
         Pass::Resolve,
@@ -57,7 +55,6 @@ impl Pass {
             Pass::GbufferFromVis => "gbuffer_from_vis",
             Pass::Rtao => "rtao",
             Pass::CellFinder => "cell_finder",
-            Pass::AoSelect => "ao_select",
             Pass::QueueArgs => "queue_args",
             Pass::AoUpdate => "ao_update",
             Pass::Resolve => "resolve",
@@ -74,7 +71,7 @@ impl Pass {
             Pass::Primary | Pass::GbufferFromVis => "primary visibility",
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
-            Pass::AoSelect | Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
+            Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
             Pass::Resolve => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",

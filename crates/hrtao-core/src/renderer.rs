@@ -592,11 +592,11 @@ impl Renderer {
         if mode == Mode::Rtao {
             rec.dispatch(Pass::Rtao, w, h, [0; 4]);
         } else if mode.uses_hash() {
+            // The last cell-finder dispatch also queues the pixels whose cell still takes rays, packed densely
+            // (the update then runs no idle lanes).
             for &(top, bottom) in &cell_levels {
                 rec.dispatch(Pass::CellFinder, w, h, [top, bottom, 0, 0]);
             }
-            // Compaction: only pixels whose cell still takes rays are traced, packed densely (no idle lanes).
-            rec.dispatch(Pass::AoSelect, w, h, [0; 4]);
             rec.dispatch(Pass::QueueArgs, 1, 1, [0; 4]);
             rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [0; 4]);
             rec.dispatch(Pass::Resolve, w, h, [0; 4]);
