@@ -24,11 +24,14 @@ void main() {
     bool src_is_tmp = ((iterations - iteration) & 1u) == 1u;
     FloatRef src = FloatRef(src_is_tmp ? g.filter_tmp : g.ao);
     FloatRef dst = FloatRef(src_is_tmp ? g.ao : g.filter_tmp);
-    float center = src.v[index];
-    // Misses, pixels without AO and those whose plan (resolve.comp, filter_plan.glsl) ends before this
-    // iteration keep their value.
+    // A pixel's plan (resolve.comp, filter_plan.glsl) ends after `done` iterations (none for misses and pixels
+    // without AO). The iteration after it copies the value into the other buffer; from then on both hold it,
+    // and later iterations have nothing to do for the pixel.
     uint plan = UintRef(g.filter_plan).v[index];
-    if (iteration >= plan_iterations(plan)) {
+    uint done = plan_iterations(plan);
+    if (iteration > done) return;
+    float center = src.v[index];
+    if (iteration == done) {
         dst.v[index] = center;
         return;
     }
