@@ -815,6 +815,12 @@ impl Renderer {
     }
 
     /// The LOD index used per pixel by the last HRTAO frame (0 = finest, LOD_COUNT = none).
+    /// Each pixel's filter plan (filter_plan.glsl): `FILTER_PLAN_BITS` low bits of à-trous iterations, then
+    /// the rays of the cell its AO came from.
+    pub fn read_filter_plan(&self) -> Result<Vec<u32>> {
+        self.read_buffer(&self.targets.filter_plan, self.pixel_count())
+    }
+
     pub fn read_lod_used(&self) -> Result<Vec<u32>> {
         self.read_buffer(&self.targets.lod_used, self.pixel_count())
     }
