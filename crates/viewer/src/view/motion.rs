@@ -79,10 +79,11 @@ impl Motion {
         }
     }
 
-    /// Adapts the moving scale to the frame-time target after a moving frame of `frame_ms` (area ∝ scale²).
+    /// Adapts the moving scale to the frame-time target (an upper bound) after a moving frame of `frame_ms`
+    /// (area ∝ scale²).
     pub fn adapt(&mut self, frame_ms: f64, target_ms: f64, cap: f32) {
         let s = self.moving_scale;
-        let next = if frame_ms > target_ms * 1.15 {
+        let next = if frame_ms > target_ms {
             s * 0.9
         } else if frame_ms < target_ms * 0.7 {
             s * 1.05
