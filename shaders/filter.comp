@@ -62,13 +62,14 @@ void main() {
             ivec2 q = ivec2(pix) + ivec2(dx, dy) * step;
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             uint qi = uint(q.y) * g.width + uint(q.x);
-            GPixel qp = gb.px[qi];
-            if (qp.t < 0.0 || UintRef(g.lod_used).v[qi] >= LOD_COUNT) continue;
+            FilterGuide guide = GuideRef(g.filter_guide).v[qi];
+            if (guide.normal == GUIDE_NONE) continue;
+            vec3 q_normal = unpack_normal(guide.normal);
             float k = KERNEL[abs(dx)] * KERNEL[abs(dy)];
-            vec3 delta = qp.position - px.position;
+            vec3 delta = guide.position - px.position;
             float w_pos = exp(-dot(delta, delta) / (scale * scale));
             float w_plane = exp(-abs(dot(delta, px.normal)) / (0.25 * scale));
-            float w_n = pow(max(dot(qp.normal, px.normal), 0.0), 2.0 * g.s_nd);
+            float w_n = pow(max(dot(q_normal, px.normal), 0.0), 2.0 * g.s_nd);
             float w_ao = guided ? exp(-abs(src.v[qi] - center) * stop) : 1.0;
             float w = k * w_pos * w_plane * w_n * w_ao;
             sum += w * src.v[qi];

@@ -24,6 +24,28 @@ uint planned_iterations(float footprint, uint samples, uint iterations) {
     return max(paper, noisy);
 }
 
+// The filter's guide of a pixel (FilterGuide): a pixel without AO (a miss, or no cell) stops every tap.
+layout(buffer_reference, scalar) buffer GuideRef { FilterGuide v[]; };
+
+vec2 oct_wrap(vec2 v) { return (1.0 - abs(v.yx)) * mix(vec2(-1.0), vec2(1.0), greaterThanEqual(v, vec2(0.0))); }
+uint pack_normal(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.z >= 0.0 ? n.xy : oct_wrap(n.xy);
+    return packSnorm2x16(e);
+}
+vec3 unpack_normal(uint u) {
+    vec2 e = unpackSnorm2x16(u);
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) n.xy = oct_wrap(n.xy);
+    return normalize(n);
+}
+FilterGuide make_guide(GPixel px, bool has_ao) {
+    FilterGuide guide;
+    guide.position = px.position;
+    guide.normal = has_ao ? pack_normal(px.normal) : GUIDE_NONE;
+    return guide;
+}
+
 uint make_plan(uint iterations, uint samples) {
     return min(iterations, (1u << FILTER_PLAN_BITS) - 1u) | (min(samples, 0xffffffffu >> FILTER_PLAN_BITS) << FILTER_PLAN_BITS);
 }

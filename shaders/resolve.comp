@@ -86,6 +86,7 @@ void main() {
         }
     }
     UintRef(g.filter_plan).v[index] = plan;
+    GuideRef(g.filter_guide).v[index] = make_guide(px, used < LOD_COUNT);
     FloatRef dst = FloatRef((iterations & 1u) == 1u ? g.filter_tmp : g.ao);
     dst.v[index] = clamp(ao, 0.0, 1.0);
     UintRef(g.lod_used).v[index] = used;

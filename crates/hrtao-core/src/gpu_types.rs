@@ -34,6 +34,9 @@ gpu_consts! {
     FLAG_REGION_EPOCHS: u32 = 64;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
+    /// `FilterGuide::normal` of a pixel without AO (a miss, or no cell): never a packed normal (packSnorm2x16
+    /// stops at -32767).
+    GUIDE_NONE: u32 = 0x8000_8000;
     /// Most internal pixels a feature-edge line spans (bounds the composite's neighbour reads).
     MAX_EDGE_STEPS: u32 = 8;
     /// `FrameGlobals::projection` and `RasterPush::projection` values (camera.rs `Projection`).
@@ -202,6 +205,9 @@ gpu_structs! {
         /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the
         /// pixel takes and the rays of the cell its AO came from.
         filter_plan: u64,
+        /// Per pixel, from the resolve to the filter's taps (filter_plan.glsl): position and packed normal in
+        /// 16 bytes (a tap then reads a quarter of a cache line, not a 48-byte G-buffer sample).
+        filter_guide: u64,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -308,6 +314,13 @@ gpu_structs! {
     /// Per pixel, the hash cell indices at the LOD_COUNT levels (cell finder output).
     struct PixelCells {
         cells: [u32; 4],
+    }
+
+    /// Per pixel, what the filter's taps read of it (filter_plan.glsl): its position, and its normal
+    /// octahedron-encoded in 2 x 16 bits (`GUIDE_NONE`: no AO there, the tap stops).
+    struct FilterGuide {
+        position: [f32; 3],
+        normal: u32,
     }
 
     /// Per pixel, the rays it traced itself this frame (per-pixel RTAO, still-camera refinement).

@@ -12,7 +12,8 @@ use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{
-    self, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells, PixelRays,
+    self, FilterGuide, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells,
+    PixelRays,
 };
 use crate::pass::{Pass, PassSet, Recorder};
 use crate::raster::{Primary, Rasterizer};
@@ -29,6 +30,7 @@ struct Targets {
     ao: Buffer,
     lod_used: Buffer,
     filter_plan: Buffer,
+    filter_guide: Buffer,
     filter_tmp: Buffer,
     pixel_rays: Buffer,
     accum: Buffer,
@@ -57,6 +59,7 @@ impl Targets {
             ao: b("AO", n * 4)?,
             lod_used: b("LOD used", n * 4)?,
             filter_plan: b("filter plan", n * 4)?,
+            filter_guide: b("filter guide", n * std::mem::size_of::<FilterGuide>() as u64)?,
             filter_tmp: b("filter ping-pong", n * 4)?,
             pixel_rays: b("pixel rays", n * std::mem::size_of::<PixelRays>() as u64)?,
             accum: b("still accumulation", n * std::mem::size_of::<PixelAccum>() as u64)?,
@@ -432,6 +435,7 @@ impl Renderer {
             ao: t.ao.address,
             lod_used: t.lod_used.address,
             filter_plan: t.filter_plan.address,
+            filter_guide: t.filter_guide.address,
             filter_tmp: t.filter_tmp.address,
             pixel_rays: t.pixel_rays.address,
             accum: t.accum.address,

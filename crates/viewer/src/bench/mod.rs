@@ -392,7 +392,7 @@ pub fn scene_device_estimate(s: &hrtao_core::accel::BuildStats) -> u64 {
 pub fn renderer_device_estimate(w: u32, h: u32, hash_capacity: u32) -> u64 {
     use hrtao_core::gpu::{GPixel, HashCell, PixelCells};
     let n = w as u64 * h as u64;
-    n * (std::mem::size_of::<GPixel>() + std::mem::size_of::<PixelCells>() + 6 * 4) as u64
+    n * (std::mem::size_of::<GPixel>() + std::mem::size_of::<PixelCells>() + 10 * 4) as u64
         + hash_capacity as u64 * std::mem::size_of::<HashCell>() as u64
 }
 
