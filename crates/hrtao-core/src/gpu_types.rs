@@ -193,7 +193,10 @@ gpu_structs! {
         /// Fractional ray budget (ours): outside refinement frames, a pixel whose cell takes rays traces this
         /// frame with this probability (1 = every such pixel, as the paper), see ao_select.comp.
         trace_fraction: f32,
-        _trace_pad: u32,
+        /// Level blend (ours, docs/algorithm.md): a young cell's interpolated AO is shrunk toward the next coarser
+        /// level's unless they differ by more than the fine level's noise, weighted by this (0 = the paper's
+        /// finest level alone).
+        level_blend: f32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

@@ -445,7 +445,7 @@ impl Renderer {
             still_smoothing: s.still_smoothing,
             _still_pad: 0,
             trace_fraction: s.trace_fraction,
-            _trace_pad: 0,
+            level_blend: s.level_blend,
             bias_evidence: t.bias_evidence.address,
             near_weight: s.near_weight,
             near_fraction: s.near_fraction,
