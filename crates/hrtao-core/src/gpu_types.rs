@@ -70,11 +70,14 @@ gpu_consts! {
     /// Rays the target cells took this frame (the paper's collaborative rays; refinement rays that a target
     /// cell also takes are counted here too).
     STAT_CELL_RAYS: u32 = 9;
+    /// Adaptive first-frame sampling (ours, ao_update.comp): the sum of the queued pixels' weights for the
+    /// second half of the ray budget, in 1/ADAPT_WEIGHT_SCALE units.
+    STAT_ADAPT_WEIGHT: u32 = 10;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
-    STAT_OCCUPIED: u32 = 10;
-    STAT_COUNT: u32 = 11;
+    STAT_OCCUPIED: u32 = 11;
+    STAT_COUNT: u32 = 12;
     /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 10;
+    STAT_PER_FRAME: u32 = 11;
 }
 
 gpu_structs! {
@@ -330,6 +333,6 @@ gpu_structs! {
 
     /// Counters read back after every frame.
     struct FrameStats {
-        counters: [u32; 11],
+        counters: [u32; 12],
     }
 }

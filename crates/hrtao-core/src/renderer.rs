@@ -585,7 +585,14 @@ impl Renderer {
             // Compaction: only pixels whose cell still takes rays are traced, packed densely (no idle lanes).
             rec.dispatch(Pass::AoSelect, w, h, [0; 4]);
             rec.dispatch(Pass::QueueArgs, 1, 1, [0; 4]);
-            rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [0; 4]);
+            if self.settings.adaptive_rays {
+                // Adaptive sampling (ours): the first half of the budget, the weights, the second half.
+                for phase in 1..=3 {
+                    rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [phase, 0, 0, 0]);
+                }
+            } else {
+                rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [0; 4]);
+            }
             rec.dispatch(Pass::Resolve, w, h, [0; 4]);
             if self.settings.filter {
                 // Ping-pong: iteration i reads one buffer and writes the other; an even count ends in `ao`.

@@ -167,6 +167,11 @@ pub struct AoSettings {
     /// the levels agree, and the fine level keeps the detail where they differ. λ is this setting; 0 = the
     /// paper's finest level alone.
     pub level_blend: f32,
+    /// Ours (docs/algorithm.md, adaptive sampling): pixels whose cells take rays trace the first half of their
+    /// budget, then the second half of the frame's budget goes to them in proportion to the noise their cells
+    /// still have, so cells that came out open take few and noisy ones more. Off: every pixel traces its
+    /// budget (the paper). Refinement frames always trace each pixel's budget.
+    pub adaptive_rays: bool,
 }
 
 impl Default for AoSettings {
@@ -202,6 +207,7 @@ impl Default for AoSettings {
             near_weight: 1.0,
             near_fraction: 0.5,
             level_blend: 1.0,
+            adaptive_rays: true,
         }
     }
 }
@@ -216,6 +222,7 @@ impl AoSettings {
             local_edits: false,
             near_weight: 0.0,
             level_blend: 0.0,
+            adaptive_rays: false,
             ..self.clone()
         }
     }
