@@ -7,8 +7,35 @@
 // Results go to the target cell (up to max_samples) and propagate to the coarser cells (§4, up to SAMPLE_CAP).
 // Near-field control variate (ours, near_weight > 0): each ray also tells whether it hit within the near radius
 // r_n; cells count the rays open within r_n, and the pixel keeps its own count for resolve.comp.
+// Adaptive sampling of young cells (ours, adaptive_rays, docs/algorithm.md): push.x = 0 traces the whole budget
+// in one dispatch; otherwise three dispatches split it: 1 traces a quarter of it, 2 weighs every queued pixel by
+// the noise its target cell still has, (p(1-p))^1.5 of the cell's rays so far, and sums the weights, 3 traces
+// the other three quarters of the frame's budget, shared among the queued pixels in proportion to their
+// weights (cells that came out open or closed take few rays, noisy ones many). Refinement frames trace the
+// whole budget in the first dispatch.
 #include "common.glsl"
 #include "ray_target.glsl"
+
+const uint PHASE_ALL = 0u;
+const uint PHASE_FIRST = 1u;
+const uint PHASE_WEIGH = 2u;
+const uint PHASE_SECOND = 3u;
+// Fixed point of the weights summed in STAT_ADAPT_WEIGHT (a weight is at most 0.25^1.5 = 1/8: no u32 overflow
+// below 2^25 queued pixels).
+const float ADAPT_WEIGHT_SCALE = 1024.0;
+// A pixel takes at most this many times its even share of the second part.
+const float ADAPT_MAX_SHARE = 4.0;
+const float ADAPT_EXP = 1.5;
+
+// The weight of a pixel for the second part: (p(1-p))^ADAPT_EXP of its target cell's rays so far, with p kept
+// off 0 and 1 (a cell that came out all open may still hide a rare occluder). Measured on the five shared
+// scenes (docs/algorithm.md): the exponent 1/3 that minimises the summed standard deviation of independent
+// pixels gains least; cells are shared and their noise is what the filter cannot remove, and 1.5 gains most.
+float adapt_weight(HashCell cell) {
+    float n = float(max(cell.samples, 1u));
+    float p = clamp(float(cell.unoccluded) / n, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
+    return pow(p * (1.0 - p), ADAPT_EXP);
+}
 
 // Ray counts of one pixel for one cell: traced, open, open within the near radius.
 void add_rays(CellRef cells, uint c, uvec3 rays) {
@@ -30,19 +57,45 @@ void main() {
     bool own = refine_frame();
     if (!cell_takes && !own) return;
     CellRef cells = CellRef(g.hash_cells);
-    // Rays claimed from the target cell's QMC sequence (a block of rays_per_pixel, cut at max_samples).
+    // This dispatch's share of the budget (adaptive sampling splits it in two parts, see above).
+    uint phase = push.x;
+    uint first_half = g.rays_per_pixel >= 2u ? max(g.rays_per_pixel / 4u, 1u) : 0u;
+    bool split = phase != PHASE_ALL && !own && first_half > 0u;
+    uint budget = g.rays_per_pixel;
+    if (phase != PHASE_ALL && !split) {
+        if (phase != PHASE_FIRST) return;   // the whole budget went in the first dispatch
+    } else if (phase == PHASE_FIRST) {
+        budget = first_half;
+    } else if (phase == PHASE_WEIGH) {
+        float w = adapt_weight(cells.v[pc.cells[first]]);
+        FloatRef(g.filter_tmp).v[index] = w;   // scratch until the resolve: read back by the second half
+        stat_add(STAT_ADAPT_WEIGHT, uint(w * ADAPT_WEIGHT_SCALE + 0.5));
+        return;
+    } else if (phase == PHASE_SECOND) {
+        StatsRef stats = StatsRef(g.stats);
+        float total = float(stats.counters[STAT_ADAPT_WEIGHT]) / ADAPT_WEIGHT_SCALE;
+        float even = float(g.rays_per_pixel - first_half);
+        float queued = float(stats.counters[STAT_RAY_QUEUE]);
+        float share = total > 0.0 ? FloatRef(g.filter_tmp).v[index] * queued / total : 1.0;
+        float want = even * min(share, ADAPT_MAX_SHARE);
+        // Stochastic rounding: the expected total is the second half of the budget.
+        float u = uint_to_unit(h_check(index ^ h_index(g.frame_index ^ 0x2545f491u)));
+        budget = uint(floor(want + u));
+        if (budget == 0u) return;
+    }
+    // Rays claimed from the target cell's QMC sequence (a block of `budget`, cut at max_samples).
     uint qmc0 = 0u;
     uint claimed = 0u;
     if (cell_takes) {
-        qmc0 = atomicAdd(cells.v[pc.cells[first]].qmc_index, g.rays_per_pixel);
-        claimed = qmc0 < g.max_samples ? min(g.rays_per_pixel, g.max_samples - qmc0) : 0u;
+        qmc0 = atomicAdd(cells.v[pc.cells[first]].qmc_index, budget);
+        claimed = qmc0 < g.max_samples ? min(budget, g.max_samples - qmc0) : 0u;
     }
-    uint rays = own ? g.rays_per_pixel : claimed;
+    uint rays = own ? budget : claimed;
     uvec2 shift;
     uint seq0;
     if (own) {
         shift = pixel_shift(index);
-        seq0 = g.still_index * g.rays_per_pixel;
+        seq0 = g.still_index * g.rays_per_pixel;   // own rays: the whole budget in one dispatch
     } else {
         uint check = stamp_checksum(cells.v[pc.cells[first]].stamp);
         shift = uvec2(h_check(check), h_index(check ^ 0x5bd1e995u));
@@ -62,8 +115,9 @@ void main() {
     }
     if (rays == 0u) return;
     stat_add(STAT_RAYS, rays);
-    PixelRaysRef(g.pixel_rays).v[index].near_traced = rays;
-    PixelRaysRef(g.pixel_rays).v[index].near_open = all_rays.z;
+    // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
+    PixelRaysRef(g.pixel_rays).v[index].near_traced += rays;
+    PixelRaysRef(g.pixel_rays).v[index].near_open += all_rays.z;
     if (own) {
         stat_add(STAT_REFINE_RAYS, rays);
         PixelRaysRef(g.pixel_rays).v[index].traced = rays;

@@ -5,10 +5,41 @@
 // absent or empty drop out and the weights renormalise), so the cell grid does not show as blocks and the
 // AO is centred on the pixel rather than on its cell.
 // Ours (near_weight > 0): the near-field control variate corrects the cell estimate with the pixel's own rays.
+// Ours (level_blend > 0): a young cell is shrunk toward the next coarser level where they agree within its noise.
 // Writes into the buffer the filter's ping-pong starts from (so an even or odd iteration count ends in `ao`).
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
+
+// Trilinear interpolation at level `lod` of the 8 cells around `position` (cells absent or empty drop out):
+// (sum of w AO, sum of w near-open fraction, sum of w, the rays the weighted mean is worth: (sum w)^2 / sum w^2/s).
+vec4 interpolate(vec3 position, int lod, ivec3 nq) {
+    CellRef cells = CellRef(g.hash_cells);
+    vec3 u = ldexp(position, ivec3(-lod)) - 0.5;
+    vec3 base = floor(u);
+    vec3 f = u - base;
+    ivec3 b = ivec3(clamp(base, vec3(-2147483520.0), vec3(2147483520.0)));
+    float sum = 0.0;
+    float near_sum = 0.0;
+    float wsum = 0.0;
+    float w2s = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        vec3 wv = mix(1.0 - f, f, vec3(o));
+        float w = wv.x * wv.y * wv.z;
+        if (w <= 0.0) continue;
+        uint c = find_cell(region_cell_key(b + o, lod, nq));
+        if (c == INVALID_CELL) continue;
+        uint s = cells.v[c].samples;
+        if (s == 0u) continue;
+        w *= min(1.0, float(s) / float(max(g.min_samples, 1u)));
+        sum += w * float(cells.v[c].unoccluded) / float(s);
+        near_sum += w * float(cells.v[c].near_open) / float(s);
+        wsum += w;
+        w2s += w * w / float(s);
+    }
+    return vec4(sum, near_sum, wsum, w2s > 0.0 ? wsum * wsum / w2s : 0.0);
+}
 
 void main() {
     uvec2 pix;
@@ -41,30 +72,31 @@ void main() {
             used = best;
             int lod = pixel_lod(px.t) + int(best);
             ivec3 nq = normal_coord(px.normal, g.s_nd);
-            vec3 u = ldexp(px.position, ivec3(-lod)) - 0.5;
-            vec3 base = floor(u);
-            vec3 f = u - base;
-            ivec3 b = ivec3(clamp(base, vec3(-2147483520.0), vec3(2147483520.0)));
-            float sum = 0.0;
-            float near_sum = 0.0;   // the cells' near-open fractions, interpolated alike
-            float wsum = 0.0;
-            for (int corner = 0; corner < 8; ++corner) {
-                ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-                vec3 wv = mix(1.0 - f, f, vec3(o));
-                float w = wv.x * wv.y * wv.z;
-                if (w <= 0.0) continue;
-                uint c = find_cell(region_cell_key(b + o, lod, nq));
-                if (c == INVALID_CELL) continue;
-                uint s = cells.v[c].samples;
-                if (s == 0u) continue;
-                // Cells with few samples count less (they are noisy).
-                w *= min(1.0, float(s) / float(max(g.min_samples, 1u)));
-                sum += w * float(cells.v[c].unoccluded) / float(s);
-                near_sum += w * float(cells.v[c].near_open) / float(s);
-                wsum += w;
-            }
+            vec4 fine = interpolate(px.position, lod, nq);
+            float sum = fine.x;
+            float near_sum = fine.y;
+            float wsum = fine.z;
             uint own = pc.cells[best];
             float own_samples = float(cells.v[own].samples);
+            // Level blend (ours, docs/algorithm.md): a young cell holds a few pixels' rays; where its level and
+            // the next coarser one agree within the fine level's binomial noise v, the coarser level (about 4x
+            // the rays on a surface) takes over, and where they differ by more, the fine level's detail stays
+            // (Wiener weight d^2 / (d^2 + lambda v)). Full cells and refinement frames are left as they are.
+            bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
+            if (g.level_blend > 0.0 && !refining && wsum > 0.0 && best + 1u < LOD_COUNT
+                && own_samples < float(g.max_samples)) {
+                vec4 coarse = interpolate(px.position, lod + 1, nq);
+                if (coarse.z > 0.0) {
+                    float a_f = sum / wsum;
+                    float a_c = coarse.x / coarse.z;
+                    float n_f = fine.w;
+                    float v = max(a_f * (1.0 - a_f), 0.5 / n_f) / n_f;
+                    float d = a_f - a_c;
+                    float k = d * d / (d * d + g.level_blend * v);
+                    sum = mix(a_c, a_f, k) * wsum;
+                    near_sum = mix(coarse.y / coarse.z, near_sum / wsum, k) * wsum;
+                }
+            }
             ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
             // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
             // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.
@@ -72,7 +104,6 @@ void main() {
             // Not in still-camera refinement frames: there the pixel's own rays enter the composite directly,
             // and a correction from each frame's few rays would only add flicker.
             PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
-            bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
             if (g.near_weight > 0.0 && pr.near_traced > 0u && !refining) {
                 float n = float(pr.near_traced);
                 float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / own_samples;

@@ -139,7 +139,7 @@ fn main() -> anyhow::Result<()> {
         }
         curves.push(line);
         println!(
-            "| {key} | {rtao_1:.4} | {hrtao_1:.4} | {:.2} | {rtao_eq:.4} ({eq_frames}f) | {hrtao_n:.4} | {:.2} | {rays_px:.0} | {:.5} | {:.0}, {:.0} |",
+            "| {key} | {rtao_1:.4} | {hrtao_1:.4} | {:.2} | {rtao_eq:.4} ({eq_frames}f) | {hrtao_n:.4} | {:.2} | {rays_px:.2} | {:.5} | {:.0}, {:.0} |",
             rtao_1 / hrtao_1,
             hrtao_n / rtao_eq,
             flicker / flicker_n.max(1) as f64,

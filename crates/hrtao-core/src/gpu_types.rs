@@ -78,11 +78,14 @@ gpu_consts! {
     /// Rays the target cells took this frame (the paper's collaborative rays; refinement rays that a target
     /// cell also takes are counted here too).
     STAT_CELL_RAYS: u32 = 9;
+    /// Adaptive first-frame sampling (ours, ao_update.comp): the sum of the queued pixels' weights for the
+    /// second half of the ray budget, in 1/ADAPT_WEIGHT_SCALE units.
+    STAT_ADAPT_WEIGHT: u32 = 10;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
-    STAT_OCCUPIED: u32 = 10;
-    STAT_COUNT: u32 = 11;
+    STAT_OCCUPIED: u32 = 11;
+    STAT_COUNT: u32 = 12;
     /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 10;
+    STAT_PER_FRAME: u32 = 11;
 }
 
 gpu_structs! {
@@ -201,7 +204,10 @@ gpu_structs! {
         /// Fractional ray budget (ours): outside refinement frames, a pixel whose cell takes rays traces this
         /// frame with this probability (1 = every such pixel, as the paper), see ray_target.glsl.
         trace_fraction: f32,
-        _trace_pad: u32,
+        /// Level blend (ours, docs/algorithm.md): a young cell's interpolated AO is shrunk toward the next coarser
+        /// level's unless they differ by more than the fine level's noise, weighted by this (0 = the paper's
+        /// finest level alone).
+        level_blend: f32,
         /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the
         /// pixel takes and the rays of the cell its AO came from.
         filter_plan: u64,
@@ -348,6 +354,6 @@ gpu_structs! {
 
     /// Counters read back after every frame.
     struct FrameStats {
-        counters: [u32; 11],
+        counters: [u32; 12],
     }
 }

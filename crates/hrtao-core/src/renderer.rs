@@ -461,7 +461,7 @@ impl Renderer {
             still_smoothing: s.still_smoothing,
             _still_pad: 0,
             trace_fraction: s.trace_fraction,
-            _trace_pad: 0,
+            level_blend: s.level_blend,
             bias_evidence: t.bias_evidence.address,
             near_weight: s.near_weight,
             near_fraction: s.near_fraction,
@@ -602,7 +602,14 @@ impl Renderer {
                 rec.dispatch(Pass::CellFinder, w, h, [top, bottom, 0, 0]);
             }
             rec.dispatch(Pass::QueueArgs, 1, 1, [0; 4]);
-            rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [0; 4]);
+            if self.settings.adaptive_rays {
+                // Adaptive sampling (ours): the first half of the budget, the weights, the second half.
+                for phase in 1..=3 {
+                    rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [phase, 0, 0, 0]);
+                }
+            } else {
+                rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [0; 4]);
+            }
             rec.dispatch(Pass::Resolve, w, h, [0; 4]);
             if self.settings.filter {
                 // Ping-pong: iteration i reads one buffer and writes the other; an even count ends in `ao`.

@@ -161,6 +161,17 @@ pub struct AoSettings {
     /// The near radius r_n of the control variate as a fraction of the AO radius R (0.5: smaller radii make
     /// the near-open fraction curve within a cell where the AO does not, which biases the correction).
     pub near_fraction: f32,
+    /// Ours (docs/algorithm.md, level blend): while a pixel's finest cell is young (below `max_samples`), its
+    /// interpolated AO a_f is shrunk toward the next coarser level's a_c by the Wiener weight
+    /// d²/(d² + λ v), d = a_f - a_c, v the binomial noise of a_f: the coarse level's rays smooth the noise where
+    /// the levels agree, and the fine level keeps the detail where they differ. λ is this setting; 0 = the
+    /// paper's finest level alone.
+    pub level_blend: f32,
+    /// Ours (docs/algorithm.md, adaptive sampling): pixels whose cells take rays trace the first half of their
+    /// budget, then the second half of the frame's budget goes to them in proportion to the noise their cells
+    /// still have, so cells that came out open take few and noisy ones more. Off: every pixel traces its
+    /// budget (the paper). Refinement frames always trace each pixel's budget.
+    pub adaptive_rays: bool,
 }
 
 impl Default for AoSettings {
@@ -195,6 +206,8 @@ impl Default for AoSettings {
             local_edits: true,
             near_weight: 1.0,
             near_fraction: 0.5,
+            level_blend: 1.0,
+            adaptive_rays: true,
         }
     }
 }
@@ -208,6 +221,8 @@ impl AoSettings {
             filter_sigma: 0.0,
             local_edits: false,
             near_weight: 0.0,
+            level_blend: 0.0,
+            adaptive_rays: false,
             ..self.clone()
         }
     }
@@ -278,6 +293,7 @@ impl AoSettings {
             ("prior rays max", self.prior_rays_max),
             ("prior sigma", self.prior_sigma),
             ("residual sigma", self.residual_sigma),
+            ("level blend", self.level_blend),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));

@@ -181,10 +181,86 @@ fn near_field_control_variate_cuts_contact_error() {
     });
     let corrected = contact_error(ours);
     println!("wedge contact, HRTAO 1 frame: cells {cells:.4}, near-field corrected {corrected:.4}");
-    assert!(cells > 0.05, "the cells alone miss the contact: {cells}");
+    // With adaptive sampling and the level blend (session 6): cells 0.048, corrected 0.013 (before them: 0.057,
+    // 0.040).
+    assert!(cells > 0.04, "the cells alone miss the contact: {cells}");
     assert!(
-        corrected < 0.045,
+        corrected < 0.5 * cells,
         "near-field corrected contact error {corrected} (cells alone {cells})"
+    );
+    assert_clean(&gpu);
+}
+
+/// HRTAO's first frame with the same total rays (ours: adaptive sampling and the level blend,
+/// docs/algorithm.md): on a wedge most of the floor is open, and its cells come out open after a quarter of
+/// the budget; the rest of the frame's rays go to the noisy cells near the wall. Mean |AO - analytic| over the
+/// floor pixels within R of the wall, one frame from an empty map at 8 rays per pixel: the paper's
+/// allocation (every pixel traces its 8 rays) and finest level against the defaults.
+#[test]
+fn adaptive_sampling_and_level_blend_cut_first_frame_error_at_equal_rays() {
+    let gpu = gpu();
+    let wall = quad(Vec3::new(0.0, 0.0, 50.0), Vec3::Y * 100.0, Vec3::Z * 50.0);
+    let scene = scene_of(vec![floor(), wall]);
+    let radius = 1.0;
+    let cam = hrtao_core::Camera {
+        eye: [10.0, 0.0, 12.0],
+        target: [4.0, 0.0, 0.0],
+        up: [0.0, 0.0, 1.0],
+        fov_y_deg: 50.0,
+        width: 160,
+        height: 90,
+        ..Default::default()
+    };
+    let sg = hrtao_core::SceneGpu::new(&gpu, &scene).expect("scene upload");
+    let first_frame = |settings: hrtao_core::AoSettings| {
+        let mut r = hrtao_core::Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
+        let rays = r.render(&sg, scene.f(), &cam).expect("frame").rays;
+        let ao = r.read_ao().unwrap();
+        let gb = r.read_gbuffer().unwrap();
+        let (mut n, mut sum, mut open) = (0usize, 0.0f32, 0usize);
+        for (p, a) in gb.iter().zip(&ao) {
+            let x = p.position[0];
+            if p.t > 0.0 && p.normal[2] > 0.99 && x > 0.01 {
+                if x < radius {
+                    sum += (a - wedge_ao(x, radius)).abs();
+                    n += 1;
+                } else {
+                    open += 1;
+                }
+            }
+        }
+        assert!(
+            n > 300 && open > n,
+            "floor pixels near the wall ({n}) and open ({open})"
+        );
+        (sum / n as f32, rays)
+    };
+    let ours = hrtao(8, radius);
+    assert!(ours.adaptive_rays && ours.level_blend > 0.0, "on by default");
+    let paper_like = hrtao_core::AoSettings {
+        adaptive_rays: false,
+        level_blend: 0.0,
+        ..ours.clone()
+    };
+    let (before, rays_before) = first_frame(paper_like);
+    let (blend, _) = first_frame(hrtao_core::AoSettings {
+        adaptive_rays: false,
+        ..ours.clone()
+    });
+    let (after, rays_after) = first_frame(ours);
+    println!(
+        "wedge within R, HRTAO 1 frame: {before:.4} ({rays_before} rays), level blend {blend:.4}, \
+         + adaptive sampling {after:.4} ({rays_after} rays)"
+    );
+    assert!(
+        (rays_after as f64) <= rays_before as f64 * 1.01,
+        "adaptive sampling keeps the budget: {rays_after} rays against {rays_before}"
+    );
+    // On a wedge the levels differ near the wall (the blend keeps the fine level there): it must not hurt.
+    assert!(blend <= 1.02 * before, "level blend {blend} against {before}");
+    assert!(
+        after < 0.85 * before,
+        "adaptive sampling {after} against {before}"
     );
     assert_clean(&gpu);
 }
