@@ -11,6 +11,25 @@ fn wedge_ao(d: f32, r: f32) -> f32 {
     1.0 - (a.acos() - a * (1.0 - a * a).sqrt()) / std::f32::consts::PI
 }
 
+/// Floor z = 0 and a wall x = 0 (facing +x), both far larger than any AO radius used here.
+fn wedge() -> hrtao_scene::Scene {
+    let wall = quad(Vec3::new(0.0, 0.0, 50.0), Vec3::Y * 100.0, Vec3::Z * 50.0);
+    scene_of(vec![floor(), wall])
+}
+
+/// A 160×90 view of the wedge from `eye` toward `target`, z up.
+fn wedge_camera(eye: [f32; 3], target: [f32; 3]) -> hrtao_core::Camera {
+    hrtao_core::Camera {
+        eye,
+        target,
+        up: [0.0, 0.0, 1.0],
+        fov_y_deg: 50.0,
+        width: 160,
+        height: 90,
+        ..Default::default()
+    }
+}
+
 /// The analytic scenes are checked for per-pixel RTAO (converged), for HRTAO's first frame (the cell estimate)
 /// and for HRTAO after still frames (the refinement converges to the ray-traced value).
 fn modes(radius: f32) -> [(&'static str, hrtao_core::AoSettings, u32); 3] {
@@ -44,19 +63,9 @@ fn open_plane_is_unoccluded() {
 #[test]
 fn wedge_matches_analytic_value() {
     let gpu = gpu();
-    // Floor z = 0 and a wall x = 0 (facing +x), both far larger than R.
-    let wall = quad(Vec3::new(0.0, 0.0, 50.0), Vec3::Y * 100.0, Vec3::Z * 50.0);
-    let scene = scene_of(vec![floor(), wall]);
+    let scene = wedge();
     let radius = 4.0;
-    let cam = hrtao_core::Camera {
-        eye: [6.0, 0.0, 8.0],
-        target: [2.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width: 160,
-        height: 90,
-        ..Default::default()
-    };
+    let cam = wedge_camera([6.0, 0.0, 8.0], [2.0, 0.0, 0.0]);
     for (label, settings, frames) in modes(radius) {
         let (r, _sg) = render(&gpu, &scene, &cam, settings, frames);
         let ao = r.read_ao().unwrap();
@@ -146,18 +155,9 @@ fn validation_layer_is_live_and_counts_messages() {
 #[test]
 fn near_field_control_variate_cuts_contact_error() {
     let gpu = gpu();
-    let wall = quad(Vec3::new(0.0, 0.0, 50.0), Vec3::Y * 100.0, Vec3::Z * 50.0);
-    let scene = scene_of(vec![floor(), wall]);
+    let scene = wedge();
     let radius = 1.0;
-    let cam = hrtao_core::Camera {
-        eye: [6.0, 0.0, 8.0],
-        target: [1.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width: 160,
-        height: 90,
-        ..Default::default()
-    };
+    let cam = wedge_camera([6.0, 0.0, 8.0], [1.0, 0.0, 0.0]);
     let contact_error = |settings: hrtao_core::AoSettings| {
         let (r, _sg) = render(&gpu, &scene, &cam, settings, 1);
         let ao = r.read_ao().unwrap();
@@ -199,18 +199,9 @@ fn near_field_control_variate_cuts_contact_error() {
 #[test]
 fn adaptive_sampling_and_level_blend_cut_first_frame_error_at_equal_rays() {
     let gpu = gpu();
-    let wall = quad(Vec3::new(0.0, 0.0, 50.0), Vec3::Y * 100.0, Vec3::Z * 50.0);
-    let scene = scene_of(vec![floor(), wall]);
+    let scene = wedge();
     let radius = 1.0;
-    let cam = hrtao_core::Camera {
-        eye: [10.0, 0.0, 12.0],
-        target: [4.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width: 160,
-        height: 90,
-        ..Default::default()
-    };
+    let cam = wedge_camera([10.0, 0.0, 12.0], [4.0, 0.0, 0.0]);
     let sg = hrtao_core::SceneGpu::new(&gpu, &scene).expect("scene upload");
     let first_frame = |settings: hrtao_core::AoSettings| {
         let mut r = hrtao_core::Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
