@@ -139,11 +139,15 @@ fn tiny_bench_writes_the_schema_and_a_report() {
     }
     let rays = num(first, "rays");
     assert!(rays > 0.0, "the first frame traced no ray");
-    // Rays: B per covered pixel at most, and per-pixel RTAO traces exactly B on each covered pixel.
+    // Rays: B per covered pixel (per-pixel RTAO exactly; HRTAO's adaptive sampling shares three quarters of the
+    // budget with stochastic rounding, so its total is B per pixel in expectation, within a few rays).
     let covered = num(&v, "quality.covered_pixels");
     assert!(covered > 0.0 && covered <= 64.0 * 36.0);
     assert_eq!(num(&v["rtao"]["first"][0], "rays"), 4.0 * covered);
-    assert!(rays <= 4.0 * covered);
+    assert!(
+        rays <= 1.02 * 4.0 * covered,
+        "HRTAO traced {rays} rays on {covered} covered pixels at B = 4"
+    );
 
     let s = &v["summary"];
     for k in [

@@ -140,7 +140,12 @@ pub fn fit_slope(pts: &[(f64, f64)]) -> f64 {
     }
 }
 
-/// The error of a curve at `rays` (log-log interpolation, clamped to the measured range; NaN when outside).
+/// Rays within this fraction past either end of a curve take that end's error: HRTAO's adaptive sampling rounds
+/// its rays stochastically, so a run meant to match the curve's last point can land a few rays beyond it.
+pub const CURVE_END_SLACK: f64 = 0.02;
+
+/// The error of a curve at `rays` (log-log interpolation within the measured range, its ends' errors within
+/// `CURVE_END_SLACK` past them; NaN further out).
 pub fn error_at(curve: &[(f64, f64)], rays: f64) -> f64 {
     let pts: Vec<(f64, f64)> = curve
         .iter()
@@ -161,8 +166,12 @@ pub fn error_at(curve: &[(f64, f64)], rays: f64) -> f64 {
             return (e0.ln() + f * (e1.ln() - e0.ln())).exp();
         }
     }
-    if (rays - pts[0].0).abs() <= 1e-9 * rays {
-        return pts[0].1;
+    let (first, last) = (pts[0], pts[pts.len() - 1]);
+    if rays <= first.0 && rays * (1.0 + CURVE_END_SLACK) >= first.0 {
+        return first.1;
+    }
+    if rays >= last.0 && rays <= last.0 * (1.0 + CURVE_END_SLACK) {
+        return last.1;
     }
     f64::NAN
 }
