@@ -59,26 +59,26 @@ void main() {
     CellRef cells = CellRef(g.hash_cells);
     // This dispatch's share of the budget (adaptive sampling splits it in two parts, see above).
     uint phase = push.x;
-    uint first_half = g.rays_per_pixel >= 2u ? max(g.rays_per_pixel / 4u, 1u) : 0u;
-    bool split = phase != PHASE_ALL && !own && first_half > 0u;
+    uint first_part = g.rays_per_pixel >= 2u ? max(g.rays_per_pixel / 4u, 1u) : 0u;
+    bool split = phase != PHASE_ALL && !own && first_part > 0u;
     uint budget = g.rays_per_pixel;
     if (phase != PHASE_ALL && !split) {
         if (phase != PHASE_FIRST) return;   // the whole budget went in the first dispatch
     } else if (phase == PHASE_FIRST) {
-        budget = first_half;
+        budget = first_part;
     } else if (phase == PHASE_WEIGH) {
         float w = adapt_weight(cells.v[pc.cells[first]]);
-        FloatRef(g.filter_tmp).v[index] = w;   // scratch until the resolve: read back by the second half
+        FloatRef(g.filter_tmp).v[index] = w;   // scratch until the resolve: read back by the second part
         stat_add(STAT_ADAPT_WEIGHT, uint(w * ADAPT_WEIGHT_SCALE + 0.5));
         return;
     } else if (phase == PHASE_SECOND) {
         StatsRef stats = StatsRef(g.stats);
         float total = float(stats.counters[STAT_ADAPT_WEIGHT]) / ADAPT_WEIGHT_SCALE;
-        float even = float(g.rays_per_pixel - first_half);
+        float even = float(g.rays_per_pixel - first_part);
         float queued = float(stats.counters[STAT_RAY_QUEUE]);
         float share = total > 0.0 ? FloatRef(g.filter_tmp).v[index] * queued / total : 1.0;
         float want = even * min(share, ADAPT_MAX_SHARE);
-        // Stochastic rounding: the expected total is the second half of the budget.
+        // Stochastic rounding: the expected total is the rest of the budget.
         float u = uint_to_unit(h_check(index ^ h_index(g.frame_index ^ 0x2545f491u)));
         budget = uint(floor(want + u));
         if (budget == 0u) return;

@@ -603,7 +603,7 @@ impl Renderer {
             }
             rec.dispatch(Pass::QueueArgs, 1, 1, [0; 4]);
             if self.settings.adaptive_rays {
-                // Adaptive sampling (ours): the first half of the budget, the weights, the second half.
+                // Adaptive sampling (ours): a quarter of the budget, the weights, the rest shared by them.
                 for phase in 1..=3 {
                     rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [phase, 0, 0, 0]);
                 }
