@@ -47,12 +47,16 @@ void main() {
     // World scale of the position weights: the cell, or in the guided filter the reach of this iteration.
     float scale = guided ? max(cell, 2.0 * float(step) * pixel_size) : cell;
     // Guided: the noise of the pixel's value, p(1-p)/n for the n rays of its cell (p kept off 0 and 1 so an
-    // open or closed cell still admits its neighbours' noise), halved per iteration as the filter averages.
+    // open or closed cell still admits its neighbours' noise). The pixels of one cell share its noise, so the
+    // averaging only lowers it once the kernel (4 steps wide) spans more than the cell's footprint: from there
+    // it halves per doubling of the kernel.
     float stop = 0.0;
     if (guided) {
         float n = float(max(plan_samples(plan), 1u));
         float p = clamp(center, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
-        float variance = p * (1.0 - p) / n * exp2(-float(iteration));
+        float footprint = cell / max(pixel_size, 1e-30);
+        float cells_spanned = 4.0 * float(step) / max(footprint, 1.0);
+        float variance = p * (1.0 - p) / n / max(cells_spanned, 1.0);
         stop = 1.0 / (g.filter_sigma * sqrt(2.0 * variance));
     }
     float sum = 0.0;

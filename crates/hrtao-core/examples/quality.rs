@@ -102,6 +102,10 @@ fn main() -> anyhow::Result<()> {
             prev = ao;
         }
         let hrtao_n = metrics::ao_error(&prev, &reference).mae;
+        if !dump.is_empty() {
+            let path = PathBuf::from(&dump).join(format!("{key}_hrtao{frames}.pfm"));
+            hrtao_core::imageio::write_pfm(&path, cam.width, cam.height, &prev)?;
+        }
         let gbuf = r.read_gbuffer()?;
         let geometry = gbuf.iter().filter(|p| p.t >= 0.0).count().max(1) as f64;
         let rays_px = total_rays as f64 / geometry;
