@@ -5,8 +5,9 @@
 // checksum), cosine-weighted around the pixel's normal. In still-camera refinement frames (ours) every pixel
 // traces its own R2 sequence instead, continued across the still frames; its rays also count for its cells.
 // Results go to the target cell (up to max_samples) and propagate to the coarser cells (§4, up to SAMPLE_CAP).
-// Near-field control variate (ours, near_weight > 0): each ray also tells whether it hit within the near radius
-// r_n; cells count the rays open within r_n, and the pixel keeps its own count for resolve.comp.
+// Near-field control variate (ours, FLAG_NEAR_FIELD: near_weight > 0 in frames of a young map): each ray also
+// tells whether it hit within the near radius r_n; cells count those rays and the ones open within r_n, and
+// the pixel keeps its own counts for resolve.comp. Other frames trace the paper's first-hit queries.
 // Adaptive sampling of young cells (ours, adaptive_rays, docs/algorithm.md): push.x = 0 traces the whole budget
 // in one dispatch; otherwise three dispatches split it: 1 traces a quarter of it, 2 weighs every queued pixel by
 // the noise its target cell still has, (p(1-p))^1.5 of the cell's rays so far, and sums the weights, 3 traces
@@ -41,7 +42,10 @@ float adapt_weight(HashCell cell) {
 void add_rays(CellRef cells, uint c, uvec3 rays) {
     atomicAdd(cells.v[c].samples, rays.x);
     atomicAdd(cells.v[c].unoccluded, rays.y);
-    if (g.near_weight > 0.0) atomicAdd(cells.v[c].near_open, rays.z);
+    if ((g.flags & FLAG_NEAR_FIELD) != 0u) {
+        atomicAdd(cells.v[c].near_traced, rays.x);
+        atomicAdd(cells.v[c].near_open, rays.z);
+    }
 }
 
 void main() {
@@ -103,11 +107,12 @@ void main() {
     }
     vec3 origin = offset_ray(px.position, px.normal);
     float r_near = g.near_fraction * g.ao_radius;
+    bool near_field = (g.flags & FLAG_NEAR_FIELD) != 0u;
     uvec3 all_rays = uvec3(rays, 0u, 0u);   // traced, open, open within r_near
     uvec3 cell_rays = uvec3(claimed, 0u, 0u);   // the same among the first `claimed` rays (the target cell's)
     for (uint r = 0u; r < rays; ++r) {
         vec3 dir = cosine_direction(px.normal, r2_point(seq0 + r, shift));
-        uint e = g.near_weight > 0.0 ? ray_escape(origin, dir, r_near, g.ao_radius)
+        uint e = near_field ? ray_escape(origin, dir, r_near, g.ao_radius)
                                      : (ray_unoccluded(origin, dir, g.ao_radius) ? RAY_OPEN : RAY_NEAR_HIT);
         uvec2 counts = uvec2(e == RAY_OPEN ? 1u : 0u, e != RAY_NEAR_HIT ? 1u : 0u);
         all_rays.yz += counts;
@@ -116,8 +121,10 @@ void main() {
     if (rays == 0u) return;
     stat_add(STAT_RAYS, rays);
     // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
-    PixelRaysRef(g.pixel_rays).v[index].near_traced += rays;
-    PixelRaysRef(g.pixel_rays).v[index].near_open += all_rays.z;
+    if (near_field) {
+        PixelRaysRef(g.pixel_rays).v[index].near_traced += rays;
+        PixelRaysRef(g.pixel_rays).v[index].near_open += all_rays.z;
+    }
     if (own) {
         stat_add(STAT_REFINE_RAYS, rays);
         PixelRaysRef(g.pixel_rays).v[index].traced = rays;

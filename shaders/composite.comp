@@ -253,7 +253,11 @@ void main() {
         float k = hashed ? max(g.prior_rays, 1e-6) : 1e-6;
         float ao = (k * a.cell / a.frames + a.open) / (k + a.rays);
         color = (k * a.shade_cell / a.frames + a.shade_open) / (k + a.rays);
-        if (hashed && accumulates) {
+        if (hashed && accumulates && g.still_index == 0u) {
+            // A moving frame: no own rays, so the AO is this frame's cell estimate; the still frames' smoothing
+            // starts from it.
+            ao = smoothed(index, ao, false);
+        } else if (hashed && accumulates) {
             float mean_c = a.cell / a.frames;
             float r = a.rays > 0.0 ? a.open / a.rays - mean_c : 0.0;
             float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);

@@ -16,17 +16,20 @@
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
 
 void main() {
-    uvec2 pix;
-    uint index;
-    if (!pixel_coords(pix, index)) return;
+    // Dispatched over the pixels whose plan takes an iteration (resolve.comp queues them); the others hold
+    // their final value in both buffers already.
+    uint q;
+    if (!queue_entry(StatsRef(g.stats).counters[STAT_FILTER_QUEUE], q)) return;
+    uint index = UintRef(g.filter_queue).v[q];
+    uvec2 pix = uvec2(index % g.width, index / g.width);
     uint iteration = push.x;
     uint iterations = push.y;
     bool src_is_tmp = ((iterations - iteration) & 1u) == 1u;
     FloatRef src = FloatRef(src_is_tmp ? g.filter_tmp : g.ao);
     FloatRef dst = FloatRef(src_is_tmp ? g.ao : g.filter_tmp);
-    // A pixel's plan (resolve.comp, filter_plan.glsl) ends after `done` iterations (none for misses and pixels
-    // without AO). The iteration after it copies the value into the other buffer; from then on both hold it,
-    // and later iterations have nothing to do for the pixel.
+    // A pixel's plan (resolve.comp, filter_plan.glsl) ends after `done` iterations. The iteration after it
+    // copies the value into the other buffer; from then on both hold it, and later iterations have nothing to
+    // do for the pixel.
     uint plan = UintRef(g.filter_plan).v[index];
     uint done = plan_iterations(plan);
     if (iteration > done) return;

@@ -46,6 +46,22 @@ FilterGuide make_guide(GPixel px, bool has_ao) {
     return guide;
 }
 
+// Stores a pixel's resolved AO where the filter starts (the buffer iteration 0 reads, so that an even or odd
+// count of `iterations` ends in `ao`) and its plan. A pixel that takes no iteration is final: it goes into both
+// buffers, where the filter's taps find it at every iteration, and stays out of the filter's queue. The others
+// are queued (STAT_FILTER_QUEUE): the filter runs densely over them, however scattered they are.
+void store_resolved(uint index, uint plan, float ao, uint iterations) {
+    UintRef(g.filter_plan).v[index] = plan;
+    bool odd = (iterations & 1u) == 1u;
+    FloatRef(odd ? g.filter_tmp : g.ao).v[index] = ao;
+    if (plan_iterations(plan) == 0u) {
+        if (iterations > 0u) FloatRef(odd ? g.ao : g.filter_tmp).v[index] = ao;
+    } else {
+        uint slot = atomicAdd(StatsRef(g.stats).counters[STAT_FILTER_QUEUE], 1u);
+        UintRef(g.filter_queue).v[slot] = index;
+    }
+}
+
 uint make_plan(uint iterations, uint samples) {
     return min(iterations, (1u << FILTER_PLAN_BITS) - 1u) | (min(samples, 0xffffffffu >> FILTER_PLAN_BITS) << FILTER_PLAN_BITS);
 }

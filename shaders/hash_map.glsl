@@ -73,6 +73,7 @@ void reset_counters(CellRef cells, uint slot) {
     atomicExchange(cells.v[slot].samples, 0u);
     atomicExchange(cells.v[slot].unoccluded, 0u);
     atomicExchange(cells.v[slot].qmc_index, 0u);
+    atomicExchange(cells.v[slot].near_traced, 0u);
     atomicExchange(cells.v[slot].near_open, 0u);
 }
 

@@ -6,13 +6,16 @@
 // AO is centred on the pixel rather than on its cell.
 // Ours (near_weight > 0): the near-field control variate corrects the cell estimate with the pixel's own rays.
 // Ours (level_blend > 0): a young cell is shrunk toward the next coarser level where they agree within its noise.
-// Writes into the buffer the filter's ping-pong starts from (so an even or odd iteration count ends in `ao`).
+// Writes into the buffer the filter's ping-pong starts from, and queues the pixels the filter runs on
+// (filter_plan.glsl, `store_resolved`).
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
 
 // Trilinear interpolation at level `lod` of the 8 cells around `position` (cells absent or empty drop out):
-// (sum of w AO, sum of w near-open fraction, sum of w, the rays the weighted mean is worth: (sum w)^2 / sum w^2/s).
+// (sum of w AO, the near-open fraction times sum of w, sum of w, the rays the weighted mean is worth:
+// (sum w)^2 / sum w^2/s). The near-open fraction is interpolated over the cells that classified rays (-1 when
+// none did).
 vec4 interpolate(vec3 position, int lod, ivec3 nq) {
     CellRef cells = CellRef(g.hash_cells);
     vec3 u = ldexp(position, ivec3(-lod)) - 0.5;
@@ -23,6 +26,7 @@ vec4 interpolate(vec3 position, int lod, ivec3 nq) {
     float near_sum = 0.0;
     float wsum = 0.0;
     float w2s = 0.0;
+    float near_w = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
         ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
         vec3 wv = mix(1.0 - f, f, vec3(o));
@@ -34,11 +38,16 @@ vec4 interpolate(vec3 position, int lod, ivec3 nq) {
         if (s == 0u) continue;
         w *= min(1.0, float(s) / float(max(g.min_samples, 1u)));
         sum += w * float(cells.v[c].unoccluded) / float(s);
-        near_sum += w * float(cells.v[c].near_open) / float(s);
+        uint near_traced = cells.v[c].near_traced;
+        if (near_traced > 0u) {
+            near_sum += w * float(cells.v[c].near_open) / float(near_traced);
+            near_w += w;
+        }
         wsum += w;
         w2s += w * w / float(s);
     }
-    return vec4(sum, near_sum, wsum, w2s > 0.0 ? wsum * wsum / w2s : 0.0);
+    float near = near_w > 0.0 ? near_sum / near_w * wsum : -1.0;
+    return vec4(sum, near, wsum, w2s > 0.0 ? wsum * wsum / w2s : 0.0);
 }
 
 void main() {
@@ -94,7 +103,9 @@ void main() {
                     float d = a_f - a_c;
                     float k = d * d / (d * d + g.level_blend * v);
                     sum = mix(a_c, a_f, k) * wsum;
-                    near_sum = mix(coarse.y / coarse.z, near_sum / wsum, k) * wsum;
+                    if (near_sum >= 0.0 && coarse.y >= 0.0) {
+                        near_sum = mix(coarse.y / coarse.z, near_sum / wsum, k) * wsum;
+                    }
                 }
             }
             ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
@@ -104,9 +115,12 @@ void main() {
             // Not in still-camera refinement frames: there the pixel's own rays enter the composite directly,
             // and a correction from each frame's few rays would only add flicker.
             PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
-            if (g.near_weight > 0.0 && pr.near_traced > 0u && !refining) {
+            // The pixel classified rays this frame (FLAG_NEAR_FIELD) and so did its cells.
+            uint own_near = cells.v[own].near_traced;
+            bool cells_near = wsum > 0.0 ? near_sum >= 0.0 : own_near > 0u;
+            if (g.near_weight > 0.0 && pr.near_traced > 0u && cells_near && !refining) {
                 float n = float(pr.near_traced);
-                float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / own_samples;
+                float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / float(own_near);
                 float r = float(pr.near_open) / n - cell_near;
                 float v = max(cell_near * (1.0 - cell_near), 0.5 / n) / n;
                 ao += g.near_weight * r * r * r / (r * r + v);
@@ -116,9 +130,7 @@ void main() {
             plan = make_plan(planned_iterations(footprint, own_rays, iterations), own_rays);
         }
     }
-    UintRef(g.filter_plan).v[index] = plan;
     GuideRef(g.filter_guide).v[index] = make_guide(px, used < LOD_COUNT);
-    FloatRef dst = FloatRef((iterations & 1u) == 1u ? g.filter_tmp : g.ao);
-    dst.v[index] = clamp(ao, 0.0, 1.0);
+    store_resolved(index, plan, clamp(ao, 0.0, 1.0), iterations);
     UintRef(g.lod_used).v[index] = used;
 }

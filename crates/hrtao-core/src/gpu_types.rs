@@ -32,6 +32,9 @@ gpu_consts! {
     /// Some region epoch is not 0 (local edits, ours): cell keys read the region table (hash_map.glsl); without
     /// it every epoch is 0 and the keys are the paper's.
     FLAG_REGION_EPOCHS: u32 = 64;
+    /// The ray-tracing update classifies its rays for the near-field control variate (ours: `near_weight` > 0,
+    /// in frames of a young map, `Renderer::young_map`); other frames trace the paper's first-hit queries.
+    FLAG_NEAR_FIELD: u32 = 128;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
     /// `FilterGuide::normal` of a pixel without AO (a miss, or no cell): never a packed normal (packSnorm2x16
@@ -81,11 +84,19 @@ gpu_consts! {
     /// Adaptive first-frame sampling (ours, ao_update.comp): the sum of the queued pixels' weights for the
     /// second half of the ray budget, in 1/ADAPT_WEIGHT_SCALE units.
     STAT_ADAPT_WEIGHT: u32 = 10;
+    /// Pixels queued for the à-trous filter this frame: those whose plan takes at least one iteration
+    /// (resolve.comp, filter_plan.glsl `store_resolved`).
+    STAT_FILTER_QUEUE: u32 = 11;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
-    STAT_OCCUPIED: u32 = 11;
-    STAT_COUNT: u32 = 12;
+    STAT_OCCUPIED: u32 = 12;
+    STAT_COUNT: u32 = 13;
     /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 11;
+    STAT_PER_FRAME: u32 = 12;
+    /// Offsets in words into the indirect dispatch arguments (`dispatch_args`, written by queue_args.comp):
+    /// the ray-tracing update's, then the filter's.
+    RAY_ARGS_OFFSET: u32 = 0;
+    FILTER_ARGS_OFFSET: u32 = 4;
+    DISPATCH_ARGS_WORDS: u32 = 8;
 }
 
 gpu_structs! {
@@ -157,8 +168,10 @@ gpu_structs! {
         hash_cells: u64,
         pixel_cells: u64,
         stats: u64,
-        /// Pixel indices that trace rays this frame (STAT_RAY_QUEUE of them), and the indirect dispatch size.
+        /// Pixel indices that trace rays this frame (STAT_RAY_QUEUE of them), those the filter runs on
+        /// (STAT_FILTER_QUEUE), and the indirect dispatch sizes (RAY_ARGS_OFFSET, FILTER_ARGS_OFFSET).
         ray_queue: u64,
+        filter_queue: u64,
         dispatch_args: u64,
         /// `RegionTable`: REGION_COUNT epochs, then the last local edit (frame index, box count, boxes).
         regions: u64,
@@ -294,9 +307,12 @@ gpu_structs! {
         /// Next index into the cell's QMC sequence (paper §3); rays are claimed from it in blocks, so it exceeds
         /// `max_samples` by at most one block per pixel of one frame.
         qmc_index: u32,
-        /// Rays that hit nothing within the near radius r_n (near-field control variate, ours; counted only
-        /// while `near_weight` > 0).
+        /// Near-field control variate (ours): the rays classified by whether they hit within the near radius
+        /// r_n (only in frames of a young map, `FLAG_NEAR_FIELD`), and those of them that hit nothing there.
+        near_traced: u32,
         near_open: u32,
+        /// Keeps the cell at 32 bytes (scalar layout aligns the array to its u64).
+        reserved: u32,
     }
 
     /// One CPU-vs-GPU hash test case: inputs, then the GPU's outputs (hash_test.comp).
@@ -354,6 +370,6 @@ gpu_structs! {
 
     /// Counters read back after every frame.
     struct FrameStats {
-        counters: [u32; 12],
+        counters: [u32; 13],
     }
 }

@@ -306,9 +306,10 @@ impl<'a> Recorder<'a> {
     }
 
     /// Dispatches `pass` with the work-group counts a previous pass wrote into `args` (VkDispatchIndirectCommand).
-    pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, push: [u32; 4]) {
+    /// Dispatches `pass` with the group counts at word `offset` of `args` (queue_args.comp writes them).
+    pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, offset: u32, push: [u32; 4]) {
         self.record(pass, push, |d, cmd| unsafe {
-            d.cmd_dispatch_indirect(cmd, args, 0)
+            d.cmd_dispatch_indirect(cmd, args, offset as u64 * 4)
         });
     }
 

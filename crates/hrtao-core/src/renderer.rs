@@ -38,6 +38,7 @@ struct Targets {
     output: Buffer,
     pixel_cells: Buffer,
     ray_queue: Buffer,
+    filter_queue: Buffer,
 }
 
 impl Targets {
@@ -67,6 +68,7 @@ impl Targets {
             output: b("output RGBA8", n * 4)?,
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
             ray_queue: b("ray queue", n * 4)?,
+            filter_queue: b("filter queue", n * 4)?,
         })
     }
 }
@@ -82,6 +84,8 @@ pub const EDGE_WIDTH: f32 = 1.0;
 
 /// Frames the cell finder stays level by level after a failed insert (`Renderer::cell_levels`).
 const LEVELWISE_FRAMES: u32 = 64;
+/// The map counts as young in frames after one that queued at least 1/this of the pixels (`young_map`).
+const YOUNG_QUEUED_DEN: u64 = 4;
 
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
@@ -163,6 +167,8 @@ pub struct Renderer {
     last_converged: bool,
     /// Until this frame the cell finder runs level by level (the map was full somewhere, see `cell_levels`).
     levelwise_until: u32,
+    /// Pixels queued for rays in the last finished frame (u32::MAX before the first): see `young_map`.
+    last_queued: u32,
     /// Jitter the primary samples of still frames (anti-aliasing). `hrtao render` keeps pixel centres.
     pub jitter: bool,
     /// Height of the view in pixels when the renderer works at a reduced internal resolution (0 = the internal
@@ -201,7 +207,7 @@ impl Renderer {
         let dispatch_args = Buffer::new(
             gpu,
             "dispatch args",
-            16,
+            gpu::DISPATCH_ARGS_WORDS as u64 * 4,
             MemoryLocation::GpuOnly,
             vk::BufferUsageFlags::INDIRECT_BUFFER,
         )?;
@@ -227,6 +233,7 @@ impl Renderer {
             edit_still_index: 0,
             last_converged: false,
             levelwise_until: 0,
+            last_queued: u32::MAX,
             jitter: false,
             view_height: 0,
             background_top: [0.62, 0.68, 0.76],
@@ -383,6 +390,9 @@ impl Renderer {
         if self.regions.any_edit() {
             flags |= gpu::FLAG_REGION_EPOCHS;
         }
+        if s.near_weight > 0.0 && self.young_map() {
+            flags |= gpu::FLAG_NEAR_FIELD;
+        }
         let jitter = if self.jitter && s.accumulates() && self.still_index > 0 {
             // R2 points in the pixel, frame after frame (the centre first).
             let i = self.still_index as f64;
@@ -444,6 +454,7 @@ impl Renderer {
             pixel_cells: t.pixel_cells.address,
             stats: self.stats.address,
             ray_queue: t.ray_queue.address,
+            filter_queue: t.filter_queue.address,
             dispatch_args: self.dispatch_args.address,
             regions: self.regions.address(),
             projection: match cam.projection {
@@ -563,6 +574,7 @@ impl Renderer {
         }
         let mode = self.settings.mode;
         let cell_levels = self.cell_levels();
+        let adaptive_split = self.settings.adaptive_rays && self.young_map();
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (primary, &self.raster) {
@@ -601,21 +613,27 @@ impl Renderer {
             for &(top, bottom) in &cell_levels {
                 rec.dispatch(Pass::CellFinder, w, h, [top, bottom, 0, 0]);
             }
-            rec.dispatch(Pass::QueueArgs, 1, 1, [0; 4]);
-            if self.settings.adaptive_rays {
+            let rays = gpu::RAY_ARGS_OFFSET;
+            let args = self.dispatch_args.raw;
+            rec.dispatch(Pass::QueueArgs, 1, 1, [gpu::STAT_RAY_QUEUE, rays, 0, 0]);
+            if adaptive_split {
                 // Adaptive sampling (ours): a quarter of the budget, the weights, the rest shared by them.
                 for phase in 1..=3 {
-                    rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [phase, 0, 0, 0]);
+                    rec.dispatch_indirect(Pass::AoUpdate, args, rays, [phase, 0, 0, 0]);
                 }
             } else {
-                rec.dispatch_indirect(Pass::AoUpdate, self.dispatch_args.raw, [0; 4]);
+                rec.dispatch_indirect(Pass::AoUpdate, args, rays, [0; 4]);
             }
             rec.dispatch(Pass::Resolve, w, h, [0; 4]);
-            if self.settings.filter {
-                // Ping-pong: iteration i reads one buffer and writes the other; an even count ends in `ao`.
-                let iterations = self.settings.filter_iterations;
+            let iterations = self.settings.filter_iterations;
+            if self.settings.filter && iterations > 0 {
+                // Over the pixels the resolve queued (those whose plan takes an iteration). Ping-pong:
+                // iteration i reads one buffer and writes the other; an even count ends in `ao`. The queue's
+                // arguments are timed with the ray-tracing update's (the same one-thread pass).
+                let filter = gpu::FILTER_ARGS_OFFSET;
+                rec.dispatch(Pass::QueueArgs, 1, 1, [gpu::STAT_FILTER_QUEUE, filter, 0, 0]);
                 for i in 0..iterations {
-                    rec.dispatch(Pass::Filter, w, h, [i, iterations, 0, 0]);
+                    rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
                 }
             }
         }
@@ -670,6 +688,16 @@ impl Renderer {
         }
     }
 
+    /// Whether the map is young this frame: new, re-keyed (eq. 6), or the view brought many new cells (the last
+    /// frame queued at least 1/YOUNG_QUEUED_DEN of the pixels). Our first-frame additions run only then:
+    /// adaptive sampling's three dispatches (`adaptive_rays`) and the near-field control variate's ray
+    /// classification (`near_weight`). In a navigation frame a few newly seen cells take rays, and they trace as
+    /// in the paper: one dispatch of first-hit queries.
+    fn young_map(&self) -> bool {
+        self.f_start_frame == self.frame_index
+            || self.last_queued as u64 * YOUNG_QUEUED_DEN >= self.pixel_count() as u64
+    }
+
     /// Reads the statistics of the frame just completed.
     pub fn finish_frame(&mut self, scene_f: u32, wall_ms: f64) -> Result<FrameReport> {
         self.frame_index = self.frame_index.wrapping_add(1);
@@ -683,6 +711,7 @@ impl Renderer {
             self.levelwise_until = self.frame_index.wrapping_add(LEVELWISE_FRAMES);
         }
         self.last_converged = self.converged(c[gpu::STAT_RAYS as usize]);
+        self.last_queued = c[gpu::STAT_RAY_QUEUE as usize];
         Ok(FrameReport {
             gpu_total_ms: gpu_ms.iter().map(|(_, ms)| ms).sum(),
             gpu_ms,

@@ -238,6 +238,24 @@ impl AoSettings {
     }
 
     /// Checks ranges; the message names the setting.
+    /// These settings with the fields of the JSON object `overrides` replaced, e.g. `{"near_weight": 0}`
+    /// (`--set` of the command line and the development examples). An unknown field or a value of the wrong
+    /// type is an error; the result is validated.
+    pub fn with_overrides(&self, overrides: &str) -> Result<AoSettings, String> {
+        let mut v = serde_json::to_value(self).map_err(|e| e.to_string())?;
+        let fields: serde_json::Map<String, serde_json::Value> =
+            serde_json::from_str(overrides).map_err(|e| format!("settings overrides {overrides:?}: {e}"))?;
+        for (k, x) in fields {
+            match v.get_mut(&k) {
+                Some(slot) => *slot = x,
+                None => return Err(format!("settings overrides: no setting {k:?}")),
+            }
+        }
+        let s: AoSettings = serde_json::from_value(v).map_err(|e| format!("settings overrides: {e}"))?;
+        s.validate()?;
+        Ok(s)
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         if !(self.ao_radius.is_finite() && self.ao_radius > 0.0) {
             return Err(format!(

@@ -105,16 +105,20 @@ pub struct AoArgs {
     /// Crease angle of the feature edges, in degrees.
     #[arg(long, default_value_t = AoSettings::default().crease_deg)]
     pub crease: f32,
+    /// Any other AO setting, as a JSON object of `AoSettings` fields (applied last), e.g.
+    /// `--set '{"near_weight": 0, "adaptive_rays": false}'`.
+    #[arg(long)]
+    pub set: Option<String>,
 }
 
 impl AoArgs {
-    pub fn settings(&self, scene_diagonal: f32) -> AoSettings {
+    pub fn settings(&self, scene_diagonal: f32) -> anyhow::Result<AoSettings> {
         let scene_diagonal = if scene_diagonal.is_finite() && scene_diagonal > 0.0 {
             scene_diagonal
         } else {
             1.0
         };
-        AoSettings {
+        let settings = AoSettings {
             mode: self.mode,
             ao_radius: self.radius.unwrap_or((scene_diagonal * 0.05).max(1e-6)),
             rays_per_pixel: self.rays,
@@ -129,6 +133,10 @@ impl AoArgs {
             edges: self.edges,
             crease_deg: self.crease,
             ..AoSettings::default()
+        };
+        match &self.set {
+            Some(json) => settings.with_overrides(json).map_err(anyhow::Error::msg),
+            None => Ok(settings),
         }
     }
 }

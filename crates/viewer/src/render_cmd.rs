@@ -55,7 +55,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         camera.height = h;
     }
     camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
-    let settings = args.ao.settings(bounds.diagonal().length());
+    let settings = args.ao.settings(bounds.diagonal().length())?;
     settings.validate().map_err(|e| anyhow::anyhow!(e))?;
 
     let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;

@@ -34,9 +34,5 @@ impl Args {
 
 /// `base` with the fields of the JSON object `overrides` replaced (e.g. `{"filter_sigma": 0}`).
 pub fn with_overrides(base: &AoSettings, overrides: &str) -> anyhow::Result<AoSettings> {
-    let mut v = serde_json::to_value(base)?;
-    for (k, x) in serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(overrides)? {
-        v[k] = x;
-    }
-    Ok(serde_json::from_value(v)?)
+    base.with_overrides(overrides).map_err(anyhow::Error::msg)
 }

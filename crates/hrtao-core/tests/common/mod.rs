@@ -210,15 +210,17 @@ pub fn check_map(
             a.unoccluded,
             a.samples
         );
-        // Near-field control variate: a ray open within R is open within r_n <= R.
-        if s.near_weight > 0.0 {
-            assert!(
-                a.unoccluded <= a.near_open && a.near_open <= a.samples,
-                "cell {i}: {} unoccluded, {} open within r_n, {} samples",
-                a.unoccluded,
-                a.near_open,
-                a.samples
-            );
+        // Near-field control variate: the classified rays are some of the cell's, and those open within r_n
+        // some of them; a cell whose every ray was classified has no more open rays than open within r_n <= R.
+        assert!(
+            a.near_open <= a.near_traced && a.near_traced <= a.samples,
+            "cell {i}: {} open within r_n of {} classified, {} samples",
+            a.near_open,
+            a.near_traced,
+            a.samples
+        );
+        if a.near_traced == a.samples {
+            assert!(a.unoccluded <= a.near_open, "cell {i}: {} unoccluded, {} open within r_n", a.unoccluded, a.near_open);
         }
         assert!(
             a.samples <= gpu::SAMPLE_CAP + slack,

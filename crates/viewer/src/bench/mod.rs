@@ -480,7 +480,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if nav_cams.is_empty() {
         bail!("no navigation frame (--orbit 0)");
     }
-    let mut hrtao_settings = args.ao.settings(bounds.diagonal().length());
+    let mut hrtao_settings = args.ao.settings(bounds.diagonal().length())?;
     hrtao_settings.mode = Mode::Hrtao;
     hrtao_settings.validate().map_err(|e| anyhow::anyhow!(e))?;
     if hrtao_settings.rays_per_pixel == 0 {
