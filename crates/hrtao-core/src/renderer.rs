@@ -84,8 +84,8 @@ pub const EDGE_WIDTH: f32 = 1.0;
 
 /// Frames the cell finder stays level by level after a failed insert (`Renderer::cell_levels`).
 const LEVELWISE_FRAMES: u32 = 64;
-/// The map counts as young in frames after one that queued at least 1/this of the pixels (`young_map`).
-const YOUNG_QUEUED_DEN: u64 = 4;
+/// The map counts as young in frames after one whose cells took at least 1/this of its budget (`young_map`).
+const YOUNG_CELL_RAYS_DEN: u64 = 4;
 
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
@@ -134,6 +134,9 @@ pub struct FrameReport {
     pub refine_rays: u64,
     /// Rays the target cells took (see `STAT_CELL_RAYS`).
     pub cell_rays: u64,
+    /// Pixels queued for rays (`STAT_RAY_QUEUE`) and for the filter (`STAT_FILTER_QUEUE`).
+    pub ray_pixels: u32,
+    pub filtered_pixels: u32,
     /// The image of this view is final: rendering more frames would not change it (see `Renderer::converged`).
     pub converged: bool,
 }
@@ -145,7 +148,7 @@ pub struct Renderer {
     timer: Option<GpuTimer>,
     globals: Buffer,
     stats: Buffer,
-    /// VkDispatchIndirectCommand of the ray-tracing update, written by queue_args.comp.
+    /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by queue_args.comp.
     dispatch_args: Buffer,
     targets: Targets,
     hash: HashMapGpu,
@@ -167,8 +170,9 @@ pub struct Renderer {
     last_converged: bool,
     /// Until this frame the cell finder runs level by level (the map was full somewhere, see `cell_levels`).
     levelwise_until: u32,
-    /// Pixels queued for rays in the last finished frame (u32::MAX before the first): see `young_map`.
-    last_queued: u32,
+    /// Rays the cells took in the last finished frame (u64::MAX before the first), and that frame's ray
+    /// budget: see `young_map`.
+    last_cell_rays: (u64, u64),
     /// Jitter the primary samples of still frames (anti-aliasing). `hrtao render` keeps pixel centres.
     pub jitter: bool,
     /// Height of the view in pixels when the renderer works at a reduced internal resolution (0 = the internal
@@ -233,7 +237,7 @@ impl Renderer {
             edit_still_index: 0,
             last_converged: false,
             levelwise_until: 0,
-            last_queued: u32::MAX,
+            last_cell_rays: (u64::MAX, 0),
             jitter: false,
             view_height: 0,
             background_top: [0.62, 0.68, 0.76],
@@ -688,14 +692,15 @@ impl Renderer {
         }
     }
 
-    /// Whether the map is young this frame: new, re-keyed (eq. 6), or the view brought many new cells (the last
-    /// frame queued at least 1/YOUNG_QUEUED_DEN of the pixels). Our first-frame additions run only then:
-    /// adaptive sampling's three dispatches (`adaptive_rays`) and the near-field control variate's ray
-    /// classification (`near_weight`). In a navigation frame a few newly seen cells take rays, and they trace as
-    /// in the paper: one dispatch of first-hit queries.
+    /// Whether the map is young this frame: new, re-keyed (eq. 6), or its cells still take many rays (in the
+    /// last frame at least 1/YOUNG_CELL_RAYS_DEN of the budget: a new view, the first still frames). Our
+    /// first-frame additions run only then: adaptive sampling's three dispatches (`adaptive_rays`) and the
+    /// near-field control variate's ray classification (`near_weight`). In a navigation frame a few newly seen
+    /// cells take rays, and in a late still frame the pixels' own: they trace as in the paper, one dispatch of
+    /// first-hit queries.
     fn young_map(&self) -> bool {
-        self.f_start_frame == self.frame_index
-            || self.last_queued as u64 * YOUNG_QUEUED_DEN >= self.pixel_count() as u64
+        let (cell_rays, budget) = self.last_cell_rays;
+        self.f_start_frame == self.frame_index || cell_rays.saturating_mul(YOUNG_CELL_RAYS_DEN) >= budget
     }
 
     /// Reads the statistics of the frame just completed.
@@ -711,7 +716,10 @@ impl Renderer {
             self.levelwise_until = self.frame_index.wrapping_add(LEVELWISE_FRAMES);
         }
         self.last_converged = self.converged(c[gpu::STAT_RAYS as usize]);
-        self.last_queued = c[gpu::STAT_RAY_QUEUE as usize];
+        let budget = self.pixel_count() as f64
+            * self.settings.rays_per_pixel as f64
+            * self.settings.trace_fraction.clamp(0.0, 1.0) as f64;
+        self.last_cell_rays = (c[gpu::STAT_CELL_RAYS as usize] as u64, budget.ceil() as u64);
         Ok(FrameReport {
             gpu_total_ms: gpu_ms.iter().map(|(_, ms)| ms).sum(),
             gpu_ms,
@@ -731,6 +739,8 @@ impl Renderer {
             accumulated_frames: self.still_index + 1,
             refine_rays: c[gpu::STAT_REFINE_RAYS as usize] as u64,
             cell_rays: c[gpu::STAT_CELL_RAYS as usize] as u64,
+            ray_pixels: c[gpu::STAT_RAY_QUEUE as usize],
+            filtered_pixels: c[gpu::STAT_FILTER_QUEUE as usize],
             converged: self.last_converged,
         })
     }
