@@ -54,6 +54,10 @@ bool queue_entry(uint count, out uint q) {
     return q < count;
 }
 
+// A moving frame over a settled map (ours): few cells are young, scattered; our first-frame additions (extra
+// filter iterations, level blend) leave it, and it resolves and filters as the paper does.
+bool navigation_frame() { return g.still_index == 0u && (g.flags & FLAG_YOUNG_MAP) == 0u; }
+
 bool camera_orthographic() { return g.projection == PROJECTION_ORTHOGRAPHIC; }
 
 // The camera ray through the pixel centre moved by this frame's jitter (Camera::ray): perspective, from the eye

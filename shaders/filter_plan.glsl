@@ -12,13 +12,15 @@ uint plan_samples(uint plan) { return plan >> FILTER_PLAN_BITS; }
 // guided filter (filter_sigma > 0): a full cell (max_samples, §6) holds its final estimate and takes none; a
 // cell of n rays also runs the iterations that bring its noise down to a full cell's (its binomial variance
 // p(1-p)/n halves per iteration: log2(max_samples / n) of them), so young cells are smoothed over several
-// cells while settled navigation frames cost what the paper's filter costs.
+// cells. A navigation frame (`navigation_frame`: few young cells, scattered) takes the paper's iterations,
+// full cells none, so it filters fewer pixels than the paper's filter.
 uint planned_iterations(float footprint, uint samples, uint iterations) {
     uint paper = 0u;
     while (paper < iterations && float(2u << paper) <= footprint) paper++;
     if (g.filter_sigma <= 0.0) return paper;
     uint full = max(g.max_samples, 1u);
     if (samples >= full) return 0u;
+    if (navigation_frame()) return paper;
     uint noisy = 0u;
     while (noisy < iterations && (max(samples, 1u) << noisy) < full) noisy++;
     return max(paper, noisy);

@@ -92,7 +92,7 @@ void main() {
             // the rays on a surface) takes over, and where they differ by more, the fine level's detail stays
             // (Wiener weight d^2 / (d^2 + lambda v)). Full cells and refinement frames are left as they are.
             bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
-            if (g.level_blend > 0.0 && !refining && wsum > 0.0 && best + 1u < LOD_COUNT
+            if (g.level_blend > 0.0 && !refining && !navigation_frame() && wsum > 0.0 && best + 1u < LOD_COUNT
                 && own_samples < float(g.max_samples)) {
                 vec4 coarse = interpolate(px.position, lod + 1, nq);
                 if (coarse.z > 0.0) {

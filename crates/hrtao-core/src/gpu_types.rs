@@ -35,6 +35,9 @@ gpu_consts! {
     /// The ray-tracing update classifies its rays for the near-field control variate (ours: `near_weight` > 0,
     /// in frames of a young map, `Renderer::young_map`); other frames trace the paper's first-hit queries.
     FLAG_NEAR_FIELD: u32 = 128;
+    /// The map is young this frame (`Renderer::young_map`). A moving frame without it is a navigation frame
+    /// (`navigation_frame` in common.glsl), which resolves and filters as the paper does.
+    FLAG_YOUNG_MAP: u32 = 256;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
     /// `FilterGuide::normal` of a pixel without AO (a miss, or no cell): never a packed normal (packSnorm2x16

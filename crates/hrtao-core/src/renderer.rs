@@ -394,8 +394,11 @@ impl Renderer {
         if self.regions.any_edit() {
             flags |= gpu::FLAG_REGION_EPOCHS;
         }
-        if s.near_weight > 0.0 && self.young_map() {
-            flags |= gpu::FLAG_NEAR_FIELD;
+        if self.young_map() {
+            flags |= gpu::FLAG_YOUNG_MAP;
+            if s.near_weight > 0.0 {
+                flags |= gpu::FLAG_NEAR_FIELD;
+            }
         }
         let jitter = if self.jitter && s.accumulates() && self.still_index > 0 {
             // R2 points in the pixel, frame after frame (the centre first).

@@ -642,22 +642,31 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 }
 
 /// HRTAO timing of N renderers (ours and the paper's mode, each with its settings), interleaved frame by frame
-/// so that a change of load on the machine hits them alike: the first frame `--repeat` times from an empty map,
+/// so that a change of load on the machine hits them alike, and in turns in reverse order, so that neither is
+/// always the one that runs first after the host's work: the first frame `--repeat` times from an empty map,
 /// static frames until each map has settled, then the navigation cameras.
 fn time_hrtao<const N: usize>(
-    mut rs: [&mut Renderer; N],
+    rs: [&mut Renderer; N],
     scene_gpu: &SceneGpu,
     sf: u32,
     camera: &Camera,
     nav_cams: &[Camera],
     args: &BenchArgs,
 ) -> Result<[ModeRun; N]> {
+    // The renderers in turn i: forwards, then backwards.
+    let turn = |i: usize| -> Vec<usize> {
+        if i % 2 == 0 {
+            (0..N).collect()
+        } else {
+            (0..N).rev().collect()
+        }
+    };
     let mut first: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
-    for i in 0..args.repeat {
-        for (r, first) in rs.iter_mut().zip(&mut first) {
-            r.clear_cache()?;
-            let rep = r.render(scene_gpu, sf, camera)?;
-            first.push(FrameRecord::new(i as usize, "first", &rep));
+    for i in 0..args.repeat as usize {
+        for k in turn(i) {
+            rs[k].clear_cache()?;
+            let rep = rs[k].render(scene_gpu, sf, camera)?;
+            first[k].push(FrameRecord::new(i, "first", &rep));
         }
     }
     let mut settle: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
@@ -680,9 +689,9 @@ fn time_hrtao<const N: usize>(
     }
     let mut nav: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
     for (i, cam) in nav_cams.iter().enumerate() {
-        for (r, nav) in rs.iter_mut().zip(&mut nav) {
-            let rep = r.render(scene_gpu, sf, cam)?;
-            nav.push(FrameRecord::new(i + 1, "nav", &rep));
+        for k in turn(i) {
+            let rep = rs[k].render(scene_gpu, sf, cam)?;
+            nav[k].push(FrameRecord::new(i + 1, "nav", &rep));
         }
     }
     let mut runs = first.into_iter().zip(settle).zip(nav);
