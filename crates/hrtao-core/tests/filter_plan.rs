@@ -50,7 +50,11 @@ fn young_cells_take_every_iteration_and_settled_navigation_filters_like_the_pape
     let young = rs[0].read_hash_cells().unwrap();
     let classified = |c: &&gpu::HashCell| c.samples > 0 && c.near_traced == c.samples;
     let live = young.iter().filter(|c| c.samples > 0).count();
-    assert_eq!(young.iter().filter(classified).count(), live, "first frame: every ray classified");
+    assert_eq!(
+        young.iter().filter(classified).count(),
+        live,
+        "first frame: every ray classified"
+    );
 
     // Settle as `hrtao bench` does (until the cells take under a tenth of the first frame's rays), then orbit.
     for (r, (first_rays, _)) in rs.iter_mut().zip(&first) {
@@ -68,7 +72,11 @@ fn young_cells_take_every_iteration_and_settled_navigation_filters_like_the_pape
         cam.eye = (Quat::from_axis_angle(up, 2f32.to_radians()) * (Vec3::from(cam.eye) - t) + t).into();
         for (r, w) in rs.iter_mut().zip(&mut work) {
             let rep = r.render(&sg, scene.f(), &cam).unwrap();
-            assert!(rep.ray_pixels < cam.width * cam.height / 4, "a navigation frame: {}", rep.ray_pixels);
+            assert!(
+                rep.ray_pixels < cam.width * cam.height / 4,
+                "a navigation frame: {}",
+                rep.ray_pixels
+            );
             *w += planned(r, &rep).0;
         }
     }
@@ -83,9 +91,14 @@ fn young_cells_take_every_iteration_and_settled_navigation_filters_like_the_pape
     // The cells first seen while navigating traced the paper's first-hit queries: none of their rays was
     // classified (the near-field control variate, like adaptive sampling, runs while the map is young).
     let cells = rs[0].read_hash_cells().unwrap();
-    let unclassified = cells.iter().filter(|c| c.samples > 0 && c.near_traced == 0).count();
+    let unclassified = cells
+        .iter()
+        .filter(|c| c.samples > 0 && c.near_traced == 0)
+        .count();
     println!("{unclassified} cells seen while navigating, {live} in the first frame");
     assert!(unclassified > 0, "cells inserted while navigating");
-    assert!(cells.iter().all(|c| c.near_open <= c.near_traced && c.near_traced <= c.samples));
+    assert!(cells
+        .iter()
+        .all(|c| c.near_open <= c.near_traced && c.near_traced <= c.samples));
     assert_clean(&gpu);
 }

@@ -220,7 +220,12 @@ pub fn check_map(
             a.samples
         );
         if a.near_traced == a.samples {
-            assert!(a.unoccluded <= a.near_open, "cell {i}: {} unoccluded, {} open within r_n", a.unoccluded, a.near_open);
+            assert!(
+                a.unoccluded <= a.near_open,
+                "cell {i}: {} unoccluded, {} open within r_n",
+                a.unoccluded,
+                a.near_open
+            );
         }
         assert!(
             a.samples <= gpu::SAMPLE_CAP + slack,

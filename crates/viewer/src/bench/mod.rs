@@ -655,7 +655,7 @@ fn time_hrtao<const N: usize>(
 ) -> Result<[ModeRun; N]> {
     // The renderers in turn i: forwards, then backwards.
     let turn = |i: usize| -> Vec<usize> {
-        if i % 2 == 0 {
+        if i.is_multiple_of(2) {
             (0..N).collect()
         } else {
             (0..N).rev().collect()
