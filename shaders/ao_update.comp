@@ -118,6 +118,7 @@ void main() {
     // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
     PixelRaysRef(g.pixel_rays).v[index].near_traced += rays;
     PixelRaysRef(g.pixel_rays).v[index].near_open += all_rays.z;
+    PixelRaysRef(g.pixel_rays).v[index].open += all_rays.y;
     if (own) {
         stat_add(STAT_REFINE_RAYS, rays);
         PixelRaysRef(g.pixel_rays).v[index].traced = rays;

@@ -459,7 +459,7 @@ impl Renderer {
             section_count: 0,
             residual_sigma: s.residual_sigma,
             still_smoothing: s.still_smoothing,
-            _still_pad: 0,
+            pooled_residual: s.pooled_residual,
             trace_fraction: s.trace_fraction,
             level_blend: s.level_blend,
             bias_evidence: t.bias_evidence.address,
@@ -617,6 +617,9 @@ impl Renderer {
                 for i in 0..iterations {
                     rec.dispatch(Pass::Filter, w, h, [i, iterations, 0, 0]);
                 }
+            }
+            if self.settings.pooled_residual > 0.0 {
+                rec.dispatch(Pass::Residual, w, h, [0; 4]);
             }
         }
         rec.dispatch(Pass::Composite, w, h, [0; 4]);
