@@ -214,7 +214,7 @@ impl Default for AoSettings {
             near_fraction: 0.5,
             level_blend: 1.0,
             adaptive_rays: true,
-            pooled_residual: 4.0,
+            pooled_residual: 16.0,
         }
     }
 }
