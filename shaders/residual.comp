@@ -4,17 +4,22 @@
 // surface, r = open / traced - a, shrunk against the binomial noise v of those rays (Wiener: r^2 / (r^2 + λ v)).
 // Cells of one or two pixels each hold the rays of a few faces' pixels, and the filter, which must cross cells to
 // remove their noise, also crosses the faces; the pooled rays bring back what differs between them. After the
-// filter, so it does not smooth the correction away. Pixels of full cells (settled navigation frames) and
-// refinement frames are left as they are. Reads and writes `ao` in place (a pixel writes only its own value).
+// filter, so it does not smooth the correction away. Dispatched indirectly over the pixels that traced rays into
+// their cells this frame (the ray queue, as ao_update.comp): pixels of full cells, and so settled navigation
+// frames, cost nothing; refinement frames are left as they are. Reads and writes `ao` in place (a pixel writes
+// only its own value).
 #include "common.glsl"
 #include "filter_plan.glsl"
 #include "pool.glsl"
 
 void main() {
-    uvec2 pix;
-    uint index;
-    if (!pixel_coords(pix, index)) return;
     if ((g.flags & FLAG_REFINE) != 0u && g.still_index > 0u) return;
+    uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    uint q = group * (WORKGROUP_SIZE * WORKGROUP_SIZE) + gl_LocalInvocationIndex;
+    if (q >= StatsRef(g.stats).counters[STAT_RAY_QUEUE]) return;
+    uint index = UintRef(g.ray_queue).v[q];
+    if (index >= g.width * g.height) return;
+    uvec2 pix = uvec2(index % g.width, index / g.width);
     uint plan = UintRef(g.filter_plan).v[index];
     uint samples = plan_samples(plan);
     if (samples == 0u || samples >= g.max_samples) return;   // no AO, or a full cell
@@ -28,7 +33,7 @@ void main() {
     float r = pool.x / n - a;
     float p = clamp(a, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
     float v = p * (1.0 - p) / n;
-    float q = p * (1.0 - p) / float(samples);
-    float e = r * r + q;
+    float cell_var = p * (1.0 - p) / float(samples);
+    float e = r * r + cell_var;
     ao.v[index] = clamp(a + r * e / (e + g.pooled_residual * v), 0.0, 1.0);
 }

@@ -619,7 +619,8 @@ impl Renderer {
                 }
             }
             if self.settings.pooled_residual > 0.0 {
-                rec.dispatch(Pass::Residual, w, h, [0; 4]);
+                // Over the pixels that traced into their cells (the ray queue): none once the cells are full.
+                rec.dispatch_indirect(Pass::Residual, self.dispatch_args.raw, [0; 4]);
             }
         }
         rec.dispatch(Pass::Composite, w, h, [0; 4]);
