@@ -49,9 +49,8 @@ void add_rays(CellRef cells, uint c, uvec3 rays) {
 }
 
 void main() {
-    uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    uint q = group * (WORKGROUP_SIZE * WORKGROUP_SIZE) + gl_LocalInvocationIndex;
-    if (q >= StatsRef(g.stats).counters[STAT_RAY_QUEUE]) return;
+    uint q;
+    if (!queue_entry(StatsRef(g.stats).counters[STAT_RAY_QUEUE], q)) return;
     uint index = UintRef(g.ray_queue).v[q];
     if (index >= g.width * g.height) return;
     GPixel px = GBufferRef(g.gbuffer).px[index];
@@ -121,9 +120,12 @@ void main() {
     if (rays == 0u) return;
     stat_add(STAT_RAYS, rays);
     // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
-    if (near_field) {
+    if ((g.flags & FLAG_YOUNG_MAP) != 0u) {
+        // This frame's rays of the pixel, for the near-field control variate (resolve.comp, when classified)
+        // and the pooled residual (residual.comp); both run only while the map is young.
         PixelRaysRef(g.pixel_rays).v[index].near_traced += rays;
         PixelRaysRef(g.pixel_rays).v[index].near_open += all_rays.z;
+        PixelRaysRef(g.pixel_rays).v[index].open += all_rays.y;
     }
     if (own) {
         stat_add(STAT_REFINE_RAYS, rays);

@@ -39,6 +39,7 @@ void queue_for_rays(uint index, GPixel px, PixelCells pc) {
     none.unoccluded = 0u;
     none.near_traced = 0u;
     none.near_open = 0u;
+    none.open = 0u;
     PixelRaysRef(g.pixel_rays).v[index] = none;
     if (px.t < 0.0) return;
     uint first;

@@ -88,6 +88,14 @@ fn main() -> anyhow::Result<()> {
                     let gb = r.read_gbuffer()?;
                     let mask: Vec<f32> = gb.iter().map(|p| if p.t >= 0.0 { 1.0 } else { 0.0 }).collect();
                     hrtao_core::imageio::write_pfm(&d.join(format!("{key}_mask.pfm")), w, h, &mask)?;
+                    // The G-buffer's position and normal, one channel per file, for offline analyses.
+                    for (name, i) in [("px", 0), ("py", 1), ("pz", 2), ("nx", 3), ("ny", 4), ("nz", 5)] {
+                        let c: Vec<f32> = gb
+                            .iter()
+                            .map(|p| if i < 3 { p.position[i] } else { p.normal[i - 3] })
+                            .collect();
+                        hrtao_core::imageio::write_pfm(&d.join(format!("{key}_{name}.pfm")), w, h, &c)?;
+                    }
                 }
             }
             if f >= 4 {

@@ -207,7 +207,9 @@ gpu_structs! {
         /// Still-camera refinement (ours): the shown AO moves this fraction of the way to the new estimate
         /// each still frame (1 = no smoothing).
         still_smoothing: f32,
-        _still_pad: u32,
+        /// Pooled residual control variate (ours, docs/algorithm.md): the Wiener factor λ of the correction by
+        /// the own rays of the pixel and its same-surface 3x3 neighbours (0 = off).
+        pooled_residual: f32,
         /// Per pixel, two slots (by still-frame parity) of (residual, rays, shown AO, 0): the pixel's own mean
         /// minus its mean cell estimate over its own rays, written by the composite each frame and pooled
         /// over neighbours in the next, and the AO it showed (composite.comp).
@@ -352,10 +354,13 @@ gpu_structs! {
     struct PixelRays {
         traced: u32,
         unoccluded: u32,
-        /// Near-field control variate (ours): every ray the pixel traced this frame (into its cell or its own),
-        /// and those that hit nothing within the near radius r_n.
+        /// Counted while the map is young (`FLAG_YOUNG_MAP`): every ray the pixel traced this frame (into its
+        /// cell or its own), and those that hit nothing within the near radius r_n (near-field control variate,
+        /// ours; meaningful with `FLAG_NEAR_FIELD`).
         near_traced: u32,
         near_open: u32,
+        /// Pooled residual control variate (ours): of the `near_traced` rays, those that hit nothing within R.
+        open: u32,
     }
 
     /// Per pixel, the accumulation over still frames (composite.comp). With shade = base colour x light of

@@ -28,12 +28,13 @@ pub enum Pass {
     QueueArgs,
     Resolve,
     Filter,
+    Residual,
     Composite,
     HashTest,
 }
 
 impl Pass {
-    pub const ALL: [Pass; 11] = [
+    pub const ALL: [Pass; 12] = [
         Pass::Clear,
         Pass::Primary,
         Pass::GbufferFromVis,
@@ -43,6 +44,7 @@ impl Pass {
         Pass::AoUpdate,
         Pass::Resolve,
         Pass::Filter,
+        Pass::Residual,
         Pass::Composite,
         Pass::HashTest,
     ];
@@ -59,6 +61,7 @@ impl Pass {
             Pass::AoUpdate => "ao_update",
             Pass::Resolve => "resolve",
             Pass::Filter => "filter",
+            Pass::Residual => "residual",
             Pass::Composite => "composite",
             Pass::HashTest => "hash_test",
         }
@@ -72,7 +75,7 @@ impl Pass {
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
             Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
-            Pass::Resolve => "per-pixel AO",
+            Pass::Resolve | Pass::Residual => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",
             Pass::HashTest => "hash test",

@@ -477,7 +477,7 @@ impl Renderer {
             section_count: 0,
             residual_sigma: s.residual_sigma,
             still_smoothing: s.still_smoothing,
-            _still_pad: 0,
+            pooled_residual: s.pooled_residual,
             trace_fraction: s.trace_fraction,
             level_blend: s.level_blend,
             bias_evidence: t.bias_evidence.address,
@@ -581,7 +581,8 @@ impl Renderer {
         }
         let mode = self.settings.mode;
         let cell_levels = self.cell_levels();
-        let adaptive_split = self.settings.adaptive_rays && self.young_map();
+        let young = self.young_map();
+        let adaptive_split = self.settings.adaptive_rays && young;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (primary, &self.raster) {
@@ -642,6 +643,10 @@ impl Renderer {
                 for i in 0..iterations {
                     rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
                 }
+            }
+            if self.settings.pooled_residual > 0.0 && young {
+                // Over the pixels that traced into their cells (the ray queue), while the map is young.
+                rec.dispatch_indirect(Pass::Residual, args, rays, [0; 4]);
             }
         }
         rec.dispatch(Pass::Composite, w, h, [0; 4]);

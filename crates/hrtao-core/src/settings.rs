@@ -167,11 +167,17 @@ pub struct AoSettings {
     /// the levels agree, and the fine level keeps the detail where they differ. λ is this setting; 0 = the
     /// paper's finest level alone.
     pub level_blend: f32,
-    /// Ours (docs/algorithm.md, adaptive sampling): pixels whose cells take rays trace the first half of their
-    /// budget, then the second half of the frame's budget goes to them in proportion to the noise their cells
-    /// still have, so cells that came out open take few and noisy ones more. Off: every pixel traces its
-    /// budget (the paper). Refinement frames always trace each pixel's budget.
+    /// Ours (docs/algorithm.md, adaptive sampling): while the map is young, pixels whose cells take rays trace
+    /// a quarter of their budget, then the rest of the frame's budget goes to them in proportion to the noise
+    /// their cells still have, so cells that came out open take few and noisy ones more. Off: every pixel
+    /// traces its budget (the paper). Refinement frames always trace each pixel's budget.
     pub adaptive_rays: bool,
+    /// Ours (docs/algorithm.md, pooled residual control variate): while a pixel's cell is young, its AO a is
+    /// corrected by the residual r = (open rays / traced rays) - a of the rays traced this frame by the pixel
+    /// and its 3x3 neighbours on the same surface, shrunk by the Wiener weight r²/(r² + λ v) against the
+    /// binomial noise v of those rays: detail finer than the cells (faces of a few pixels) comes back where
+    /// the rays show it. λ is this setting; 0 = off (the paper).
+    pub pooled_residual: f32,
 }
 
 impl Default for AoSettings {
@@ -208,6 +214,7 @@ impl Default for AoSettings {
             near_fraction: 0.5,
             level_blend: 1.0,
             adaptive_rays: true,
+            pooled_residual: 16.0,
         }
     }
 }
@@ -223,6 +230,7 @@ impl AoSettings {
             near_weight: 0.0,
             level_blend: 0.0,
             adaptive_rays: false,
+            pooled_residual: 0.0,
             ..self.clone()
         }
     }
@@ -312,6 +320,7 @@ impl AoSettings {
             ("prior sigma", self.prior_sigma),
             ("residual sigma", self.residual_sigma),
             ("level blend", self.level_blend),
+            ("pooled residual", self.pooled_residual),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));

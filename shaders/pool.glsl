@@ -1,0 +1,34 @@
+// The pixel's own rays pooled with its neighbours' on the same surface (ours): the rays traced this frame by
+// the pixel and its 3x3 neighbours that lie on its plane, for the control variates of resolve.comp and
+// residual.comp. Needs common.glsl.
+#ifndef HRTAO_POOL_GLSL
+#define HRTAO_POOL_GLSL
+
+// A neighbour is on the pixel's surface when its normal is within POOL_COS of the pixel's and it lies within
+// POOL_PLANE pixels of the pixel's tangent plane.
+const float POOL_COS = 0.95;
+const float POOL_PLANE = 0.05;
+const int POOL_RADIUS = 1;
+
+// The rays traced this frame by the pixel and its 3x3 neighbours on its surface: (open within R, open within
+// the near radius, traced).
+vec3 pooled_rays(uvec2 pix, GPixel px) {
+    float tol = POOL_PLANE * pixel_world_size(px.t);
+    vec3 sum = vec3(0.0);
+    for (int dy = -POOL_RADIUS; dy <= POOL_RADIUS; ++dy) {
+        for (int dx = -POOL_RADIUS; dx <= POOL_RADIUS; ++dx) {
+            ivec2 q = ivec2(pix) + ivec2(dx, dy);
+            if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+            uint qi = uint(q.y) * g.width + uint(q.x);
+            PixelRays pr = PixelRaysRef(g.pixel_rays).v[qi];
+            if (pr.near_traced == 0u) continue;
+            GPixel pq = GBufferRef(g.gbuffer).px[qi];
+            if (pq.t < 0.0 || dot(pq.normal, px.normal) < POOL_COS
+                || abs(dot(pq.position - px.position, px.normal)) > tol) continue;
+            sum += vec3(float(pr.open), float(pr.near_open), float(pr.near_traced));
+        }
+    }
+    return sum;
+}
+
+#endif
