@@ -1,6 +1,6 @@
 // The pixel's own rays pooled with its neighbours' on the same surface (ours): the rays traced this frame by
-// the pixel and its 3x3 neighbours that lie on its plane, for the control variates of resolve.comp and
-// residual.comp. Needs common.glsl.
+// the pixel and its 3x3 neighbours that lie on its plane, for the pooled residual (residual.comp). Needs
+// common.glsl.
 #ifndef HRTAO_POOL_GLSL
 #define HRTAO_POOL_GLSL
 

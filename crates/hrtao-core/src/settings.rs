@@ -245,7 +245,6 @@ impl AoSettings {
         }
     }
 
-    /// Checks ranges; the message names the setting.
     /// These settings with the fields of the JSON object `overrides` replaced, e.g. `{"near_weight": 0}`
     /// (`--set` of the command line and the development examples). An unknown field or a value of the wrong
     /// type is an error; the result is validated.
@@ -264,6 +263,7 @@ impl AoSettings {
         Ok(s)
     }
 
+    /// Checks ranges; the message names the setting.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.ao_radius.is_finite() && self.ao_radius > 0.0) {
             return Err(format!(
@@ -369,6 +369,24 @@ impl AoSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn overrides_set_named_fields_and_reject_unknown_or_invalid_ones() {
+        let base = AoSettings::default();
+        let s = base
+            .with_overrides(r#"{"near_weight": 0, "adaptive_rays": false}"#)
+            .unwrap();
+        assert_eq!((s.near_weight, s.adaptive_rays), (0.0, false));
+        assert_eq!(s.s_p, base.s_p);
+        let err = base.with_overrides(r#"{"near_wieght": 0}"#).unwrap_err();
+        assert!(err.contains("near_wieght"), "{err}");
+        assert!(base.with_overrides(r#"{"near_weight": "no"}"#).is_err());
+        assert!(base
+            .with_overrides(r#"{"near_weight": 2}"#)
+            .unwrap_err()
+            .contains("near weight"));
+        assert!(base.with_overrides("not json").is_err());
+    }
 
     #[test]
     fn near_field_settings_are_checked_named_and_off_in_the_paper_mode() {
