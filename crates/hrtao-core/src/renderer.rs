@@ -86,6 +86,8 @@ pub const EDGE_WIDTH: f32 = 1.0;
 const LEVELWISE_FRAMES: u32 = 64;
 /// The map counts as young in frames after one whose cells took at least 1/this of its budget (`young_map`).
 const YOUNG_CELL_RAYS_DEN: u64 = 4;
+/// `Renderer::last_cell_rays` of an empty map: its next frame is young.
+const NEW_MAP: (u64, u64) = (u64::MAX, 0);
 
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
@@ -237,7 +239,7 @@ impl Renderer {
             edit_still_index: 0,
             last_converged: false,
             levelwise_until: 0,
-            last_cell_rays: (u64::MAX, 0),
+            last_cell_rays: NEW_MAP,
             jitter: false,
             view_height: 0,
             background_top: [0.62, 0.68, 0.76],
@@ -318,6 +320,7 @@ impl Renderer {
                     .device
                     .cmd_fill_buffer(cmd, self.stats.raw, 0, vk::WHOLE_SIZE, 0);
             })?;
+            self.last_cell_rays = NEW_MAP;
         }
         self.settings = settings;
         self.sync_region_size();
@@ -333,6 +336,7 @@ impl Renderer {
             self.gpu.device.cmd_fill_buffer(cmd, stats, 0, vk::WHOLE_SIZE, 0);
         })?;
         self.regions.reset();
+        self.last_cell_rays = NEW_MAP;
         Ok(())
     }
 
@@ -702,8 +706,9 @@ impl Renderer {
 
     /// Whether the map is young this frame: new, re-keyed (eq. 6), or its cells still take many rays (in the
     /// last frame at least 1/YOUNG_CELL_RAYS_DEN of the budget: a new view, the first still frames). Our
-    /// first-frame additions run only then: adaptive sampling's three dispatches (`adaptive_rays`) and the
-    /// near-field control variate's ray classification (`near_weight`). In a navigation frame a few newly seen
+    /// first-frame additions run only then: adaptive sampling's three dispatches (`adaptive_rays`), the
+    /// near-field control variate's ray classification (`near_weight`) and the pooled residual
+    /// (`pooled_residual`). In a navigation frame a few newly seen
     /// cells take rays, and in a late still frame the pixels' own: they trace as in the paper, one dispatch of
     /// first-hit queries.
     fn young_map(&self) -> bool {

@@ -100,5 +100,12 @@ fn young_cells_take_every_iteration_and_settled_navigation_filters_like_the_pape
     assert!(cells
         .iter()
         .all(|c| c.near_open <= c.near_traced && c.near_traced <= c.samples));
+    // An emptied map is young again: its first frame classifies every ray.
+    rs[0].clear_cache().unwrap();
+    rs[0].render(&sg, scene.f(), &cam).unwrap();
+    let fresh = rs[0].read_hash_cells().unwrap();
+    let live = fresh.iter().filter(|c| c.samples > 0).count();
+    assert!(live > 0);
+    assert_eq!(fresh.iter().filter(classified).count(), live, "after clear_cache");
     assert_clean(&gpu);
 }
