@@ -19,15 +19,7 @@ fn wedge() -> hrtao_scene::Scene {
 
 /// A 160×90 view of the wedge from `eye` toward `target`, z up.
 fn wedge_camera(eye: [f32; 3], target: [f32; 3]) -> hrtao_core::Camera {
-    hrtao_core::Camera {
-        eye,
-        target,
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width: 160,
-        height: 90,
-        ..Default::default()
-    }
+    z_up_camera(eye, target, 160, 90)
 }
 
 /// The analytic scenes are checked for per-pixel RTAO (converged), for HRTAO's first frame (the cell estimate)

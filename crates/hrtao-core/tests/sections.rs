@@ -49,15 +49,7 @@ fn scene(groups: Vec<Vec<Primitive>>) -> Scene {
 }
 
 fn camera(eye: [f32; 3], target: [f32; 3]) -> Camera {
-    Camera {
-        eye,
-        target,
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width: 96,
-        height: 72,
-        ..Camera::default()
-    }
+    z_up_camera(eye, target, 96, 72)
 }
 
 fn plane(n: [f32; 3], d: f32) -> Sections {

@@ -263,3 +263,16 @@ pub fn check_map(
     out.live_cells = out.live_cells.max(used.len());
     out
 }
+
+/// A perspective camera with z up and a 50° vertical field of view, `width`×`height` pixels.
+pub fn z_up_camera(eye: [f32; 3], target: [f32; 3], width: u32, height: u32) -> Camera {
+    Camera {
+        eye,
+        target,
+        up: [0.0, 0.0, 1.0],
+        fov_y_deg: 50.0,
+        width,
+        height,
+        ..Camera::default()
+    }
+}
