@@ -377,6 +377,26 @@ impl Viewer {
                 "Ours (docs/algorithm.md): each pixel corrects its cell's AO with its own rays that hit within \
                  half the AO radius, restoring contact shadows a cell averages away. 0: the paper's cells.",
             );
+        ui.add(egui::Slider::new(&mut s.level_blend, 0.0..=8.0).text("level blend λ"))
+            .on_hover_text(
+                "Ours (docs/algorithm.md): while a pixel's finest cell is young, its AO leans on the next coarser \
+                 level where the two agree within the finest cell's noise (λ scales that noise), so the first \
+                 frames after a move are smoother. 0: the paper's finest level alone.",
+            );
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut s.adaptive_rays, "adaptive rays").on_hover_text(
+                "Ours (docs/algorithm.md): while the hash map is young, pixels trace a quarter of the ray budget \
+                 first and the rest goes to the cells that are still noisy. Off: every pixel traces the same \
+                 number of rays (the paper).",
+            );
+            ui.label("pooled residual λ");
+            ui.add(egui::DragValue::new(&mut s.pooled_residual).speed(0.5).clamp_range(0.0..=256.0))
+                .on_hover_text(
+                    "Ours (docs/algorithm.md): while a cell is young, each pixel is corrected by the rays it and \
+                     its neighbours on the same surface traced this frame, where they differ from the cell by \
+                     more than their noise (λ scales it): faces smaller than a cell keep their own AO. 0: off.",
+                );
+        });
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.edges, "edges").on_hover_text(
                 "Feature edges over the shading: silhouettes (depth and part changes) and creases. In \
@@ -449,7 +469,7 @@ impl Viewer {
         .on_hover_text(
             "Internal resolution of a still image as a fraction of the 3D view (blitted to the window). While \
              the camera moves the resolution drops to meet the frame-time target (not below 0.35 of the view \
-             unless this cap is lower). Note s_p is in internal pixels.",
+             unless this cap is lower). s_p counts view pixels, so the hash cells do not change with it.",
         );
         ui.horizontal(|ui| {
             ui.checkbox(&mut self.prefs.auto_budget, "frame-time target")
@@ -489,6 +509,17 @@ impl Viewer {
                     ao_radius: self.default_radius,
                     ..Default::default()
                 };
+            }
+            if ui
+                .button("Paper")
+                .on_hover_text(
+                    "The paper's technique as published: every addition of ours off (refinement, contact \
+                     correction, level blend, adaptive rays, pooled residual, local edits, the filter's noise \
+                     stop); radius, budget and cells unchanged. Defaults turns them back on.",
+                )
+                .clicked()
+            {
+                s = s.paper();
             }
         });
         if s != self.settings {
