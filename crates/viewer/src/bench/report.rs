@@ -125,7 +125,8 @@ pub fn run(dir: &Path, markdown: Option<&Path>) -> Result<()> {
 
 /// Sections of the markdown that `hrtao bench` does not generate (measured by other commands), carried over
 /// unchanged when the report is regenerated: each runs from its heading to the next `## ` heading.
-const KEPT_SECTIONS: &[&str] = &["## Viewer orbit"];
+/// A heading matches by its start (the image-quality section names its size after these words).
+const KEPT_SECTIONS: &[&str] = &["## Viewer orbit", "## Image quality against Blender Cycles"];
 
 fn kept_sections(old: &str) -> String {
     let mut kept = String::new();
@@ -142,7 +143,6 @@ fn kept_sections(old: &str) -> String {
     kept
 }
 
-/// `p` relative to `base` when `p` is inside it (enough for docs/bench under docs/).
 /// Our HRTAO beside the paper's behaviour (`AoSettings::paper`), measured in the same run: frame cost while
 /// navigating, flicker of a still camera, and the error curve.
 fn ours_vs_paper(m: &mut String, results: &[&BenchResult]) -> Result<()> {
@@ -190,6 +190,7 @@ fn ours_vs_paper(m: &mut String, results: &[&BenchResult]) -> Result<()> {
     Ok(())
 }
 
+/// `p` relative to `base` when `p` is inside it (enough for docs/bench under docs/).
 fn pathdiff(p: &Path, base: &Path) -> Option<PathBuf> {
     let p = std::fs::canonicalize(p).ok()?;
     let base = std::fs::canonicalize(base).ok()?;
@@ -900,5 +901,12 @@ mod kept_tests {
         let at_end = "# B\n\n## Viewer orbit\nfigures\n";
         assert_eq!(kept_sections(at_end), "\n## Viewer orbit\nfigures\n");
         assert_eq!(kept_sections("# B\n## Table 1\n"), "");
+        // Both hand-written sections, in the old file's order, and the generated one between them dropped.
+        let both =
+            "# B\n## Viewer orbit\nv\n## Scale\ns\n## Image quality against Blender Cycles at 640×360\nq\n";
+        assert_eq!(
+            kept_sections(both),
+            "\n## Viewer orbit\nv\n\n## Image quality against Blender Cycles at 640×360\nq\n"
+        );
     }
 }
