@@ -1,18 +1,19 @@
 #!/usr/bin/env bash
 # Builds hrtao (release), benchmarks the shared scenes and generated server rooms with `hrtao bench`, and writes
 # docs/benchmarks.md plus PNG plots in docs/bench/ (`hrtao bench --report`). Needs ../shared beside the repo.
-# About 10-15 minutes on Mesa lavapipe with 2 cores. Environment:
-#   BENCH_SIZE=WxH (320x180)   BENCH_RAYS=B (10, the paper's budget)   BENCH_SCENES="rod cycloidal ..."
+# About 80 minutes on Mesa lavapipe with 2 cores at the defaults (san_francisco alone takes 45); BENCH_SIZE=320x180
+# takes about 15. Environment:
+#   BENCH_SIZE=WxH (640x360, the viewer's working size here)   BENCH_RAYS=B (8)   BENCH_SCENES="rod cycloidal ..."
 #   BENCH_SCALE="rows:cols ..." (racks sizes)   BENCH_QUICK=1 (tiny settings, to check the script itself)
 #   BENCH_HRTAO_FRAMES=N (32: still frames of HRTAO, ours and the paper's mode, for the error curves and flicker)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SHARED=${SHARED:-../shared}
 OUT=docs/bench
-SIZE=${BENCH_SIZE:-320x180}
+SIZE=${BENCH_SIZE:-640x360}
 W=${SIZE%x*}
 H=${SIZE#*x}
-RAYS=${BENCH_RAYS:-10}
+RAYS=${BENCH_RAYS:-8}
 # key:scene file:AO radius (radii from $SHARED/refs/index.json)
 ALL_SCENES="rod:scenes/rod_assembly/rod.glb:10 cycloidal:scenes/cycloidal_gearbox/cycloidal.glb:8 \
 engine:scenes/2CylinderEngine/2CylinderEngine.gltf:40 duplex:scenes/duplex_apartment/duplex.glb:1 \

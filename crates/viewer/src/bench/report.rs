@@ -160,7 +160,8 @@ fn ours_vs_paper(m: &mut String, results: &[&BenchResult]) -> Result<()> {
     writeln!(m, "### Ours beside the paper's behaviour, same run\n")?;
     writeln!(
         m,
-        "Paper = `AoSettings::paper()`: still-camera refinement and variance-guided filter off. Navigation: GPU ms \
+        "Paper = `AoSettings::paper()`: every addition of ours off (still-camera refinement, the filter's noise \
+         stop, the near-field correction, level blend, adaptive rays, pooled residual, local edits). Navigation: GPU ms \
          (median whole frame). Flicker: mean |ΔAO| between consecutive frames of the still camera after frame 4. \
          MAE against the converged reference above.\n"
     )?;
@@ -254,8 +255,8 @@ fn render_markdown(
         m,
         "**Read the ratios, not the milliseconds.** The device is Mesa's lavapipe: Vulkan ray queries emulated on {} CPU \
          cores. Absolute times are 2–4 orders of magnitude above a ray-tracing GPU and are noisy (other processes \
-         share the cores); the paper's numbers are 1080p on a Quadro RTX 8000. Images here are small (see the \
-         tables) to keep the whole script within minutes.\n",
+         share the cores); the paper's numbers are 1080p on a Quadro RTX 8000. Images are the viewer's working size on \
+         this machine (see the tables), smaller than the paper's 1080p.\n",
         r0.host.cpu_cores
     )?;
 
@@ -316,23 +317,21 @@ fn render_markdown(
                 .collect();
             notes.push(format!(
                 "**Rays to match (≥ 32×): missed on {} of {} scenes, worst {}× ({:.0} % of the target).** HRTAO's one-frame \
-                 MAE is {}–{}× lower than per-pixel RTAO's at the same B, but HRTAO's error does not keep falling: it \
-                 is bias, not noise. Static HRTAO frames level off (last HRTAO frame vs per-pixel RTAO at the same \
-                 cumulated rays: {}), and the independent Cycles references show the same floor, so the reference is \
-                 not the cause (converged per-pixel RTAO lands within 0.002–0.004 of Cycles). The bias comes from \
-                 sharing one AO value per cell: cells of s_p = 3 pixels quantised to a power of two (eq. 3), 4 LODs with \
-                 coarser fallbacks while the finest cell has < min samples (§4), and the à-trous filter (§5), all of \
-                 which smear contact occlusion. 32× would need HRTAO's one-frame MAE at about the error of per-pixel \
-                 RTAO at 32 B (≈ 0.01 here). What would close it: smaller cells (s_p 1–2, at more cells per frame), \
-                 trilinear/bilateral reconstruction weighted by the pixel's position inside the cell, and a filter \
-                 that stops at occlusion discontinuities; measuring at 1080p (cells relative to geometry shrink as \
-                 the resolution grows).",
+                 MAE is {}–{}× lower than per-pixel RTAO's at the same B. Per-pixel RTAO's error falls about as \
+                 1/√rays, so matching a k× lower error takes about k² × B rays: 32× would need HRTAO's one frame \
+                 √32 ≈ 5.7× below per-pixel RTAO at B. What remains of HRTAO's one-frame error is the young cells' \
+                 noise where a face covers only a few pixels, and the bias of sharing one AO value per cell (cells of \
+                 s_p = {} view pixels rounded to a power of two, eq. 2–3; coarser LODs while the finest cell is young, \
+                 §4; the à-trous filter, §5). A still camera does not stop at that bias (last HRTAO frame vs \
+                 per-pixel RTAO at the same cumulated rays: {}): the still refinement (ours, docs/algorithm.md) \
+                 moves each pixel to its own rays.",
                 ratios.len() - met,
                 ratios.len(),
                 f(lo, 1),
                 lo / 32.0 * 100.0,
                 f(span(&better).0, 1),
                 f(span(&better).1, 1),
+                scenes[0].settings["s_p"],
                 plateau.join("; ")
             ));
         }
