@@ -14,6 +14,10 @@
 #include "filter_plan.glsl"
 
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
+// Guided filter (ours): the world scale of the position weight in steps of the iteration (the taps reach 2
+// steps), and the plane weight's tolerance in units of the iteration's reach (2 steps, at least the cell).
+const float GUIDED_REACH = 4.0;
+const float GUIDED_PLANE = 2.0;
 
 void main() {
     // Dispatched over the pixels whose plan takes an iteration (resolve.comp queues them); the others hold
@@ -49,6 +53,16 @@ void main() {
     bool guided = g.filter_sigma > 0.0;
     // World scale of the position weights: the cell, or in the guided filter the reach of this iteration.
     float scale = guided ? max(cell, 2.0 * float(step) * pixel_size) : cell;
+    // Guided, first frames (ours): the position weight reaches over twice the iteration's taps and the plane
+    // weight admits parallel faces within 2 scales (otherwise a quarter), so a face of a few pixels borrows the
+    // rays of its neighbours on nearby parallel planes where their AO agrees within the noise (san_francisco one
+    // frame 0.0262 -> 0.0258, duplex 0.0093 -> 0.0083; docs/algorithm.md). Only in a young map's frames that are
+    // not still refinement (the first frame from an empty map, after an edit): still frames and navigation
+    // frames filter as before.
+    bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
+    bool wide = guided && (g.flags & FLAG_YOUNG_MAP) != 0u && !refining;
+    float pos_scale = wide ? max(cell, GUIDED_REACH * float(step) * pixel_size) : scale;
+    float plane_scale = (wide ? GUIDED_PLANE : 0.25) * scale;
     // Guided: the noise of the pixel's value, p(1-p)/n for the n rays of its cell (p kept off 0 and 1 so an
     // open or closed cell still admits its neighbours' noise). The pixels of one cell share its noise, so the
     // averaging only lowers it once the kernel (4 steps wide) spans more than the cell's footprint: from there
@@ -74,8 +88,8 @@ void main() {
             vec3 q_normal = unpack_normal(guide.normal);
             float k = KERNEL[abs(dx)] * KERNEL[abs(dy)];
             vec3 delta = guide.position - px.position;
-            float w_pos = exp(-dot(delta, delta) / (scale * scale));
-            float w_plane = exp(-abs(dot(delta, px.normal)) / (0.25 * scale));
+            float w_pos = exp(-dot(delta, delta) / (pos_scale * pos_scale));
+            float w_plane = exp(-abs(dot(delta, px.normal)) / plane_scale);
             float w_n = pow(max(dot(q_normal, px.normal), 0.0), 2.0 * g.s_nd);
             float w_ao = guided ? exp(-abs(src.v[qi] - center) * stop) : 1.0;
             float w = k * w_pos * w_plane * w_n * w_ao;
