@@ -3,7 +3,7 @@
 //! noise.
 mod common;
 use common::*;
-use hrtao_core::{imageio, Renderer, SceneGpu};
+use hrtao_core::{Renderer, SceneGpu};
 
 /// One frame from an empty map at 8 rays per pixel on the shared duplex view (320x180) against its Cycles
 /// reference, within the budget. Measured 0.0099 with the narrow filter, 0.0087-0.0088 with the wider reach
@@ -12,7 +12,7 @@ use hrtao_core::{imageio, Renderer, SceneGpu};
 fn guided_filter_reach_first_frame_error() {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene("duplex", 320, 180);
-    let (_, _, cycles) = imageio::read_pfm(&shared("refs/duplex_320x180.cycles.pfm")).unwrap();
+    let cycles = cycles_ref("duplex", 320, 180);
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
     let settings = hrtao(8, radius);
     assert!(settings.filter_sigma > 0.0, "the guided filter is on by default");

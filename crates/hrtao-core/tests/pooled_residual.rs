@@ -2,7 +2,7 @@
 //! filter, a young cell's pixel is corrected by the rays its 3x3 same-plane neighbours traced this frame.
 mod common;
 use common::*;
-use hrtao_core::{imageio, AoSettings, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Renderer, SceneGpu};
 
 /// One frame from an empty map at 8 rays per pixel on the shared engine (320x180) against its Cycles reference:
 /// the correction lowers the error at the same rays (measured 0.0281 -> 0.0272 on this size, 0.0229 -> 0.0212
@@ -11,7 +11,7 @@ use hrtao_core::{imageio, AoSettings, Renderer, SceneGpu};
 fn pooled_residual_cuts_first_frame_error_at_equal_rays() {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene("engine", 320, 180);
-    let (_, _, cycles) = imageio::read_pfm(&shared("refs/engine_320x180.cycles.pfm")).unwrap();
+    let cycles = cycles_ref("engine", 320, 180);
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
     let first_frame = |settings: AoSettings| {
         let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");

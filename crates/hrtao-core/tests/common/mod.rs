@@ -114,6 +114,14 @@ pub fn shared_scene(key: &str, w: u32, h: u32) -> (Scene, Camera, f32) {
     (scene, cam, entry["radius"].as_f64().unwrap() as f32)
 }
 
+/// The Blender Cycles AO reference of a shared view (`../shared/refs/KEY_WxH.cycles.pfm`), checked for its size.
+pub fn cycles_ref(key: &str, w: u32, h: u32) -> Vec<f32> {
+    let (rw, rh, ao) =
+        hrtao_core::imageio::read_pfm(&shared(&format!("refs/{key}_{w}x{h}.cycles.pfm"))).unwrap();
+    assert_eq!((rw, rh), (w, h), "reference size");
+    ao
+}
+
 /// Mean absolute error over pixels not open (AO < 0.999) in both images.
 pub fn mae(a: &[f32], b: &[f32]) -> f32 {
     hrtao_core::metrics::ao_error(a, b).mae as f32
