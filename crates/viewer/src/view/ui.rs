@@ -380,8 +380,8 @@ impl Viewer {
         ui.add(egui::Slider::new(&mut s.level_blend, 0.0..=8.0).text("level blend λ"))
             .on_hover_text(
                 "Ours (docs/algorithm.md): while a pixel's finest cell is young, its AO leans on the next coarser \
-                 level where the two agree within the finest cell's noise (λ scales that noise), so the first \
-                 frames after a move are smoother. 0: the paper's finest level alone.",
+                 level where the two agree within the finest cell's noise (λ scales that noise), so a young map's \
+                 first frames are smoother (not while navigating a settled map). 0: the paper's finest level alone.",
             );
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.adaptive_rays, "adaptive rays").on_hover_text(
