@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds hrtao (release), benchmarks the shared scenes and generated server rooms with `hrtao bench`, and writes
 # docs/benchmarks.md plus PNG plots in docs/bench/ (`hrtao bench --report`). Needs ../shared beside the repo.
-# About 80 minutes on Mesa lavapipe with 2 cores at the defaults (san_francisco alone takes 45); BENCH_SIZE=320x180
+# About 80 minutes on Mesa lavapipe with 2 cores at the defaults (san_francisco alone about 55); BENCH_SIZE=320x180
 # takes about 15. Environment:
 #   BENCH_SIZE=WxH (640x360, the viewer's working size here)   BENCH_RAYS=B (8)   BENCH_SCENES="rod cycloidal ..."
 #   BENCH_SCALE="rows:cols ..." (racks sizes)   BENCH_QUICK=1 (tiny settings, to check the script itself)

@@ -255,8 +255,8 @@ fn render_markdown(
         m,
         "**Read the ratios, not the milliseconds.** The device is Mesa's lavapipe: Vulkan ray queries emulated on {} CPU \
          cores. Absolute times are 2–4 orders of magnitude above a ray-tracing GPU and are noisy (other processes \
-         share the cores); the paper's numbers are 1080p on a Quadro RTX 8000. Images are the viewer's working size on \
-         this machine (see the tables), smaller than the paper's 1080p.\n",
+         share the cores); the paper's numbers are 1080p on a Quadro RTX 8000. Image sizes are in the tables (`scripts/bench-docs.sh` \
+         defaults to 640×360, the viewer's working size on this machine).\n",
         r0.host.cpu_cores
     )?;
 
