@@ -58,6 +58,9 @@ bool queue_entry(uint count, out uint q) {
 // filter iterations, level blend) leave it, and it resolves and filters as the paper does.
 bool navigation_frame() { return g.still_index == 0u && (g.flags & FLAG_YOUNG_MAP) == 0u; }
 
+// Still-camera refinement frame (ours): every pixel traces its own rays.
+bool refine_frame() { return (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u; }
+
 bool camera_orthographic() { return g.projection == PROJECTION_ORTHOGRAPHIC; }
 
 // The camera ray through the pixel centre moved by this frame's jitter (Camera::ray): perspective, from the eye

@@ -59,8 +59,7 @@ void main() {
     // frame 0.0262 -> 0.0258, duplex 0.0093 -> 0.0083; docs/algorithm.md). Only in a young map's frames that are
     // not still refinement (the first frame from an empty map, after an edit): still frames and navigation
     // frames filter as before.
-    bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
-    bool wide = guided && (g.flags & FLAG_YOUNG_MAP) != 0u && !refining;
+    bool wide = guided && (g.flags & FLAG_YOUNG_MAP) != 0u && !refine_frame();
     float pos_scale = wide ? max(cell, GUIDED_REACH * float(step) * pixel_size) : scale;
     float plane_scale = (wide ? GUIDED_PLANE : 0.25) * scale;
     // Guided: the noise of the pixel's value, p(1-p)/n for the n rays of its cell (p kept off 0 and 1 so an

@@ -10,11 +10,10 @@ const float POOL_COS = 0.95;
 const float POOL_PLANE = 0.05;
 const int POOL_RADIUS = 1;
 
-// The rays traced this frame by the pixel and its 3x3 neighbours on its surface: (open within R, open within
-// the near radius, traced).
-vec3 pooled_rays(uvec2 pix, GPixel px) {
+// The rays traced this frame by the pixel and its 3x3 neighbours on its surface: (open within R, traced).
+vec2 pooled_rays(uvec2 pix, GPixel px) {
     float tol = POOL_PLANE * pixel_world_size(px.t);
-    vec3 sum = vec3(0.0);
+    vec2 sum = vec2(0.0);
     for (int dy = -POOL_RADIUS; dy <= POOL_RADIUS; ++dy) {
         for (int dx = -POOL_RADIUS; dx <= POOL_RADIUS; ++dx) {
             ivec2 q = ivec2(pix) + ivec2(dx, dy);
@@ -25,7 +24,7 @@ vec3 pooled_rays(uvec2 pix, GPixel px) {
             GPixel pq = GBufferRef(g.gbuffer).px[qi];
             if (pq.t < 0.0 || dot(pq.normal, px.normal) < POOL_COS
                 || abs(dot(pq.position - px.position, px.normal)) > tol) continue;
-            sum += vec3(float(pr.open), float(pr.near_open), float(pr.near_traced));
+            sum += vec2(float(pr.open), float(pr.near_traced));
         }
     }
     return sum;

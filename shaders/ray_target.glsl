@@ -4,9 +4,6 @@
 #define HRTAO_RAY_TARGET_GLSL
 #include "hash_map.glsl"
 
-// Still-camera refinement frame (ours): every pixel traces its own rays.
-bool refine_frame() { return (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u; }
-
 // The finest of the pixel's cells that exists (inserts may fail under overload) in `first`; true when that
 // cell still takes rays (its QMC sequence has not reached max_samples).
 bool ray_target(GPixel px, PixelCells pc, out uint first) {

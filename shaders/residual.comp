@@ -14,7 +14,7 @@
 #include "pool.glsl"
 
 void main() {
-    if ((g.flags & FLAG_REFINE) != 0u && g.still_index > 0u) return;
+    if (refine_frame()) return;
     uint q;
     if (!queue_entry(StatsRef(g.stats).counters[STAT_RAY_QUEUE], q)) return;
     uint index = UintRef(g.ray_queue).v[q];
@@ -25,11 +25,11 @@ void main() {
     if (samples == 0u || samples >= g.max_samples) return;   // no AO, or a full cell
     GPixel px = GBufferRef(g.gbuffer).px[index];
     if (px.t < 0.0) return;
-    vec3 pool = pooled_rays(pix, px);
-    if (pool.z <= 0.0) return;
+    vec2 pool = pooled_rays(pix, px);
+    if (pool.y <= 0.0) return;
     FloatRef ao = FloatRef(g.ao);
     float a = ao.v[index];
-    float n = pool.z;
+    float n = pool.y;
     float r = pool.x / n - a;
     float p = clamp(a, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
     float v = p * (1.0 - p) / n;

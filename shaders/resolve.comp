@@ -91,8 +91,7 @@ void main() {
             // the next coarser one agree within the fine level's binomial noise v, the coarser level (about 4x
             // the rays on a surface) takes over, and where they differ by more, the fine level's detail stays
             // (Wiener weight d^2 / (d^2 + lambda v)). Full cells and refinement frames are left as they are.
-            bool refining = (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u;
-            if (g.level_blend > 0.0 && !refining && !navigation_frame() && wsum > 0.0 && best + 1u < LOD_COUNT
+            if (g.level_blend > 0.0 && !refine_frame() && !navigation_frame() && wsum > 0.0 && best + 1u < LOD_COUNT
                 && own_samples < float(g.max_samples)) {
                 vec4 coarse = interpolate(px.position, lod + 1, nq);
                 if (coarse.z > 0.0) {
@@ -118,7 +117,7 @@ void main() {
             // The pixel classified rays this frame (FLAG_NEAR_FIELD) and so did its cells.
             uint own_near = cells.v[own].near_traced;
             bool cells_near = wsum > 0.0 ? near_sum >= 0.0 : own_near > 0u;
-            if (g.near_weight > 0.0 && pr.near_traced > 0u && cells_near && !refining) {
+            if (g.near_weight > 0.0 && pr.near_traced > 0u && cells_near && !refine_frame()) {
                 float n = float(pr.near_traced);
                 float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / float(own_near);
                 float r = float(pr.near_open) / n - cell_near;
