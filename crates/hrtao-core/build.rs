@@ -16,6 +16,7 @@ fn glsl_type(rust: &str) -> String {
         "[u32;2]" => "uvec2".into(),
         "[u32;3]" => "uvec3".into(),
         "[u32;4]" => "uvec4".into(),
+        "[i32;3]" => "ivec3".into(),
         other => {
             // Arrays of scalars: [u32;8] -> uint name[8] is handled by the caller.
             panic!("gpu_types.rs: no GLSL mapping for Rust type `{other}`")
@@ -29,7 +30,7 @@ fn glsl_field(name: &str, rust: &str) -> String {
         let (elem, n) = inner.split_once(';').unwrap();
         if !matches!(
             t.as_str(),
-            "[f32;2]" | "[f32;3]" | "[f32;4]" | "[u32;2]" | "[u32;3]" | "[u32;4]"
+            "[f32;2]" | "[f32;3]" | "[f32;4]" | "[u32;2]" | "[u32;3]" | "[u32;4]" | "[i32;3]"
         ) {
             return format!("{} {}[{}];", glsl_type(elem), name, n);
         }

@@ -482,6 +482,8 @@ impl Renderer {
             residual_sigma: s.residual_sigma,
             still_smoothing: s.still_smoothing,
             pooled_residual: s.pooled_residual,
+            cell_gradient: s.cell_gradient,
+            align_pad: 0,
             trace_fraction: s.trace_fraction,
             level_blend: s.level_blend,
             bias_evidence: t.bias_evidence.address,

@@ -178,6 +178,12 @@ pub struct AoSettings {
     /// binomial noise v of those rays: detail finer than the cells (faces of a few pixels) comes back where
     /// the rays show it. λ is this setting; 0 = off (the paper).
     pub pooled_residual: f32,
+    /// Ours (docs/algorithm.md, linear cells): each cell also keeps the least-squares slope of its AO across
+    /// the cell, from where its rays started, and the resolve evaluates that line at the pixel instead of the
+    /// cell's mean. The slope is shrunk by the Wiener weight g²/(g² + λ v) against its noise v. λ is this
+    /// setting; 0 = constant cells (the paper), the default until its navigation cost is measured (2 is the
+    /// best measured value, docs/algorithm.md).
+    pub cell_gradient: f32,
 }
 
 impl Default for AoSettings {
@@ -215,6 +221,7 @@ impl Default for AoSettings {
             level_blend: 1.0,
             adaptive_rays: true,
             pooled_residual: 16.0,
+            cell_gradient: 0.0,
         }
     }
 }
@@ -231,6 +238,7 @@ impl AoSettings {
             level_blend: 0.0,
             adaptive_rays: false,
             pooled_residual: 0.0,
+            cell_gradient: 0.0,
             ..self.clone()
         }
     }
@@ -321,6 +329,7 @@ impl AoSettings {
             ("residual sigma", self.residual_sigma),
             ("level blend", self.level_blend),
             ("pooled residual", self.pooled_residual),
+            ("cell gradient", self.cell_gradient),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));

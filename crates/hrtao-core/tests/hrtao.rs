@@ -241,6 +241,7 @@ fn stale_cells_are_reclaimed_so_the_map_never_fills() {
     let settings = AoSettings {
         hash_capacity: 8192,
         stale_frames: 2,
+        cell_gradient: 2.0,
         ..hrtao(1, radius)
     };
     let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
@@ -274,6 +275,7 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
     let base = AoSettings {
         s_p: 1.0,
+        cell_gradient: 2.0,
         ..hrtao(4, radius)
     };
     let need = Renderer::new(&gpu, cam.width, cam.height, base.clone())

@@ -397,6 +397,10 @@ impl Viewer {
                      more than their noise (λ scales it): faces smaller than a cell keep their own AO. 0: off.",
                 );
         });
+        ui.add(egui::Slider::new(&mut s.cell_gradient, 0.0..=16.0).text("linear cells λ"))
+            .on_hover_text(
+                "Ours (docs/algorithm.md): each cell also keeps the slope of its AO across the cell, from where                  its rays started, and a pixel reads the cell's line at its own position instead of the cell's                  mean; the slope is shrunk against its noise (λ scales it; 2 measured best). 0: constant cells                  (the paper). Cells already filled take it from their next rays.",
+            );
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.edges, "edges").on_hover_text(
                 "Feature edges over the shading: silhouettes (depth and part changes) and creases. In \
