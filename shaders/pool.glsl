@@ -10,6 +10,11 @@ const float POOL_COS = 0.95;
 const float POOL_PLANE = 0.05;
 const int POOL_RADIUS = 1;
 
+// Whether G-buffer sample `pq` lies on the surface of pixel `px`; `tol` = POOL_PLANE * the pixel's world size.
+bool same_surface(GPixel px, GPixel pq, float tol) {
+    return pq.t >= 0.0 && dot(pq.normal, px.normal) >= POOL_COS && abs(dot(pq.position - px.position, px.normal)) <= tol;
+}
+
 // The rays traced this frame by the pixel and its 3x3 neighbours on its surface: (open within R, traced).
 vec2 pooled_rays(uvec2 pix, GPixel px) {
     float tol = POOL_PLANE * pixel_world_size(px.t);
@@ -22,8 +27,7 @@ vec2 pooled_rays(uvec2 pix, GPixel px) {
             PixelRays pr = PixelRaysRef(g.pixel_rays).v[qi];
             if (pr.near_traced == 0u) continue;
             GPixel pq = GBufferRef(g.gbuffer).px[qi];
-            if (pq.t < 0.0 || dot(pq.normal, px.normal) < POOL_COS
-                || abs(dot(pq.position - px.position, px.normal)) > tol) continue;
+            if (!same_surface(px, pq, tol)) continue;
             sum += vec2(float(pr.open), float(pr.near_traced));
         }
     }

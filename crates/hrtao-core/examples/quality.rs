@@ -85,6 +85,17 @@ fn main() -> anyhow::Result<()> {
                     std::fs::create_dir_all(&d)?;
                     let (w, h) = (cam.width, cam.height);
                     hrtao_core::imageio::write_pfm(&d.join(format!("{key}_hrtao1.pfm")), w, h, &ao)?;
+                    let rays = r.read_pixel_rays()?;
+                    let open: Vec<f32> = rays.iter().map(|p| p.open as f32).collect();
+                    let traced: Vec<f32> = rays.iter().map(|p| p.near_traced as f32).collect();
+                    hrtao_core::imageio::write_pfm(&d.join(format!("{key}_open.pfm")), w, h, &open)?;
+                    hrtao_core::imageio::write_pfm(&d.join(format!("{key}_traced.pfm")), w, h, &traced)?;
+                    let plan: Vec<f32> = r
+                        .read_filter_plan()?
+                        .iter()
+                        .map(|p| (p >> hrtao_core::gpu::FILTER_PLAN_BITS) as f32)
+                        .collect();
+                    hrtao_core::imageio::write_pfm(&d.join(format!("{key}_samples.pfm")), w, h, &plan)?;
                     let gb = r.read_gbuffer()?;
                     let mask: Vec<f32> = gb.iter().map(|p| if p.t >= 0.0 { 1.0 } else { 0.0 }).collect();
                     hrtao_core::imageio::write_pfm(&d.join(format!("{key}_mask.pfm")), w, h, &mask)?;
@@ -125,9 +136,14 @@ fn main() -> anyhow::Result<()> {
         let mut rt = Renderer::new(&gpu, cam.width, cam.height, rt_settings)?;
         let eq_frames = ((rays_px / rays as f64).round() as u32).max(1);
         let mut rtao_curve = Vec::new();
-        for _ in 0..eq_frames.max(frames) {
+        for i in 0..eq_frames.max(frames) {
             rt.render(&sg, scene.f(), &cam)?;
-            rtao_curve.push(metrics::ao_error(&rt.read_ao()?, &reference).mae);
+            let ao = rt.read_ao()?;
+            if i == 0 && !dump.is_empty() {
+                let path = PathBuf::from(&dump).join(format!("{key}_rtao1.pfm"));
+                hrtao_core::imageio::write_pfm(&path, cam.width, cam.height, &ao)?;
+            }
+            rtao_curve.push(metrics::ao_error(&ao, &reference).mae);
         }
         if !dump.is_empty() {
             let d = PathBuf::from(&dump);

@@ -94,11 +94,16 @@ gpu_consts! {
     /// Pixels queued for the à-trous filter this frame: those whose plan takes at least one iteration
     /// (resolve.comp, filter_plan.glsl `store_resolved`).
     STAT_FILTER_QUEUE: u32 = 11;
+    /// Contact detail (ours, detail.comp): four words holding two i64 sums over the pixels it corrects, in
+    /// 1/DETAIL_SUM_SCALE units: Σ t (y - a) d and Σ t d², t the pixel's rays, y their open fraction, a its AO
+    /// and d its obscurance detail; their ratio is the frame's fitted detail gain.
+    STAT_DETAIL_SUMS: u32 = 12;
+    DETAIL_SUM_SCALE: u32 = 0x0010_0000;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
-    STAT_OCCUPIED: u32 = 12;
-    STAT_COUNT: u32 = 13;
+    STAT_OCCUPIED: u32 = 16;
+    STAT_COUNT: u32 = 17;
     /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 12;
+    STAT_PER_FRAME: u32 = 16;
     /// Offsets in words into the indirect dispatch arguments (`dispatch_args`, written by queue_args.comp):
     /// the ray-tracing update's, then the filter's.
     RAY_ARGS_OFFSET: u32 = 0;
@@ -233,14 +238,17 @@ gpu_structs! {
         /// Linear cells (ours, docs/algorithm.md): the Wiener factor λ that shrinks a cell's AO slope against
         /// its noise (0 = constant cells, the paper).
         cell_gradient: f32,
-        /// Keeps the next address at an 8-byte offset (scalar layout aligns it to its u64).
-        align_pad: u32,
+        /// Contact detail (ours, docs/algorithm.md): the weight of the fitted detail gain (0 = off). Also keeps
+        /// the next address at an 8-byte offset (scalar layout aligns it to its u64).
+        contact_detail: f32,
         /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the
         /// pixel takes and the rays of the cell its AO came from.
         filter_plan: u64,
         /// Per pixel, from the resolve to the filter's taps (filter_plan.glsl): position and packed normal in
         /// 16 bytes (a tap then reads a quarter of a cache line, not a 48-byte G-buffer sample).
         filter_guide: u64,
+        /// Per pixel, the screen-space obscurance of its G-buffer neighbourhood (detail.comp).
+        obscurance: u64,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -392,6 +400,6 @@ gpu_structs! {
 
     /// Counters read back after every frame.
     struct FrameStats {
-        counters: [u32; 13],
+        counters: [u32; 17],
     }
 }

@@ -29,12 +29,13 @@ pub enum Pass {
     Resolve,
     Filter,
     Residual,
+    Detail,
     Composite,
     HashTest,
 }
 
 impl Pass {
-    pub const ALL: [Pass; 12] = [
+    pub const ALL: [Pass; 13] = [
         Pass::Clear,
         Pass::Primary,
         Pass::GbufferFromVis,
@@ -45,6 +46,7 @@ impl Pass {
         Pass::Resolve,
         Pass::Filter,
         Pass::Residual,
+        Pass::Detail,
         Pass::Composite,
         Pass::HashTest,
     ];
@@ -62,6 +64,7 @@ impl Pass {
             Pass::Resolve => "resolve",
             Pass::Filter => "filter",
             Pass::Residual => "residual",
+            Pass::Detail => "detail",
             Pass::Composite => "composite",
             Pass::HashTest => "hash_test",
         }
@@ -75,7 +78,7 @@ impl Pass {
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
             Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
-            Pass::Resolve | Pass::Residual => "per-pixel AO",
+            Pass::Resolve | Pass::Residual | Pass::Detail => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",
             Pass::HashTest => "hash test",

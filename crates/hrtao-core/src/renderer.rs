@@ -39,6 +39,7 @@ struct Targets {
     pixel_cells: Buffer,
     ray_queue: Buffer,
     filter_queue: Buffer,
+    obscurance: Buffer,
 }
 
 impl Targets {
@@ -69,6 +70,7 @@ impl Targets {
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
             ray_queue: b("ray queue", n * 4)?,
             filter_queue: b("filter queue", n * 4)?,
+            obscurance: b("obscurance", n * 4)?,
         })
     }
 }
@@ -483,7 +485,8 @@ impl Renderer {
             still_smoothing: s.still_smoothing,
             pooled_residual: s.pooled_residual,
             cell_gradient: s.cell_gradient,
-            align_pad: 0,
+            contact_detail: s.contact_detail,
+            obscurance: t.obscurance.address,
             trace_fraction: s.trace_fraction,
             level_blend: s.level_blend,
             bias_evidence: t.bias_evidence.address,
@@ -653,6 +656,14 @@ impl Renderer {
             if self.settings.pooled_residual > 0.0 && young {
                 // Over the pixels that traced into their cells (the ray queue), while the map is young.
                 rec.dispatch_indirect(Pass::Residual, args, rays, [0; 4]);
+            }
+            if self.settings.contact_detail > 0.0 && young {
+                // Contact detail (ours): the obscurance of every pixel, then over the ray queue the fit of its
+                // gain to this frame's rays and the correction (detail.comp's three phases).
+                rec.dispatch(Pass::Detail, w, h, [0; 4]);
+                for phase in 1..=2 {
+                    rec.dispatch_indirect(Pass::Detail, args, rays, [phase, 0, 0, 0]);
+                }
             }
         }
         rec.dispatch(Pass::Composite, w, h, [0; 4]);
@@ -884,6 +895,11 @@ impl Renderer {
     /// the rays of the cell its AO came from.
     pub fn read_filter_plan(&self) -> Result<Vec<u32>> {
         self.read_buffer(&self.targets.filter_plan, self.pixel_count())
+    }
+
+    /// Per pixel, the rays it traced itself in the last frame (`PixelRays`).
+    pub fn read_pixel_rays(&self) -> Result<Vec<PixelRays>> {
+        self.read_buffer(&self.targets.pixel_rays, self.pixel_count())
     }
 
     pub fn read_lod_used(&self) -> Result<Vec<u32>> {

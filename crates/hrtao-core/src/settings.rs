@@ -184,6 +184,13 @@ pub struct AoSettings {
     /// setting; 0 = constant cells (the paper), the default until its navigation cost is measured (2 is the
     /// best measured value, docs/algorithm.md).
     pub cell_gradient: f32,
+    /// Ours (docs/algorithm.md, contact detail): while a pixel's cell is young, the detail of its screen-space
+    /// obscurance (how much of the G-buffer around it rises above its tangent plane within R, minus the same on
+    /// its surface's 3x3 neighbours) is added to its AO with a gain fitted each frame to the rays the pixels
+    /// traced (least squares over the image, shrunk against its noise, never brightening creases): contact
+    /// shadows finer than the cells and the filter come back. This setting scales the fitted gain; 0 = off
+    /// (the paper), 1 = the fit.
+    pub contact_detail: f32,
 }
 
 impl Default for AoSettings {
@@ -222,6 +229,7 @@ impl Default for AoSettings {
             adaptive_rays: true,
             pooled_residual: 16.0,
             cell_gradient: 0.0,
+            contact_detail: 1.0,
         }
     }
 }
@@ -239,6 +247,7 @@ impl AoSettings {
             adaptive_rays: false,
             pooled_residual: 0.0,
             cell_gradient: 0.0,
+            contact_detail: 0.0,
             ..self.clone()
         }
     }
@@ -330,6 +339,7 @@ impl AoSettings {
             ("level blend", self.level_blend),
             ("pooled residual", self.pooled_residual),
             ("cell gradient", self.cell_gradient),
+            ("contact detail", self.contact_detail),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} must be a number >= 0, got {v}"));

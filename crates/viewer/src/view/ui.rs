@@ -399,7 +399,16 @@ impl Viewer {
         });
         ui.add(egui::Slider::new(&mut s.cell_gradient, 0.0..=16.0).text("linear cells λ"))
             .on_hover_text(
-                "Ours (docs/algorithm.md): each cell also keeps the slope of its AO across the cell, from where                  its rays started, and a pixel reads the cell's line at its own position instead of the cell's                  mean; the slope is shrunk against its noise (λ scales it; 2 measured best). 0: constant cells                  (the paper). Only rays traced while it is on give a cell its slope.",
+                "Ours (docs/algorithm.md): each cell also keeps the slope of its AO across the cell, from where \
+                 its rays started, and a pixel reads the cell's line at its own position instead of the cell's \
+                 mean; the slope is shrunk against its noise (λ scales it; 2 measured best). 0: constant cells \
+                 (the paper). Only rays traced while it is on give a cell its slope.",
+            );
+        ui.add(egui::Slider::new(&mut s.contact_detail, 0.0..=2.0).text("contact detail"))
+            .on_hover_text(
+                "Ours (docs/algorithm.md): while cells are young, the creases and contacts that the G-buffer \
+                 shows around a pixel, finer than its cells, darken it by a gain fitted each frame to the rays \
+                 the pixels traced. This scales the fitted gain: 1 = the fit, 0 = off (the paper).",
             );
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.edges, "edges").on_hover_text(
