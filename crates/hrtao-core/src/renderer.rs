@@ -720,8 +720,8 @@ impl Renderer {
     /// Whether the map is young this frame: new, re-keyed (eq. 6), or its cells still take many rays (in the
     /// last frame at least 1/YOUNG_CELL_RAYS_DEN of the budget: a new view, the first still frames). Our
     /// first-frame additions run only then: adaptive sampling's three dispatches (`adaptive_rays`), the
-    /// near-field control variate's ray classification (`near_weight`) and the pooled residual
-    /// (`pooled_residual`). In a navigation frame a few newly seen
+    /// near-field control variate's ray classification (`near_weight`), the pooled residual
+    /// (`pooled_residual`) and contact detail (`contact_detail`). In a navigation frame a few newly seen
     /// cells take rays, and in a late still frame the pixels' own: they trace as in the paper, one dispatch of
     /// first-hit queries.
     fn young_map(&self) -> bool {
