@@ -18,6 +18,19 @@ fn median_of_odd_even_and_nan() {
 }
 
 #[test]
+fn paired_ratio_is_the_median_of_frame_by_frame_ratios() {
+    // The load triples the cost of the second pair (both frames of it) and the third pair is a noisy one: the
+    // pairs say 0.9, the medians of the two runs, taken over unrelated frames, say 0.95.
+    let ours = [90.0, 270.0, 95.0];
+    let paper = [100.0, 300.0, 90.0];
+    assert!((paired_ratio(&ours, &paper) - 0.9).abs() < 1e-12);
+    assert!((median(&ours) / median(&paper) - 0.95).abs() < 1e-12);
+    // Pairs without a positive base are skipped; none at all gives NaN.
+    assert!((paired_ratio(&[1.0, 5.0], &[0.0, 10.0]) - 0.5).abs() < 1e-12);
+    assert!(paired_ratio(&[1.0], &[0.0]).is_nan());
+}
+
+#[test]
 fn segment_mean_recovers_the_disjoint_average() {
     // A per-pixel sequence of samples; running means after 4 and 10 samples.
     let samples = [[1.0f32, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0], [0.5; 10]];

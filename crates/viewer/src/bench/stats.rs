@@ -16,6 +16,19 @@ pub fn median(values: &[f64]) -> f64 {
     }
 }
 
+/// Median of the per-frame ratios `a[i] / b[i]` of two runs over the same frames, interleaved (NaN when no
+/// pair has a positive `b`). A change of load on the machine hits both frames of a pair alike, so this is the
+/// cost ratio that noise moves least; the ratio of the two medians pairs unrelated frames.
+pub fn paired_ratio(a: &[f64], b: &[f64]) -> f64 {
+    let ratios: Vec<f64> = a
+        .iter()
+        .zip(b)
+        .filter(|(_, &y)| y > 0.0)
+        .map(|(x, y)| x / y)
+        .collect();
+    median(&ratios)
+}
+
 /// Mean over samples `n_a..n_b` of a sequence, given the running means `avg_a` of its first `n_a` samples and
 /// `avg_b` of its first `n_b` samples (per pixel). This turns one progressive per-pixel RTAO run into estimates
 /// over disjoint sample ranges, so the reference shares no sample with the estimates it judges.
