@@ -2,7 +2,6 @@
 //! pixel's AO with a gain fitted to the frame's own rays.
 mod common;
 use common::*;
-use hrtao_core::AoSettings;
 
 /// One frame from an empty map at 8 rays per pixel on a shared view at 320x180 against its Cycles reference,
 /// without and with contact detail (every other setting at its default): the creases between the engine's fins
@@ -14,16 +13,7 @@ fn contact_detail_lowers_the_first_frame_error() {
         "engine",
         320,
         180,
-        &[
-            |s| AoSettings {
-                contact_detail: 0.0,
-                ..s
-            },
-            |s| AoSettings {
-                contact_detail: 1.0,
-                ..s
-            },
-        ],
+        &[r#"{"contact_detail": 0}"#, r#"{"contact_detail": 1}"#],
     );
     println!(
         "engine 320x180, HRTAO 1 frame: without contact detail {:.4}, with {:.4}",

@@ -2,7 +2,6 @@
 //! the pixel, instead of the cell's mean.
 mod common;
 use common::*;
-use hrtao_core::AoSettings;
 
 /// One frame from an empty map at 8 rays per pixel on a shared view at 320x180 against its Cycles reference,
 /// with constant cells and with linear cells over the same rays: the line reads the AO's slope across a cell
@@ -16,16 +15,8 @@ fn linear_cells_lower_the_first_frame_error() {
         320,
         180,
         &[
-            |s| AoSettings {
-                cell_gradient: 0.0,
-                contact_detail: 0.0,
-                ..s
-            },
-            |s| AoSettings {
-                cell_gradient: 2.0,
-                contact_detail: 0.0,
-                ..s
-            },
+            r#"{"cell_gradient": 0, "contact_detail": 0}"#,
+            r#"{"cell_gradient": 2, "contact_detail": 0}"#,
         ],
     );
     println!(

@@ -122,11 +122,11 @@ pub fn cycles_ref(key: &str, w: u32, h: u32) -> Vec<f32> {
     ao
 }
 
-/// Mean absolute error over pixels not open (AO < 0.999) in both images.
 /// One frame from an empty map at 8 rays per pixel on a shared view against its Cycles reference: the MAE with
-/// `hrtao(8, R)` changed by each of `variants`, over one scene upload.
+/// `hrtao(8, R)` changed by each of `variants` (settings overrides as JSON, `AoSettings::with_overrides`), over
+/// one scene upload.
 #[allow(dead_code)]
-pub fn first_frame_errors(key: &str, w: u32, h: u32, variants: &[fn(AoSettings) -> AoSettings]) -> Vec<f32> {
+pub fn first_frame_errors(key: &str, w: u32, h: u32, variants: &[&str]) -> Vec<f32> {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene(key, w, h);
     let cycles = cycles_ref(key, w, h);
@@ -134,8 +134,10 @@ pub fn first_frame_errors(key: &str, w: u32, h: u32, variants: &[fn(AoSettings) 
     let errors = variants
         .iter()
         .map(|variant| {
-            let mut r =
-                Renderer::new(&gpu, cam.width, cam.height, variant(hrtao(8, radius))).expect("renderer");
+            let settings = hrtao(8, radius)
+                .with_overrides(variant)
+                .expect("settings overrides");
+            let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
             r.render(&sg, scene.f(), &cam).expect("frame");
             mae(&r.read_ao().unwrap(), &cycles)
         })
@@ -144,6 +146,7 @@ pub fn first_frame_errors(key: &str, w: u32, h: u32, variants: &[fn(AoSettings) 
     errors
 }
 
+/// Mean absolute error over pixels not open (AO < 0.999) in both images.
 pub fn mae(a: &[f32], b: &[f32]) -> f32 {
     hrtao_core::metrics::ao_error(a, b).mae as f32
 }
