@@ -16,9 +16,9 @@ bool same_surface(GPixel px, GPixel pq, float tol) {
 }
 
 // The rays traced this frame by the pixel and its 3x3 neighbours on its surface: (open within R, traced).
-vec2 pooled_rays(uvec2 pix, GPixel px) {
+vec3 pooled_rays(uvec2 pix, GPixel px) {
     float tol = POOL_PLANE * pixel_world_size(px.t);
-    vec2 sum = vec2(0.0);
+    vec3 sum = vec3(0.0);
     for (int dy = -POOL_RADIUS; dy <= POOL_RADIUS; ++dy) {
         for (int dx = -POOL_RADIUS; dx <= POOL_RADIUS; ++dx) {
             ivec2 q = ivec2(pix) + ivec2(dx, dy);
@@ -28,7 +28,7 @@ vec2 pooled_rays(uvec2 pix, GPixel px) {
             if (pr.near_traced == 0u) continue;
             GPixel pq = GBufferRef(g.gbuffer).px[qi];
             if (!same_surface(px, pq, tol)) continue;
-            sum += vec2(float(pr.open), float(pr.near_traced));
+            sum += vec3(float(pr.open), float(pr.near_open), float(pr.near_traced));
         }
     }
     return sum;

@@ -25,11 +25,11 @@ void main() {
     if (samples == 0u || samples >= g.max_samples) return;   // no AO, or a full cell
     GPixel px = GBufferRef(g.gbuffer).px[index];
     if (px.t < 0.0) return;
-    vec2 pool = pooled_rays(pix, px);
-    if (pool.y <= 0.0) return;
+    vec3 pool = pooled_rays(pix, px);
+    if (pool.z <= 0.0) return;
     FloatRef ao = FloatRef(g.ao);
     float a = ao.v[index];
-    float n = pool.y;
+    float n = pool.z;
     float r = pool.x / n - a;
     float p = clamp(a, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
     float v = p * (1.0 - p) / n;

@@ -11,6 +11,7 @@
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
+#include "pool.glsl"
 
 // Linear cells (ours, cell_gradient > 0, docs/algorithm.md): the AO of cell `c` (s rays) at offset `d` (in cell
 // widths) from its centre: the rays' mean plus the least-squares slope of the open rays against where they
@@ -134,7 +135,11 @@ void main() {
             ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
             // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
             // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.
-            // The residual is shrunk against the binomial noise of the pixel's few rays (Wiener: r^2/(r^2+v)).
+            // The residual r is shrunk against the binomial noise v of the pixel's few rays (Wiener:
+            // P/(P+v)), with the power P of the contact estimated from the residual r_q of the rays pooled
+            // over the pixel's same-surface 3x3 neighbours (pool.glsl), or from r r_q where the pixel and its
+            // neighbours agree: a contact shadow spans several pixels, a pixel whose few rays were unlucky
+            // does not (P = r^2, the pixel's own, speckled the first frames of a view).
             // Not in still-camera refinement frames: there the pixel's own rays enter the composite directly,
             // and a correction from each frame's few rays would only add flicker.
             PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
@@ -146,7 +151,10 @@ void main() {
                 float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / float(own_near);
                 float r = float(pr.near_open) / n - cell_near;
                 float v = max(cell_near * (1.0 - cell_near), 0.5 / n) / n;
-                ao += g.near_weight * r * r * r / (r * r + v);
+                vec3 pool = pooled_rays(pix, px);   // holds the pixel's own rays: pool.z >= n
+                float rq = pool.y / pool.z - cell_near;
+                float power = max(rq * rq, r * rq);
+                ao += g.near_weight * r * power / (power + v);
             }
             float footprint = exp2(float(lod)) / max(pixel_world_size(px.t), 1e-30);   // cell width in pixels
             uint own_rays = uint(own_samples);

@@ -122,16 +122,23 @@ pub fn cycles_ref(key: &str, w: u32, h: u32) -> Vec<f32> {
     ao
 }
 
-/// One frame from an empty map at 8 rays per pixel on a shared view against its Cycles reference: the MAE with
-/// `hrtao(8, R)` changed by each of `variants` (settings overrides as JSON, `AoSettings::with_overrides`), over
-/// one scene upload.
+/// One frame from an empty map at 8 rays per pixel on a shared view: the AO with `hrtao(8, R)` changed by each
+/// of `variants` (settings overrides as JSON, `AoSettings::with_overrides`) over one scene upload, the view's
+/// G-buffer and its Cycles reference.
 #[allow(dead_code)]
-pub fn first_frame_errors(key: &str, w: u32, h: u32, variants: &[&str]) -> Vec<f32> {
+pub struct FirstFrames {
+    pub ao: Vec<Vec<f32>>,
+    pub gbuffer: Vec<hrtao_core::gpu::GPixel>,
+    pub cycles: Vec<f32>,
+}
+
+#[allow(dead_code)]
+pub fn first_frames(key: &str, w: u32, h: u32, variants: &[&str]) -> FirstFrames {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene(key, w, h);
-    let cycles = cycles_ref(key, w, h);
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
-    let errors = variants
+    let mut gbuffer = Vec::new();
+    let ao = variants
         .iter()
         .map(|variant| {
             let settings = hrtao(8, radius)
@@ -139,11 +146,23 @@ pub fn first_frame_errors(key: &str, w: u32, h: u32, variants: &[&str]) -> Vec<f
                 .expect("settings overrides");
             let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
             r.render(&sg, scene.f(), &cam).expect("frame");
-            mae(&r.read_ao().unwrap(), &cycles)
+            gbuffer = r.read_gbuffer().unwrap();
+            r.read_ao().unwrap()
         })
         .collect();
     assert_clean(&gpu);
-    errors
+    FirstFrames {
+        ao,
+        gbuffer,
+        cycles: cycles_ref(key, w, h),
+    }
+}
+
+/// `first_frames`' MAE against Cycles, one per variant.
+#[allow(dead_code)]
+pub fn first_frame_errors(key: &str, w: u32, h: u32, variants: &[&str]) -> Vec<f32> {
+    let f = first_frames(key, w, h, variants);
+    f.ao.iter().map(|a| mae(a, &f.cycles)).collect()
 }
 
 /// Mean absolute error over pixels not open (AO < 0.999) in both images.
