@@ -155,7 +155,8 @@ pub struct AoSettings {
     pub local_edits: bool,
     /// Ours (docs/algorithm.md, near-field control variate): a pixel that traced rays this frame corrects its
     /// cell estimate by this weight β times its own near-open fraction minus its cells' (rays that hit
-    /// nothing within `near_fraction` x R), restoring the contact shadows a cell averages away.
+    /// nothing within `near_fraction` x R), restoring the contact shadows a cell averages away; shrunk
+    /// unless its same-surface neighbours' rays show the contact too, so unlucky pixels do not speckle.
     /// 0 = the paper's cell estimate alone.
     pub near_weight: f32,
     /// The near radius r_n of the control variate as a fraction of the AO radius R (0.5: smaller radii make

@@ -375,7 +375,8 @@ impl Viewer {
         ui.add(egui::Slider::new(&mut s.near_weight, 0.0..=1.0).text("contact correction"))
             .on_hover_text(
                 "Ours (docs/algorithm.md): each pixel corrects its cell's AO with its own rays that hit within \
-                 half the AO radius, restoring contact shadows a cell averages away. 0: the paper's cells.",
+                 half the AO radius, restoring contact shadows a cell averages away, where its neighbours' rays \
+                 agree. 0: the paper's cells.",
             );
         ui.add(egui::Slider::new(&mut s.level_blend, 0.0..=8.0).text("level blend λ"))
             .on_hover_text(
