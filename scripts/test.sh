@@ -7,8 +7,11 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 export HRTAO_VALIDATION=1
 export RUST_BACKTRACE=1
-# Lavapipe: avoid Mesa's shader cache in $HOME growing across runs.
-export MESA_SHADER_CACHE_DISABLE=${MESA_SHADER_CACHE_DISABLE:-true}
+# Lavapipe compiles every pipeline when first used (~0.4 s each) and every test builds its own device: Mesa's
+# shader cache lets later tests reuse the compiled pipelines (a suite twice as fast). It lives in target/, not in
+# $HOME, so it cannot grow across checkouts; its keys hash the SPIR-V and the driver, so a stale entry never hits.
+export MESA_SHADER_CACHE_DISABLE=false
+export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$PWD/target/mesa-shader-cache}"
 
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
