@@ -1422,9 +1422,13 @@ impl Viewer {
             }
             if let Some(rep) = &self.last_report {
                 log::info!(
-                    "scripted run: {n} frames, last {:.1} ms ({:.1} ms GPU), {} rays, view {}x{}, internal {:?}",
+                    "scripted run: {n} frames, last {:.1} ms ({}), {} rays, view {}x{}, internal {:?}",
                     rep.wall_ms,
-                    rep.gpu_total_ms,
+                    if rep.gpu_ms.is_empty() {
+                        "passes not timed".to_string()
+                    } else {
+                        format!("{:.1} ms GPU", rep.gpu_total_ms)
+                    },
                     rep.rays,
                     self.view_rect[2],
                     self.view_rect[3],

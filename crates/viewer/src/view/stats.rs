@@ -12,7 +12,8 @@ use super::shot::ShotSummary;
 pub struct FrameStat {
     /// The whole frame on the CPU clock: UI, the renderer's passes, the blit, egui, present.
     pub wall_ms: f64,
-    /// The renderer's passes by GPU timestamps (0 when the device has none).
+    /// The renderer's passes by GPU timestamps (0 when the device has none or they do not measure the passes:
+    /// lavapipe after a raster pass).
     pub gpu_ms: f64,
     /// `gpu_ms` per section (the paper's Table 2 names).
     pub gpu_sections_ms: BTreeMap<String, f64>,

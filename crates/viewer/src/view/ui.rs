@@ -573,7 +573,11 @@ impl Viewer {
                     1000.0 / self.interval_ms_avg.max(1e-3)
                 ),
             );
-            row("GPU total", format!("{:.2} ms", rep.gpu_total_ms));
+            if rep.gpu_ms.is_empty() {
+                row("GPU passes", "not timed on this device (see frame)".to_string());
+            } else {
+                row("GPU total", format!("{:.2} ms", rep.gpu_total_ms));
+            }
             for (name, ms) in &rep.gpu_ms {
                 row(&format!("  {name}"), format!("{ms:.2} ms"));
             }
