@@ -187,6 +187,51 @@ fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
     }
 }
 
+/// The frame-time target's ray budget belongs to the scene it was found on: a saved budget that a heavy scene cut
+/// to the minimum does not carry over to the next scene, whose first frames would trace almost nothing (the budget
+/// only grows again in moving frames).
+#[test]
+fn a_saved_budget_cut_by_a_heavy_scene_restarts_at_the_default() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("budget");
+    std::fs::create_dir_all(dir.join("hrtao")).unwrap();
+    std::fs::write(
+        dir.join("hrtao/viewer.json"),
+        r#"{"rays_per_frame": 1000, "auto_budget": true}"#,
+    )
+    .unwrap();
+    let stats = dir.join("stats.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(["view", "--size", "320x200", "--no-panel", "--frames", "3"])
+        .arg("--stats")
+        .arg(&stats)
+        .arg("--exit")
+        .env("XDG_CONFIG_HOME", &dir)
+        .env("HRTAO_VALIDATION", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("[vulkan"), "validation messages:\n{err}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let rays: Vec<u64> = json["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["rays"].as_u64().unwrap())
+        .collect();
+    println!("rays per frame: {rays:?}");
+    // The first frame (at the moving scale, 112×70) traces the default budget's 300 000 rays' worth (115 330 on
+    // lavapipe), not the saved 1000 (397 before the fix: a grainy first image of the new scene).
+    assert!(
+        rays[0] > 20_000,
+        "the first frame traces the default budget, not the saved one: {rays:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Screenshots to an unwritable place or a full disk give an error message and a clean exit status.
 #[test]
 fn screenshot_to_unwritable_or_full_destination_fails_cleanly() {

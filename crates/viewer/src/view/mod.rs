@@ -757,6 +757,12 @@ impl Viewer {
                 "primary visibility: {primary:?} (ray queries {rq_ms:.0} ms, raster {raster_ms:.0} ms at {w}x{h})"
             );
         }
+        if self.prefs.auto_budget {
+            // The frame-time target found its budget for the old scene (rays cost 0.07–5 Mrays/s here, by mesh),
+            // and it only moves in moving frames: a budget a heavy scene cut down would leave the next scene's
+            // first frames tracing almost nothing (a grainy first image). Each scene starts from the default.
+            self.prefs.rays_per_frame = budget::DEFAULT_RAYS_PER_FRAME;
+        }
         self.settings = settings;
         self.section_state = section_state;
         self.scene_gpu = Some(scene_gpu);
