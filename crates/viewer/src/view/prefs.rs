@@ -21,7 +21,8 @@ pub struct Prefs {
     pub settings: AoSettings,
     /// Largest internal resolution as a fraction of the 3D view (None: 1): still images are rendered at it.
     pub max_render_scale: Option<f32>,
-    /// Ray budget in rays per frame (converted to rays per pixel at the current internal resolution).
+    /// Ray budget in rays per frame (converted to rays per pixel at the current internal resolution). With the
+    /// frame-time target on, each scene opened starts from the default and the target moves it from there.
     pub rays_per_frame: u32,
     /// Adapt the ray budget and the moving render scale to meet `target_ms`.
     pub auto_budget: bool,
