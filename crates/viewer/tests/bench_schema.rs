@@ -203,7 +203,7 @@ fn tiny_bench_writes_the_schema_and_a_report() {
         "# Benchmarks",
         "Table 1",
         "Table 2",
-        "Targets of issue 5",
+        "## Targets",
         "beside the paper's behaviour",
         "tiny",
         "error_tiny.png",
