@@ -1,5 +1,6 @@
-//! Image quality of HRTAO against the Blender Cycles references of `../shared/refs` (a development tool; the
-//! published figures come from `hrtao bench`).
+//! Image quality of HRTAO against Blender Cycles references (a development tool; the published figures come from
+//! `hrtao bench`): the repository's `testdata/refs` (keys rod, cycloidal), and with `HRTAO_SHARED=DIR` also the
+//! views of `DIR/refs/index.json` (extra scenes that are not in the repository, e.g. engine, duplex, sf).
 //!
 //! `cargo run --release -p hrtao-core --example quality -- [--size 640x360] [--rays 8] [--frames 32]
 //! [--set '{"refine": false}'] KEY...` (`--set` overrides AoSettings fields, e.g. the paper's behaviour).
@@ -8,14 +9,45 @@
 //! and per-pixel RTAO with the same total rays), and HRTAO's flicker (mean |ΔAO| between consecutive still
 //! frames after frame 4).
 mod cli_args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
+use anyhow::Context;
 use hrtao_core::{metrics, AoSettings, Camera, ContextOptions, Gpu, Mode, Renderer, SceneGpu};
 
-fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared")
-        .join(rel)
+/// The folders holding `scenes/` and `refs/index.json`: the repository's test data, then `$HRTAO_SHARED`.
+fn roots() -> Vec<PathBuf> {
+    let mut roots = vec![PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../testdata")];
+    if let Some(dir) = std::env::var_os("HRTAO_SHARED") {
+        roots.push(PathBuf::from(dir));
+    }
+    roots
+}
+
+/// The first root whose index lists `key`, with its index entry.
+fn find(key: &str) -> anyhow::Result<(PathBuf, serde_json::Value)> {
+    for root in roots() {
+        let path = root.join("refs/index.json");
+        let index: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?,
+        )?;
+        if index[key].is_object() {
+            return Ok((root, index[key].clone()));
+        }
+    }
+    anyhow::bail!("no scene {key:?} in testdata/refs/index.json (rod, cycloidal); set HRTAO_SHARED=DIR for the views of DIR/refs/index.json")
+}
+
+/// A reference image (`KEY_WxH.cycles.exr`: R = G = B = AO, row 0 at the top) and its size.
+fn read_exr(path: &Path) -> anyhow::Result<(u32, u32, Vec<f32>)> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| (size.width(), vec![0.0f32; size.area()]),
+        |(width, ao), pos, (r, _g, _b, _a): (f32, f32, f32, f32)| ao[pos.y() * *width + pos.x()] = r,
+    )
+    .with_context(|| format!("reading {}", path.display()))?;
+    let size = image.layer_data.size;
+    let (_, ao) = image.layer_data.channel_data.pixels;
+    Ok((size.width() as u32, size.height() as u32, ao))
 }
 
 fn main() -> anyhow::Result<()> {
@@ -26,31 +58,21 @@ fn main() -> anyhow::Result<()> {
     let extra = args.take("--set", "{}");
     let dump = args.take("--dump", "");
     let keys = if args.0.is_empty() {
-        vec!["rod", "duplex", "cycloidal", "engine", "sf"]
-            .into_iter()
-            .map(String::from)
-            .collect()
+        vec!["rod".to_string(), "cycloidal".to_string()]
     } else {
         args.0
     };
     let gpu = Gpu::new(&ContextOptions::default())?;
-    let index: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(shared("refs/index.json"))?)?;
     println!("| scene | RTAO 1f | HRTAO 1f | ratio | RTAO eq. rays | HRTAO {frames}f | ratio | HRTAO rays/px | flicker | ms/frame 1st, still |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut curves = Vec::new();
     for key in keys {
-        let entry = &index[key.as_str()];
-        let Some(file) = entry["scene"].as_str() else {
-            anyhow::bail!(
-                "no scene {key:?} in refs/index.json (keys such as rod, duplex, cycloidal, engine, sf)"
-            );
-        };
-        let scene = hrtao_scene::load(shared(file).to_str().unwrap(), &mut |_| {})?;
+        let (root, entry) = find(&key)?;
+        let file = entry["scene"].as_str().context("index entry without a scene")?;
+        let scene = hrtao_scene::load(root.join(file).to_str().unwrap(), &mut |_| {})?;
         let radius = entry["radius"].as_f64().unwrap() as f32;
-        let cam = Camera::load(&shared(&format!("refs/{key}_{size}.camera.json")))?;
-        let (_, _, reference) =
-            hrtao_core::imageio::read_pfm(&shared(&format!("refs/{key}_{size}.cycles.pfm")))?;
+        let cam = Camera::load(&root.join(format!("refs/{key}_{size}.camera.json")))?;
+        let (_, _, reference) = read_exr(&root.join(format!("refs/{key}_{size}.cycles.exr")))?;
         let sg = SceneGpu::new(&gpu, &scene)?;
         let base = AoSettings {
             ao_radius: radius,

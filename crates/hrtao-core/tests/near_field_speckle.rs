@@ -47,7 +47,7 @@ fn roughness(ao: &[f32], f: &FirstFrames, w: usize, h: usize) -> f32 {
     sum / n as f32
 }
 
-/// One frame from an empty map on the default scene's shared view (cycloidal) at the viewer's working size,
+/// One frame from an empty map on the default scene's reference view (cycloidal) at the viewer's working size,
 /// 640x360, 8 rays: with the near-field correction (the default) the image is about as smooth as without it
 /// (before pooling: 0.0093 against 0.0055, Cycles 0.0053), and the correction still lowers the error.
 #[test]

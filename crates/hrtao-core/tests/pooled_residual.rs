@@ -4,14 +4,14 @@ mod common;
 use common::*;
 use hrtao_core::{AoSettings, Renderer, SceneGpu};
 
-/// One frame from an empty map at 8 rays per pixel on the shared engine (320x180) against its Cycles reference:
-/// the correction lowers the error at the same rays (measured 0.0281 -> 0.0272 on this size, 0.0229 -> 0.0212
-/// at 640x360, `examples/quality`).
+/// One frame from an empty map at 8 rays per pixel on the cycloidal gearbox (320x180) against its Cycles
+/// reference: the correction lowers the error at the same rays (measured 0.0185 -> 0.0166, the same on a second
+/// run; the bound asks for half of that gain).
 #[test]
 fn pooled_residual_cuts_first_frame_error_at_equal_rays() {
     let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("engine", 320, 180);
-    let cycles = cycles_ref("engine", 320, 180);
+    let (scene, cam, radius) = shared_scene("cycloidal", 320, 180);
+    let cycles = cycles_ref("cycloidal", 320, 180);
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
     let first_frame = |settings: AoSettings| {
         let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
@@ -26,12 +26,14 @@ fn pooled_residual_cuts_first_frame_error_at_equal_rays() {
         ..ours.clone()
     });
     let (after, rays_after) = first_frame(ours);
-    println!("engine 320x180, HRTAO 1 frame: {before:.4} -> {after:.4} ({rays_before} / {rays_after} rays)");
+    println!(
+        "cycloidal 320x180, HRTAO 1 frame: {before:.4} -> {after:.4} ({rays_before} / {rays_after} rays)"
+    );
     assert!(
         (rays_after as f64) <= rays_before as f64 * 1.01,
         "no more rays: {rays_after} against {rays_before}"
     );
-    assert!(after < 0.98 * before, "pooled residual {after} against {before}");
+    assert!(after < 0.95 * before, "pooled residual {after} against {before}");
     assert_clean(&gpu);
 }
 
@@ -40,10 +42,10 @@ fn pooled_residual_cuts_first_frame_error_at_equal_rays() {
 #[test]
 fn pooled_residual_leaves_full_cells_alone() {
     let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("engine", 160, 90);
+    let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
     // One map for both images: which pixel takes which of a cell's samples depends on the GPU's thread order,
-    // so two renderers fill their cells with different rays (a few pixels of engine differ between runs).
+    // so two renderers fill their cells with different rays (a few pixels differ between runs).
     let settings = AoSettings {
         max_samples: 16,
         refine: false,

@@ -116,9 +116,9 @@ fn raster_gbuffer_matches_ray_queries_on_a_generated_city() {
 }
 
 #[test]
-fn raster_gbuffer_matches_ray_queries_on_shared_scenes() {
+fn raster_gbuffer_matches_ray_queries_on_reference_scenes() {
     let gpu = gpu();
-    for key in ["cycloidal", "sf"] {
+    for key in REFERENCE_SCENES {
         let (scene, cam, radius) = shared_scene(key, 320, 180);
         check_scene(&gpu, key, &scene, &cam, radius);
     }

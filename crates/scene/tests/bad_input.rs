@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{no_progress, shared_scenes, temp_dir, write_gltf, TRI};
+use common::{no_progress, temp_dir, test_scene, write_gltf, TRI};
 use hrtao_scene::{load, SceneError};
 
 fn load_err(path: &std::path::Path) -> SceneError {
@@ -37,7 +37,7 @@ fn unsupported_extension() {
 #[test]
 fn truncated_glb() {
     let dir = temp_dir("truncated");
-    let full = std::fs::read(shared_scenes().join("rod_assembly/rod.glb")).unwrap();
+    let full = std::fs::read(test_scene("rod")).unwrap();
     for (k, len) in [0, 3, 11, 19, 100, full.len() / 2, full.len() - 1]
         .into_iter()
         .enumerate()
@@ -57,7 +57,7 @@ fn truncated_glb() {
 #[test]
 fn huge_declared_glb_length_is_rejected_without_allocating() {
     let dir = temp_dir("hugelen");
-    let mut bytes = std::fs::read(shared_scenes().join("rod_assembly/rod.glb")).unwrap();
+    let mut bytes = std::fs::read(test_scene("rod")).unwrap();
     bytes[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
     let p = dir.join("huge.glb");
     std::fs::write(&p, &bytes).unwrap();
@@ -72,7 +72,7 @@ fn huge_declared_glb_length_is_rejected_without_allocating() {
 #[test]
 fn wrong_magic() {
     let dir = temp_dir("magic");
-    let mut bytes = std::fs::read(shared_scenes().join("rod_assembly/rod.glb")).unwrap();
+    let mut bytes = std::fs::read(test_scene("rod")).unwrap();
     bytes[..4].copy_from_slice(b"gLTX");
     let p = dir.join("magic.glb");
     std::fs::write(&p, &bytes).unwrap();

@@ -2,12 +2,12 @@
 
 mod common;
 
-use common::{no_progress, shared_scenes};
+use common::{no_progress, test_scene};
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{load, load_gltf, Instance, Scene, SceneError};
 
 fn rod() -> Scene {
-    load_gltf(&shared_scenes().join("rod_assembly/rod.glb"), &mut no_progress()).unwrap()
+    load_gltf(&test_scene("rod"), &mut no_progress()).unwrap()
 }
 
 #[test]

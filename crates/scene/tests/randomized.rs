@@ -1,13 +1,10 @@
 //! Randomized robustness (the suite's stand-in for the cargo-fuzz targets in fuzz/, which need nightly):
 //! mutated glTF/GLB/OBJ files must load or fail with an error, never panic, hang or abort.
+mod common;
+
+use common::{split_glb, test_scene};
 use proptest::prelude::*;
 use std::path::PathBuf;
-
-fn shared(rel: &str) -> PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared")
-        .join(rel)
-}
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("hrtao-prop-{}", std::process::id()));
@@ -71,17 +68,15 @@ proptest! {
 
     #[test]
     fn mutated_glb_never_panics(muts in proptest::collection::vec(mutation(), 1..6)) {
-        let rod = std::fs::read(shared("scenes/rod_assembly/rod.glb")).unwrap();
+        let rod = std::fs::read(test_scene("rod")).unwrap();
         check("m.glb", &apply(rod, &muts));
     }
 
     #[test]
     fn mutated_gltf_json_never_panics(muts in proptest::collection::vec(mutation(), 1..6)) {
-        // The JSON part of a small real file (the engine's .gltf is external-buffer; use its JSON with the .bin).
-        let json = std::fs::read(shared("scenes/2CylinderEngine/2CylinderEngine.gltf")).unwrap();
+        // The JSON part of a small real file: the rod as .gltf with its buffer in rod_external.bin beside it.
         let dir = scratch("x").parent().unwrap().to_path_buf();
-        let bin = shared("scenes/2CylinderEngine/2CylinderEngine0.bin");
-        let _ = std::fs::copy(bin, dir.join("2CylinderEngine0.bin"));
+        let json = std::fs::read(split_glb(&test_scene("rod"), &dir, "rod_external")).unwrap();
         check("m.gltf", &apply(json, &muts));
     }
 

@@ -1,15 +1,12 @@
 //! `hrtao bench` end to end on a tiny run (64×36, 3 navigation frames, validation on): the JSON schema, the
 //! self-consistency of its numbers (no timing assertion), and the `--report` markdown + plots.
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::PathBuf;
 use std::process::Command;
 
 fn scene() -> String {
-    let rod = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/rod_assembly/rod.glb");
-    if rod.exists() {
-        rod.display().to_string()
-    } else {
-        "gen:racks?rows=1&cols=2&units=4&detail=64".to_string()
-    }
+    common::test_scene("rod").display().to_string()
 }
 
 fn tmp_dir(name: &str) -> PathBuf {

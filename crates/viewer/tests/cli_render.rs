@@ -1,12 +1,9 @@
-//! `hrtao render` end to end: a shared scene with its suggested camera, image outputs, and bad input.
-use std::path::{Path, PathBuf};
-use std::process::Command;
+//! `hrtao render` end to end: a test scene with its reference camera, image outputs, and bad input.
+mod common;
 
-fn shared(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared")
-        .join(rel)
-}
+use common::{test_scene, testdata};
+use std::path::PathBuf;
+use std::process::Command;
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("hrtao-cli-{}", std::process::id()));
@@ -23,13 +20,13 @@ fn hrtao(args: &[&str]) -> std::process::Output {
 }
 
 #[test]
-fn render_shared_scene_writes_png_pfm_exr_and_stats() {
+fn render_test_scene_writes_png_pfm_exr_and_stats() {
     let png = tmp("rod.png");
     let pfm = tmp("rod.pfm");
     let exr = tmp("rod.exr");
     let stats = tmp("rod.json");
-    let scene = shared("scenes/rod_assembly/rod.glb");
-    let camera = shared("refs/rod_160x90.camera.json");
+    let scene = test_scene("rod");
+    let camera = testdata("refs/rod_160x90.camera.json");
     for (mode, ao_out) in [("rtao", &pfm), ("hrtao", &exr)] {
         let out = hrtao(&[
             "render",
@@ -99,7 +96,7 @@ fn bad_inputs_give_clear_errors() {
     ]);
     assert_clean_error(&out, "/nonexistent/model.glb");
 
-    let rod = std::fs::read(shared("scenes/rod_assembly/rod.glb")).unwrap();
+    let rod = std::fs::read(test_scene("rod")).unwrap();
     let truncated = tmp("truncated.glb");
     std::fs::write(&truncated, &rod[..rod.len() / 3]).unwrap();
     let out = hrtao(&["render", "--scene", truncated.to_str().unwrap()]);
@@ -114,7 +111,7 @@ fn bad_inputs_give_clear_errors() {
     let out = hrtao(&[
         "render",
         "--scene",
-        shared("scenes/rod_assembly/rod.glb").to_str().unwrap(),
+        test_scene("rod").to_str().unwrap(),
         "--camera",
         bad_cam.to_str().unwrap(),
     ]);

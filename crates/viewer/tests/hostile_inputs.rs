@@ -2,7 +2,8 @@
 //! image (exit 0, finite AO), never a panic, a hang or an abort. Files whose references lead to devices, FIFOs,
 //! directories or outside the model's folder end within seconds under 1 GB of memory, naming the reference, in
 //! `render` and in the running viewer (which keeps its scene).
-use std::path::Path;
+mod common;
+
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -173,27 +174,28 @@ fn hostile_files_give_errors_or_images() {
     );
 }
 
-/// The shared engine (.gltf + external .bin) still renders through the guard.
+/// A real assembly as .gltf + external .bin (the rod, its GLB split) still renders through the guard.
 #[test]
-fn engine_with_external_buffer_renders() {
-    let engine = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/scenes/2CylinderEngine/2CylinderEngine.gltf");
-    let ao = std::env::temp_dir().join(format!("hrtao-engine-{}.pfm", std::process::id()));
+fn external_buffer_renders() {
+    let dir = std::env::temp_dir().join(format!("hrtao-external-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let gltf = common::split_glb(&common::test_scene("rod"), &dir, "rod_external");
+    let ao = dir.join("rod_external.pfm");
     let run = run_bounded(
         Command::new(env!("CARGO_BIN_EXE_hrtao"))
-            .args(["render", "--scene", engine.to_str().unwrap()])
+            .args(["render", "--scene", gltf.to_str().unwrap()])
             .args(["--width", "64", "--height", "36", "--rays", "2"])
             .args(["--ao-out", ao.to_str().unwrap()])
             .env("HRTAO_VALIDATION", "1"),
         Duration::from_secs(300),
-        "engine",
+        "rod_external",
     );
     assert_eq!(run.code, Some(0), "{}", run.stderr);
     let (w, h, data) = hrtao_core::imageio::read_pfm(&ao).unwrap();
     assert_eq!((w, h), (64, 36));
     let min = data.iter().cloned().fold(1.0f32, f32::min);
-    assert!(min < 0.9, "the engine is drawn with AO (min {min})");
-    let _ = std::fs::remove_file(ao);
+    assert!(min < 0.9, "the rod is drawn with AO (min {min})");
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// Files pointing at devices and FIFOs opened in the running viewer: the error names the reference, the

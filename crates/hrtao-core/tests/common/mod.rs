@@ -93,36 +93,58 @@ pub fn render(
     (r, sg)
 }
 
-/// `../shared` beside the repository (CI clones the repo with shared/ next to it).
-pub fn shared(rel: &str) -> std::path::PathBuf {
+/// A file of the repository's test data (`testdata/` at the repository root).
+pub fn testdata(rel: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared")
+        .join("../../testdata")
         .join(rel)
 }
 
-/// A shared scene by its key in shared/refs/index.json, with its reference camera and AO radius.
+/// The test scenes with Cycles references (`testdata/refs/index.json`): the cycloidal gearbox (the bundled scene,
+/// `assets/default.glb`) and the rod assembly, both MIT.
+pub const REFERENCE_SCENES: [&str; 2] = ["cycloidal", "rod"];
+
+/// A reference scene by its key in `testdata/refs/index.json` ("cycloidal" or "rod"), with its reference camera
+/// for `w`×`h` (160×90, 320×180 or 640×360) and its AO radius.
 pub fn shared_scene(key: &str, w: u32, h: u32) -> (Scene, Camera, f32) {
+    assert!(
+        REFERENCE_SCENES.contains(&key),
+        "no test scene {key:?}: the repository's test data holds {REFERENCE_SCENES:?}"
+    );
     let index: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(shared("refs/index.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(testdata("refs/index.json")).unwrap()).unwrap();
     let entry = &index[key];
     let scene = hrtao_scene::load(
-        shared(entry["scene"].as_str().unwrap()).to_str().unwrap(),
+        testdata(entry["scene"].as_str().unwrap()).to_str().unwrap(),
         &mut |_| {},
     )
     .unwrap();
-    let cam = Camera::load(&shared(&format!("refs/{key}_{w}x{h}.camera.json"))).unwrap();
+    let cam = Camera::load(&testdata(&format!("refs/{key}_{w}x{h}.camera.json"))).unwrap();
     (scene, cam, entry["radius"].as_f64().unwrap() as f32)
 }
 
-/// The Blender Cycles AO reference of a shared view (`../shared/refs/KEY_WxH.cycles.pfm`), checked for its size.
+/// The Blender Cycles AO reference of a view (`testdata/refs/KEY_WxH.cycles.exr`, R = G = B = AO, row 0 at the
+/// top), checked for its size.
 pub fn cycles_ref(key: &str, w: u32, h: u32) -> Vec<f32> {
-    let (rw, rh, ao) =
-        hrtao_core::imageio::read_pfm(&shared(&format!("refs/{key}_{w}x{h}.cycles.pfm"))).unwrap();
-    assert_eq!((rw, rh), (w, h), "reference size");
+    let path = testdata(&format!("refs/{key}_{w}x{h}.cycles.exr"));
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        &path,
+        |size, _| (size.width(), vec![f32::NAN; size.area()]),
+        |(width, ao), pos, (r, _g, _b, _a): (f32, f32, f32, f32)| ao[pos.y() * *width + pos.x()] = r,
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let size = image.layer_data.size;
+    assert_eq!(
+        (size.width() as u32, size.height() as u32),
+        (w, h),
+        "reference size"
+    );
+    let (_, ao) = image.layer_data.channel_data.pixels;
+    assert!(ao.iter().all(|v| (0.0..=1.0).contains(v)), "AO in [0, 1]");
     ao
 }
 
-/// One frame from an empty map at 8 rays per pixel on a shared view: the AO with `hrtao(8, R)` changed by each
+/// One frame from an empty map at 8 rays per pixel on a reference view: the AO with `hrtao(8, R)` changed by each
 /// of `variants` (settings overrides as JSON, `AoSettings::with_overrides`) over one scene upload, the view's
 /// G-buffer and its Cycles reference.
 #[allow(dead_code)]
