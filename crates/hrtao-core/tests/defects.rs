@@ -358,3 +358,28 @@ fn a_local_edit_with_refinement_shows_no_ghost_of_the_removed_part() {
     );
     assert_clean(&gpu);
 }
+
+/// The frame's counters live in device memory and reach the report through one copy at the end of the frame:
+/// per-pixel RTAO reports exactly its rays (every surface pixel traces the budget), frame after frame (the
+/// clear pass empties the per-frame counters, the u64 ray counters included). Catches a missing end-of-frame
+/// copy (the report would read zeros) and per-frame counters that are not cleared (they would add up).
+#[test]
+fn ray_counts_reach_the_report_exactly_each_frame() {
+    let gpu = gpu();
+    let scene = blocks();
+    let cam = camera();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let s = AoSettings {
+        mode: hrtao_core::Mode::Rtao,
+        ..hrtao(7, 3.0)
+    };
+    let mut r = Renderer::new(&gpu, cam.width, cam.height, s).unwrap();
+    for frame in 0..3 {
+        let rep = r.render(&sg, scene.f(), &cam).unwrap();
+        let surface = r.read_gbuffer().unwrap().iter().filter(|p| p.t >= 0.0).count() as u64;
+        assert!(surface > 1000);
+        assert_eq!(rep.rays, 7 * surface, "frame {frame}");
+        assert_eq!((rep.refine_rays, rep.cell_rays), (0, 0));
+    }
+    assert_clean(&gpu);
+}
