@@ -118,9 +118,7 @@ float own_noise(float p, float s) {
 // As the own rays grow, var(d) shrinks and only neighbours with the same residual stay: the pixel converges
 // to its own ray-traced value. b^2 (the adaptive k): (r^2 - z^2 v/s), z = prior_sigma, averaged without
 // weights over the same neighbours.
-// A pixel a local edit restarted this frame (`restarted`) pools nothing: its neighbours' slots hold residuals
-// measured before the edit (the removed part's contact shadow would flash for a frame).
-Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p, bool restarted) {
+Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
     Vec4Ref slots = Vec4Ref(g.bias_evidence);
     uint n = g.width * g.height;
     uint index = pix.y * g.width + pix.x;
@@ -132,7 +130,7 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p, bool r
     float z2 = g.prior_sigma * g.prior_sigma;
     e.b2 = r * r - z2 * own_noise(p, s);
     float count = 1.0;
-    if (s > 0.0 && g.still_index > 1u && !restarted) {
+    if (s > 0.0 && g.still_index > 1u) {
         uint read_slot = n - write_slot;
         float pixel_size = pixel_world_size(px.t);
         for (int dy = -1; dy <= 1; ++dy) {
@@ -264,7 +262,7 @@ void main() {
             float r = a.rays > 0.0 ? a.open / a.rays - mean_c : 0.0;
             float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);
             // A miss (mean(c) = 1, all rays open) has no residual.
-            Evidence e = pooled_evidence(pix, px, r, px.t >= 0.0 ? a.rays : 0.0, p, edited);
+            Evidence e = pooled_evidence(pix, px, r, px.t >= 0.0 ? a.rays : 0.0, p);
             k = prior_weight(pix, p, e);
             ao = mean_c + e.s / (k + e.s) * e.r;
             ao = smoothed(index, ao, a.frames > 1.0);
