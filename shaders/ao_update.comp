@@ -32,9 +32,13 @@ const float ADAPT_EXP = 1.5;
 // off 0 and 1 (a cell that came out all open may still hide a rare occluder). Measured on the five shared
 // scenes (docs/algorithm.md): the exponent 1/3 that minimises the summed standard deviation of independent
 // pixels gains least; cells are shared and their noise is what the filter cannot remove, and 1.5 gains most.
-float adapt_weight(HashCell cell) {
-    float n = float(max(cell.samples, 1u));
-    float p = clamp(float(cell.unoccluded) / n, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
+float adapt_weight(CellRef cells, uint c) {
+    // Atomic loads: the counters are atomics (no pass writes them during this phase, but a plain read of an
+    // atomically updated word is a data race in the memory model).
+    uint samples = atomicLoad(cells.v[c].samples, gl_ScopeDevice, gl_StorageSemanticsBuffer, gl_SemanticsRelaxed);
+    uint open = atomicLoad(cells.v[c].unoccluded, gl_ScopeDevice, gl_StorageSemanticsBuffer, gl_SemanticsRelaxed);
+    float n = float(max(samples, 1u));
+    float p = clamp(float(open) / n, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
     return pow(p * (1.0 - p), ADAPT_EXP);
 }
 
@@ -81,7 +85,7 @@ void main() {
     } else if (phase == PHASE_FIRST) {
         budget = first_part;
     } else if (phase == PHASE_WEIGH) {
-        float w = adapt_weight(cells.v[pc.cells[first]]);
+        float w = adapt_weight(cells, pc.cells[first]);
         FloatRef(g.filter_tmp).v[index] = w;   // scratch until the resolve: read back by the second part
         stat_add(STAT_ADAPT_WEIGHT, uint(w * ADAPT_WEIGHT_SCALE + 0.5));
         return;
@@ -129,7 +133,7 @@ void main() {
         if (r < claimed) cell_rays.yz += counts;
     }
     if (rays == 0u) return;
-    stat_add(STAT_RAYS, rays);
+    rays_add(RAYS_ALL, rays);
     // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
     if ((g.flags & FLAG_YOUNG_MAP) != 0u) {
         // This frame's rays of the pixel, for the near-field control variate (resolve.comp, when classified)
@@ -139,7 +143,7 @@ void main() {
         PixelRaysRef(g.pixel_rays).v[index].open += all_rays.y;
     }
     if (own) {
-        stat_add(STAT_REFINE_RAYS, rays);
+        rays_add(RAYS_REFINE, rays);
         PixelRaysRef(g.pixel_rays).v[index].traced = rays;
         PixelRaysRef(g.pixel_rays).v[index].unoccluded = all_rays.y;
     }
@@ -149,11 +153,13 @@ void main() {
     int lod = pixel_lod(px.t);
     if (claimed > 0u) {
         add_rays(cells, pc.cells[first], cell_rays, px.position, lod + int(first));
-        stat_add(STAT_CELL_RAYS, claimed);
+        rays_add(RAYS_CELL, claimed);
     }
     for (uint l = first + 1u; l < LOD_COUNT; ++l) {
         uint c = pc.cells[l];
         if (c == INVALID_CELL || !slot_in_bounds(c)) continue;
-        if (cells.v[c].samples < SAMPLE_CAP) add_rays(cells, c, all_rays, px.position, lod + int(l));
+        // Atomic: other pixels add to the same coarse cell in this dispatch.
+        uint samples = atomicLoad(cells.v[c].samples, gl_ScopeDevice, gl_StorageSemanticsBuffer, gl_SemanticsRelaxed);
+        if (samples < SAMPLE_CAP) add_rays(cells, c, all_rays, px.position, lod + int(l));
     }
 }

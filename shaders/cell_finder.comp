@@ -23,7 +23,7 @@ void main() {
     GPixel px = GBufferRef(g.gbuffer).px[index];
     if (px.t >= 0.0 && (top == LOD_COUNT - 1u || pc.cells[top + 1u] != INVALID_CELL)) {
         int lod = pixel_lod(px.t);
-        ivec3 nq = normal_coord(px.normal, g.s_nd);
+        ivec3 nq = normal_coord(px.normal, g.s_nd, g.normal_offset);
         for (int level = int(top); level >= int(bottom); --level) {
             int l = lod + level;
             uint c = find_or_insert(region_cell_key(cell_coord(px.position, l), l, nq));

@@ -6,5 +6,6 @@ void main() {
     if (gl_GlobalInvocationID.x == 0 && gl_GlobalInvocationID.y == 0) {
         StatsRef stats = StatsRef(g.stats);
         for (uint i = 0; i < STAT_PER_FRAME; ++i) stats.counters[i] = 0u;
+        for (uint i = 0; i < RAYS_COUNT; ++i) stats.rays[i] = uint64_t(0);
     }
 }

@@ -31,13 +31,15 @@ layout(buffer_reference, scalar) buffer FloatRef { float v[]; };
 layout(buffer_reference, scalar) buffer UintRef { uint v[]; };
 layout(buffer_reference, scalar) buffer CellRef { HashCell v[]; };
 layout(buffer_reference, scalar) buffer PixelCellRef { PixelCells v[]; };
-layout(buffer_reference, scalar) buffer StatsRef { uint counters[STAT_COUNT]; };
+layout(buffer_reference, scalar) buffer StatsRef { uint counters[STAT_COUNT]; uint64_t rays[RAYS_COUNT]; };
 layout(buffer_reference, scalar) buffer PixelRaysRef { PixelRays v[]; };
 layout(buffer_reference, scalar) buffer PixelAccumRef { PixelAccum v[]; };
 
 const float PI = 3.14159265358979;
 
 void stat_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).counters[which], v); }
+// Ray counts (u64: no wrap at 4K x 1024 rays).
+void rays_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).rays[which], uint64_t(v)); }
 
 // The pixel of this invocation, or false when it lies outside the image.
 bool pixel_coords(out uvec2 pix, out uint index) {

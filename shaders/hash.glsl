@@ -40,11 +40,13 @@ ivec3 cell_coord(vec3 p, int lod) {
     return ivec3(q);
 }
 
-// eq. (5)'s normal quantisation, with bins centred on the integers: floor(n s_nd + 1/2). The paper's
-// floor(n s_nd) puts bin edges exactly on axis-aligned normals, the most common normals in CAD, so a face
-// whose normal is a rounding error off an axis would flip between bins.
-ivec3 normal_coord(vec3 n, float s_nd) {
-    precise vec3 q = clamp(n, -1.0, 1.0) * s_nd + 0.5;   // precise: no fused multiply-add (CPU mirror)
+// eq. (5)'s normal quantisation, floor(n s_nd + offset). The paper's floor(n s_nd) (offset 0, its mode) puts
+// bin edges exactly on axis-aligned normals, the most common normals in CAD, and bins centred on the integers
+// (offset 1/2) put them at n = ±1/2, where 30°/60° chamfers and hexagon faces sit: a face whose normal is a
+// rounding error off such a direction would flip between bins. Our default offset keeps every edge at least
+// 0.02 from 0, ±1/2, ±√2/2, ±√3/2 and ±1 at the default s_nd (hash.rs `NormalBins`).
+ivec3 normal_coord(vec3 n, float s_nd, float offset) {
+    precise vec3 q = clamp(n, -1.0, 1.0) * s_nd + offset;   // precise: no fused multiply-add (CPU mirror)
     return ivec3(floor(q));
 }
 
@@ -80,8 +82,8 @@ CellKey cell_key_at(ivec3 c, int lod, ivec3 nq, uint F, uint E, uint capacity) {
     return key;
 }
 
-CellKey cell_key(vec3 p, vec3 n, int lod, float s_nd, uint F, uint E, uint capacity) {
-    return cell_key_at(cell_coord(p, lod), lod, normal_coord(n, s_nd), F, E, capacity);
+CellKey cell_key(vec3 p, vec3 n, int lod, float s_nd, float offset, uint F, uint E, uint capacity) {
+    return cell_key_at(cell_coord(p, lod), lod, normal_coord(n, s_nd, offset), F, E, capacity);
 }
 
 // The region epoch table (local edits, ours; regions.rs). Cells of LOD `lod` lie in cubic regions of edge

@@ -13,7 +13,7 @@ void main() {
     HashTestCase c = cases.v[i];
     int log2_s_min = g.log2_s_min;
     int lod = lod_of(c.s_w, log2_s_min) + int(c.lod_offset);
-    CellKey key = cell_key(c.position, c.normal, lod, g.s_nd, c.scene_f, c.epoch, g.hash_capacity);
+    CellKey key = cell_key(c.position, c.normal, lod, g.s_nd, g.normal_offset, c.scene_f, c.epoch, g.hash_capacity);
     cases.v[i].index = key.slot;
     cases.v[i].checksum = key.checksum;
     cases.v[i].lod = lod;

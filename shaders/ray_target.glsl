@@ -48,7 +48,9 @@ void queue_for_rays(uint index, GPixel px, PixelCells pc) {
     if (traces && picked) {
         uint slot = atomicAdd(StatsRef(g.stats).counters[STAT_RAY_QUEUE], 1u);
         UintRef(g.ray_queue).v[slot] = index;
-    } else if (!traces && first < LOD_COUNT && g.rays_per_pixel > 0u) {
+    } else if (traces) {
+        stat_add(STAT_UNPICKED_PIXELS, 1u);
+    } else if (first < LOD_COUNT && g.rays_per_pixel > 0u) {
         stat_add(STAT_CAPPED_PIXELS, 1u);
     }
 }

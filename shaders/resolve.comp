@@ -89,11 +89,13 @@ void main() {
         CellRef cells = CellRef(g.hash_cells);
         uint best = LOD_COUNT;
         uint best_samples = 0u;
+        // A cell without rays never counts as holding enough (min_samples = 0 would pick it and show it open).
+        uint enough = max(g.min_samples, 1u);
         for (uint l = 0u; l < LOD_COUNT; ++l) {
             uint c = pc.cells[l];
             if (c == INVALID_CELL || !slot_in_bounds(c)) continue;
             uint s = cells.v[c].samples;
-            if (s >= g.min_samples) {
+            if (s >= enough) {
                 best = l;
                 break;
             }
@@ -105,7 +107,7 @@ void main() {
         if (best < LOD_COUNT && cells.v[pc.cells[best]].samples > 0u) {
             used = best;
             int lod = pixel_lod(px.t) + int(best);
-            ivec3 nq = normal_coord(px.normal, g.s_nd);
+            ivec3 nq = normal_coord(px.normal, g.s_nd, g.normal_offset);
             vec4 fine = interpolate(px.position, lod, nq);
             float sum = fine.x;
             float near_sum = fine.y;

@@ -22,7 +22,7 @@ void main() {
             if (ray_unoccluded(origin, cosine_direction(px.normal, u), g.ao_radius)) pr.unoccluded++;
         }
         pr.traced = g.rays_per_pixel;
-        stat_add(STAT_RAYS, g.rays_per_pixel);
+        rays_add(RAYS_ALL, g.rays_per_pixel);
     }
     PixelRaysRef(g.pixel_rays).v[index] = pr;
 }

@@ -98,6 +98,9 @@ impl Scratch {
     }
 }
 
+/// TLAS builds so far in this process: each build's generation (`SceneGpu::tlas_generation`) is unique.
+static TLAS_BUILDS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 fn align_up(v: u64, a: u64) -> u64 {
     v.div_ceil(a) * a
 }
@@ -114,6 +117,9 @@ pub struct SceneGpu {
     pub instance_info: Buffer,
     tlas_instances: Buffer,
     pub tlas: AccelStruct,
+    /// The build `tlas` is, unique over every scene of the process: a descriptor must be written again for
+    /// every new generation, whatever the handle value (a freed handle value may come back).
+    tlas_generation: u64,
     /// Draw list of the rasterised primary visibility (the TLAS's instances), updated with the TLAS.
     pub raster: RasterScene,
     pub stats: BuildStats,
@@ -474,6 +480,7 @@ impl SceneGpu {
             instance_info,
             tlas_instances,
             tlas: placeholder,
+            tlas_generation: 0,
             raster,
             version: 0,
             synced_f: scene.f(),
@@ -499,6 +506,11 @@ impl SceneGpu {
     /// Number of BLASes built (one per unique mesh with triangles).
     pub fn blas_count(&self) -> usize {
         self.blas.iter().filter(|b| b.is_some()).count()
+    }
+
+    /// The TLAS build generation (unique in the process, never 0 once built).
+    pub fn tlas_generation(&self) -> u64 {
+        self.tlas_generation
     }
 
     /// How many times the instance tables were updated (see `version`).
@@ -753,6 +765,7 @@ impl SceneGpu {
         })?;
         drop(scratch);
         self.tlas = tlas;
+        self.tlas_generation = TLAS_BUILDS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         self.stats.tlas_ms = t0.elapsed().as_secs_f64() * 1e3;
         self.stats.tlas_instances = count as usize;
         Ok(())

@@ -45,6 +45,14 @@ mod tests {
         assert_eq!(std::mem::size_of::<GeometryInfo>(), 32);
         assert_eq!(std::mem::size_of::<FrameGlobals>() % 8, 0);
         assert_eq!(std::mem::offset_of!(FrameGlobals, gbuffer) % 8, 0);
-        assert_eq!(STAT_COUNT as usize, std::mem::size_of::<FrameStats>() / 4);
+        assert_eq!(
+            std::mem::offset_of!(FrameStats, rays),
+            STAT_COUNT as usize * 4,
+            "the u64 ray counters follow the u32 counters at an 8-byte offset"
+        );
+        assert_eq!(
+            std::mem::size_of::<FrameStats>(),
+            STAT_COUNT as usize * 4 + RAYS_COUNT as usize * 8
+        );
     }
 }

@@ -73,37 +73,43 @@ gpu_consts! {
     REGION_COUNT: u32 = 65536;
     /// Boxes of the last local edit kept for the composite (more are merged into one).
     MAX_EDIT_BOXES: u32 = 64;
-    /// Indices into `FrameStats::counters`.
-    STAT_RAYS: u32 = 0;
-    STAT_CELLS_INSERTED: u32 = 1;
-    STAT_FAILED_INSERTS: u32 = 2;
-    STAT_MAX_PROBE: u32 = 3;
-    STAT_RECLAIMED: u32 = 4;
-    STAT_BOUNDS_VIOLATIONS: u32 = 5;
-    STAT_CAPPED_PIXELS: u32 = 6;
+    /// Indices into `FrameStats::counters` (u32: each counts pixels or cells, at most one per pixel and level).
+    STAT_CELLS_INSERTED: u32 = 0;
+    STAT_FAILED_INSERTS: u32 = 1;
+    STAT_MAX_PROBE: u32 = 2;
+    STAT_RECLAIMED: u32 = 3;
+    STAT_BOUNDS_VIOLATIONS: u32 = 4;
+    STAT_CAPPED_PIXELS: u32 = 5;
     /// Pixels queued for the ray-tracing update this frame (compacted, see ray_target.glsl `queue_for_rays`).
-    STAT_RAY_QUEUE: u32 = 7;
-    /// Rays traced by the still-camera refinement (included in STAT_RAYS).
-    STAT_REFINE_RAYS: u32 = 8;
-    /// Rays the target cells took this frame (the paper's collaborative rays; refinement rays that a target
-    /// cell also takes are counted here too).
-    STAT_CELL_RAYS: u32 = 9;
+    STAT_RAY_QUEUE: u32 = 6;
     /// Adaptive first-frame sampling (ours, ao_update.comp): the sum of the queued pixels' weights for the
     /// second half of the ray budget, in 1/ADAPT_WEIGHT_SCALE units.
-    STAT_ADAPT_WEIGHT: u32 = 10;
+    STAT_ADAPT_WEIGHT: u32 = 7;
     /// Pixels queued for the à-trous filter this frame: those whose plan takes at least one iteration
     /// (resolve.comp, filter_plan.glsl `store_resolved`).
-    STAT_FILTER_QUEUE: u32 = 11;
+    STAT_FILTER_QUEUE: u32 = 8;
+    /// Pixels whose target cell still takes rays but that a fractional budget (`trace_fraction`) left out of
+    /// this frame's ray queue: with the queued ones, the pixels on young cells.
+    STAT_UNPICKED_PIXELS: u32 = 9;
     /// Contact detail (ours, detail.comp): four words holding two i64 sums over the pixels it corrects, in
     /// 1/DETAIL_SUM_SCALE units: Σ t (y - a) d and Σ t d², t the pixel's rays, y their open fraction, a its AO
     /// and d its obscurance detail; their ratio is the frame's fitted detail gain.
-    STAT_DETAIL_SUMS: u32 = 12;
+    STAT_DETAIL_SUMS: u32 = 10;
     DETAIL_SUM_SCALE: u32 = 0x0010_0000;
+    /// Counters below this index are reset at the start of every frame (with all of `FrameStats::rays`).
+    STAT_PER_FRAME: u32 = 14;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
-    STAT_OCCUPIED: u32 = 16;
-    STAT_COUNT: u32 = 17;
-    /// Counters below this index are reset at the start of every frame.
-    STAT_PER_FRAME: u32 = 16;
+    STAT_OCCUPIED: u32 = 14;
+    /// Words of `FrameStats::counters` (even, so that `FrameStats::rays` sits at an 8-byte offset).
+    STAT_COUNT: u32 = 16;
+    /// Indices into `FrameStats::rays` (u64: 3840 x 2160 pixels x 1024 rays is above 2^33).
+    RAYS_ALL: u32 = 0;
+    /// Rays traced by the still-camera refinement (included in RAYS_ALL).
+    RAYS_REFINE: u32 = 1;
+    /// Rays the target cells took this frame (the paper's collaborative rays; refinement rays that a target
+    /// cell also takes are counted here too).
+    RAYS_CELL: u32 = 2;
+    RAYS_COUNT: u32 = 3;
     /// Offsets in words into the indirect dispatch arguments (`dispatch_args`, written by queue_args.comp):
     /// the ray-tracing update's, then the filter's.
     RAY_ARGS_OFFSET: u32 = 0;
@@ -249,6 +255,10 @@ gpu_structs! {
         filter_guide: u64,
         /// Per pixel, the screen-space obscurance of its G-buffer neighbourhood (detail.comp).
         obscurance: u64,
+        /// eq. (5): the offset of the normal bins in bins, floor(n s_nd + offset) (`AoSettings::normal_offset`).
+        normal_offset: f32,
+        /// Unused: keeps the struct a whole number of 8-byte words.
+        pad0: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -398,8 +408,9 @@ gpu_structs! {
         frames: f32,
     }
 
-    /// Counters read back after every frame.
+    /// Counters of a frame, in device memory; copied to a host-visible buffer once at the end of the frame.
     struct FrameStats {
-        counters: [u32; 17],
+        counters: [u32; 16],
+        rays: [u64; 3],
     }
 }

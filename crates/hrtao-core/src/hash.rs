@@ -97,9 +97,30 @@ pub fn cell_coord(p: Vec3, lod: i32) -> IVec3 {
     q.as_ivec3()
 }
 
-/// eq. (5)'s normal quantisation with bins centred on the integers: floor(n s_nd + 1/2) (see hash.glsl).
-pub fn normal_coord(n: Vec3, s_nd: f32) -> IVec3 {
-    (n.clamp(Vec3::splat(-1.0), Vec3::splat(1.0)) * s_nd + Vec3::splat(0.5))
+/// eq. (5)'s normal bins: s_nd per unit of a normal component, shifted by `offset` bins (see hash.glsl).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalBins {
+    pub s_nd: f32,
+    pub offset: f32,
+}
+
+impl NormalBins {
+    /// eq. (5) as published: floor(n s_nd).
+    pub fn paper(s_nd: f32) -> NormalBins {
+        NormalBins { s_nd, offset: 0.0 }
+    }
+
+    /// The components where a bin ends, in [-1, 1]: n s_nd + offset is an integer.
+    pub fn edges(self) -> Vec<f32> {
+        let lo = (-self.s_nd + self.offset).ceil() as i64;
+        let hi = (self.s_nd + self.offset).floor() as i64;
+        (lo..=hi).map(|k| (k as f32 - self.offset) / self.s_nd).collect()
+    }
+}
+
+/// eq. (5)'s normal quantisation: floor(n s_nd + offset), per component (see hash.glsl).
+pub fn normal_coord(n: Vec3, bins: NormalBins) -> IVec3 {
+    (n.clamp(Vec3::splat(-1.0), Vec3::splat(1.0)) * bins.s_nd + Vec3::splat(bins.offset))
         .floor()
         .as_ivec3()
 }
@@ -138,11 +159,19 @@ pub fn cell_key_at(c: IVec3, lod: i32, nq: IVec3, frame: u32, epoch: u32, capaci
     }
 }
 
-pub fn cell_key(p: Vec3, n: Vec3, lod: i32, s_nd: f32, frame: u32, epoch: u32, capacity: u32) -> CellKey {
+pub fn cell_key(
+    p: Vec3,
+    n: Vec3,
+    lod: i32,
+    bins: NormalBins,
+    frame: u32,
+    epoch: u32,
+    capacity: u32,
+) -> CellKey {
     cell_key_at(
         cell_coord(p, lod),
         lod,
-        normal_coord(n, s_nd),
+        normal_coord(n, bins),
         frame,
         epoch,
         capacity,
@@ -252,18 +281,66 @@ mod tests {
         );
     }
 
+    /// The normal components of CAD faces: axes (0, ±1), 30°/60° chamfers and hexagon faces (±1/2, ±√3/2),
+    /// 45° chamfers (±√2/2).
+    const CAD_COMPONENTS: [f32; 9] = [
+        0.0,
+        0.5,
+        -0.5,
+        std::f32::consts::FRAC_1_SQRT_2,
+        -std::f32::consts::FRAC_1_SQRT_2,
+        0.866_025_4,
+        -0.866_025_4,
+        1.0,
+        -1.0,
+    ];
+
+    /// At the default s_nd and offset no bin edge lies within 0.02 of a CAD face's normal component, so a face
+    /// does not split between bins on rounding noise. Catches the old centred bins, floor(3n + 1/2) (edges at
+    /// ±1/2), and the paper's floor(3n) (edges at 0) as a default.
     #[test]
-    fn axis_aligned_normals_sit_mid_bin() {
-        // A normal a rounding error off an axis stays in the axis's bin (bins centred on the integers).
-        for s_nd in [1.0, 2.0, 3.0, 4.5] {
-            for n in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Z] {
-                let off = (n + Vec3::new(1e-6, -1e-6, 1e-6)).normalize();
-                assert_eq!(
-                    normal_coord(n, s_nd),
-                    normal_coord(off, s_nd),
-                    "{n} at s_nd {s_nd}"
+    fn default_normal_bins_keep_cad_normals_off_their_edges() {
+        let d = crate::AoSettings::default();
+        let bins = NormalBins {
+            s_nd: d.s_nd,
+            offset: d.normal_offset,
+        };
+        let edges = bins.edges();
+        assert!(edges.len() >= 2 * d.s_nd as usize, "{edges:?}");
+        for e in &edges {
+            for c in CAD_COMPONENTS {
+                assert!(
+                    (e - c).abs() >= 0.02,
+                    "bin edge {e} is {} from {c}",
+                    (e - c).abs()
                 );
             }
+        }
+        // Each edge is where the bin changes: just below and above it the bins differ.
+        for e in edges.iter().filter(|e| e.abs() < 1.0) {
+            let at = |x: f32| normal_coord(Vec3::new(x, 0.0, 0.0), bins).x;
+            assert_eq!(at(e + 1e-4), at(e - 1e-4) + 1, "edge {e}");
+        }
+        // A normal a rounding error off a CAD direction stays in its bin.
+        for &c in &CAD_COMPONENTS {
+            let n = Vec3::new(c, (1.0 - c * c).max(0.0).sqrt(), 0.0);
+            let off = (n + Vec3::new(1e-6, -1e-6, 1e-6)).normalize();
+            assert_eq!(normal_coord(n, bins), normal_coord(off, bins), "{n}");
+        }
+    }
+
+    /// The paper's mode keeps eq. (5) as published: floor(n s_nd).
+    #[test]
+    fn paper_normal_bins_are_eq_5() {
+        let p = crate::AoSettings::default().paper();
+        assert_eq!(p.normal_offset, 0.0);
+        let bins = NormalBins {
+            s_nd: p.s_nd,
+            offset: p.normal_offset,
+        };
+        for x in [-1.0f32, -0.7, -0.34, -0.01, 0.0, 0.2, 0.34, 0.5, 0.99, 1.0] {
+            let n = Vec3::new(x, 0.0, 0.0);
+            assert_eq!(normal_coord(n, bins).x, (x * p.s_nd).floor() as i32, "{x}");
         }
     }
 
@@ -271,37 +348,51 @@ mod tests {
     fn keys_separate_position_normal_lod_and_frame() {
         let p = Vec3::new(1.25, -3.5, 7.0);
         let n = Vec3::Z;
-        let base = cell_key(p, n, -2, 3.0, 0, 0, 1 << 20);
+        let base = cell_key(p, n, -2, NormalBins::paper(3.0), 0, 0, 1 << 20);
         assert_eq!(
             base,
-            cell_key(p + Vec3::splat(0.01), n, -2, 3.0, 0, 0, 1 << 20),
+            cell_key(
+                p + Vec3::splat(0.01),
+                n,
+                -2,
+                NormalBins::paper(3.0),
+                0,
+                0,
+                1 << 20
+            ),
             "same cell"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p + Vec3::X, n, -2, 3.0, 0, 0, 1 << 20).checksum,
+            cell_key(p + Vec3::X, n, -2, NormalBins::paper(3.0), 0, 0, 1 << 20).checksum,
             "next cell"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p, -n, -2, 3.0, 0, 0, 1 << 20).checksum,
+            cell_key(p, -n, -2, NormalBins::paper(3.0), 0, 0, 1 << 20).checksum,
             "other normal"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p, n, -1, 3.0, 0, 0, 1 << 20).checksum,
+            cell_key(p, n, -1, NormalBins::paper(3.0), 0, 0, 1 << 20).checksum,
             "other LOD"
         );
         assert_ne!(
             base.checksum,
-            cell_key(p, n, -2, 3.0, 1, 0, 1 << 20).checksum,
+            cell_key(p, n, -2, NormalBins::paper(3.0), 1, 0, 1 << 20).checksum,
             "other F"
         );
         // A region epoch makes a new key, distinct from every F's epoch-0 key and from the next F's.
-        let e1 = cell_key(p, n, -2, 3.0, 0, 1, 1 << 20);
+        let e1 = cell_key(p, n, -2, NormalBins::paper(3.0), 0, 1, 1 << 20);
         assert_ne!(base.checksum, e1.checksum, "other epoch");
-        assert_ne!(e1.checksum, cell_key(p, n, -2, 3.0, 1, 0, 1 << 20).checksum);
-        assert_ne!(e1.checksum, cell_key(p, n, -2, 3.0, 1, 1, 1 << 20).checksum);
+        assert_ne!(
+            e1.checksum,
+            cell_key(p, n, -2, NormalBins::paper(3.0), 1, 0, 1 << 20).checksum
+        );
+        assert_ne!(
+            e1.checksum,
+            cell_key(p, n, -2, NormalBins::paper(3.0), 1, 1, 1 << 20).checksum
+        );
         assert!(base.slot < 1 << 20 && base.checksum != EMPTY_CELL);
     }
 

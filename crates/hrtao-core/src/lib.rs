@@ -35,4 +35,4 @@ pub use error::{CoreError, Result};
 pub use raster::Primary;
 pub use renderer::{FrameReport, Renderer};
 pub use section::{SectionPlane, Sections};
-pub use settings::{AoSettings, Mode};
+pub use settings::{AoSettings, Invalidates, Mode};

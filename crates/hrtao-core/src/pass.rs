@@ -95,6 +95,10 @@ pub struct PassSet {
     set: vk::DescriptorSet,
     pipelines: Vec<(Pass, vk::Pipeline)>,
     bound_tlas: vk::AccelerationStructureKHR,
+    /// The TLAS build generation binding 0 was last written for (0: never).
+    bound_generation: u64,
+    /// Descriptor writes of binding 0 so far (`Renderer::tlas_descriptor_writes`).
+    tlas_writes: u64,
 }
 
 fn spirv_words(bytes: &[u8]) -> Vec<u32> {
@@ -202,6 +206,8 @@ impl PassSet {
                 set,
                 pipelines: Vec::new(),
                 bound_tlas: vk::AccelerationStructureKHR::null(),
+                bound_generation: 0,
+                tlas_writes: 0,
             };
             for pass in Pass::ALL {
                 let module = shader_module(gpu, pass.shader())?;
@@ -224,9 +230,11 @@ impl PassSet {
         }
     }
 
-    /// Points binding 0 at `tlas` (after a TLAS rebuild). Must not be called while a frame is in flight.
-    pub fn bind_tlas(&mut self, tlas: vk::AccelerationStructureKHR) {
-        if self.bound_tlas == tlas {
+    /// Points binding 0 at `tlas` of build `generation` (`SceneGpu::tlas_generation`): written again for every
+    /// new generation, never judged by the handle value, which a rebuild may get back from a freed TLAS. Must not
+    /// be called while a frame is in flight.
+    pub fn bind_tlas(&mut self, tlas: vk::AccelerationStructureKHR, generation: u64) {
+        if self.bound_generation == generation && self.bound_tlas == tlas {
             return;
         }
         let handles = [tlas];
@@ -241,6 +249,13 @@ impl PassSet {
         write.descriptor_count = 1;
         unsafe { self.gpu.device.update_descriptor_sets(&[write], &[]) };
         self.bound_tlas = tlas;
+        self.bound_generation = generation;
+        self.tlas_writes += 1;
+    }
+
+    /// Descriptor writes of the TLAS binding so far.
+    pub fn tlas_writes(&self) -> u64 {
+        self.tlas_writes
     }
 
     fn pipeline(&self, pass: Pass) -> vk::Pipeline {

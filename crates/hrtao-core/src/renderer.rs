@@ -18,7 +18,7 @@ use crate::gpu::{
 use crate::pass::{Pass, PassSet, Recorder};
 use crate::raster::{Primary, Rasterizer};
 use crate::regions::RegionTable;
-use crate::settings::{AoSettings, Mode};
+use crate::settings::{AoSettings, Invalidates, Mode};
 use crate::tile::Tile;
 use crate::timer::GpuTimer;
 
@@ -94,8 +94,9 @@ const NEW_MAP: (u64, u64) = (u64::MAX, 0);
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
 
-/// What must stay equal for frames to accumulate into one still image.
-#[derive(Clone, PartialEq)]
+/// What must stay equal for frames to accumulate into one still image (settings: up to changes that invalidate
+/// nothing, `AoSettings::invalidates`).
+#[derive(Clone)]
 struct StillKey {
     camera: Camera,
     settings: AoSettings,
@@ -106,6 +107,16 @@ struct StillKey {
     jitter: bool,
     primary: Primary,
     tile: Option<Tile>,
+}
+
+impl PartialEq for StillKey {
+    fn eq(&self, o: &StillKey) -> bool {
+        self.settings.invalidates(&o.settings) == Invalidates::Nothing
+            && (self.camera, self.scene_f, self.tlas, self.scene_version)
+                == (o.camera, o.scene_f, o.tlas, o.scene_version)
+            && (self.view_height, self.jitter, self.primary, self.tile)
+                == (o.view_height, o.jitter, o.primary, o.tile)
+    }
 }
 
 /// The world-space hash map (paper §1), persistent across frames.
@@ -134,11 +145,14 @@ pub struct FrameReport {
     pub load_factor: f64,
     /// F the frame hashed with (eq. 6): the scene's, plus its section plane changes (`Renderer::effective_f`).
     pub scene_f: u32,
+    /// The F cells were keyed with this frame: the scene's after a global edit, plus the settings changes that
+    /// invalidated the whole map (`AoSettings::invalidates`); local edits leave it.
+    pub map_f: u32,
     /// Frames accumulated for the current view (1 = a new view).
     pub accumulated_frames: u32,
     /// Rays of the still-camera refinement (included in `rays`).
     pub refine_rays: u64,
-    /// Rays the target cells took (see `STAT_CELL_RAYS`).
+    /// Rays the target cells took (see `RAYS_CELL`).
     pub cell_rays: u64,
     /// Pixels queued for rays (`STAT_RAY_QUEUE`) and for the filter (`STAT_FILTER_QUEUE`).
     pub ray_pixels: u32,
@@ -153,7 +167,10 @@ pub struct Renderer {
     passes: PassSet,
     timer: Option<GpuTimer>,
     globals: Buffer,
+    /// `FrameStats` in device memory (the shaders' atomics stay on the GPU), and its host-visible copy made once
+    /// at the end of every frame.
     stats: Buffer,
+    stats_readback: Buffer,
     /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by queue_args.comp.
     dispatch_args: Buffer,
     targets: Targets,
@@ -169,6 +186,9 @@ pub struct Renderer {
     /// The F cells are keyed with (eq. 6): the scene's F after a global change; local edits leave it and
     /// bump region epochs instead (`regions`).
     key_f: u32,
+    /// Settings changes that invalidated the whole map (`Invalidates::WholeMap`): added to the F cells are keyed
+    /// with, so that key F values only ever grow and a key never reverts to one of before such a change.
+    settings_f: u32,
     regions: RegionTable,
     /// `still_index` at the last local edit: pixels near it restarted their refinement then.
     edit_still_index: u32,
@@ -211,6 +231,13 @@ impl Renderer {
             gpu,
             "frame stats",
             std::mem::size_of::<FrameStats>() as u64,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        let stats_readback = Buffer::new(
+            gpu,
+            "frame stats readback",
+            std::mem::size_of::<FrameStats>() as u64,
             MemoryLocation::GpuToCpu,
             vk::BufferUsageFlags::empty(),
         )?;
@@ -229,6 +256,7 @@ impl Renderer {
             passes,
             globals,
             stats,
+            stats_readback,
             dispatch_args,
             targets: Targets::new(gpu, width.max(1), height.max(1))?,
             hash,
@@ -239,6 +267,7 @@ impl Renderer {
             last_f: None,
             f_start_frame: 0,
             key_f: 0,
+            settings_f: 0,
             regions: RegionTable::new(gpu)?,
             edit_still_index: 0,
             last_converged: false,
@@ -256,12 +285,16 @@ impl Renderer {
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
+            gpu.device
+                .cmd_fill_buffer(cmd, r.stats_readback.raw, 0, vk::WHOLE_SIZE, 0);
         })?;
         r.sync_region_size();
         Ok(r)
     }
 
-    /// Region grids for the current settings (`RegionTable::region_lod`); new grids forget local edits.
+    /// Region grids for the current settings (`RegionTable::region_lod`); new grids forget local edits. Only
+    /// with a new F (`invalidate_map`, or before the first frame): epochs back at 0 under the same F would
+    /// give cells their pre-edit keys back.
     fn sync_region_size(&mut self) {
         let s = &self.settings;
         let l = RegionTable::region_lod_for(
@@ -272,6 +305,17 @@ impl Renderer {
             self.regions.region_lod = l;
             self.regions.reset();
         }
+    }
+
+    /// Invalidates every cell of the map (eq. 6, as a global edit does): the next frame keys cells with a new
+    /// F, never used before, and the old cells become reclaimable.
+    fn invalidate_map(&mut self) {
+        self.settings_f = self.settings_f.wrapping_add(1);
+        if let Some((f, sections)) = self.last_f {
+            self.key_f = f.wrapping_add(sections).wrapping_add(self.settings_f);
+            self.f_start_frame = self.frame_index;
+        }
+        self.last_cell_rays = NEW_MAP;
     }
 
     /// The LOD setting the grids of the local-edit region table (`RegionTable::region_lod`).
@@ -312,9 +356,12 @@ impl Renderer {
         Ok(())
     }
 
-    /// Applies new settings; a new hash capacity reallocates (and empties) the map.
+    /// Applies new settings, invalidating what their change invalidates (`AoSettings::invalidates`): the whole
+    /// map gets a new F (a new hash capacity reallocates and empties it); the still image restarts at the next
+    /// frame unless nothing shown changed.
     pub fn set_settings(&mut self, settings: AoSettings) -> Result<()> {
         settings.validate().map_err(CoreError::Invalid)?;
+        let whole_map = self.settings.invalidates(&settings) == Invalidates::WholeMap;
         if settings.hash_capacity != self.hash.capacity {
             self.gpu.wait_idle();
             self.hash = Self::create_hash(&self.gpu, settings.hash_capacity)?;
@@ -327,7 +374,10 @@ impl Renderer {
             self.last_cell_rays = NEW_MAP;
         }
         self.settings = settings;
-        self.sync_region_size();
+        if whole_map {
+            self.invalidate_map();
+            self.sync_region_size();
+        }
         Ok(())
     }
 
@@ -494,6 +544,8 @@ impl Renderer {
             bias_evidence: t.bias_evidence.address,
             near_weight: s.near_weight,
             near_fraction: s.near_fraction,
+            normal_offset: s.normal_offset,
+            pad0: 0,
         }
     }
 
@@ -579,7 +631,7 @@ impl Renderer {
         (globals.section0, globals.section1, globals.section2) = (s0, s1, s2);
         globals.section_count = count;
         self.globals.write(&[globals])?;
-        self.passes.bind_tlas(scene.tlas.raw);
+        self.passes.bind_tlas(scene.tlas.raw, scene.tlas_generation());
 
         let (w, h) = self.size();
         let primary = self.primary;
@@ -669,6 +721,20 @@ impl Renderer {
             }
         }
         rec.dispatch(Pass::Composite, w, h, [0; 4]);
+        // The frame's counters, once, for `finish_frame` (the dispatch's barrier made them visible).
+        let bytes = std::mem::size_of::<FrameStats>() as u64;
+        unsafe {
+            self.gpu.device.cmd_copy_buffer(
+                cmd,
+                self.stats.raw,
+                self.stats_readback.raw,
+                &[vk::BufferCopy {
+                    src_offset: 0,
+                    dst_offset: 0,
+                    size: bytes,
+                }],
+            );
+        }
         host_read_barrier(&self.gpu, cmd);
         Ok(())
     }
@@ -698,7 +764,7 @@ impl Renderer {
                 }
             }
         }
-        self.key_f = Self::effective_f(scene, scene_f);
+        self.key_f = Self::effective_f(scene, scene_f).wrapping_add(self.settings_f);
         self.f_start_frame = self.frame_index;
         false
     }
@@ -741,7 +807,9 @@ impl Renderer {
     /// Reads the statistics of the frame just completed.
     pub fn finish_frame(&mut self, scene_f: u32, wall_ms: f64) -> Result<FrameReport> {
         self.frame_index = self.frame_index.wrapping_add(1);
-        let c: Vec<u32> = self.stats.read(gpu::STAT_COUNT as usize)?;
+        let stats: FrameStats = self.stats_readback.read(1)?[0];
+        let c = stats.counters;
+        let rays = |i: u32| stats.rays[i as usize];
         let gpu_ms = match &self.timer {
             Some(t) if self.timestamps_measure() => t.read()?,
             _ => Vec::new(),
@@ -750,16 +818,18 @@ impl Renderer {
         if c[gpu::STAT_FAILED_INSERTS as usize] > 0 {
             self.levelwise_until = self.frame_index.wrapping_add(LEVELWISE_FRAMES);
         }
-        self.last_converged = self.converged(c[gpu::STAT_RAYS as usize]);
+        let young_pixels =
+            c[gpu::STAT_RAY_QUEUE as usize] as u64 + c[gpu::STAT_UNPICKED_PIXELS as usize] as u64;
+        self.last_converged = self.converged(young_pixels);
         let budget = self.pixel_count() as f64
             * self.settings.rays_per_pixel as f64
             * self.settings.trace_fraction.clamp(0.0, 1.0) as f64;
-        self.last_cell_rays = (c[gpu::STAT_CELL_RAYS as usize] as u64, budget.ceil() as u64);
+        self.last_cell_rays = (rays(gpu::RAYS_CELL), budget.ceil() as u64);
         Ok(FrameReport {
             gpu_total_ms: gpu_ms.iter().fold(0.0, |sum, (_, ms)| sum + ms),
             gpu_ms,
             wall_ms,
-            rays: c[gpu::STAT_RAYS as usize] as u64,
+            rays: rays(gpu::RAYS_ALL),
             cells_inserted: c[gpu::STAT_CELLS_INSERTED as usize],
             failed_inserts: c[gpu::STAT_FAILED_INSERTS as usize],
             longest_probe: c[gpu::STAT_MAX_PROBE as usize],
@@ -771,9 +841,10 @@ impl Renderer {
             scene_f: self
                 .last_f
                 .map_or(scene_f, |(f, sections)| f.wrapping_add(sections)),
+            map_f: self.key_f,
             accumulated_frames: self.still_index + 1,
-            refine_rays: c[gpu::STAT_REFINE_RAYS as usize] as u64,
-            cell_rays: c[gpu::STAT_CELL_RAYS as usize] as u64,
+            refine_rays: rays(gpu::RAYS_REFINE),
+            cell_rays: rays(gpu::RAYS_CELL),
             ray_pixels: c[gpu::STAT_RAY_QUEUE as usize],
             filtered_pixels: c[gpu::STAT_FILTER_QUEUE as usize],
             converged: self.last_converged,
@@ -830,10 +901,11 @@ impl Renderer {
         Ok((self.primary, ray_query, raster))
     }
 
-    /// Whether the frame just rendered (`still_index` frames into its view, `rays` traced) is final:
-    /// per-pixel RTAO and HRTAO with refinement once each pixel has `still_samples` of its own rays (and, with
-    /// jitter, `AA_FRAMES` samples); the paper's HRTAO once no cell takes rays; other modes once anti-aliased.
-    fn converged(&self, rays: u32) -> bool {
+    /// Whether the frame just rendered (`still_index` frames into its view, `young_pixels` of it on
+    /// cells that still take rays, traced this frame or not) is final: per-pixel RTAO and HRTAO with refinement
+    /// once each pixel has `still_samples` of its own rays (and, with jitter, `AA_FRAMES` samples); the paper's
+    /// HRTAO once no pixel on screen has a cell that takes rays; other modes once anti-aliased.
+    fn converged(&self, young_pixels: u64) -> bool {
         let s = &self.settings;
         let frames = self.still_index + 1;
         let aa = !self.jitter || frames >= AA_FRAMES;
@@ -844,7 +916,7 @@ impl Renderer {
             Mode::Hrtao if s.refine => {
                 aa && (s.rays_per_pixel == 0 || own_rays(self.still_index - self.edit_still_index))
             }
-            Mode::Hrtao => rays == 0 && frames > 1,
+            Mode::Hrtao => young_pixels == 0 && frames > 1,
             _ => aa,
         }
     }
@@ -966,7 +1038,7 @@ impl Renderer {
         globals.width = ROW;
         globals.height = (cases.len() as u32).div_ceil(ROW).max(1);
         self.globals.write(&[globals])?;
-        self.passes.bind_tlas(scene.tlas.raw);
+        self.passes.bind_tlas(scene.tlas.raw, scene.tlas_generation());
         let addr = buf.address;
         let push = [addr as u32, (addr >> 32) as u32, cases.len() as u32, 0];
         self.gpu.run_commands(|cmd| {
@@ -984,7 +1056,7 @@ impl Renderer {
         let key_f = if self.last_f.map(|l| l.0) == Some(scene_f) {
             self.key_f
         } else {
-            scene_f
+            scene_f.wrapping_add(self.settings_f)
         };
         let g = self.globals_for(camera, key_f);
         let size = crate::hash::FeatureSize {
@@ -999,12 +1071,23 @@ impl Renderer {
             crate::hash::cell_key_at(
                 c,
                 l,
-                crate::hash::normal_coord(px.normal.into(), g.s_nd),
+                crate::hash::normal_coord(
+                    px.normal.into(),
+                    crate::hash::NormalBins {
+                        s_nd: g.s_nd,
+                        offset: g.normal_offset,
+                    },
+                ),
                 key_f,
                 epoch,
                 g.hash_capacity,
             )
         })
+    }
+
+    /// Descriptor writes of the TLAS binding so far (one per TLAS build a frame used).
+    pub fn tlas_descriptor_writes(&self) -> u64 {
+        self.passes.tlas_writes()
     }
 
     /// Frames rendered so far (the hash map's clock).

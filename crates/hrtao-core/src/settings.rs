@@ -98,6 +98,11 @@ pub struct AoSettings {
     pub s_p: f32,
     /// s_nd: normal discretisation (eq. 5).
     pub s_nd: f32,
+    /// Ours: eq. (5)'s bins shifted by this fraction of a bin, floor(n s_nd + offset). The default keeps every
+    /// bin edge at least 0.02 from the normal components of axis-aligned faces, 30°/45°/60° chamfers and
+    /// hexagon faces (0, ±1/2, ±√2/2, ±√3/2, ±1) at the default s_nd, so such a face never splits between
+    /// bins on rounding noise; 0 = eq. (5) as published (its edges lie on axis-aligned normals).
+    pub normal_offset: f32,
     /// s_min: smallest world feature (eq. 3).
     pub s_min: f32,
     /// Rays per cell after which a cell stops receiving rays (§6: 1000).
@@ -194,6 +199,17 @@ pub struct AoSettings {
     pub contact_detail: f32,
 }
 
+/// What a change of a setting invalidates (`AoSettings::invalidates`), from least to most.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Invalidates {
+    /// Nothing shown changes: the still image keeps accumulating.
+    Nothing,
+    /// The still image restarts; the hash map keeps its cells (they hold the same AO).
+    StillImage,
+    /// What a cell holds or where it lives changes: every cell of the map is invalidated (a new F, eq. 6).
+    WholeMap,
+}
+
 impl Default for AoSettings {
     fn default() -> Self {
         AoSettings {
@@ -203,6 +219,7 @@ impl Default for AoSettings {
             trace_fraction: 1.0,
             s_p: 4.0,
             s_nd: 3.0,
+            normal_offset: 0.25,
             s_min: 1e-10,
             max_samples: 1000,
             min_samples: 8,
@@ -237,11 +254,13 @@ impl Default for AoSettings {
 
 impl AoSettings {
     /// The paper's behaviour with these parameters: our additions (still-camera refinement, variance-guided
-    /// filter, local edits) off, so `hrtao bench` can run both side by side.
+    /// filter, local edits, ...) off and eq. (5)'s normal bins as published (`normal_offset` 0), so
+    /// `hrtao bench` can run both side by side.
     pub fn paper(&self) -> AoSettings {
         AoSettings {
             refine: false,
             filter_sigma: 0.0,
+            normal_offset: 0.0,
             local_edits: false,
             near_weight: 0.0,
             level_blend: 0.0,
@@ -251,6 +270,101 @@ impl AoSettings {
             contact_detail: 0.0,
             ..self.clone()
         }
+    }
+
+    /// What changing these settings to `new` invalidates: the largest class of the fields that differ. Every
+    /// field is named here (an exhaustive destructuring: a new field does not compile until it is classified).
+    pub fn invalidates(&self, new: &AoSettings) -> Invalidates {
+        use Invalidates::{Nothing, StillImage, WholeMap};
+        let AoSettings {
+            mode,
+            ao_radius,
+            rays_per_pixel,
+            trace_fraction,
+            s_p,
+            s_nd,
+            normal_offset,
+            s_min,
+            max_samples,
+            min_samples,
+            filter,
+            filter_iterations,
+            filter_sigma,
+            hash_capacity,
+            max_probe,
+            stale_frames,
+            shaded,
+            refine,
+            prior_rays,
+            prior_rays_max,
+            prior_sigma,
+            residual_sigma,
+            still_smoothing,
+            still_samples,
+            max_cell_fraction,
+            edges,
+            crease_deg,
+            local_edits,
+            near_weight,
+            near_fraction,
+            level_blend,
+            adaptive_rays,
+            pooled_residual,
+            cell_gradient,
+            contact_detail,
+        } = self;
+        let classes = [
+            // What a cell holds: rays within R, and the near-field counts within near_fraction x R.
+            (*ao_radius != new.ao_radius, WholeMap),
+            (*near_fraction != new.near_fraction, WholeMap),
+            // Which cell a point maps to: the normal bins, the LOD scale and the largest finest cell (which
+            // also sets the region grids of local edits, `RegionTable::region_lod`).
+            (*s_nd != new.s_nd, WholeMap),
+            (*normal_offset != new.normal_offset, WholeMap),
+            (*s_min != new.s_min, WholeMap),
+            (*max_cell_fraction != new.max_cell_fraction, WholeMap),
+            // Where cells live: a new table, and the probe runs a key is looked up in.
+            (*hash_capacity != new.hash_capacity, WholeMap),
+            (*max_probe != new.max_probe, WholeMap),
+            // Linear cells keep their offset sums only while on: turned on, old cells have rays without them.
+            ((*cell_gradient > 0.0) != (new.cell_gradient > 0.0), WholeMap),
+            (*cell_gradient != new.cell_gradient, StillImage),
+            // How the cells' AO is sampled, resolved, filtered and refined, and how the image is shaded: the
+            // cells keep their estimates.
+            (*mode != new.mode, StillImage),
+            (*rays_per_pixel != new.rays_per_pixel, StillImage),
+            (*trace_fraction != new.trace_fraction, StillImage),
+            (*s_p != new.s_p, StillImage),
+            (*max_samples != new.max_samples, StillImage),
+            (*min_samples != new.min_samples, StillImage),
+            (*filter != new.filter, StillImage),
+            (*filter_iterations != new.filter_iterations, StillImage),
+            (*filter_sigma != new.filter_sigma, StillImage),
+            (*shaded != new.shaded, StillImage),
+            (*refine != new.refine, StillImage),
+            (*prior_rays != new.prior_rays, StillImage),
+            (*prior_rays_max != new.prior_rays_max, StillImage),
+            (*prior_sigma != new.prior_sigma, StillImage),
+            (*residual_sigma != new.residual_sigma, StillImage),
+            (*still_smoothing != new.still_smoothing, StillImage),
+            (*still_samples != new.still_samples, StillImage),
+            (*edges != new.edges, StillImage),
+            (*crease_deg != new.crease_deg, StillImage),
+            (*near_weight != new.near_weight, StillImage),
+            (*level_blend != new.level_blend, StillImage),
+            (*adaptive_rays != new.adaptive_rays, StillImage),
+            (*pooled_residual != new.pooled_residual, StillImage),
+            (*contact_detail != new.contact_detail, StillImage),
+            // Only when cells are reclaimed, and how later edits invalidate: nothing shown now.
+            (*stale_frames != new.stale_frames, Nothing),
+            (*local_edits != new.local_edits, Nothing),
+        ];
+        classes
+            .into_iter()
+            .filter(|&(changed, _)| changed)
+            .map(|(_, class)| class)
+            .max()
+            .unwrap_or(Nothing)
     }
 
     /// Whether still frames accumulate (per-pixel RTAO; HRTAO and AO off with refinement). Must agree with
@@ -294,6 +408,12 @@ impl AoSettings {
         }
         if !(self.s_nd.is_finite() && self.s_nd > 0.0) {
             return Err(format!("s_nd must be positive, got {}", self.s_nd));
+        }
+        if !(self.normal_offset.is_finite() && (0.0..1.0).contains(&self.normal_offset)) {
+            return Err(format!(
+                "normal offset must be in [0, 1) of a bin, got {}",
+                self.normal_offset
+            ));
         }
         if !(self.s_min.is_finite() && self.s_min > 0.0) {
             return Err(format!("s_min must be positive, got {}", self.s_min));

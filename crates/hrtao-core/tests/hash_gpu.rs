@@ -67,7 +67,10 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
             Vec3::from(c.position),
             Vec3::from(c.normal),
             lod,
-            settings.s_nd,
+            hash::NormalBins {
+                s_nd: settings.s_nd,
+                offset: settings.normal_offset,
+            },
             c.scene_f,
             c.epoch,
             settings.hash_capacity,

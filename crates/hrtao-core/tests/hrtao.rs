@@ -88,6 +88,9 @@ fn navigation_reuses_capped_cells() {
     assert_clean(&gpu);
 }
 
+/// The paper's global F (eq. 6), with local edits off: an edit re-keys every cell, and the old cells (the plate's
+/// shadow) are never read again. Catches an edit that leaves the cells' F (`Renderer::scene_changed` not
+/// setting `key_f` on a global change): the floor stays dark.
 #[test]
 fn edits_bump_f_and_old_cells_are_never_read() {
     let gpu = gpu();
@@ -114,9 +117,14 @@ fn edits_bump_f_and_old_cells_are_never_read() {
         ..Default::default()
     };
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(8, 4.0)).unwrap();
+    let settings = AoSettings {
+        local_edits: false,
+        ..hrtao(8, 4.0)
+    };
+    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    let mut map_f = 0;
     for _ in 0..3 {
-        r.render(&sg, scene.f(), &cam).unwrap();
+        map_f = r.render(&sg, scene.f(), &cam).unwrap().map_f;
     }
     let gb = r.read_gbuffer().unwrap();
     let under: Vec<usize> = (0..gb.len())
@@ -143,6 +151,11 @@ fn edits_bump_f_and_old_cells_are_never_read() {
     for _ in 0..3 {
         let rep = r.render(&sg, scene.f(), &cam).unwrap();
         assert_eq!(rep.scene_f, scene.f());
+        assert_eq!(
+            rep.map_f,
+            map_f.wrapping_add(1),
+            "the edit re-keys every cell (global F)"
+        );
         after = mean(&r.read_ao().unwrap());
     }
     println!("floor under the plate: AO {before:.3} before the edit, {after:.3} after moving the plate away");

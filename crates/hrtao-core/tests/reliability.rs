@@ -55,6 +55,11 @@ fn rss_kib() -> u64 {
 
 /// `HRTAO_SOAK_FRAMES` frames (default 200 in the suite; the documented soak uses 1000) at 64x36 along an
 /// orbit, moving an instance every 10 frames (each edit bumps F and rebuilds the TLAS).
+///
+/// With the shaders' bounds assertions on (`check_bounds`): no slot outside the table is ever used. Catches a
+/// probe that wraps with a wrong mask (e.g. `mask = 2 * hash_capacity - 1` in hash_map.glsl `find_or_insert`).
+/// The occupancy counter equals the table's non-empty slots at every check: catches an insert counted twice or
+/// a reclaimed slot counted as a new one (`stat_add(STAT_OCCUPIED, 1u)` outside its `if` in `find_or_insert`).
 #[test]
 fn soak_with_edits_stays_bounded_and_clean() {
     let frames: u32 = std::env::var("HRTAO_SOAK_FRAMES")
@@ -71,9 +76,10 @@ fn soak_with_edits_stays_bounded_and_clean() {
         ..hrtao(2, radius)
     };
     let mut r = Renderer::new(&gpu, 64, 36, settings).unwrap();
+    r.check_bounds = true;
     let base = scene.instances[0].transform;
     let (mut mem_after_warmup, mut rss_after_warmup) = (0, 0);
-    let (mut max_occupied, mut edits, mut failed) = (0, 0, 0u64);
+    let (mut max_occupied, mut edits, mut failed, mut reclaimed) = (0, 0, 0u64, 0u64);
     for i in 0..frames {
         if i > 0 && i % 10 == 0 {
             let offset = Vec3::new(0.0, 0.0, if (i / 10) % 2 == 1 { 20.0 } else { 0.0 });
@@ -95,7 +101,17 @@ fn soak_with_edits_stays_bounded_and_clean() {
         assert_eq!(rep.bounds_violations, 0);
         max_occupied = max_occupied.max(rep.occupied_cells);
         failed += rep.failed_inserts as u64;
+        reclaimed += rep.reclaimed as u64;
         if i % 50 == 49 {
+            let cells = r.read_hash_cells().unwrap();
+            let non_empty = cells
+                .iter()
+                .filter(|c| c.checksum() != hrtao_core::gpu::EMPTY_CELL)
+                .count();
+            assert_eq!(
+                rep.occupied_cells as usize, non_empty,
+                "frame {i}: the occupancy counter disagrees with the table"
+            );
             // Every pixel reads a cell of its key under the current F; no duplicates; counters bounded.
             check_map(&r, &c, scene.f(), None);
             let ao = r.read_ao().unwrap();
@@ -110,14 +126,57 @@ fn soak_with_edits_stays_bounded_and_clean() {
     let rss_end = rss_kib();
     println!(
         "soak: {frames} frames, {edits} edits, max occupied {max_occupied}/{capacity} cells, {failed} failed inserts, \
+         {reclaimed} reclaimed, \
          device memory {mem_after_warmup} -> {mem_end} bytes, RSS {rss_after_warmup} -> {rss_end} KiB, validation {}",
         gpu.validation_messages()
     );
-    assert!(max_occupied <= capacity);
+    assert!(
+        reclaimed > 0,
+        "the soak reclaims cells (the occupancy check covers reclaims)"
+    );
     assert_eq!(mem_end, mem_after_warmup, "device memory must not grow");
     assert!(
         rss_end < rss_after_warmup + 64 * 1024,
         "host memory grew by more than 64 MiB"
     );
+    assert_clean(&gpu);
+}
+
+/// Cells stop taking rays at `max_samples` (paper §6): after many frames of a still view, a target cell's QMC
+/// index is past `max_samples` by at most the one frame's blocks that crossed it (at most 4 budgets per pixel
+/// that targets it, with adaptive sampling). Catches cells that never fill (`ray_target` in ray_target.glsl
+/// returning true whatever `qmc_index`), which the old check, bounded by SAMPLE_CAP (2^24), could not.
+#[test]
+fn target_cells_stop_taking_rays_at_max_samples() {
+    let gpu = gpu();
+    let scene = scene_of(vec![floor()]);
+    let cam = top_down_camera(20.0, 64, 36);
+    let settings = AoSettings {
+        max_samples: 32,
+        refine: false,
+        ..hrtao(4, 8.0)
+    };
+    let (r, _sg) = render(&gpu, &scene, &cam, settings.clone(), 12);
+    let cells = r.read_hash_cells().unwrap();
+    let mut targets = std::collections::HashMap::new();
+    for pc in r.read_pixel_cells().unwrap() {
+        if let Some(&c) = pc.cells.iter().find(|&&c| c != hrtao_core::gpu::INVALID_CELL) {
+            *targets.entry(c).or_insert(0u32) += 1;
+        }
+    }
+    assert!(targets.len() > 20, "{} target cells", targets.len());
+    let (mut worst, mut full) = (0i64, 0usize);
+    for (&c, &pixels) in &targets {
+        let q = cells[c as usize].qmc_index;
+        let bound = settings.max_samples + 4 * settings.rays_per_pixel * pixels;
+        worst = worst.max(q as i64 - settings.max_samples as i64);
+        full += (q >= settings.max_samples) as usize;
+        assert!(q <= bound, "cell {c} ({pixels} pixels): QMC index {q} > {bound}");
+    }
+    eprintln!(
+        "{full} of {} target cells full; largest overshoot {worst} rays",
+        targets.len()
+    );
+    assert!(full * 2 > targets.len(), "most cells filled");
     assert_clean(&gpu);
 }
