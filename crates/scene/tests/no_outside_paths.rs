@@ -11,11 +11,6 @@ const TOLERATED: &[(&str, &str)] = &[
         "viewer/src/cli.rs",
         "/// Optional independent reference AO image (.pfm, e.g. the Cycles references of {DIR}/refs).",
     ),
-    (
-        "viewer/src/bench/report.rs",
-        "\"Against the independent Blender Cycles references of `{DIR}/refs` (1024 rays/pixel, noise ≈ \
-         0.002): MAE\\n\"",
-    ),
 ];
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {
