@@ -795,8 +795,9 @@ fn uri_path(model: &Path, uri: &str) -> Result<std::path::PathBuf, SceneError> {
     } else {
         uri
     };
-    let decoded =
-        urlencoding::decode(encoded).map_err(|e| reference_err(format!("bad percent-encoding: {e}")))?;
+    let decoded = percent_encoding::percent_decode_str(encoded)
+        .decode_utf8()
+        .map_err(|e| reference_err(format!("bad percent-encoding: {e}")))?;
     resolve_reference(model, Path::new(decoded.as_ref()), uri)
 }
 
