@@ -275,6 +275,15 @@ fn choose(candidates: &mut [Candidate], filter: Option<&str>) -> Option<usize> {
         .map(|(i, _)| i)
 }
 
+/// The Vulkan loader, or an error that says how to get one.
+unsafe fn load_entry() -> Result<ash::Entry> {
+    ash::Entry::load().map_err(|e| {
+        CoreError::NoDevice(format!(
+            "cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"
+        ))
+    })
+}
+
 /// One Vulkan device as `Gpu::new` judges it.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct DeviceListing {
@@ -289,11 +298,7 @@ pub struct DeviceListing {
 /// Every Vulkan device, judged and chosen as `Gpu::new` would with `options` (only `device` matters here).
 pub fn list_devices(options: &ContextOptions) -> Result<Vec<DeviceListing>> {
     unsafe {
-        let entry = ash::Entry::load().map_err(|e| {
-            CoreError::NoDevice(format!(
-                "cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"
-            ))
-        })?;
+        let entry = load_entry()?;
         let app_name = CString::new("hrtao").unwrap();
         let app = vk::ApplicationInfo::builder()
             .application_name(&app_name)
@@ -326,11 +331,7 @@ impl Gpu {
     }
 
     unsafe fn create(options: &ContextOptions) -> Result<Arc<Gpu>> {
-        let entry = ash::Entry::load().map_err(|e| {
-            CoreError::NoDevice(format!(
-                "cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"
-            ))
-        })?;
+        let entry = load_entry()?;
         let app_name = CString::new("hrtao").unwrap();
         let app = vk::ApplicationInfo::builder()
             .application_name(&app_name)

@@ -1,5 +1,6 @@
 //! glTF files whose meshes need a decompressor hrtao lacks (Draco, meshopt) fail with an error that names the
 //! extension, whether the extension is required by a .gltf or a .glb.
+mod common;
 
 /// A one-triangle glTF (positions in a data: URI) that requires `ext` and uses it on its mesh primitive.
 fn gltf_requiring(ext: &str) -> String {
@@ -8,7 +9,7 @@ fn gltf_requiring(ext: &str) -> String {
         .iter()
         .flat_map(|v| v.to_le_bytes())
         .collect();
-    let b64 = base64_encode(&positions);
+    let b64 = common::base64(&positions);
     format!(
         r#"{{
   "asset": {{"version": "2.0"}},
@@ -25,22 +26,6 @@ fn gltf_requiring(ext: &str) -> String {
   "scene": 0
 }}"#
     )
-}
-
-fn base64_encode(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
-        for i in 0..4 {
-            if i <= c.len() {
-                out.push(T[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 /// The same JSON in a GLB container (JSON chunk only).

@@ -1216,15 +1216,9 @@ fn write_boxes_obj(path: &Path, boxes: &[(&str, [f32; 3], [f32; 3])]) {
     std::fs::write(path, s).unwrap();
 }
 
-/// Several instances at once with real X input: a click selects one box, Shift+click adds a second, Delete
-/// removes both as one edit, and one Ctrl+Z brings both back.
-#[test]
-fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
-    if !display_available() {
-        return;
-    }
-    let _x = x_input_lock();
-    let dir = out_dir("multi");
+/// A floor and two 10-unit boxes ("left" at x 0..10, "right" at x 20..30) seen from the front and above, the
+/// viewer at rest with its window focused; returns it, the window and the pixels of the boxes' top centres.
+fn two_boxes_at_rest(dir: &Path) -> (Running, String, (i32, i32), (i32, i32)) {
     let obj = dir.join("parts.obj");
     write_boxes_obj(
         &obj,
@@ -1242,10 +1236,23 @@ fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
         320,
         200,
     );
-    let mut v = start_at_rest(&obj, &dir, eye, target, up, fov, (w, h));
+    let v = start_at_rest(&obj, dir, eye, target, up, fov, (w, h));
     let window = v.focus_window();
     let left = pixel_of(eye, target, up, fov, w, h, [5.0, 5.0, 10.0]);
     let right = pixel_of(eye, target, up, fov, w, h, [25.0, 5.0, 10.0]);
+    (v, window, left, right)
+}
+
+/// Several instances at once with real X input: a click selects one box, Shift+click adds a second, Delete
+/// removes both as one edit, and one Ctrl+Z brings both back.
+#[test]
+fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("multi");
+    let (mut v, window, left, right) = two_boxes_at_rest(&dir);
     v.click_until(&window, left, "(tree: left)", 1);
     v.click_with_until(&window, right, Some("shift"), "selection: 2 instances [1, 2]", 1);
     xdotool(&["key", "Delete"]);
@@ -1417,26 +1424,7 @@ fn f_frames_the_selection_and_ctrl_q_quits() {
     }
     let _x = x_input_lock();
     let dir = out_dir("frame-quit");
-    let obj = dir.join("parts.obj");
-    write_boxes_obj(
-        &obj,
-        &[
-            ("floor", [-20.0, -20.0, -1.0], [50.0, 30.0, 0.0]),
-            ("left", [0.0, 0.0, 0.0], [10.0, 10.0, 10.0]),
-            ("right", [20.0, 0.0, 0.0], [30.0, 10.0, 10.0]),
-        ],
-    );
-    let (eye, target, up, fov, w, h) = (
-        [15.0, -35.0, 45.0],
-        [15.0, 5.0, 5.0],
-        [0.0, 0.0, 1.0],
-        45.0,
-        320,
-        200,
-    );
-    let mut v = start_at_rest(&obj, &dir, eye, target, up, fov, (w, h));
-    let window = v.focus_window();
-    let right = pixel_of(eye, target, up, fov, w, h, [25.0, 5.0, 10.0]);
+    let (mut v, window, _, right) = two_boxes_at_rest(&dir);
     v.click_until(&window, right, "(tree: right)", 1);
     xdotool(&["key", "f"]);
     v.wait_for("framed the selection", 1, std::time::Duration::from_secs(30));
