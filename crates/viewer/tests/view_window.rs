@@ -85,6 +85,64 @@ fn scripted_run_renders_and_saves_a_screenshot() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `view --set-at-frame K JSON` applies settings as the panel does: the AO radius widened after the first frame
+/// darkens the screenshot toward a run at that radius from the start (a wider radius occludes more), and a bad
+/// setting fails the scripted run.
+#[test]
+fn scripted_set_at_frame_applies_settings_as_the_panel_does() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("set-at-frame");
+    let mean = |name: &str, extra: &[&str]| {
+        let shot = dir.join(format!("{name}.png"));
+        let mut args = vec![
+            "--size",
+            "240x160",
+            "--no-panel",
+            "--frames",
+            "3",
+            "--screenshot-frames",
+            "1",
+        ];
+        args.extend_from_slice(&["--screenshot", shot.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        run_viewer(&args);
+        let img = image::open(&shot).unwrap().to_luma8();
+        img.pixels().map(|p| p.0[0] as f64).sum::<f64>() / (240.0 * 160.0)
+    };
+    let narrow = mean("r8", &[]);
+    let changed = mean("r8-then-32", &["--set-at-frame", "1", r#"{"ao_radius": 32}"#]);
+    let wide = mean("r32", &["--radius", "32"]);
+    assert!(wide < narrow - 1.0, "a wider radius darkens: {narrow} {wide}");
+    // Cells gathered at the old radius still count in the frames right after the change (the renderer keeps
+    // them until they are reclaimed): the image moves most of the way, not necessarily all of it.
+    let moved = (narrow - changed) / (narrow - wide);
+    assert!(
+        moved > 0.3 && moved < 1.3,
+        "radius 8 {narrow:.2}, 8 then 32 {changed:.2}, 32 {wide:.2}: moved {moved:.2} of the way"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args([
+            "view",
+            "--no-config",
+            "--exit",
+            "--size",
+            "160x100",
+            "--frames",
+            "2",
+        ])
+        .args(["--set-at-frame", "1", r#"{"ao_radius": -1}"#])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("--set-at-frame 1"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn scripted_run_survives_a_resize() {
     if !display_available() {
