@@ -1,5 +1,5 @@
-//! `hrtao --version` names the commit it was built from: `HRTAO_GIT_COMMIT` from `git describe`, left unset when
-//! the sources are not a git checkout (a tarball) or git is missing.
+//! `hrtao --version` names the commit it was built from: `HRTAO_GIT_COMMIT` from `git rev-parse`, left unset when
+//! the sources are not a git checkout of hrtao (a tarball) or git is missing.
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -18,7 +18,12 @@ fn main() {
         println!("cargo:rustc-env=HRTAO_GIT_COMMIT={commit}");
         return;
     }
-    let Some(commit) = git(&["rev-parse", "--short=12", "HEAD"]) else {
+    // Only hrtao's own checkout counts (sources unpacked inside another repository have no commit of ours).
+    let workspace = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap()).join("../..");
+    let ours = git(&["rev-parse", "--show-toplevel"])
+        .and_then(|top| std::fs::canonicalize(top).ok())
+        .is_some_and(|top| std::fs::canonicalize(&workspace).is_ok_and(|w| w == top));
+    let Some(commit) = git(&["rev-parse", "--short=12", "HEAD"]).filter(|_| ours) else {
         return;
     };
     println!("cargo:rustc-env=HRTAO_GIT_COMMIT={commit}");
