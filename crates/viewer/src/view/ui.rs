@@ -71,7 +71,11 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Ctrl+O",
         "Open… dialog (desktop portal, or zenity); drop a model file on the window to open it too",
     ),
-    ("F12", "screenshot of the 3D view (PNG, no UI)"),
+    (
+        "F12",
+        "screenshot of the 3D view (no UI) as MODEL-YYYYMMDD-HHMMSS.png in the pictures directory (or the \
+         panel's folder)",
+    ),
     (
         "Tab",
         "show / hide the panel (also while a panel widget has the keyboard focus)",
