@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 cargo build --release -p hrtao-viewer
 if [ -z "${DISPLAY:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ] && [ $# -eq 0 ]; then
-  echo "No display found: running the viewer under Xvfb for 8 frames and saving a screenshot to hrtao-viewer.png"
-  exec xvfb-run -a -s "-screen 0 1280x800x24" ./target/release/hrtao view --frames 8 --screenshot-ui hrtao-viewer.png --exit
+  echo "No display found: running the viewer under Xvfb for 8 frames and saving a screenshot to target/hrtao-viewer.png"
+  exec xvfb-run -a -s "-screen 0 1280x800x24" ./target/release/hrtao view --frames 8 --screenshot-ui target/hrtao-viewer.png --exit
 fi
 exec ./target/release/hrtao "$@"

@@ -256,6 +256,74 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
     cand
 }
 
+/// Marks the devices whose name lacks `filter` (case-insensitive) as unusable, then picks the usable device of
+/// the best kind (discrete, integrated, virtual GPU, other, CPU), the first one listed among equals.
+fn choose(candidates: &mut [Candidate], filter: Option<&str>) -> Option<usize> {
+    if let Some(filter) = filter {
+        let f = filter.to_lowercase();
+        for c in candidates.iter_mut() {
+            if c.problem.is_none() && !c.name.to_lowercase().contains(&f) {
+                c.problem = Some(format!("name does not contain `{filter}`"));
+            }
+        }
+    }
+    candidates
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.problem.is_none())
+        .min_by_key(|(_, c)| device_kind_rank(c.kind))
+        .map(|(i, _)| i)
+}
+
+/// The Vulkan loader, or an error that says how to get one.
+unsafe fn load_entry() -> Result<ash::Entry> {
+    ash::Entry::load().map_err(|e| {
+        CoreError::NoDevice(format!(
+            "cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"
+        ))
+    })
+}
+
+/// One Vulkan device as `Gpu::new` judges it.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct DeviceListing {
+    pub name: String,
+    pub kind: &'static str,
+    /// Why hrtao cannot use the device (None: usable).
+    pub problem: Option<String>,
+    /// The device `Gpu::new` opens with the same options.
+    pub chosen: bool,
+}
+
+/// Every Vulkan device, judged and chosen as `Gpu::new` would with `options` (only `device` matters here).
+pub fn list_devices(options: &ContextOptions) -> Result<Vec<DeviceListing>> {
+    unsafe {
+        let entry = load_entry()?;
+        let app_name = CString::new("hrtao").unwrap();
+        let app = vk::ApplicationInfo::builder()
+            .application_name(&app_name)
+            .api_version(vk::API_VERSION_1_2);
+        let instance = entry
+            .create_instance(&vk::InstanceCreateInfo::builder().application_info(&app), None)
+            .map_err(|e| CoreError::NoDevice(format!("vkCreateInstance failed: {e}. {LAVAPIPE_HINT}")))?;
+        let physicals = instance.enumerate_physical_devices().unwrap_or_default();
+        let mut candidates: Vec<Candidate> =
+            physicals.iter().map(|&p| check_candidate(&instance, p)).collect();
+        let chosen = choose(&mut candidates, options.device.as_deref());
+        instance.destroy_instance(None);
+        Ok(candidates
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| DeviceListing {
+                name: c.name,
+                kind: kind_name(c.kind),
+                problem: c.problem,
+                chosen: Some(i) == chosen,
+            })
+            .collect())
+    }
+}
+
 impl Gpu {
     /// Creates the instance and the device. Picks a hardware GPU with ray queries when present, else lavapipe.
     pub fn new(options: &ContextOptions) -> Result<Arc<Gpu>> {
@@ -263,11 +331,7 @@ impl Gpu {
     }
 
     unsafe fn create(options: &ContextOptions) -> Result<Arc<Gpu>> {
-        let entry = ash::Entry::load().map_err(|e| {
-            CoreError::NoDevice(format!(
-                "cannot load the Vulkan loader (libvulkan.so.1): {e}. {LAVAPIPE_HINT}"
-            ))
-        })?;
+        let entry = load_entry()?;
         let app_name = CString::new("hrtao").unwrap();
         let app = vk::ApplicationInfo::builder()
             .application_name(&app_name)
@@ -358,19 +422,8 @@ impl Gpu {
         let physicals = instance.enumerate_physical_devices().unwrap_or_default();
         let mut candidates: Vec<Candidate> =
             physicals.iter().map(|&p| check_candidate(&instance, p)).collect();
-        if let Some(filter) = &options.device {
-            let f = filter.to_lowercase();
-            for c in candidates.iter_mut() {
-                if c.problem.is_none() && !c.name.to_lowercase().contains(&f) {
-                    c.problem = Some(format!("name does not contain `{filter}`"));
-                }
-            }
-        }
-        let chosen = candidates
-            .iter()
-            .filter(|c| c.problem.is_none())
-            .min_by_key(|c| device_kind_rank(c.kind))
-            .map(|c| (c.physical, c.queue_family));
+        let chosen = choose(&mut candidates, options.device.as_deref())
+            .map(|i| (candidates[i].physical, candidates[i].queue_family));
         let Some((physical, queue_family)) = chosen else {
             let mut listing = String::new();
             for c in &candidates {

@@ -49,10 +49,19 @@ pub fn load_gltf(
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(format!("cannot parse: {e}")))?;
     drop(bytes);
+    // Compressed geometry: no kept Rust crate decodes Draco, and the meshopt buffer views are not decoded here;
+    // the error names the extension and the way out.
     for ext in document.extensions_required() {
-        if ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression" {
-            return Err(err(format!("requires unsupported extension {ext}")));
-        }
+        let what = match ext {
+            "KHR_draco_mesh_compression" => "Draco-compressed meshes",
+            "EXT_meshopt_compression" | "KHR_meshopt_compression" => "meshoptimizer-compressed buffers",
+            _ => continue,
+        };
+        return Err(err(format!(
+            "requires the glTF extension {ext} ({what}), which hrtao cannot decode: export the model without \
+             mesh compression (e.g. `gltf-transform copy` with no compression, or Blender's glTF exporter with \
+             compression off)"
+        )));
     }
     validate_document(&document).map_err(err)?;
     let post_order = check_acyclic(&document).map_err(err)?;
@@ -795,8 +804,9 @@ fn uri_path(model: &Path, uri: &str) -> Result<std::path::PathBuf, SceneError> {
     } else {
         uri
     };
-    let decoded =
-        urlencoding::decode(encoded).map_err(|e| reference_err(format!("bad percent-encoding: {e}")))?;
+    let decoded = percent_encoding::percent_decode_str(encoded)
+        .decode_utf8()
+        .map_err(|e| reference_err(format!("bad percent-encoding: {e}")))?;
     resolve_reference(model, Path::new(decoded.as_ref()), uri)
 }
 

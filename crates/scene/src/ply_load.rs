@@ -1,12 +1,16 @@
-//! PLY loader (ASCII and binary, via ply-rs): `vertex` x/y/z and `face` vertex_indices (or
+//! PLY loader (ASCII and binary, via ply-rs-bw): `vertex` x/y/z and `face` vertex_indices (or
 //! vertex_index) become one mesh with one identity instance, coordinates as in the file; polygons are
 //! fanned into triangles. The file goes through the guard; the element counts the header declares must
 //! fit in the file's size, and the memory they imply is checked before the payload is read.
 
 use std::path::Path;
 
-use ply_rs::parser::Parser;
-use ply_rs::ply::{DefaultElement, ElementDef, Encoding, Property, PropertyAccess, PropertyType, ScalarType};
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::parser::Reader;
+use ply_rs_bw::ply::{
+    DefaultElement, ElementDef, Encoding, Property, PropertyAccess, PropertyAccessResult, PropertyType,
+    ScalarType,
+};
 
 use crate::error::SceneError;
 use crate::guard::{read_model, LoadOptions};
@@ -23,12 +27,12 @@ impl PropertyAccess for Vertex {
     fn new() -> Self {
         Vertex::default()
     }
-    fn set_property(&mut self, name: String, p: Property) {
-        let k = match name.as_str() {
+    fn set_property(&mut self, name: &str, p: Property) -> PropertyAccessResult {
+        let k = match name {
             "x" => 0,
             "y" => 1,
             "z" => 2,
-            _ => return,
+            _ => return PropertyAccessResult::Ignored,
         };
         self.0[k] = match p {
             Property::Float(v) => v,
@@ -41,6 +45,7 @@ impl PropertyAccess for Vertex {
             Property::UInt(v) => v as f32,
             _ => f32::NAN,
         };
+        PropertyAccessResult::Set
     }
 }
 
@@ -51,9 +56,9 @@ impl PropertyAccess for Face {
     fn new() -> Self {
         Face::default()
     }
-    fn set_property(&mut self, name: String, p: Property) {
+    fn set_property(&mut self, name: &str, p: Property) -> PropertyAccessResult {
         if name != "vertex_indices" && name != "vertex_index" {
-            return;
+            return PropertyAccessResult::Ignored;
         }
         self.0 = match p {
             Property::ListChar(v) => v.into_iter().map(i64::from).collect(),
@@ -64,6 +69,7 @@ impl PropertyAccess for Face {
             Property::ListUInt(v) => v.into_iter().map(i64::from).collect(),
             _ => vec![-1],
         };
+        PropertyAccessResult::Set
     }
 }
 
@@ -100,11 +106,11 @@ pub fn load_ply(
         message,
     };
     let (bytes, mut budget) = read_model(path, opts, progress)?;
-    let mut reader = bytes.as_slice();
+    let mut reader = Reader::new(bytes.as_slice());
     let header = Parser::<DefaultElement>::new()
         .read_header(&mut reader)
         .map_err(|e| err(format!("bad header: {e}")))?;
-    let payload = reader.len() as u64;
+    let payload = reader.get_ref().len() as u64;
     let mut need = 0u64;
     for (name, e) in &header.elements {
         let min = (e.count as u64).saturating_mul(min_element_bytes(e, &header.encoding));
@@ -124,7 +130,7 @@ pub fn load_ply(
     let (mut vertices, mut faces) = (Vec::new(), Vec::new());
     for (name, e) in &header.elements {
         opts.check_cancel(path)?;
-        let bad = |x: std::io::Error| err(format!("`{name}` elements: {x}"));
+        let bad = |x: ply_rs_bw::parser::ParseError| err(format!("`{name}` elements: {x}"));
         match name.as_str() {
             "vertex" => {
                 vertices = Parser::<Vertex>::new()

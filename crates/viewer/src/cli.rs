@@ -1,23 +1,45 @@
 //! Command-line interface: every command's arguments. The commands import them from here (never the reverse).
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use hrtao_core::camera::UpAxis;
 use hrtao_core::{AoSettings, Mode, SectionPlane, Sections};
 use hrtao_scene::glam::DVec3;
 use hrtao_scene::Scene;
 
+/// `hrtao --version`: the package version and the commit it was built from (none from a source tarball).
+pub const VERSION: &str = match option_env!("HRTAO_GIT_COMMIT") {
+    Some(_) => concat!(
+        env!("CARGO_PKG_VERSION"),
+        " (commit ",
+        env!("HRTAO_GIT_COMMIT"),
+        ")"
+    ),
+    None => env!("CARGO_PKG_VERSION"),
+};
+
 #[derive(Parser, Debug)]
 #[command(
     name = "hrtao",
-    version,
-    about = "CAD viewport with noise-free ray-traced ambient occlusion (HRTAO)"
+    version = VERSION,
+    about = "CAD viewport with noise-free ray-traced ambient occlusion (HRTAO)",
+    long_about = "CAD viewport with noise-free ray-traced ambient occlusion (HRTAO).\n\n\
+        `hrtao FILE` opens FILE in the viewer (as `hrtao view FILE`); with no argument the viewer opens the \
+        bundled gearbox. The other commands render, benchmark and list devices without a window."
 )]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
-    /// Verbose logging.
-    #[arg(long, short, global = true)]
+    /// The viewer's options when no command is given (`hrtao FILE` is `hrtao view FILE`).
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Verbose logging (debug level; RUST_LOG overrides).
+    #[arg(long, short, global = true, conflicts_with = "quiet")]
     pub verbose: bool,
+    /// Quiet: warnings and errors only, no progress bars.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -28,14 +50,133 @@ pub enum Command {
     Bench(BenchArgs),
     /// Render a scene headless to PNG (shaded) and PFM/EXR (linear AO).
     Render(RenderArgs),
-    /// List Vulkan devices and whether they support ray queries.
+    /// List every Vulkan device, whether hrtao can use it, and which one it chooses and why.
     Devices(DeviceArgs),
 }
 
-#[derive(Args, Debug, Clone)]
+/// Up axis of a scene (for an automatic camera).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Up {
+    Y,
+    Z,
+}
+
+impl From<Up> for UpAxis {
+    fn from(u: Up) -> UpAxis {
+        match u {
+            Up::Y => UpAxis::Y,
+            Up::Z => UpAxis::Z,
+        }
+    }
+}
+
+/// `bench --auto-camera`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AutoCamera {
+    /// Frame the whole scene from outside.
+    Fit,
+    /// Stand at a corner of the bounds at 80 % of their height and look across the scene.
+    Corner,
+}
+
+/// `bench --group`: the table of the report a result goes to.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Group {
+    Scenes,
+    Scale,
+}
+
+impl Group {
+    pub fn name(self) -> &'static str {
+        match self {
+            Group::Scenes => "scenes",
+            Group::Scale => "scale",
+        }
+    }
+}
+
+/// `WxH`, each side within 1..=16384.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}` must look like 1280x720"))?;
+    let side = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("`{s}`: {e}"));
+    let (w, h) = (side(w)?, side(h)?);
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!("`{s}`: each side must be within 1..=16384"));
+    }
+    Ok((w, h))
+}
+
+/// A JSON object of `AoSettings` fields (checked for syntax and field names; values are checked with the rest
+/// of the settings).
+pub fn parse_settings_json(s: &str) -> Result<String, String> {
+    let fields: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_str(s).map_err(|e| format!("not a JSON object of settings: {e}"))?;
+    let known = serde_json::to_value(AoSettings::default()).map_err(|e| e.to_string())?;
+    if let Some(k) = fields.keys().find(|k| known.get(k.as_str()).is_none()) {
+        return Err(format!("no setting `{k}`"));
+    }
+    Ok(s.to_string())
+}
+
+fn parse_hash_capacity(s: &str) -> Result<u32, String> {
+    let n: u32 = s.parse().map_err(|e| format!("{e}"))?;
+    if !n.is_power_of_two() || !(1024..=1 << 28).contains(&n) {
+        return Err(format!("{n} is not a power of two within 1024..=2^28"));
+    }
+    Ok(n)
+}
+
+fn parse_render_scale(s: &str) -> Result<f32, String> {
+    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if !(0.05..=2.0).contains(&v) {
+        return Err(format!("{v} is not within 0.05..=2"));
+    }
+    Ok(v)
+}
+
+/// The AO modes, listed in the help and in errors.
+fn mode_parser() -> impl TypedValueParser<Value = Mode> {
+    PossibleValuesParser::new([
+        PossibleValue::new("hrtao").help("the paper's hash-map AO with our additions"),
+        PossibleValue::new("rtao").help("per-pixel ray-traced AO (the baseline)"),
+        PossibleValue::new("none").alias("no-ao").help("no AO"),
+        PossibleValue::new("debug-cells").alias("cells"),
+        PossibleValue::new("debug-lod").alias("lod"),
+        PossibleValue::new("debug-samples").alias("samples"),
+    ])
+    .map(|s| s.parse::<Mode>().expect("every listed mode parses"))
+}
+
+/// `K VALUE` pairs of a repeatable two-value option, K a frame count.
+pub fn frame_pairs(option: &str, values: &[String]) -> anyhow::Result<Vec<(u32, String)>> {
+    values
+        .chunks(2)
+        .map(|kv| match kv {
+            [k, v] => Ok((
+                k.parse::<u32>()
+                    .map_err(|e| anyhow::anyhow!("{option} K: `{k}`: {e}"))?,
+                v.clone(),
+            )),
+            _ => anyhow::bail!("{option} takes K and a value"),
+        })
+        .collect()
+}
+
+/// The `--set-at-frame K JSON` pairs, each JSON checked as `--set` checks it.
+pub fn set_at_frame(values: &[String]) -> anyhow::Result<Vec<(u32, String)>> {
+    let pairs = frame_pairs("--set-at-frame", values)?;
+    for (_, json) in &pairs {
+        parse_settings_json(json).map_err(|e| anyhow::anyhow!("--set-at-frame: {e}"))?;
+    }
+    Ok(pairs)
+}
+
+#[derive(Args, Debug, Clone, Default)]
 pub struct DeviceArgs {
-    /// Use the first device whose name contains this text.
-    #[arg(long)]
+    /// Use the best device whose name contains this text (case-insensitive).
+    #[arg(long, env = "HRTAO_DEVICE")]
     pub device: Option<String>,
     /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
     #[arg(long)]
@@ -69,8 +210,8 @@ impl SectionArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct AoArgs {
-    /// AO mode: hrtao, rtao (per-pixel baseline), none, debug-cells, debug-lod, debug-samples.
-    #[arg(long, default_value = "hrtao")]
+    /// AO mode.
+    #[arg(long, default_value = "hrtao", value_parser = mode_parser())]
     pub mode: Mode,
     /// AO radius in scene units (default: 5% of the scene's bounding-box diagonal).
     #[arg(long)]
@@ -94,7 +235,7 @@ pub struct AoArgs {
     #[arg(long, default_value_t = AoSettings::default().filter_iterations)]
     pub filter_iterations: u32,
     /// Hash map capacity in cells (a power of two).
-    #[arg(long, default_value_t = AoSettings::default().hash_capacity)]
+    #[arg(long, default_value_t = AoSettings::default().hash_capacity, value_parser = parse_hash_capacity)]
     pub hash_capacity: u32,
     /// Render a uniform grey clay instead of the materials' base colours.
     #[arg(long)]
@@ -107,7 +248,7 @@ pub struct AoArgs {
     pub crease: f32,
     /// Any other AO setting, as a JSON object of `AoSettings` fields (applied last), e.g.
     /// `--set '{"near_weight": 0, "adaptive_rays": false}'`.
-    #[arg(long)]
+    #[arg(long, value_name = "JSON", value_parser = parse_settings_json)]
     pub set: Option<String>,
 }
 
@@ -143,9 +284,10 @@ impl AoArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
+    /// Scene: .gltf, .glb, .obj, .stl, .ply, or a generator spec such as gen:racks?rows=10&cols=10 (default: the
+    /// bundled gearbox with its camera).
     #[arg(long)]
-    pub scene: String,
+    pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
     /// "projection": "orthographic" and "ortho_height" (world height of the image); default: fit the scene.
     #[arg(long)]
@@ -156,14 +298,18 @@ pub struct RenderArgs {
     /// Image height (overrides the camera file).
     #[arg(long)]
     pub height: Option<u32>,
-    /// Up axis for the automatic camera: y or z.
-    #[arg(long, default_value = "y")]
-    pub up: String,
+    /// Up axis for the automatic camera.
+    #[arg(long, value_enum, default_value_t = Up::Y, ignore_case = true)]
+    pub up: Up,
     #[command(flatten)]
     pub ao: AoArgs,
     /// Frames to render with the same camera (per-pixel RTAO averages them; the HRTAO map persists).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: u32,
+    /// Scripted: apply these settings (a JSON object, as --set takes it) after K frames, as the panel would
+    /// (repeatable).
+    #[arg(long, num_args = 2, value_names = ["K", "JSON"], hide = true)]
+    pub set_at_frame: Vec<String>,
     #[command(flatten)]
     pub sections: SectionArgs,
     /// Shaded output image (.png).
@@ -181,23 +327,25 @@ pub struct RenderArgs {
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct ViewArgs {
-    /// Scene to open: .gltf, .glb, .obj or a generator spec such as gen:city (default: the bundled gearbox).
+    /// Model to open: .gltf, .glb, .obj, .stl, .ply, or a generator spec such as gen:city (default: the bundled
+    /// gearbox).
+    #[arg(value_name = "FILE")]
     pub file: Option<String>,
     /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
     #[arg(long)]
     pub camera: Option<PathBuf>,
-    /// Up axis when fitting a camera: y or z (default: z for the bundled scene, y otherwise).
-    #[arg(long)]
-    pub up: Option<String>,
+    /// Up axis when fitting a camera (default: z for the bundled scene, y otherwise).
+    #[arg(long, value_enum, ignore_case = true)]
+    pub up: Option<Up>,
     /// Window size, e.g. 1280x720.
-    #[arg(long, value_name = "WxH")]
-    pub size: Option<String>,
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
     /// Largest internal resolution as a fraction of the 3D view (default 1): a still image is rendered at it;
     /// while the camera moves the scale drops to meet the frame-time target (never below 0.35 unless capped).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_render_scale)]
     pub render_scale: Option<f32>,
-    /// AO mode: hrtao, rtao, none, debug-cells, debug-lod, debug-samples.
-    #[arg(long)]
+    /// AO mode.
+    #[arg(long, value_parser = mode_parser())]
     pub mode: Option<Mode>,
     /// Ray budget in rays per frame, whatever the internal resolution (turns the frame-time target off).
     #[arg(long, value_name = "N")]
@@ -216,8 +364,8 @@ pub struct ViewArgs {
     pub screenshot: Option<PathBuf>,
     /// Scripted mode: render --screenshot at this size in the background (tiles, one frame per viewer frame,
     /// each tile until converged) while the window keeps drawing; the run ends once the PNG is written.
-    #[arg(long, value_name = "WxH", requires = "screenshot")]
-    pub screenshot_size: Option<String>,
+    #[arg(long, value_name = "WxH", requires = "screenshot", value_parser = parse_size)]
+    pub screenshot_size: Option<(u32, u32)>,
     /// Scripted mode: save the whole window including the UI to this PNG after --frames.
     #[arg(long)]
     pub screenshot_ui: Option<PathBuf>,
@@ -226,12 +374,16 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 4)]
     pub screenshot_frames: u32,
     /// Scripted mode: resize the window to WxH after frame K (tests resizing), e.g. `--resize-at-frame 2 320x200`.
-    #[arg(long, num_args = 2, value_names = ["K", "WxH"])]
+    #[arg(long, num_args = 2, value_names = ["K", "WxH"], hide = true)]
     pub resize_at_frame: Vec<String>,
     /// Scripted mode: open FILE after frame K, as a user would from the panel (tests that a bad file leaves the
     /// current scene in place), e.g. `--open-at-frame 1 broken.glb`.
-    #[arg(long, num_args = 2, value_names = ["K", "FILE"])]
+    #[arg(long, num_args = 2, value_names = ["K", "FILE"], hide = true)]
     pub open_at_frame: Vec<String>,
+    /// Scripted mode: apply these settings (a JSON object, as `render --set` takes it) after K rendered frames,
+    /// as the panel would (repeatable).
+    #[arg(long, num_args = 2, value_names = ["K", "JSON"], hide = true)]
+    pub set_at_frame: Vec<String>,
     /// Scripted mode: orbit the view's pivot by 2° per frame for N frames, then stay still until the image has
     /// converged at full resolution (then the screenshots, --exit).
     #[arg(long, value_name = "N")]
@@ -257,17 +409,13 @@ pub struct ViewArgs {
     pub no_panel: bool,
     #[command(flatten)]
     pub sections: SectionArgs,
-    /// Use the first device whose name contains this text.
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
-    #[arg(long)]
-    pub validation: bool,
+    #[command(flatten)]
+    pub device: DeviceArgs,
 }
 
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
+    /// Scene: .gltf, .glb, .obj, .stl, .ply, or a generator spec such as gen:racks?rows=10&cols=10.
     #[arg(long, required_unless_present = "report")]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
@@ -289,9 +437,9 @@ pub struct BenchArgs {
     /// Image height (default: the camera file's, else 180).
     #[arg(long)]
     pub height: Option<u32>,
-    /// Up axis for the automatic camera: y or z (default z for gen: scenes, else y).
-    #[arg(long)]
-    pub up: Option<String>,
+    /// Up axis for the automatic camera (default z for gen: scenes, else y).
+    #[arg(long, value_enum, ignore_case = true)]
+    pub up: Option<Up>,
     /// At most this many static frames after the first frame and before the navigation, letting cells fill as
     /// they would during the first fraction of a second on a GPU (the paper's navigation is with a warm map).
     #[arg(long, default_value_t = 128)]
@@ -299,19 +447,17 @@ pub struct BenchArgs {
     /// Stop settling once a frame traces fewer than this fraction of the first frame's rays.
     #[arg(long, default_value_t = 0.1)]
     pub settle_until: f64,
-    /// Automatic camera (no --camera): "fit" frames the whole scene from outside; "corner" stands at a corner of
-    /// the bounds at 80 % of their height and looks across the scene (inside a room: depth complexity grows with
-    /// its size).
-    #[arg(long, default_value = "fit")]
-    pub auto_camera: String,
+    /// Automatic camera (no --camera); from a corner, inside a room, depth complexity grows with its size.
+    #[arg(long, value_enum, default_value_t = AutoCamera::Fit)]
+    pub auto_camera: AutoCamera,
     /// First-frame repetitions (each from an empty hash map); the summary takes medians.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeat: u32,
     /// Skip the error measurements (reference, curves, search over B): timing and memory only.
     #[arg(long)]
     pub no_quality: bool,
     /// Rays per pixel per frame of the progressive per-pixel RTAO run (resolution of the search over B).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     pub step: u32,
     /// Cap of the search over per-pixel rays (0: 64 × B, at least 64).
     #[arg(long, default_value_t = 0)]
@@ -328,9 +474,9 @@ pub struct BenchArgs {
     /// Name in reports (default: the scene file stem or spec).
     #[arg(long)]
     pub label: Option<String>,
-    /// Group in reports: "scenes" (default) or "scale".
-    #[arg(long, default_value = "scenes")]
-    pub group: String,
+    /// Group in reports.
+    #[arg(long, value_enum, default_value_t = Group::Scenes)]
+    pub group: Group,
     /// Write the results here (schema hrtao-bench/1).
     #[arg(long)]
     pub json: Option<PathBuf>,

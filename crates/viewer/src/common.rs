@@ -1,5 +1,8 @@
-//! Helpers shared by the commands: opening the device, loading a scene, writing JSON, the bundled scene's path.
-use std::path::Path;
+//! Helpers shared by the commands: opening the device, loading a scene, writing JSON, the bundled scene, progress
+//! bars.
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -53,19 +56,69 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// The default scene bundled in `assets/`.
-pub fn default_scene_path() -> std::path::PathBuf {
-    let beside_exe = std::env::current_exe()
-        .ok()
-        .and_then(|p| p.parent().map(|d| d.join("assets")));
-    let candidates = [
-        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/default.glb")),
-        beside_exe.map(|d| d.join("default.glb")),
-        Some(Path::new("assets/default.glb").to_path_buf()),
-    ];
-    candidates
-        .into_iter()
-        .flatten()
-        .find(|p| p.exists())
-        .unwrap_or_else(|| "assets/default.glb".into())
+/// The bundled scene (a cycloidal gearbox, MIT: assets/default.LICENSE.md) and its camera, in the binary: an
+/// installed `hrtao` needs no file of the source tree.
+const DEFAULT_GLB: &[u8] = include_bytes!("../../../assets/default.glb");
+const DEFAULT_CAMERA: &[u8] = include_bytes!("../../../assets/default.camera.json");
+
+/// The bundled scene as a file (the loaders read files): written once into the user's cache directory
+/// (`~/.cache/hrtao/bundled/default.glb`, else the temporary directory) with its camera beside it, and rewritten
+/// when this binary bundles other bytes.
+pub fn default_scene_path() -> PathBuf {
+    let dirs = [dirs::cache_dir(), Some(std::env::temp_dir())];
+    let mut last_error = None;
+    for dir in dirs.into_iter().flatten() {
+        let dir = dir.join("hrtao").join("bundled");
+        let glb = dir.join("default.glb");
+        match write_if_changed(&glb, DEFAULT_GLB)
+            .and_then(|()| write_if_changed(&dir.join("default.camera.json"), DEFAULT_CAMERA))
+        {
+            Ok(()) => return glb,
+            Err(e) => last_error = Some(format!("{}: {e}", dir.display())),
+        }
+    }
+    log::warn!(
+        "cannot write the bundled scene: {}",
+        last_error.unwrap_or_default()
+    );
+    PathBuf::from("default.glb")
+}
+
+/// Writes `bytes` to `path` unless it already holds them; through a temporary file and a rename, so that a
+/// process reading the file (another `hrtao`) never sees it half written.
+fn write_if_changed(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if std::fs::read(path).is_ok_and(|old| old == bytes) {
+        return Ok(());
+    }
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// `-q`: no progress bars (warnings and errors only in the log).
+static QUIET: AtomicBool = AtomicBool::new(false);
+
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, Ordering::Relaxed);
+}
+
+/// A progress bar of `len` steps on stderr; hidden with `-q` or when stderr is not a terminal.
+pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+    if QUIET.load(Ordering::Relaxed) || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len).with_message(what.to_string());
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg:>12} [{bar:30}] {pos}/{len} {elapsed_precise} (ETA {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar
 }

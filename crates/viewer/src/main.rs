@@ -5,11 +5,99 @@ mod common;
 mod render_cmd;
 mod view;
 
-use clap::Parser;
+use clap::{CommandFactory, FromArgMatches};
+
+/// `hrtao -h`: examples.
+const EXAMPLES: &str = "\
+Examples:
+  hrtao                               open the bundled gearbox in the viewer
+  hrtao model.glb                     open a model (glTF, OBJ, STL, PLY)
+  hrtao render --scene model.glb --out shot.png --ao-out ao.exr --frames 8
+  hrtao bench --scene gen:racks?rows=10&cols=10 --json racks.json
+  hrtao devices                       which Vulkan device hrtao uses, and why
+
+`hrtao --help` also lists the viewer's keys and the environment variables.";
+
+/// The environment variables the commands read.
+const ENVIRONMENT: &[(&str, &str)] = &[
+    (
+        "RUST_LOG",
+        "log filter: error, warn, info, debug (e.g. RUST_LOG=hrtao=debug)",
+    ),
+    (
+        "HRTAO_DEVICE",
+        "use the best device whose name contains this text (as --device)",
+    ),
+    (
+        "HRTAO_VALIDATION=1",
+        "the Khronos validation layer on (as --validation)",
+    ),
+    (
+        "HRTAO_MAX_SCENE_MB",
+        "memory a scene may take while it loads, in MiB (default: from the machine's RAM)",
+    ),
+    (
+        "HRTAO_DEVICE_MEMORY_LIMIT",
+        "refuse device allocations past this many MiB (simulates a small GPU)",
+    ),
+    (
+        "XDG_CONFIG_HOME",
+        "the viewer's settings are $XDG_CONFIG_HOME/hrtao/viewer.json (default ~/.config)",
+    ),
+    (
+        "XDG_PICTURES_DIR",
+        "where F12 saves screenshots unless the panel names a folder (default: the XDG pictures \
+         directory, else ~/Pictures)",
+    ),
+    (
+        "HRTAO_SHARED",
+        "a folder of extra benchmark scenes for the measurement scripts (no test needs it)",
+    ),
+];
+
+/// `  NAME` then the text wrapped at 76 columns, indented: narrow enough that clap's own wrapping at the
+/// terminal's width leaves it alone.
+fn two_column(rows: &[(&str, &str)]) -> String {
+    let mut out = String::new();
+    for (name, text) in rows {
+        out.push_str(&format!("  {name}\n"));
+        let mut line = String::from("      ");
+        for word in text.split_whitespace() {
+            if line.len() + word.len() >= 76 && !line.trim_start().is_empty() {
+                out.push_str(line.trim_end());
+                out.push('\n');
+                line = String::from("      ");
+            }
+            line.push_str(word);
+            line.push(' ');
+        }
+        out.push_str(line.trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+fn cli_command() -> clap::Command {
+    let examples = EXAMPLES.lines().take_while(|l| !l.starts_with("`hrtao --help`"));
+    cli::Cli::command().after_help(EXAMPLES).after_long_help(format!(
+        "{}\n\nViewer keys and mouse (the panel's Help lists them too):\n{}\nEnvironment:\n{}",
+        examples.collect::<Vec<_>>().join("\n").trim_end(),
+        two_column(view::BINDINGS),
+        two_column(ENVIRONMENT)
+    ))
+}
 
 fn main() {
-    let args = cli::Cli::parse();
-    let default_level = if args.verbose { "debug" } else { "info" };
+    let args = match cli::Cli::from_arg_matches(&cli_command().get_matches()) {
+        Ok(a) => a,
+        Err(e) => e.format(&mut cli_command()).exit(),
+    };
+    let default_level = match (args.verbose, args.quiet) {
+        (true, _) => "debug",
+        (_, true) => "warn",
+        _ => "info",
+    };
+    common::set_quiet(args.quiet);
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(default_level))
         .format_timestamp_millis()
         .init();
@@ -18,7 +106,7 @@ fn main() {
         Some(cli::Command::Devices(d)) => render_cmd::list_devices(&d),
         Some(cli::Command::View(v)) => view::run(&v),
         Some(cli::Command::Bench(b)) => bench::run(&b),
-        None => view::run(&cli::ViewArgs::default()),
+        None => view::run(&args.view),
     };
     if let Err(e) = result {
         eprintln!("hrtao: error: {e:#}");

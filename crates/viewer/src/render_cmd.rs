@@ -1,20 +1,11 @@
 //! `hrtao render`: load, build, render K frames headless, write images and statistics.
 use std::time::Instant;
 
-use anyhow::{bail, Result};
-use hrtao_core::camera::UpAxis;
+use anyhow::{anyhow, Result};
 use hrtao_core::{imageio, Camera, FrameReport, Renderer, SceneGpu};
 
 use crate::cli::{DeviceArgs, RenderArgs};
-use crate::common::{load_scene, open_gpu, write_json};
-
-fn parse_up(s: &str) -> Result<UpAxis> {
-    match s.to_ascii_lowercase().as_str() {
-        "y" => Ok(UpAxis::Y),
-        "z" => Ok(UpAxis::Z),
-        _ => bail!("--up must be y or z, got `{s}`"),
-    }
-}
+use crate::common::{default_scene_path, load_scene, open_gpu, progress, write_json};
 
 #[derive(serde::Serialize)]
 struct RenderStats<'a> {
@@ -39,14 +30,22 @@ struct RenderStats<'a> {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
-    if args.frames == 0 {
-        bail!("--frames must be at least 1");
-    }
-    let (scene, load_ms) = load_scene(&args.scene)?;
+    let set_at_frame = crate::cli::set_at_frame(&args.set_at_frame)?;
+    // No --scene: the bundled gearbox, with its camera and the viewer's radius for it.
+    let bundled = args.scene.is_none();
+    let spec = match &args.scene {
+        Some(s) => s.clone(),
+        None => default_scene_path().display().to_string(),
+    };
+    let (scene, load_ms) = load_scene(&spec)?;
     let bounds = scene.bounds();
-    let mut camera = match &args.camera {
+    let camera_file = args
+        .camera
+        .clone()
+        .or_else(|| bundled.then(|| std::path::Path::new(&spec).with_extension("camera.json")));
+    let mut camera = match &camera_file {
         Some(p) => Camera::load_in(p, scene.origin)?,
-        None => Camera::fit(bounds.min, bounds.max, parse_up(&args.up)?, 40.0, 640, 360),
+        None => Camera::fit(bounds.min, bounds.max, args.up.into(), 40.0, 640, 360),
     };
     if let Some(w) = args.width {
         camera.width = w;
@@ -55,7 +54,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         camera.height = h;
     }
     camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
-    let settings = args.ao.settings(bounds.diagonal().length())?;
+    let mut settings = args.ao.settings(bounds.diagonal().length())?;
+    if bundled && args.ao.radius.is_none() {
+        settings.ao_radius = crate::view::BUNDLED_RADIUS;
+    }
     settings.validate().map_err(|e| anyhow::anyhow!(e))?;
 
     let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
@@ -72,7 +74,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut renderer = Renderer::new(&gpu, camera.width, camera.height, settings.clone())?;
     let t0 = Instant::now();
     let mut frames = Vec::new();
+    let bar = progress(args.frames as u64, "rendering");
     for i in 0..args.frames {
+        for (_, json) in set_at_frame.iter().filter(|(k, _)| *k == i) {
+            // As the panel applies a change: the new settings from the next frame on.
+            settings = settings
+                .with_overrides(json)
+                .map_err(|e| anyhow!("--set-at-frame {i}: {e}"))?;
+            log::info!("settings after frame {i}: {json}");
+            renderer.set_settings(settings.clone())?;
+        }
         let report = renderer.render(&scene_gpu, scene.f(), &camera)?;
         log::info!(
             "frame {i}: {:.1} ms wall, {:.1} ms GPU, {} rays{}",
@@ -91,7 +102,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             }
         );
         frames.push(report);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     let render_ms = t0.elapsed().as_secs_f64() * 1e3;
     let (w, h) = renderer.size();
     if let Some(out) = &args.out {
@@ -108,7 +121,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(path) = &args.stats {
         let stats = RenderStats {
             device: &gpu.info,
-            scene: args.scene.clone(),
+            scene: spec.clone(),
             unique_triangles: scene.unique_triangle_count(),
             instanced_triangles: scene.instanced_triangle_count(),
             instances: scene.instances.len(),
@@ -133,11 +146,45 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// `hrtao devices`: every Vulkan device, whether hrtao can use it, which one it opens and by what rule.
 pub fn list_devices(d: &DeviceArgs) -> Result<()> {
+    let options = hrtao_core::ContextOptions {
+        device: d.device.clone(),
+        ..Default::default()
+    };
+    let devices = hrtao_core::context::list_devices(&options)?;
+    print!("{}", devices_report(&devices, d.device.as_deref()));
+    if !devices.iter().any(|x| x.chosen) {
+        anyhow::bail!("no usable Vulkan device with ray queries");
+    }
+    // The chosen device opened as every command opens it: its driver and API version.
     let gpu = open_gpu(d)?;
     println!(
-        "{} ({}), driver {}, Vulkan {}",
+        "opened: {} ({}), driver {}, Vulkan {}",
         gpu.info.name, gpu.info.kind, gpu.info.driver, gpu.info.api_version
     );
     Ok(())
+}
+
+/// The text of `hrtao devices` before the chosen device is opened.
+pub fn devices_report(devices: &[hrtao_core::context::DeviceListing], filter: Option<&str>) -> String {
+    let mut out = format!("Vulkan devices ({}):\n", devices.len());
+    for (i, x) in devices.iter().enumerate() {
+        let state = match (&x.problem, x.chosen) {
+            (_, true) => "usable, chosen".to_string(),
+            (None, false) => "usable".to_string(),
+            (Some(p), false) => format!("not usable: {p}"),
+        };
+        out.push_str(&format!("  {i}: {} ({}): {state}\n", x.name, x.kind));
+    }
+    let rule = "hrtao takes the usable device of the best kind (discrete GPU, integrated GPU, virtual GPU, \
+                other, CPU), the first one listed among equals";
+    let filter = filter
+        .map(|f| format!(" whose name contains `{f}` (--device / HRTAO_DEVICE)"))
+        .unwrap_or_default();
+    match devices.iter().find(|x| x.chosen) {
+        Some(x) => out.push_str(&format!("chosen: {} ({}): {rule}{filter}.\n", x.name, x.kind)),
+        None => out.push_str(&format!("chosen: none; {rule}{filter}.\n")),
+    }
+    out
 }

@@ -85,6 +85,64 @@ fn scripted_run_renders_and_saves_a_screenshot() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `view --set-at-frame K JSON` applies settings as the panel does: the AO radius widened after the first frame
+/// darkens the screenshot toward a run at that radius from the start (a wider radius occludes more), and a bad
+/// setting fails the scripted run.
+#[test]
+fn scripted_set_at_frame_applies_settings_as_the_panel_does() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("set-at-frame");
+    let mean = |name: &str, extra: &[&str]| {
+        let shot = dir.join(format!("{name}.png"));
+        let mut args = vec![
+            "--size",
+            "240x160",
+            "--no-panel",
+            "--frames",
+            "3",
+            "--screenshot-frames",
+            "1",
+        ];
+        args.extend_from_slice(&["--screenshot", shot.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        run_viewer(&args);
+        let img = image::open(&shot).unwrap().to_luma8();
+        img.pixels().map(|p| p.0[0] as f64).sum::<f64>() / (240.0 * 160.0)
+    };
+    let narrow = mean("r8", &[]);
+    let changed = mean("r8-then-32", &["--set-at-frame", "1", r#"{"ao_radius": 32}"#]);
+    let wide = mean("r32", &["--radius", "32"]);
+    assert!(wide < narrow - 1.0, "a wider radius darkens: {narrow} {wide}");
+    // Cells gathered at the old radius still count in the frames right after the change (the renderer keeps
+    // them until they are reclaimed): the image moves most of the way, not necessarily all of it.
+    let moved = (narrow - changed) / (narrow - wide);
+    assert!(
+        moved > 0.3 && moved < 1.3,
+        "radius 8 {narrow:.2}, 8 then 32 {changed:.2}, 32 {wide:.2}: moved {moved:.2} of the way"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args([
+            "view",
+            "--no-config",
+            "--exit",
+            "--size",
+            "160x100",
+            "--frames",
+            "2",
+        ])
+        .args(["--set-at-frame", "1", r#"{"ao_radius": -1}"#])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("--set-at-frame 1"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn scripted_run_survives_a_resize() {
     if !display_available() {
@@ -293,12 +351,22 @@ impl Running {
         Self::start_with(args, cwd, &[])
     }
 
-    /// `start` with environment variables set (Some) or removed (None).
+    /// `start` with environment variables set (Some) or removed (None). F12 saves into `cwd/screenshots` (the
+    /// pictures directory) unless `env` names another.
     fn start_with(args: &[&str], cwd: &Path, env: &[(&str, Option<&str>)]) -> Running {
+        let pictures = cwd.join("screenshots");
+        let mut env = env.to_vec();
+        if !env.iter().any(|(k, _)| *k == "XDG_PICTURES_DIR") {
+            env.push(("XDG_PICTURES_DIR", pictures.to_str()));
+        }
+        Self::launch(&[&["view"], args].concat(), cwd, &env)
+    }
+
+    /// `hrtao ARGS --no-config` in `cwd` with `env` changed, its log captured.
+    fn launch(args: &[&str], cwd: &Path, env: &[(&str, Option<&str>)]) -> Running {
         use std::io::BufRead;
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_hrtao"));
-        cmd.arg("view")
-            .args(args)
+        cmd.args(args)
             .arg("--no-config")
             .current_dir(cwd)
             .env("HRTAO_VALIDATION", "1")
@@ -506,7 +574,8 @@ fn wait_for_screenshots(dir: &Path, count: usize, v: &mut Running) -> Vec<u32> {
             .unwrap_or_default();
         files.retain(|p| p.extension().is_some_and(|e| e == "png"));
         if files.len() >= count {
-            files.sort();
+            // Oldest first (names share the second: `MODEL-…-SS.png`, then `-2`, `-3`).
+            files.sort_by_key(|f| std::fs::metadata(f).and_then(|m| m.modified()).ok());
             // The PNG is written in one go after rendering; a partly written file fails to decode: retry.
             let widths: Option<Vec<u32>> = files
                 .iter()
@@ -767,7 +836,8 @@ fn key_5_toggles_orthographic_keeping_the_framing_at_the_pivot() {
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.extension().is_some_and(|e| e == "png"))
             .collect();
-        files.sort();
+        // Oldest first (names share the second: `MODEL-…-SS.png`, then `-2`, `-3`).
+        files.sort_by_key(|f| std::fs::metadata(f).and_then(|m| m.modified()).ok());
         widths.push(foreground_width(&files[i]));
     }
     // Perspective: 2 units of the 2 * 10 * tan(20 deg) = 7.28 the view spans at the plane (88 px); orthographic:
@@ -882,7 +952,7 @@ fn ctrl_shift_drag_moves_a_section_plane() {
             .unwrap()
             .map(|e| e.unwrap().path())
             .collect();
-        files.sort();
+        files.sort_by_key(|f| std::fs::metadata(f).and_then(|m| m.modified()).ok());
         files[n - 1].clone()
     };
     xdotool(&["key", "F12"]);
@@ -1204,15 +1274,9 @@ fn write_boxes_obj(path: &Path, boxes: &[(&str, [f32; 3], [f32; 3])]) {
     std::fs::write(path, s).unwrap();
 }
 
-/// Several instances at once with real X input: a click selects one box, Shift+click adds a second, Delete
-/// removes both as one edit, and one Ctrl+Z brings both back.
-#[test]
-fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
-    if !display_available() {
-        return;
-    }
-    let _x = x_input_lock();
-    let dir = out_dir("multi");
+/// A floor and two 10-unit boxes ("left" at x 0..10, "right" at x 20..30) seen from the front and above, the
+/// viewer at rest with its window focused; returns it, the window and the pixels of the boxes' top centres.
+fn two_boxes_at_rest(dir: &Path) -> (Running, String, (i32, i32), (i32, i32)) {
     let obj = dir.join("parts.obj");
     write_boxes_obj(
         &obj,
@@ -1230,10 +1294,23 @@ fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
         320,
         200,
     );
-    let mut v = start_at_rest(&obj, &dir, eye, target, up, fov, (w, h));
+    let v = start_at_rest(&obj, dir, eye, target, up, fov, (w, h));
     let window = v.focus_window();
     let left = pixel_of(eye, target, up, fov, w, h, [5.0, 5.0, 10.0]);
     let right = pixel_of(eye, target, up, fov, w, h, [25.0, 5.0, 10.0]);
+    (v, window, left, right)
+}
+
+/// Several instances at once with real X input: a click selects one box, Shift+click adds a second, Delete
+/// removes both as one edit, and one Ctrl+Z brings both back.
+#[test]
+fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("multi");
+    let (mut v, window, left, right) = two_boxes_at_rest(&dir);
     v.click_until(&window, left, "(tree: left)", 1);
     v.click_with_until(&window, right, Some("shift"), "selection: 2 instances [1, 2]", 1);
     xdotool(&["key", "Delete"]);
@@ -1316,6 +1393,121 @@ fn the_open_dialog_loads_a_typed_path_through_zenity() {
         1,
         std::time::Duration::from_secs(60),
     );
+    v.validation_clean();
+    drop(v);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A desktop launch: `hrtao FILE` (no command, as `Exec=hrtao %f` runs it) from `/`, with HOME and the pictures
+/// directory in a temporary folder. F12 (real X key event) writes `MODEL-YYYYMMDD-HHMMSS.png` into the pictures
+/// directory, the toast names its full path, and nothing lands in the working directory. The window carries the
+/// application id of the desktop entry (X11 WM_CLASS `hrtao`).
+#[test]
+fn f12_from_a_desktop_launch_saves_into_the_pictures_directory() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("pictures");
+    let home = dir.join("home");
+    let pictures = dir.join("Pictures here");
+    std::fs::create_dir_all(&home).unwrap();
+    let model = dir.join("bracket.obj");
+    write_boxes_obj(&model, &[("bracket", [0.0; 3], [10.0, 4.0, 2.0])]);
+    let root_before: Vec<_> = std::fs::read_dir("/")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .collect();
+    let mut v = Running::launch(
+        &[model.to_str().unwrap(), "--size", "320x200", "--no-panel"],
+        Path::new("/"),
+        &[
+            ("HOME", home.to_str()),
+            ("XDG_PICTURES_DIR", pictures.to_str()),
+            ("XDG_CONFIG_HOME", None),
+            ("XDG_CACHE_HOME", None),
+        ],
+    );
+    v.wait_for("opened", 1, std::time::Duration::from_secs(90));
+    let window = v.focus_window();
+    let by_class = xdotool(&["search", "--class", "^hrtao$"]);
+    assert!(
+        by_class.lines().any(|w| w.trim() == window),
+        "WM_CLASS hrtao: {by_class:?} (window {window})"
+    );
+    xdotool(&["key", "F12"]);
+    v.wait_for("screenshot saved: ", 1, std::time::Duration::from_secs(60));
+    let shots: Vec<PathBuf> = std::fs::read_dir(&pictures)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    assert_eq!(shots.len(), 1, "{shots:?}");
+    let name = shots[0].file_name().unwrap().to_str().unwrap().to_string();
+    // bracket-YYYYMMDD-HHMMSS.png
+    let stamp = name.strip_prefix("bracket-").and_then(|r| r.strip_suffix(".png"));
+    assert!(
+        stamp.is_some_and(|t| t.len() == 15
+            && t.as_bytes()[8] == b'-'
+            && t.chars().filter(char::is_ascii_digit).count() == 14),
+        "{name}"
+    );
+    assert!(image::image_dimensions(&shots[0]).is_ok(), "a PNG: {name}");
+    assert!(
+        v.log_text()
+            .contains(&format!("screenshot saved: {}", shots[0].display())),
+        "the toast shows the full path:\n{}",
+        v.log_text()
+    );
+    let root_after: Vec<_> = std::fs::read_dir("/")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .collect();
+    assert_eq!(
+        root_before, root_after,
+        "nothing written in the working directory /"
+    );
+    v.validation_clean();
+    drop(v);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Real X keys: with an instance selected, F frames it (the pivot moves to its centre); Ctrl+Q then quits with
+/// exit status 0.
+#[test]
+fn f_frames_the_selection_and_ctrl_q_quits() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("frame-quit");
+    let (mut v, window, _, right) = two_boxes_at_rest(&dir);
+    v.click_until(&window, right, "(tree: right)", 1);
+    xdotool(&["key", "f"]);
+    v.wait_for("framed the selection", 1, std::time::Duration::from_secs(30));
+    let log = v.log_text();
+    let line = log.lines().find(|l| l.contains("framed the selection")).unwrap();
+    assert!(
+        line.ends_with("framed the selection: 1 instances, centre [25.0, 5.0, 5.0]"),
+        "F frames the right box only: {line}"
+    );
+    xdotool(&["key", "ctrl+q"]);
+    let t0 = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = v.child.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(30),
+            "still running 30 s after Ctrl+Q:\n{}",
+            v.log_text()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    assert!(status.success(), "{status}:\n{}", v.log_text());
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(v.log_text().contains("quit (Ctrl+Q)"), "{}", v.log_text());
     v.validation_clean();
     drop(v);
     let _ = std::fs::remove_dir_all(&dir);

@@ -21,7 +21,7 @@ use hrtao_core::metrics::{ao_error, AoError};
 use hrtao_core::{imageio, AoSettings, Camera, FrameReport, Mode, Renderer, SceneGpu};
 use serde::{Deserialize, Serialize};
 
-use crate::cli::BenchArgs;
+use crate::cli::{AutoCamera, BenchArgs};
 use crate::common::{load_scene, open_gpu, write_json};
 use stats::{
     median, rays_to_reach, section_sum, segment_mean, CurvePoint, Match, HRTAO_PASSES, NON_RAY_PASSES,
@@ -323,14 +323,6 @@ pub struct BenchResult {
     pub total_bench_s: f64,
 }
 
-fn parse_up(s: &str) -> Result<UpAxis> {
-    match s.to_ascii_lowercase().as_str() {
-        "y" => Ok(UpAxis::Y),
-        "z" => Ok(UpAxis::Z),
-        _ => bail!("--up must be y or z, got `{s}`"),
-    }
-}
-
 /// Navigation cameras from a path file: a JSON array of cameras or {"cameras": [...]}.
 pub fn load_path(path: &std::path::Path, width: u32, height: u32) -> Result<Vec<Camera>> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
@@ -464,17 +456,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if bounds.is_empty() {
         bail!("scene `{spec}` has no visible geometry");
     }
-    let up = match &args.up {
-        Some(u) => parse_up(u)?,
+    let up = match args.up {
+        Some(u) => u.into(),
         None if spec.starts_with("gen:") => UpAxis::Z,
         None => UpAxis::Y,
     };
     let mut camera = match &args.camera {
         Some(p) => Camera::load_in(p, scene.origin)?,
-        None => match args.auto_camera.as_str() {
-            "fit" => Camera::fit(bounds.min, bounds.max, up, 40.0, 320, 180),
-            "corner" => corner_camera(bounds.min, bounds.max, up),
-            other => bail!("--auto-camera must be fit or corner, got `{other}`"),
+        None => match args.auto_camera {
+            AutoCamera::Fit => Camera::fit(bounds.min, bounds.max, up, 40.0, 320, 180),
+            AutoCamera::Corner => corner_camera(bounds.min, bounds.max, up),
         },
     };
     if let Some(w) = args.width {
@@ -509,6 +500,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         ..hrtao_settings.clone()
     };
 
+    // Progress by phase: build, warm-up, HRTAO timing, per-pixel RTAO timing, quality.
+    let bar = crate::common::progress(if args.no_quality { 4 } else { 5 }, "bench");
+    bar.set_message("building");
     let gpu = open_gpu(&args.device)?;
     if !gpu.info.timestamps {
         log::warn!("the device has no timestamp queries: GPU times will be zero");
@@ -540,12 +534,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // The paper's behaviour (our additions off) on a renderer of its own, so both run side by side.
     let mut paper_r = Renderer::new(&gpu, w, h, hrtao_settings.paper())?;
 
+    bar.inc(1);
+    bar.set_message("warm-up");
     // Warm-up (pipeline compilation, caches) for every mode.
     r.render(&scene_gpu, sf, &camera)?;
     paper_r.render(&scene_gpu, sf, &camera)?;
     r.set_settings(rtao_settings.clone())?;
     r.render(&scene_gpu, sf, &camera)?;
 
+    bar.inc(1);
+    bar.set_message("HRTAO timing");
     // 1. Timing: HRTAO and the paper's behaviour, frame by frame over the same cameras.
     r.set_settings(hrtao_settings.clone())?;
     let [hrtao, paper] = time_hrtao([&mut r, &mut paper_r], &scene_gpu, sf, &camera, &nav_cams, args)?;
@@ -569,6 +567,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         hrtao.nav_paired_ratio(&paper, Some("primary visibility"))
     );
 
+    bar.inc(1);
+    bar.set_message("RTAO timing");
     // Per-pixel RTAO at the same B over the same cameras (no accumulation: each first frame after a reset).
     r.set_settings(rtao_settings.clone())?;
     let mut first = Vec::new();
@@ -590,6 +590,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
     let summary = summarize(&hrtao, &rtao);
 
+    bar.inc(1);
+    bar.set_message("quality");
     // 2. Quality.
     let quality = if args.no_quality {
         None
@@ -604,6 +606,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?)
     };
 
+    bar.finish_and_clear();
     let validation_messages = gpu.validation_messages();
     let unix_time = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
@@ -618,7 +621,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         scene: SceneInfo {
             spec: spec.to_string(),
             label: args.label.clone().unwrap_or_else(|| label_of(spec)),
-            group: args.group.clone(),
+            group: args.group.name().to_string(),
             meshes: scene.meshes.len(),
             instances: scene.instances.len(),
             unique_triangles: scene.unique_triangle_count(),

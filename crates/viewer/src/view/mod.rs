@@ -45,25 +45,19 @@ use present::Presenter;
 
 /// Seconds a scripted run may take: --timeout, or 600 plus 600 per million pixels of a background screenshot.
 fn scripted_timeout(args: &ViewArgs) -> u64 {
-    let shot_pixels = args
-        .screenshot_size
-        .as_deref()
-        .and_then(|s| parse_size(s).ok())
-        .map_or(0, |(w, h)| w as u64 * h as u64);
+    let shot_pixels = args.screenshot_size.map_or(0, |(w, h)| w as u64 * h as u64);
     args.timeout
         .unwrap_or(600 + 600 * shot_pixels.div_ceil(1_000_000))
 }
 
-pub fn parse_size(s: &str) -> Result<(u32, u32)> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| anyhow!("size `{s}` must look like 1280x720"))?;
-    let (w, h): (u32, u32) = (w.trim().parse()?, h.trim().parse()?);
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        bail!("size `{s}` must be within 1..=16384");
-    }
-    Ok((w, h))
-}
+/// The window's application id, the name of the desktop entry (`hrtao.desktop`).
+pub const APP_ID: &str = "hrtao";
+
+/// The AO radius for the bundled gearbox (millimetres; 5 % of its diagonal would be 3× as wide).
+pub const BUNDLED_RADIUS: f32 = 8.0;
+
+/// The key and mouse bindings (the panel's Help table; `hrtao --help` prints them too).
+pub use ui::BINDINGS;
 
 /// The bundled scene's path, normalised for display.
 pub(crate) fn default_spec() -> String {
@@ -79,18 +73,16 @@ struct Outcome {
 }
 
 pub fn run(args: &ViewArgs) -> Result<()> {
-    let size = match &args.size {
-        Some(s) => parse_size(s)?,
-        None => (1280, 800),
-    };
-    if let Some(s) = &args.screenshot_size {
-        parse_size(s).context("--screenshot-size")?;
-    }
-    let resize = match args.resize_at_frame.as_slice() {
+    let size = args.size.unwrap_or((1280, 800));
+    let resize = match crate::cli::frame_pairs("--resize-at-frame", &args.resize_at_frame)?.as_slice() {
         [] => None,
-        [k, wh] => Some((k.parse::<u32>().context("--resize-at-frame K")?, parse_size(wh)?)),
-        _ => bail!("--resize-at-frame takes K and WxH"),
+        [(k, wh)] => Some((
+            *k,
+            crate::cli::parse_size(wh).map_err(|e| anyhow!("--resize-at-frame: {e}"))?,
+        )),
+        _ => bail!("--resize-at-frame is given once"),
     };
+    let set_at_frame = crate::cli::set_at_frame(&args.set_at_frame)?;
     if args.sections.section.len() > hrtao_core::gpu::MAX_SECTIONS as usize {
         bail!(
             "at most {} section planes are supported",
@@ -102,7 +94,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             bail!("--render-scale must be within 0.05..=2");
         }
     }
-    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+    let unset = |v: &str| std::env::var_os(v).is_none_or(|x| x.is_empty());
+    if unset("DISPLAY") && unset("WAYLAND_DISPLAY") {
         bail!(
             "no display: set DISPLAY (e.g. run under `xvfb-run -a`) or use `hrtao render` for headless use"
         );
@@ -110,13 +103,15 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let outcome = Arc::new(Mutex::new(Outcome::default()));
     let creator = Creator {
         args: args.clone(),
-        resize,
+        hooks: ScriptHooks { resize, set_at_frame },
         outcome: outcome.clone(),
     };
     let options = egui_ash::RunOption {
         viewport_builder: Some(
             egui::ViewportBuilder::default()
                 .with_title("hrtao")
+                // Wayland app_id and X11 WM_CLASS: the desktop entry packaging/hrtao.desktop matches it.
+                .with_app_id(APP_ID)
                 .with_inner_size([size.0 as f32, size.1 as f32])
                 .with_drag_and_drop(true),
         ),
@@ -143,9 +138,18 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     Ok(())
 }
 
+/// The scripted run's hooks, parsed from the arguments before the window opens.
+#[derive(Clone)]
+struct ScriptHooks {
+    /// --resize-at-frame K WxH.
+    resize: Option<(u32, (u32, u32))>,
+    /// --set-at-frame K JSON (repeatable).
+    set_at_frame: Vec<(u32, String)>,
+}
+
 struct Creator {
     args: ViewArgs,
-    resize: Option<(u32, (u32, u32))>,
+    hooks: ScriptHooks,
     outcome: Arc<Mutex<Outcome>>,
 }
 
@@ -166,8 +170,8 @@ impl egui_ash::AppCreator<Allocator> for Creator {
                 })
                 .unwrap_or_default();
         let opts = ContextOptions {
-            validation: self.args.validation || hrtao_core::context::validation_requested_by_env(),
-            device: self.args.device.clone(),
+            validation: self.args.device.validation || hrtao_core::context::validation_requested_by_env(),
+            device: self.args.device.device.clone(),
             surface_extensions: exts,
             ..Default::default()
         };
@@ -202,7 +206,7 @@ impl egui_ash::AppCreator<Allocator> for Creator {
             gpu,
             presenter,
             &self.args,
-            self.resize,
+            self.hooks.clone(),
             cc.exit_signal,
             self.outcome.clone(),
             cc.context.clone(),
@@ -319,6 +323,8 @@ struct Script {
     shot_started: bool,
     resize: Option<(u32, (u32, u32))>,
     open: Option<(u32, String)>,
+    /// --set-at-frame: settings (JSON) applied after K rendered frames, as the panel applies them.
+    set_at_frame: Vec<(u32, String)>,
     exit: bool,
     deadline: Option<Instant>,
     rendered: u32,
@@ -344,6 +350,8 @@ pub(crate) struct Viewer {
     presenter: Presenter,
     egui_ctx: egui::Context,
     exit_signal: egui_ash::ExitSignal,
+    /// F11 toggles it.
+    fullscreen: bool,
     outcome: Arc<Mutex<Outcome>>,
     // Scene and rendering.
     scene: Option<Scene>,
@@ -416,7 +424,7 @@ impl Viewer {
         gpu: Arc<Gpu>,
         presenter: Presenter,
         args: &ViewArgs,
-        resize: Option<(u32, (u32, u32))>,
+        hooks: ScriptHooks,
         exit_signal: egui_ash::ExitSignal,
         outcome: Arc<Mutex<Outcome>>,
         egui_ctx: egui::Context,
@@ -455,17 +463,14 @@ impl Viewer {
         } else {
             egui::Visuals::light()
         });
-        let forced_up = match args.up.as_deref().map(str::to_ascii_lowercase).as_deref() {
-            Some("z") => Some(UpAxis::Z),
-            Some("y") => Some(UpAxis::Y),
-            _ => None,
-        };
+        let forced_up = args.up.map(UpAxis::from);
         let spec = args.file.clone().unwrap_or_else(default_spec);
         let mut v = Viewer {
             gpu,
             presenter,
             egui_ctx,
             exit_signal,
+            fullscreen: false,
             outcome,
             scene: None,
             scene_spec: String::new(),
@@ -525,9 +530,10 @@ impl Viewer {
                 screenshot: args.screenshot.clone(),
                 screenshot_ui: args.screenshot_ui.clone(),
                 screenshot_frames: args.screenshot_frames,
-                screenshot_size: args.screenshot_size.as_deref().and_then(|s| parse_size(s).ok()),
+                screenshot_size: args.screenshot_size,
                 shot_started: false,
-                resize,
+                resize: hooks.resize,
+                set_at_frame: hooks.set_at_frame,
                 open: match args.open_at_frame.as_slice() {
                     [k, file] => k.parse::<u32>().ok().map(|k| (k, file.clone())),
                     _ => None,
@@ -701,7 +707,11 @@ impl Viewer {
             up
         };
         let diag = bounds.diagonal().length();
-        self.default_radius = if is_default { 8.0 } else { (diag * 0.05).max(1e-6) };
+        self.default_radius = if is_default {
+            BUNDLED_RADIUS
+        } else {
+            (diag * 0.05).max(1e-6)
+        };
         let mut settings = self.settings.clone();
         settings.ao_radius = self.args_radius.take().unwrap_or(self.default_radius);
         // Orient the camera with a true up vector (nav keeps it orthogonal).
@@ -918,11 +928,16 @@ impl Viewer {
         Ok(req.path)
     }
 
-    /// A timestamped screenshot path in the configured folder.
+    /// `MODEL-YYYYMMDD-HHMMSS.png` in the panel's folder, else the pictures directory, else the working directory.
     pub(crate) fn screenshot_path(&self) -> PathBuf {
-        self.prefs
-            .screenshot_dir
-            .join(screenshot_name(jiff::Zoned::now()))
+        let folder = self
+            .prefs
+            .screenshot_folder
+            .clone()
+            .or_else(prefs::pictures_dir)
+            .unwrap_or_default();
+        let model = self.scene.as_ref().map_or("hrtao", |s| s.name.as_str());
+        unique_path(&folder, &screenshot_name(model, jiff::Zoned::now()))
     }
 
     /// F12/the button: a custom size renders in the background; the window's size right away.
@@ -1386,6 +1401,20 @@ impl Viewer {
                 self.start_loading(file);
             }
         }
+        for (_, json) in self
+            .script
+            .set_at_frame
+            .iter()
+            .filter(|(k, _)| *k == n)
+            .cloned()
+            .collect::<Vec<_>>()
+        {
+            log::info!("scripted settings after frame {n}: {json}");
+            match self.settings.with_overrides(&json) {
+                Ok(s) => self.apply_settings(s),
+                Err(e) => self.fatal(format!("--set-at-frame {n}: {e}")),
+            }
+        }
         if self.script.orbit_left > 0 || (self.script.wait_converged && !self.converged_full()) {
             return;
         }
@@ -1540,9 +1569,32 @@ impl Drop for Viewer {
     }
 }
 
-/// `hrtao-YYYYMMDD-HHMMSS-mmm.png` in local time.
-fn screenshot_name(t: jiff::Zoned) -> String {
-    format!("hrtao-{}.png", t.strftime("%Y%m%d-%H%M%S-%3f"))
+/// `MODEL-YYYYMMDD-HHMMSS` in local time, the model's name made safe for a file name.
+fn screenshot_name(model: &str, t: jiff::Zoned) -> String {
+    let model: String = model
+        .chars()
+        .map(|c| {
+            if c.is_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let model = model.trim_start_matches('.');
+    let model = if model.is_empty() { "hrtao" } else { model };
+    format!("{model}-{}", t.strftime("%Y%m%d-%H%M%S"))
+}
+
+/// `folder/NAME.png`, or `folder/NAME-2.png`, `-3`… when that file exists (two shots in one second).
+fn unique_path(folder: &Path, name: &str) -> PathBuf {
+    (1..)
+        .map(|i| match i {
+            1 => folder.join(format!("{name}.png")),
+            _ => folder.join(format!("{name}-{i}.png")),
+        })
+        .find(|p| !p.exists())
+        .expect("a free name")
 }
 
 /// Same camera pose and lens (the image size is not part of the view).
@@ -1574,12 +1626,20 @@ mod tests {
 
     #[test]
     fn dates_and_sizes() {
-        let name = screenshot_name(
-            jiff::Timestamp::from_second(1_704_067_200)
-                .unwrap()
-                .to_zoned(jiff::tz::TimeZone::UTC),
-        );
-        assert_eq!(name, "hrtao-20240101-000000-000.png");
+        let t = jiff::Timestamp::from_second(1_704_067_200)
+            .unwrap()
+            .to_zoned(jiff::tz::TimeZone::UTC);
+        assert_eq!(screenshot_name("gearbox", t.clone()), "gearbox-20240101-000000");
+        assert_eq!(screenshot_name("../a b", t.clone()), "_a_b-20240101-000000");
+        assert_eq!(screenshot_name("", t), "hrtao-20240101-000000");
+        let dir = std::env::temp_dir().join(format!("hrtao-unique-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let first = unique_path(&dir, "m");
+        assert_eq!(first, dir.join("m.png"));
+        std::fs::write(&first, b"").unwrap();
+        assert_eq!(unique_path(&dir, "m"), dir.join("m-2.png"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        use crate::cli::parse_size;
         assert_eq!(parse_size("480x270").unwrap(), (480, 270));
         assert!(parse_size("0x10").is_err() && parse_size("abc").is_err());
     }

@@ -20,8 +20,11 @@ pub struct Nav {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StdView {
     Front,
+    Back,
     Right,
+    Left,
     Top,
+    Bottom,
     Iso,
 }
 
@@ -162,20 +165,32 @@ pub fn std_view_dirs(view: StdView, up: UpAxis) -> (Vec3, Vec3) {
     match up {
         UpAxis::Z => match view {
             StdView::Front => (Vec3::Y, Vec3::Z),
+            StdView::Back => (-Vec3::Y, Vec3::Z),
             StdView::Right => (-Vec3::X, Vec3::Z),
+            StdView::Left => (Vec3::X, Vec3::Z),
             StdView::Top => (-Vec3::Z, Vec3::Y),
+            StdView::Bottom => (Vec3::Z, -Vec3::Y),
             StdView::Iso => (Vec3::new(-1.0, 1.0, -1.0).normalize(), Vec3::Z),
         },
         UpAxis::Y => match view {
             StdView::Front => (-Vec3::Z, Vec3::Y),
+            StdView::Back => (Vec3::Z, Vec3::Y),
             StdView::Right => (-Vec3::X, Vec3::Y),
+            StdView::Left => (Vec3::X, Vec3::Y),
             StdView::Top => (-Vec3::Y, -Vec3::Z),
+            StdView::Bottom => (Vec3::Y, Vec3::Z),
             StdView::Iso => (Vec3::new(-1.0, -1.0, -1.0).normalize(), Vec3::Y),
         },
     }
 }
 
-/// A standard view framing the box `min..max`; returns the camera and pivot. Front, right and top views are
+/// The view from the other side of the pivot (Blender's "opposite view", key 9): the eye mirrored through the
+/// pivot, looking back along the reversed direction, with the same up vector, distance and projection.
+pub fn opposite(c: &Camera, pivot: Vec3) -> Camera {
+    set(c, 2.0 * pivot - eye(c), 2.0 * pivot - target(c), cam_up(c))
+}
+
+/// A standard view framing the box `min..max`; returns the camera and pivot. The six axis views are
 /// orthographic (as in CAD tools); the iso view keeps the current projection.
 pub fn std_view(c: &Camera, view: StdView, up: UpAxis, min: Vec3, max: Vec3) -> (Camera, Vec3) {
     let (dir, upv) = std_view_dirs(view, up);
@@ -200,6 +215,35 @@ pub fn up_axis_of(c: &Camera) -> UpAxis {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn opposite_views_look_back_through_the_pivot() {
+        let (min, max) = (Vec3::new(-1.0, -2.0, 0.0), Vec3::new(3.0, 2.0, 1.0));
+        for up in [UpAxis::Y, UpAxis::Z] {
+            for (a, b) in [
+                (StdView::Front, StdView::Back),
+                (StdView::Right, StdView::Left),
+                (StdView::Top, StdView::Bottom),
+            ] {
+                let (da, _) = std_view_dirs(a, up);
+                let (db, _) = std_view_dirs(b, up);
+                assert!(close(da, -db), "{a:?}/{b:?}");
+                let (ca, pivot) = std_view(&cam(), a, up, min, max);
+                let (cb, _) = std_view(&cam(), b, up, min, max);
+                let o = opposite(&ca, pivot);
+                assert!(close(forward(&o), forward(&cb)), "{a:?} -> {b:?}");
+                assert!((distance(&o) - distance(&ca)).abs() < 1e-4);
+                assert!(close(nav_pivot_dist(&o, pivot), nav_pivot_dist(&ca, pivot)));
+                let back = opposite(&o, pivot);
+                assert!(close(eye(&back), eye(&ca)) && close(target(&back), target(&ca)));
+            }
+        }
+    }
+
+    /// The pivot's distance from the eye, as a vector for `close`.
+    fn nav_pivot_dist(c: &Camera, pivot: Vec3) -> Vec3 {
+        Vec3::splat((pivot - eye(c)).length())
+    }
 
     fn cam() -> Camera {
         Camera {

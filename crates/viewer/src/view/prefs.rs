@@ -27,7 +27,9 @@ pub struct Prefs {
     /// Adapt the ray budget and the moving render scale to meet `target_ms`.
     pub auto_budget: bool,
     pub target_ms: f32,
-    pub screenshot_dir: PathBuf,
+    /// Where F12 saves (None: the pictures directory, see `pictures_dir`). Files of older versions name a
+    /// `screenshot_dir` relative to the working directory: ignored.
+    pub screenshot_folder: Option<PathBuf>,
     pub screenshot_custom: bool,
     pub screenshot_width: u32,
     pub screenshot_height: u32,
@@ -45,7 +47,7 @@ impl Default for Prefs {
             rays_per_frame: super::budget::DEFAULT_RAYS_PER_FRAME,
             auto_budget: true,
             target_ms: 100.0,
-            screenshot_dir: PathBuf::from("screenshots"),
+            screenshot_folder: None,
             screenshot_custom: false,
             screenshot_width: 3840,
             screenshot_height: 2160,
@@ -54,6 +56,17 @@ impl Default for Prefs {
             dark_theme: true,
         }
     }
+}
+
+/// The user's pictures directory: `$XDG_PICTURES_DIR`, else the XDG user directory (`user-dirs.dirs`), else
+/// `~/Pictures`; relative paths and a missing home give None.
+pub fn pictures_dir() -> Option<PathBuf> {
+    let from_env = std::env::var_os("XDG_PICTURES_DIR").map(PathBuf::from);
+    let home_pictures = dirs::home_dir().map(|h| h.join("Pictures"));
+    [from_env, dirs::picture_dir(), home_pictures]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_absolute())
 }
 
 /// `$XDG_CONFIG_HOME/hrtao/viewer.json`, else `~/.config/hrtao/viewer.json`, else `./hrtao-viewer.json`.

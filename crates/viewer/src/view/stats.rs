@@ -149,17 +149,9 @@ impl StatsLog {
     }
 }
 
-pub fn median(mut v: Vec<f64>) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+/// The median of the finite values (the bench's), None when there are none.
+pub fn median(v: Vec<f64>) -> Option<f64> {
+    Some(crate::bench::stats::median(&v)).filter(|m| !m.is_nan())
 }
 
 #[cfg(test)]

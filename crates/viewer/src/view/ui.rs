@@ -29,8 +29,13 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Double-click",
         "set the orbit pivot on the surface under the cursor",
     ),
-    ("F / Home", "fit all"),
-    ("1 / 3 / 7 / 9", "front / right / top / isometric view"),
+    ("F", "frame the selection (nothing selected: fit all)"),
+    ("Home", "fit all"),
+    ("1 / 3 / 7", "front / right / top view (as Blender's numpad)"),
+    ("Ctrl+1 / Ctrl+3 / Ctrl+7", "back / left / bottom view"),
+    ("9", "opposite view: look from the other side of the pivot"),
+    ("0", "isometric view"),
+    ("5", "perspective / orthographic"),
     ("Enter", "reset to the initial camera"),
     ("Click", "select an instance (click background: deselect)"),
     (
@@ -66,11 +71,17 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Ctrl+O",
         "Open… dialog (desktop portal, or zenity); drop a model file on the window to open it too",
     ),
-    ("F12", "screenshot of the 3D view (PNG, no UI)"),
+    (
+        "F12",
+        "screenshot of the 3D view (no UI) as MODEL-YYYYMMDD-HHMMSS.png in the pictures directory (or the \
+         panel's folder)",
+    ),
     (
         "Tab",
         "show / hide the panel (also while a panel widget has the keyboard focus)",
     ),
+    ("F11", "full screen on / off"),
+    ("Ctrl+Q", "quit"),
 ];
 
 /// The modifiers held when the last primary button event of this frame happened (a quick Shift+click can press
@@ -537,18 +548,23 @@ impl Viewer {
             }
         });
         if s != self.settings {
-            match s.validate() {
-                Ok(()) => {
-                    self.settings = s.clone();
-                    if let Some(r) = &mut self.renderer {
-                        if let Err(e) = r.set_settings(s) {
-                            let msg = format!("settings: {e}");
-                            self.toast(msg, true);
-                        }
+            self.apply_settings(s);
+        }
+    }
+
+    /// Settings changed in the panel (or by --set-at-frame): checked, then the renderer's.
+    pub(crate) fn apply_settings(&mut self, s: hrtao_core::AoSettings) {
+        match s.validate() {
+            Ok(()) => {
+                self.settings = s.clone();
+                if let Some(r) = &mut self.renderer {
+                    if let Err(e) = r.set_settings(s) {
+                        let msg = format!("settings: {e}");
+                        self.toast(msg, true);
                     }
                 }
-                Err(e) => self.toast(format!("settings: {e}"), true),
             }
+            Err(e) => self.toast(format!("settings: {e}"), true),
         }
     }
 
@@ -805,9 +821,21 @@ impl Viewer {
     fn screenshot_section(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             ui.label("folder");
-            let mut dir = self.prefs.screenshot_dir.display().to_string();
-            if ui.text_edit_singleline(&mut dir).changed() {
-                self.prefs.screenshot_dir = dir.into();
+            let mut dir = self
+                .prefs
+                .screenshot_folder
+                .as_ref()
+                .map(|d| d.display().to_string())
+                .unwrap_or_default();
+            let pictures = super::prefs::pictures_dir()
+                .map_or("the pictures directory".to_string(), |d| d.display().to_string());
+            if ui
+                .add(egui::TextEdit::singleline(&mut dir).hint_text(pictures))
+                .on_hover_text("Where F12 saves MODEL-YYYYMMDD-HHMMSS.png; empty: the pictures directory")
+                .changed()
+            {
+                self.prefs.screenshot_folder =
+                    Some(dir.trim().into()).filter(|d: &std::path::PathBuf| !d.as_os_str().is_empty());
             }
         });
         ui.checkbox(&mut self.prefs.screenshot_custom, "custom resolution")
@@ -1055,6 +1083,34 @@ impl Viewer {
     fn fit_all(&mut self) {
         if let Some(s) = &self.scene {
             let b = s.bounds();
+            self.fit_box(b);
+        }
+    }
+
+    /// F with a selection: frames the selected instances' bounds (the view direction stays).
+    fn frame_selection(&mut self) {
+        let Some(s) = &self.scene else {
+            return;
+        };
+        let b = self
+            .selection
+            .instances
+            .iter()
+            .map(|&i| s.instance_bounds(i))
+            .fold(hrtao_scene::Aabb::empty(), |a, b| a.union(&b));
+        if b.is_empty() {
+            return self.fit_all();
+        }
+        log::info!(
+            "framed the selection: {} instances, centre {:?}",
+            self.selection.instances.len(),
+            b.center().to_array()
+        );
+        self.fit_box(b);
+    }
+
+    fn fit_box(&mut self, b: hrtao_scene::Aabb) {
+        {
             let (c, p) = nav::fit(&self.view_cam(), b.min, b.max);
             self.nav.cam = Camera {
                 width: self.nav.cam.width,
@@ -1109,7 +1165,10 @@ impl Viewer {
                 Key::Num3,
                 Key::Num7,
                 Key::Num9,
+                Key::Num0,
                 Key::Num5,
+                Key::F11,
+                Key::Q,
                 Key::Enter,
                 Key::Delete,
                 Key::H,
@@ -1149,20 +1208,37 @@ impl Viewer {
                 .filter(|k| i.key_pressed(*k))
                 .map(|k| (k, held(k)))
                 .collect();
+            // Fly keys, not while Ctrl is held (Ctrl+Q quits, Ctrl+S…).
             let down: Vec<Key> = [Key::W, Key::A, Key::S, Key::D, Key::Q, Key::E]
                 .into_iter()
-                .filter(|k| i.key_down(*k))
+                .filter(|k| i.key_down(*k) && !i.modifiers.command)
                 .collect();
             (pressed, down, i.modifiers, i.stable_dt.min(0.25))
         });
         for (k, mods) in pressed {
             match k {
+                Key::F if !self.selection.instances.is_empty() => self.frame_selection(),
                 Key::F | Key::Home => self.fit_all(),
+                Key::Num1 if mods.command => self.std_view(StdView::Back),
+                Key::Num3 if mods.command => self.std_view(StdView::Left),
+                Key::Num7 if mods.command => self.std_view(StdView::Bottom),
                 Key::Num1 => self.std_view(StdView::Front),
                 Key::Num3 => self.std_view(StdView::Right),
                 Key::Num7 => self.std_view(StdView::Top),
-                Key::Num9 => self.std_view(StdView::Iso),
+                Key::Num9 => {
+                    self.nav.cam = nav::opposite(&self.nav.cam, self.nav.pivot);
+                }
+                Key::Num0 => self.std_view(StdView::Iso),
                 Key::Num5 => self.toggle_projection(),
+                Key::F11 => {
+                    self.fullscreen = !self.fullscreen;
+                    log::info!("full screen {}", if self.fullscreen { "on" } else { "off" });
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Fullscreen(self.fullscreen));
+                }
+                Key::Q if mods.command => {
+                    log::info!("quit (Ctrl+Q)");
+                    self.exit_signal.send(std::process::ExitCode::SUCCESS);
+                }
                 Key::Enter => self.reset_view(),
                 Key::Escape if self.background_shot.is_some() => self.cancel_background_shot(" (Esc)"),
                 Key::Escape if self.measure.active => self.measure.points.clear(),
