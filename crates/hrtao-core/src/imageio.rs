@@ -93,20 +93,60 @@ pub fn write_exr(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<(
     .map_err(|e| CoreError::Invalid(format!("writing {}: {e}", path.display())))
 }
 
-/// Writes the AO image as .pfm or .exr, chosen by the extension.
-pub fn write_ao(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<()> {
+/// Reads the red channel of an OpenEXR file's first RGBA layer (row 0 = top): the AO `write_exr` writes, and
+/// Blender's AO references (R = G = B). Missing channels read as NaN; any NaN is an error.
+pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| (size.width(), vec![f32::NAN; size.area()]),
+        |(width, ao), pos, (r, _g, _b, _a): (f32, f32, f32, f32)| ao[pos.y() * *width + pos.x()] = r,
+    )
+    .map_err(|e| CoreError::Invalid(format!("reading {}: {e}", path.display())))?;
+    let size = image.layer_data.size;
+    let (_, data) = image.layer_data.channel_data.pixels;
+    if data.iter().any(|v| v.is_nan()) {
+        return Err(CoreError::Invalid(format!(
+            "{}: the image has NaN values",
+            path.display()
+        )));
+    }
+    Ok((size.width() as u32, size.height() as u32, data))
+}
+
+/// Reads an AO image written as .pfm or .exr, chosen by the extension (row 0 = top).
+pub fn read_ao(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
+    match ao_format(path)? {
+        AoFormat::Pfm => read_pfm(path),
+        AoFormat::Exr => read_exr(path),
+    }
+}
+
+enum AoFormat {
+    Pfm,
+    Exr,
+}
+
+fn ao_format(path: &Path) -> Result<AoFormat> {
     match path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .as_deref()
     {
-        Some("pfm") => write_pfm(path, width, height, data),
-        Some("exr") => write_exr(path, width, height, data),
+        Some("pfm") => Ok(AoFormat::Pfm),
+        Some("exr") => Ok(AoFormat::Exr),
         _ => Err(CoreError::Invalid(format!(
-            "{}: AO output must end in .pfm or .exr",
+            "{}: an AO image must end in .pfm or .exr",
             path.display()
         ))),
+    }
+}
+
+/// Writes the AO image as .pfm or .exr, chosen by the extension.
+pub fn write_ao(path: &Path, width: u32, height: u32, data: &[f32]) -> Result<()> {
+    match ao_format(path)? {
+        AoFormat::Pfm => write_pfm(path, width, height, data),
+        AoFormat::Exr => write_exr(path, width, height, data),
     }
 }
 
@@ -120,6 +160,24 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ao_round_trips_through_exr_and_pfm_with_rows_top_first() {
+        let dir = std::env::temp_dir().join(format!("hrtao-ao-rt-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 3 x 2, every value distinct, so a flipped or transposed read fails.
+        let data = [0.0, 0.125, 0.25, 0.5, 0.75, 1.0];
+        for name in ["ao.exr", "ao.PFM"] {
+            let path = dir.join(name);
+            write_ao(&path, 3, 2, &data).unwrap();
+            assert_eq!(read_ao(&path).unwrap(), (3, 2, data.to_vec()), "{name}");
+        }
+        assert!(read_ao(&dir.join("ao.png")).is_err());
+        std::fs::write(dir.join("bad.exr"), b"not an exr").unwrap();
+        let err = read_ao(&dir.join("bad.exr")).unwrap_err().to_string();
+        assert!(err.contains("bad.exr"), "{err}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn pfm_round_trip_keeps_rows_top_first() {

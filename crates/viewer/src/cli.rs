@@ -468,7 +468,7 @@ pub struct BenchArgs {
     /// Static HRTAO frames for HRTAO's error-versus-rays curve.
     #[arg(long, default_value_t = 8)]
     pub hrtao_frames: u32,
-    /// Optional independent reference AO image (.pfm, e.g. the Cycles references of ../shared/refs).
+    /// Optional independent reference AO image (.pfm or .exr, e.g. a Blender Cycles reference of testdata/refs).
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Name in reports (default: the scene file stem or spec).

@@ -127,19 +127,9 @@ pub fn shared_scene(key: &str, w: u32, h: u32) -> (Scene, Camera, f32) {
 /// top), checked for its size.
 pub fn cycles_ref(key: &str, w: u32, h: u32) -> Vec<f32> {
     let path = testdata(&format!("refs/{key}_{w}x{h}.cycles.exr"));
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        &path,
-        |size, _| (size.width(), vec![f32::NAN; size.area()]),
-        |(width, ao), pos, (r, _g, _b, _a): (f32, f32, f32, f32)| ao[pos.y() * *width + pos.x()] = r,
-    )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let size = image.layer_data.size;
-    assert_eq!(
-        (size.width() as u32, size.height() as u32),
-        (w, h),
-        "reference size"
-    );
-    let (_, ao) = image.layer_data.channel_data.pixels;
+    let (rw, rh, ao) =
+        hrtao_core::imageio::read_ao(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!((rw, rh), (w, h), "reference size");
     assert!(ao.iter().all(|v| (0.0..=1.0).contains(v)), "AO in [0, 1]");
     ao
 }

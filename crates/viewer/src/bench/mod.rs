@@ -908,7 +908,7 @@ fn measure_quality(
     let external = match &args.reference {
         None => None,
         Some(p) => {
-            let (ew, eh, ext) = imageio::read_pfm(p)?;
+            let (ew, eh, ext) = imageio::read_ao(p)?;
             let (w, h) = r.size();
             if (ew, eh) != (w, h) {
                 bail!(
