@@ -108,48 +108,7 @@ impl Default for Tessellation {
     }
 }
 
-/// Triangles of one colour of a part, in the part's coordinates (millimetres).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Primitive {
-    pub positions: Vec<[f32; 3]>,
-    pub indices: Vec<u32>,
-    /// Linear RGBA, `None` without colour.
-    pub color: Option<[f32; 4]>,
-    /// The colour was set on the part's faces: it wins over an occurrence's colour.
-    pub face_color: bool,
-}
-
-/// A unique part, tessellated once.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Part {
-    pub name: String,
-    pub primitives: Vec<Primitive>,
-}
-
-/// A node of the product structure (pre-order: a parent comes before its children).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Node {
-    pub name: String,
-    pub parent: Option<u32>,
-    /// The part this occurrence places, `None` for an assembly (or a part without triangles).
-    pub part: Option<u32>,
-    /// Column-major placement in the file's coordinates (millimetres).
-    pub world: [f64; 16],
-    /// The nearest colour set on this occurrence or an enclosing one.
-    pub color: Option<[f32; 4]>,
-    pub visible: bool,
-}
-
-/// What a file holds: parts, nodes and units.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Model {
-    pub parts: Vec<Part>,
-    pub nodes: Vec<Node>,
-    /// Metres per unit of the coordinates above (OCCT's session unit, millimetres).
-    pub model_unit_m: f64,
-    /// Metres per unit the file declares, `None` if it declares none.
-    pub file_unit_m: Option<f64>,
-}
+pub use hrtao_scene::cad::{CadModel as Model, CadNode as Node, CadPart as Part, CadPrimitive as Primitive};
 
 /// Why a read failed.
 #[derive(thiserror::Error, Debug)]

@@ -2,12 +2,23 @@
 mod bench;
 mod cli;
 mod common;
+mod occt_worker;
 mod render_cmd;
 mod view;
 
 use clap::Parser;
 
 fn main() {
+    // The STEP/IGES kernel's worker process (hidden: started by the scene loader, not by users).
+    if std::env::args_os()
+        .nth(1)
+        .is_some_and(|a| a == occt_worker::SUBCOMMAND)
+    {
+        std::process::exit(occt_worker::main(std::env::args_os().skip(2).collect()));
+    }
+    if let Ok(exe) = std::env::current_exe() {
+        hrtao_scene::set_default_cad_worker(exe);
+    }
     let args = cli::Cli::parse();
     let default_level = if args.verbose { "debug" } else { "info" };
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(default_level))
