@@ -97,6 +97,7 @@ fn step_entities(bytes: &[u8]) -> Result<u64, String> {
     let Some(data) = find(bytes, b"DATA;").or_else(|| find(bytes, b"DATA(")) else {
         return Err("no DATA section: the file has a header but no entities".into());
     };
+    let data = data + 5;
     let n = bytes[data..].iter().filter(|&&b| b == b';').count() as u64;
     if n <= 2 || find(&bytes[data..], b"#").is_none() {
         return Err("the DATA section holds no entity".into());
