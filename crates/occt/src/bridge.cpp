@@ -16,6 +16,9 @@
 #include <IGESData_GlobalSection.hxx>
 #include <IGESData_IGESModel.hxx>
 #include <Interface_Static.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <Message_PrinterOStream.hxx>
 #include <Message_ProgressIndicator.hxx>
 #include <Message_ProgressScope.hxx>
 #include <NCollection_DataMap.hxx>
@@ -250,8 +253,14 @@ struct Walker {
   }
 };
 
+// OCCT's messages (transfer statistics) go to stdout by default: keep them out of the caller's output.
+void quiet() {
+  Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
+}
+
 int read_impl(const char* path, int32_t format, const hr_tessellation* tess, const hr_callbacks* cb,
               hr_units* units) {
+  quiet();
   Handle(Progress) progress = new Progress(cb);
   Handle(XCAFApp_Application) app = XCAFApp_Application::GetApplication();
   Handle(TDocStd_Document) doc;
@@ -343,6 +352,9 @@ TopoDS_Shape bolt() {
 }
 
 int write_impl(const char* path, int32_t format, int32_t kind, int32_t count) {
+  quiet();
+  // Without p-curves a box takes about a third of the entities.
+  Interface_Static::SetIVal("write.surfacecurve.mode", kind == 3 ? 0 : 1);
   Handle(XCAFApp_Application) app = XCAFApp_Application::GetApplication();
   Handle(TDocStd_Document) doc;
   app->NewDocument("MDTV-XCAF", doc);

@@ -8,6 +8,13 @@
 
 use std::io::{Read, Write};
 
+/// Most entities a STEP/IGES file may have: the kernel keeps every entity in memory, and 2 million take about
+/// 2 GiB.
+pub const MAX_CAD_ENTITIES: u64 = 2_000_000;
+/// Memory the kernel takes per entity of the file, as estimated for the memory limit (a B-rep entity read and
+/// transferred by OpenCASCADE takes about 1 KiB).
+pub const CAD_ENTITY_BYTES: u64 = 1024;
+
 /// Triangles of one colour of a part, in the part's coordinates (the model unit).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CadPrimitive {

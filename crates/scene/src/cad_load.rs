@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 use glam::{DMat4, DVec3, Vec3};
 
 use crate::aabb::Aabb;
-use crate::cad::{read_frame, CadModel, Frame};
+use crate::cad::{read_frame, CadModel, Frame, CAD_ENTITY_BYTES, MAX_CAD_ENTITIES};
 use crate::error::SceneError;
 use crate::guard::{read_model, CadFormat, CadOptions, LoadOptions};
 use crate::scene::{
@@ -31,11 +31,6 @@ use crate::scene::{
 };
 use crate::tree::NodeTree;
 
-/// Most entities a STEP/IGES file may have (the kernel keeps every entity in memory).
-pub const MAX_CAD_ENTITIES: u64 = 5_000_000;
-/// Memory the kernel takes per entity of the file, as estimated for the memory limit (a B-rep entity read and
-/// transferred by OCCT takes about 1 KiB).
-pub const CAD_ENTITY_BYTES: u64 = 1024;
 /// Address space the worker may use beyond the scene memory limit (OCCT's libraries and heap arenas).
 const WORKER_OVERHEAD: u64 = 1 << 30;
 
