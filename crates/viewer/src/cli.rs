@@ -18,6 +18,16 @@ pub struct Cli {
     /// Verbose logging.
     #[arg(long, short, global = true)]
     pub verbose: bool,
+    /// STEP/IGES tessellation: linear deflection as a fraction of each part's size [default: 0.001].
+    #[arg(long, global = true, value_name = "FRACTION")]
+    pub deflection: Option<f64>,
+    /// STEP/IGES tessellation: linear deflection in millimetres for every part (F3D's way), instead of
+    /// --deflection.
+    #[arg(long, global = true, value_name = "MM", conflicts_with = "deflection")]
+    pub deflection_mm: Option<f64>,
+    /// STEP/IGES tessellation: angular deflection in degrees [default: 10].
+    #[arg(long, global = true, value_name = "DEGREES")]
+    pub angular_deflection: Option<f64>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -143,7 +153,7 @@ impl AoArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
+    /// Scene: .gltf, .glb, .obj, .stl, .ply, .step/.stp, .iges/.igs, or a generator spec such as gen:racks?rows=10&cols=10.
     #[arg(long)]
     pub scene: String,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
@@ -181,7 +191,8 @@ pub struct RenderArgs {
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct ViewArgs {
-    /// Scene to open: .gltf, .glb, .obj or a generator spec such as gen:city (default: the bundled gearbox).
+    /// Scene to open: .gltf, .glb, .obj, .stl, .ply, .step/.stp, .iges/.igs or a generator spec such as gen:city
+    /// (default: the bundled gearbox).
     pub file: Option<String>,
     /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
     #[arg(long)]
@@ -267,7 +278,7 @@ pub struct ViewArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// Scene: .gltf, .glb, .obj, or a generator spec such as gen:racks?rows=10&cols=10.
+    /// Scene: .gltf, .glb, .obj, .stl, .ply, .step/.stp, .iges/.igs, or a generator spec such as gen:racks?rows=10&cols=10.
     #[arg(long, required_unless_present = "report")]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with

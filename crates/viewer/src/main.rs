@@ -24,6 +24,12 @@ fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(default_level))
         .format_timestamp_millis()
         .init();
+    if let Err(e) =
+        occt_worker::set_tessellation(args.deflection, args.deflection_mm, args.angular_deflection)
+    {
+        eprintln!("hrtao: error: {e}");
+        std::process::exit(2);
+    }
     let result = match args.command {
         Some(cli::Command::Render(r)) => render_cmd::run(&r),
         Some(cli::Command::Devices(d)) => render_cmd::list_devices(&d),

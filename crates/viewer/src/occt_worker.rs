@@ -15,6 +15,36 @@ pub const SUBCOMMAND: &str = "occt-worker";
 /// OOM score added to the worker's (the viewer's is 0): under memory pressure the kernel goes first.
 const OOM_SCORE_ADJ: &str = "500";
 
+/// Sets the STEP/IGES tessellation of this process's loads from the command line's `--deflection`,
+/// `--deflection-mm` and `--angular-deflection` (each a finite number > 0; unset keeps the default).
+pub fn set_tessellation(
+    relative: Option<f64>,
+    mm: Option<f64>,
+    angular_deg: Option<f64>,
+) -> Result<(), String> {
+    let check = |v: Option<f64>, what: &str| match v {
+        Some(x) if !(x.is_finite() && x > 0.0) => Err(format!("{what} must be a number > 0, got {x}")),
+        _ => Ok(v),
+    };
+    let (relative, mm) = (check(relative, "--deflection")?, check(mm, "--deflection-mm")?);
+    let angular_deg = check(angular_deg, "--angular-deflection")?;
+    if relative.is_none() && mm.is_none() && angular_deg.is_none() {
+        return Ok(());
+    }
+    let mut t = hrtao_scene::CadTessellation::default();
+    if let Some(r) = relative {
+        t.relative = r;
+    }
+    if let Some(mm) = mm {
+        (t.relative, t.absolute) = (0.0, mm);
+    }
+    if let Some(a) = angular_deg {
+        t.angular_deg = a.min(90.0);
+    }
+    hrtao_scene::set_default_cad_tessellation(t);
+    Ok(())
+}
+
 /// Runs the worker; returns the process exit code.
 pub fn main(args: Vec<OsString>) -> i32 {
     let _ = std::fs::write("/proc/self/oom_score_adj", OOM_SCORE_ADJ);
