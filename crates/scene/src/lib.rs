@@ -192,3 +192,34 @@ fn finish(mut scene: Scene, source: &str) -> Result<Scene, SceneError> {
     }
     Ok(scene)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without the `occt` feature a STEP file is an error saying how to enable it; with it and no worker to run,
+    /// an error saying so (never a panic).
+    #[test]
+    fn step_without_the_kernel_is_a_clear_error() {
+        let dir = std::env::temp_dir().join(format!("hrtao-scene-step-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("part.STP");
+        std::fs::write(
+            &p,
+            "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=A();\nENDSEC;\nEND-ISO-10303-21;\n",
+        )
+        .unwrap();
+        let mut opts = LoadOptions::default();
+        opts.cad.worker = None;
+        let e = load_with(p.to_str().unwrap(), &opts, &mut |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("part.STP"), "{e}");
+        if cfg!(feature = "occt") {
+            assert!(e.contains("no OpenCASCADE worker"), "{e}");
+        } else {
+            assert!(e.contains("`occt` feature"), "{e}");
+        }
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
