@@ -272,6 +272,26 @@ fn hostile_step_and_iges_files_give_errors_or_images() {
             }
             (r, want) => panic!("{}: expected {want:?}, got {:?}", case.name, r.as_ref().err()),
         }
+        // The same through `hrtao render` (the 10^4 solids once is enough: the loader above).
+        if case.name != "step_10k_solids" {
+            let png = dir.join(format!("{}.png", case.name));
+            let out = render(&case.path, &png);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert!(!stderr.contains("panicked"), "{}: {stderr}", case.name);
+            let file = case.path.file_name().unwrap().to_str().unwrap();
+            match case.expect {
+                Expect::Image => assert!(
+                    out.status.success() && covered_pixels(&png) > 0,
+                    "{}: {stderr}",
+                    case.name
+                ),
+                Expect::Error => assert!(
+                    out.status.code() == Some(1) && stderr.contains(file),
+                    "{}: a clear error naming the file\n{stderr}",
+                    case.name
+                ),
+            }
+        }
         if case.name == "step_over_entity_cap" {
             // Refused by counting, before the kernel runs (the kernel alone takes seconds per 10^5 entities).
             assert!(took < Duration::from_secs(5), "refused quickly: {took:?}");
