@@ -2,8 +2,20 @@
 # Installs the system packages hrtao needs on Debian 12 (bookworm) / Ubuntu, skipping what is present.
 # Vulkan loader, Mesa lavapipe with VK_KHR_ray_query (Mesa >= 23; on Debian 12 from bookworm-backports),
 # glslc (shader compiler), Xvfb (windows without a display), xdotool (X input in tests), zenity (the Open…
-# dialog without a desktop portal), Khronos validation layers.
+# dialog without a desktop portal), Khronos validation layers; OpenCASCADE 7.6 development packages (STEP/IGES
+# through XCAF, the `occt` feature), desktop-file-utils (the desktop entry's test). The STEP test files come from
+# Debian's gmsh-doc package (scripts/fetch-step-data.sh).
+# `install-deps.sh --bench` also installs what only measurements use: gmsh (the comparison mesher of the STEP AO
+# check, an ignored test) and f3d (the reference viewer of the STEP benchmark).
 set -euo pipefail
+
+extra=()
+for arg in "$@"; do
+  case "$arg" in
+    --bench) extra+=(gmsh f3d) ;;
+    *) echo "install-deps: unknown option $arg (known: --bench)" >&2; exit 2 ;;
+  esac
+done
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
@@ -12,7 +24,11 @@ need=()
 have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
 # xdotool: the window tests send real X input events. zenity: the Open… dialog when no desktop portal runs
 # (rfd's fallback; the window tests drive it).
-for p in libvulkan1 vulkan-tools glslc xvfb vulkan-validationlayers xauth libxkbcommon-x11-0 libx11-xcb1 xdotool zenity; do
+# OpenCASCADE: libocct-data-exchange-dev (STEP/IGES readers, XCAF), libocct-ocaf-dev (the XCAF document),
+# libocct-modeling-*-dev (B-rep, BRepMesh), libocct-foundation-dev (TKernel, TKMath); a C++ compiler for the bridge.
+for p in libvulkan1 vulkan-tools glslc xvfb vulkan-validationlayers xauth libxkbcommon-x11-0 libx11-xcb1 xdotool zenity \
+  g++ libocct-data-exchange-dev libocct-ocaf-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev \
+  libocct-foundation-dev desktop-file-utils ${extra[@]+"${extra[@]}"}; do
   have_pkg "$p" || need+=("$p")
 done
 

@@ -41,6 +41,13 @@ pub enum SceneError {
     /// The PLY file is malformed.
     #[error("PLY {path}: {message}")]
     Ply { path: PathBuf, message: String },
+    /// A STEP or IGES file cannot be read, or its kernel (OpenCASCADE, in a worker process) failed.
+    #[error("{format} {path}: {message}")]
+    Cad {
+        format: &'static str,
+        path: PathBuf,
+        message: String,
+    },
     /// The scene data is inconsistent (bad index, NaN position, singular transform, ...).
     #[error("invalid scene: {0}")]
     Invalid(String),

@@ -32,6 +32,8 @@ pub struct LoadOptions {
     /// instances, estimated from the counts the file declares *before* allocating
     /// ([`SceneError::TooLarge`] otherwise). The model file itself may not be larger either.
     pub max_memory: u64,
+    /// STEP and IGES: the kernel's worker process and the tessellation.
+    pub cad: CadOptions,
 }
 
 impl Default for LoadOptions {
@@ -39,6 +41,70 @@ impl Default for LoadOptions {
         LoadOptions {
             cancel: Arc::new(AtomicBool::new(false)),
             max_memory: default_max_memory(),
+            cad: CadOptions::default(),
+        }
+    }
+}
+
+/// STEP or IGES.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CadFormat {
+    Step,
+    Iges,
+}
+
+impl CadFormat {
+    pub fn name(self) -> &'static str {
+        match self {
+            CadFormat::Step => "STEP",
+            CadFormat::Iges => "IGES",
+        }
+    }
+}
+
+/// How B-rep faces become triangles (OpenCASCADE's `BRepMesh_IncrementalMesh`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CadTessellation {
+    /// Linear deflection as a fraction of each part's bounding-box diagonal; 0 uses `absolute`.
+    pub relative: f64,
+    /// Linear deflection in millimetres when `relative` is 0 (F3D's way: one tolerance for the whole model).
+    pub absolute: f64,
+    /// Angular deflection in degrees.
+    pub angular_deg: f64,
+}
+
+impl Default for CadTessellation {
+    /// 0.1 % of each part's size and 10 degrees: curved faces shade smoothly with geometric normals and feature
+    /// edges stay on real creases.
+    fn default() -> Self {
+        CadTessellation {
+            relative: 1e-3,
+            absolute: 0.0,
+            angular_deg: 10.0,
+        }
+    }
+}
+
+/// STEP/IGES load options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CadOptions {
+    /// The `hrtao` binary whose `occt-worker` subcommand runs the kernel; by default the one given to
+    /// [`crate::set_default_cad_worker`] (the viewer's own executable).
+    pub worker: Option<std::path::PathBuf>,
+    pub tessellation: CadTessellation,
+    /// CPU seconds the kernel may take (`HRTAO_OCCT_CPU_SECONDS`, default 300).
+    pub cpu_seconds: u64,
+}
+
+impl Default for CadOptions {
+    fn default() -> Self {
+        CadOptions {
+            worker: crate::default_cad_worker(),
+            tessellation: crate::default_cad_tessellation(),
+            cpu_seconds: std::env::var("HRTAO_OCCT_CPU_SECONDS")
+                .ok()
+                .and_then(|v| v.trim().parse().ok())
+                .unwrap_or(300),
         }
     }
 }

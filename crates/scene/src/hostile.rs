@@ -767,3 +767,210 @@ fn write_reference_cases(dir: &Path, good: &str) -> io::Result<Vec<HostileCase>>
     }
     Ok(out)
 }
+
+/// Variations of the generated STEP file ([`step_boxes`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StepOptions {
+    /// Every box but the first has height 0: its side faces have no area, its top and bottom coincide.
+    pub flat: bool,
+    /// The length unit refers to an entity the file does not define.
+    pub undefined_unit: bool,
+    /// The product is used as a component of itself (a NEXT_ASSEMBLY_USAGE_OCCURRENCE from it to it).
+    pub self_reference: bool,
+}
+
+/// A STEP (AP214) file of `n` 10 mm boxes as faceted B-rep solids of one part (40 entities a box), in millimetres.
+pub fn step_boxes(n: usize, o: StepOptions) -> String {
+    let mut s = String::from(
+        "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('hrtao hostile corpus'),'2;1');\n\
+         FILE_NAME('boxes','2026-01-01T00:00:00',(''),(''),'','','');\n\
+         FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\nENDSEC;\nDATA;\n\
+         #1=APPLICATION_CONTEXT('automotive design');\n\
+         #2=APPLICATION_PROTOCOL_DEFINITION('international standard','automotive_design',2000,#1);\n\
+         #3=PRODUCT_CONTEXT('',#1,'mechanical');\n#4=PRODUCT('boxes','boxes','',(#3));\n\
+         #5=PRODUCT_DEFINITION_FORMATION('','',#4);\n#6=PRODUCT_DEFINITION_CONTEXT('part definition',#1,'design');\n\
+         #7=PRODUCT_DEFINITION('design','',#5,#6);\n#8=PRODUCT_DEFINITION_SHAPE('','',#7);\n\
+         #9=SHAPE_DEFINITION_REPRESENTATION(#8,#10);\n",
+    );
+    let first = 100;
+    let per = 40;
+    let breps: Vec<String> = (0..n).map(|i| format!("#{}", first + i * per + 27)).collect();
+    s += &format!(
+        "#10=FACETED_BREP_SHAPE_REPRESENTATION('',({}),#11);\n",
+        breps.join(",")
+    );
+    let unit = if o.undefined_unit { 99 } else { 12 };
+    s += &format!(
+        "#11=(GEOMETRIC_REPRESENTATION_CONTEXT(3) GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#15)) \
+         GLOBAL_UNIT_ASSIGNED_CONTEXT((#{unit},#13,#14)) REPRESENTATION_CONTEXT('',''));\n\
+         #12=(LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.));\n\
+         #13=(NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.));\n\
+         #14=(NAMED_UNIT(*) SI_UNIT($,.STERADIAN.) SOLID_ANGLE_UNIT());\n\
+         #15=UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-07),#{unit},'distance_accuracy_value','');\n"
+    );
+    // Face normals (-z, +z, -y, +y, -x, +x) and reference directions (+x, +z) of the faces' planes.
+    s += "#30=DIRECTION('',(0.,0.,-1.));\n#31=DIRECTION('',(0.,0.,1.));\n#32=DIRECTION('',(0.,-1.,0.));\n\
+          #33=DIRECTION('',(0.,1.,0.));\n#34=DIRECTION('',(-1.,0.,0.));\n#35=DIRECTION('',(1.,0.,0.));\n\
+          #36=DIRECTION('',(1.,0.,0.));\n#37=DIRECTION('',(0.,0.,1.));\n";
+    if o.self_reference {
+        s += "#20=NEXT_ASSEMBLY_USAGE_OCCURRENCE('1','self','',#7,#7,$);\n\
+              #21=PRODUCT_DEFINITION_SHAPE('','',#20);\n\
+              #22=CONTEXT_DEPENDENT_SHAPE_REPRESENTATION(#23,#21);\n\
+              #23=(REPRESENTATION_RELATIONSHIP('','',#10,#10) REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION(#24) \
+              SHAPE_REPRESENTATION_RELATIONSHIP());\n\
+              #24=ITEM_DEFINED_TRANSFORMATION('','',#25,#26);\n\
+              #25=AXIS2_PLACEMENT_3D('',#27,$,$);\n#26=AXIS2_PLACEMENT_3D('',#28,$,$);\n\
+              #27=CARTESIAN_POINT('',(0.,0.,0.));\n#28=CARTESIAN_POINT('',(50.,0.,0.));\n";
+    }
+    let side = (n as f64).sqrt().ceil().max(1.0) as usize;
+    // Corners 0-7 (bit 0: x, bit 1: y, bit 2: z) and the faces as outward corner loops.
+    const FACES: [[usize; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    for i in 0..n {
+        let h = if o.flat && i > 0 { 0.0 } else { 10.0 };
+        let b = first + i * per;
+        let (x0, y0) = (20.0 * (i % side) as f64, 20.0 * (i / side) as f64);
+        for c in 0..8 {
+            let x = x0 + if c & 1 != 0 { 10.0 } else { 0.0 };
+            let y = y0 + if c & 2 != 0 { 10.0 } else { 0.0 };
+            let z = if c & 4 != 0 { h } else { 0.0 };
+            s += &format!("#{}=CARTESIAN_POINT('',({x:.1},{y:.1},{z:.1}));\n", b + c);
+        }
+        for (f, corners) in FACES.iter().enumerate() {
+            let pts: Vec<String> = corners.iter().map(|c| format!("#{}", b + c)).collect();
+            s += &format!("#{}=POLY_LOOP('',({}));\n", b + 8 + f, pts.join(","));
+            s += &format!("#{}=FACE_OUTER_BOUND('',#{},.T.);\n", b + 14 + f, b + 8 + f);
+            let origin = [0, 4, 0, 2, 0, 1][f];
+            let reference = if f < 4 { 36 } else { 37 };
+            s += &format!(
+                "#{}=AXIS2_PLACEMENT_3D('',#{},#{},#{reference});\n",
+                b + 28 + f,
+                b + origin,
+                30 + f
+            );
+            s += &format!("#{}=PLANE('',#{});\n", b + 34 + f, b + 28 + f);
+            s += &format!(
+                "#{}=FACE_SURFACE('',(#{}),#{},.T.);\n",
+                b + 20 + f,
+                b + 14 + f,
+                b + 34 + f
+            );
+        }
+        let faces: Vec<String> = (0..6).map(|f| format!("#{}", b + 20 + f)).collect();
+        s += &format!("#{}=CLOSED_SHELL('',({}));\n", b + 26, faces.join(","));
+        s += &format!("#{}=FACETED_BREP('',#{});\n", b + 27, b + 26);
+    }
+    s += "ENDSEC;\nEND-ISO-10303-21;\n";
+    s
+}
+
+/// STEP and IGES files for the kernel's loader: truncated, garbage named `.step`, a header without data, an
+/// assembly containing itself, faces without area, 10^4 solids, an entity count beyond the cap, an undefined
+/// unit. Loading them needs the OpenCASCADE worker (`LoadOptions::cad`).
+pub fn write_cad_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
+    std::fs::create_dir_all(dir)?;
+    let one = step_boxes(1, StepOptions::default());
+    let header_end = one.find("DATA;").unwrap_or(0);
+    let mut garbage = Vec::with_capacity(4096);
+    let mut x: u32 = 0x1234_5678;
+    for _ in 0..4096 {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        garbage.push(x as u8);
+    }
+    // One more entity than the cap: tiny entities, refused by counting before the kernel runs.
+    let mut over_cap = String::from(&one[..header_end]);
+    over_cap += "DATA;\n";
+    for i in 1..=(crate::cad::MAX_CAD_ENTITIES + 1) {
+        over_cap += &format!("#{i}=A();\n");
+    }
+    over_cap += "ENDSEC;\nEND-ISO-10303-21;\n";
+    let files: Vec<(&'static str, &'static str, Vec<u8>, Expect)> = vec![
+        ("step_valid_box", "step", one.clone().into_bytes(), Expect::Image),
+        ("step_garbage", "step", garbage.clone(), Expect::Error),
+        ("iges_garbage", "igs", garbage, Expect::Error),
+        ("step_empty", "stp", Vec::new(), Expect::Error),
+        (
+            "step_header_only",
+            "step",
+            format!("{}END-ISO-10303-21;\n", &one[..header_end]).into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "step_truncated",
+            "step",
+            one.as_bytes()[..one.len() / 2].to_vec(),
+            Expect::Error,
+        ),
+        (
+            "step_self_reference",
+            "step",
+            step_boxes(
+                1,
+                StepOptions {
+                    self_reference: true,
+                    ..Default::default()
+                },
+            )
+            .into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "step_no_area_faces",
+            "step",
+            step_boxes(
+                4,
+                StepOptions {
+                    flat: true,
+                    ..Default::default()
+                },
+            )
+            .into_bytes(),
+            Expect::Image,
+        ),
+        (
+            "step_undefined_unit",
+            "step",
+            step_boxes(
+                2,
+                StepOptions {
+                    undefined_unit: true,
+                    ..Default::default()
+                },
+            )
+            .into_bytes(),
+            Expect::Image,
+        ),
+        (
+            "step_10k_solids",
+            "step",
+            step_boxes(10_000, StepOptions::default()).into_bytes(),
+            Expect::Image,
+        ),
+        (
+            "step_over_entity_cap",
+            "step",
+            over_cap.into_bytes(),
+            Expect::Error,
+        ),
+    ];
+    let mut out = Vec::new();
+    for (name, ext, bytes, expect) in files {
+        let path = dir.join(format!("{name}.{ext}"));
+        make(&path, &Entry::File(bytes))?;
+        out.push(HostileCase {
+            name,
+            path,
+            expect,
+            reference: None,
+        });
+    }
+    Ok(out)
+}

@@ -5,6 +5,9 @@
 //! are in metres, Z-up.
 
 mod aabb;
+pub mod cad;
+#[cfg(feature = "occt")]
+mod cad_load;
 mod error;
 mod generate;
 mod gltf_load;
@@ -25,7 +28,7 @@ pub use glam;
 pub use aabb::Aabb;
 pub use error::SceneError;
 pub use generate::{MAX_INSTANCES, MAX_MESH_TRIANGLES};
-pub use guard::{default_max_memory, LoadOptions};
+pub use guard::{default_max_memory, CadFormat, CadOptions, CadTessellation, LoadOptions};
 pub use scene::{
     Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR, EXACT_BOUNDS_VERTEX_BUDGET,
 };
@@ -67,12 +70,46 @@ pub fn generate(spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Sc
     finish(generate::generate(spec, progress)?, spec)
 }
 
+/// The extensions [`load_with`] reads (lower case; any case is accepted).
+pub const SUPPORTED_EXTENSIONS: [&str; 9] =
+    ["gltf", "glb", "obj", "stl", "ply", "step", "stp", "iges", "igs"];
+
+static DEFAULT_CAD_TESSELLATION: std::sync::RwLock<Option<CadTessellation>> = std::sync::RwLock::new(None);
+static DEFAULT_CAD_WORKER: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+
+/// Sets the binary whose `occt-worker` subcommand reads STEP/IGES for loads whose [`LoadOptions`] name none:
+/// `hrtao` passes its own executable. The first call wins.
+pub fn set_default_cad_worker(path: std::path::PathBuf) {
+    let _ = DEFAULT_CAD_WORKER.set(path);
+}
+
+pub(crate) fn default_cad_worker() -> Option<std::path::PathBuf> {
+    DEFAULT_CAD_WORKER.get().cloned()
+}
+
+/// Sets the STEP/IGES tessellation of loads made from now on with default [`LoadOptions`] (the command line's
+/// `--deflection`/`--angular-deflection`).
+pub fn set_default_cad_tessellation(t: CadTessellation) {
+    *DEFAULT_CAD_TESSELLATION
+        .write()
+        .unwrap_or_else(|e| e.into_inner()) = Some(t);
+}
+
+pub(crate) fn default_cad_tessellation() -> CadTessellation {
+    DEFAULT_CAD_TESSELLATION
+        .read()
+        .unwrap_or_else(|e| e.into_inner())
+        .unwrap_or_default()
+}
+
 /// Loads a scene from `gen:...`, `*.gltf`, `*.glb` or `*.obj` with the default [`LoadOptions`].
 pub fn load(path_or_spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
     load_with(path_or_spec, &LoadOptions::default(), progress)
 }
 
-/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl` or `*.ply`; `opts` can cancel the load from another
+/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl`, `*.ply`, `*.step`/`*.stp` or
+/// `*.iges`/`*.igs` (any case; STEP and IGES through OpenCASCADE in a worker process, with the `occt` feature);
+/// `opts` can cancel the load from another
 /// thread and bounds its memory. Files and their references are read through a guard: references stay
 /// inside the model's folder, only regular files of the declared size are read (never devices, FIFOs,
 /// directories or sockets), and every read is bounded (see docs/reliability.md).
@@ -94,13 +131,46 @@ pub fn load_with(
         "obj" => obj_load::load_obj(path, opts, progress)?,
         "stl" => stl_load::load_stl(path, opts, progress)?,
         "ply" => ply_load::load_ply(path, opts, progress)?,
+        "step" | "stp" | "iges" | "igs" => {
+            let format = if ext.starts_with('s') {
+                CadFormat::Step
+            } else {
+                CadFormat::Iges
+            };
+            load_cad(path, format, opts, progress)?
+        }
         _ => {
             return Err(SceneError::UnsupportedFormat(format!(
-                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply or gen:..."
+                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply, .step, .stp, .iges, .igs or gen:..."
             )))
         }
     };
     finish(scene, path_or_spec)
+}
+
+#[cfg(feature = "occt")]
+fn load_cad(
+    path: &Path,
+    format: CadFormat,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
+    cad_load::load_cad(path, format, opts, progress)
+}
+
+#[cfg(not(feature = "occt"))]
+fn load_cad(
+    path: &Path,
+    format: CadFormat,
+    _opts: &LoadOptions,
+    _progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
+    Err(SceneError::UnsupportedFormat(format!(
+        "{}: {} files are read through OpenCASCADE, which this build leaves out: rebuild with the `occt` \
+         feature (on by default: `cargo build --release`, or `--features occt`) after scripts/install-deps.sh",
+        path.display(),
+        format.name()
+    )))
 }
 
 /// Validates and rejects scenes without any triangle; errors name the source.
@@ -121,4 +191,35 @@ fn finish(mut scene: Scene, source: &str) -> Result<Scene, SceneError> {
         )));
     }
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without the `occt` feature a STEP file is an error saying how to enable it; with it and no worker to run,
+    /// an error saying so (never a panic).
+    #[test]
+    fn step_without_the_kernel_is_a_clear_error() {
+        let dir = std::env::temp_dir().join(format!("hrtao-scene-step-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("part.STP");
+        std::fs::write(
+            &p,
+            "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=A();\nENDSEC;\nEND-ISO-10303-21;\n",
+        )
+        .unwrap();
+        let mut opts = LoadOptions::default();
+        opts.cad.worker = None;
+        let e = load_with(p.to_str().unwrap(), &opts, &mut |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("part.STP"), "{e}");
+        if cfg!(feature = "occt") {
+            assert!(e.contains("no OpenCASCADE worker"), "{e}");
+        } else {
+            assert!(e.contains("`occt` feature"), "{e}");
+        }
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }

@@ -89,6 +89,8 @@ pub struct Scene {
     pub origin: [f64; 3],
     /// The file's node hierarchy and which instances each node owns (see [`NodeTree`]).
     pub tree: NodeTree,
+    /// Metres per scene unit when the file says (STEP, IGES); `None` when the format carries no unit.
+    pub unit_m: Option<f64>,
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     f: u32,
     /// The world bounds each recent edit changed, with the F it produced (newest last, at most
@@ -159,6 +161,7 @@ impl Scene {
             name: name.into(),
             origin: [0.0; 3],
             tree: NodeTree::default(),
+            unit_m: None,
             f: 0,
             changes: Default::default(),
         }

@@ -40,6 +40,16 @@ pub struct Cli {
     /// Quiet: warnings and errors only, no progress bars.
     #[arg(long, short, global = true)]
     pub quiet: bool,
+    /// STEP/IGES tessellation: linear deflection as a fraction of each part's size [default: 0.001].
+    #[arg(long, global = true, value_name = "FRACTION")]
+    pub deflection: Option<f64>,
+    /// STEP/IGES tessellation: linear deflection in millimetres for every part (F3D's way), instead of
+    /// --deflection.
+    #[arg(long, global = true, value_name = "MM", conflicts_with = "deflection")]
+    pub deflection_mm: Option<f64>,
+    /// STEP/IGES tessellation: angular deflection in degrees [default: 10].
+    #[arg(long, global = true, value_name = "DEGREES")]
+    pub angular_deflection: Option<f64>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -284,8 +294,8 @@ impl AoArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene: .gltf, .glb, .obj, .stl, .ply, or a generator spec such as gen:racks?rows=10&cols=10 (default: the
-    /// bundled gearbox with its camera).
+    /// Scene: .step/.stp, .iges/.igs, .gltf, .glb, .obj, .stl, .ply, or a generator spec such as
+    /// gen:racks?rows=10&cols=10 (default: the bundled gearbox with its camera).
     #[arg(long)]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
@@ -327,8 +337,8 @@ pub struct RenderArgs {
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct ViewArgs {
-    /// Model to open: .gltf, .glb, .obj, .stl, .ply, or a generator spec such as gen:city (default: the bundled
-    /// gearbox).
+    /// Model to open: .step/.stp, .iges/.igs, .gltf, .glb, .obj, .stl, .ply, or a generator spec such as
+    /// gen:city (default: the bundled gearbox).
     #[arg(value_name = "FILE")]
     pub file: Option<String>,
     /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
@@ -415,7 +425,8 @@ pub struct ViewArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// Scene: .gltf, .glb, .obj, .stl, .ply, or a generator spec such as gen:racks?rows=10&cols=10.
+    /// Scene: .step/.stp, .iges/.igs, .gltf, .glb, .obj, .stl, .ply, or a generator spec such as
+    /// gen:racks?rows=10&cols=10.
     #[arg(long, required_unless_present = "report")]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with

@@ -2,6 +2,7 @@
 mod bench;
 mod cli;
 mod common;
+mod occt_worker;
 mod render_cmd;
 mod view;
 
@@ -11,7 +12,7 @@ use clap::{CommandFactory, FromArgMatches};
 const EXAMPLES: &str = "\
 Examples:
   hrtao                               open the bundled gearbox in the viewer
-  hrtao model.glb                     open a model (glTF, OBJ, STL, PLY)
+  hrtao model.step                    open a model (STEP, IGES, glTF, OBJ, STL, PLY)
   hrtao render --scene model.glb --out shot.png --ao-out ao.exr --frames 8
   hrtao bench --scene gen:racks?rows=10&cols=10 --json racks.json
   hrtao devices                       which Vulkan device hrtao uses, and why
@@ -88,6 +89,16 @@ fn cli_command() -> clap::Command {
 }
 
 fn main() {
+    // The STEP/IGES kernel's worker process (hidden: started by the scene loader, not by users).
+    if std::env::args_os()
+        .nth(1)
+        .is_some_and(|a| a == occt_worker::SUBCOMMAND)
+    {
+        std::process::exit(occt_worker::main(std::env::args_os().skip(2).collect()));
+    }
+    if let Ok(exe) = std::env::current_exe() {
+        hrtao_scene::set_default_cad_worker(exe);
+    }
     let args = match cli::Cli::from_arg_matches(&cli_command().get_matches()) {
         Ok(a) => a,
         Err(e) => e.format(&mut cli_command()).exit(),
@@ -101,6 +112,12 @@ fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(default_level))
         .format_timestamp_millis()
         .init();
+    if let Err(e) =
+        occt_worker::set_tessellation(args.deflection, args.deflection_mm, args.angular_deflection)
+    {
+        eprintln!("hrtao: error: {e}");
+        std::process::exit(2);
+    }
     let result = match args.command {
         Some(cli::Command::Render(r)) => render_cmd::run(&r),
         Some(cli::Command::Devices(d)) => render_cmd::list_devices(&d),

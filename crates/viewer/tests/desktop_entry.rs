@@ -61,10 +61,6 @@ fn mime_of(ext: &str) -> &'static str {
     }
 }
 
-/// Formats the entry offers before their loader is in this tree: the STEP/IGES loader comes with its own
-/// change; once it is merged this list is empty and the test checks them like the others.
-const LOADER_PENDING: &[&str] = &["model/step", "model/iges"];
-
 #[test]
 fn desktop_entry_launches_hrtao_with_its_icon_and_application_id() {
     let e = entry();
@@ -95,18 +91,17 @@ fn desktop_entry_launches_hrtao_with_its_icon_and_application_id() {
     let viewer =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/view/mod.rs")).unwrap();
     assert!(viewer.contains("pub const APP_ID: &str = \"hrtao\";"));
-    // desktop-file-validate (desktop-file-utils) where installed: no error, no warning.
-    if let Ok(out) = std::process::Command::new("desktop-file-validate")
+    // desktop-file-validate (desktop-file-utils, installed by scripts/install-deps.sh): no error, no warning.
+    let out = std::process::Command::new("desktop-file-validate")
         .arg(packaging().join("hrtao.desktop"))
         .output()
-    {
-        let said = format!(
-            "{}{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
-        assert!(out.status.success() && said.trim().is_empty(), "{said}");
-    }
+        .expect("desktop-file-validate (run scripts/install-deps.sh)");
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success() && said.trim().is_empty(), "{said}");
 }
 
 #[test]
@@ -117,7 +112,7 @@ fn desktop_entry_offers_exactly_the_formats_the_loaders_read() {
         .map(str::to_string)
         .collect();
     let exts = loader_extensions();
-    for must in ["gltf", "glb", "obj", "stl", "ply"] {
+    for must in ["gltf", "glb", "obj", "stl", "ply", "step", "stp", "iges", "igs"] {
         assert!(
             exts.contains(must),
             "the probe finds the .{must} loader: {exts:?}"
@@ -126,9 +121,6 @@ fn desktop_entry_offers_exactly_the_formats_the_loaders_read() {
     let read: BTreeSet<String> = exts.iter().map(|e| mime_of(e).to_string()).collect();
     let missing: Vec<&String> = read.difference(&offered).collect();
     assert!(missing.is_empty(), "read but not offered: {missing:?}");
-    let extra: Vec<&String> = offered
-        .difference(&read)
-        .filter(|m| !LOADER_PENDING.contains(&m.as_str()))
-        .collect();
+    let extra: Vec<&String> = offered.difference(&read).collect();
     assert!(extra.is_empty(), "offered but not read: {extra:?}");
 }

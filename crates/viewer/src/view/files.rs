@@ -14,8 +14,8 @@ const NO_DIALOG: Duration = Duration::from_millis(400);
 /// What the dialog thread sends back: the chosen file (None: cancelled or no dialog) and how long it was open.
 pub type DialogResult = (Option<PathBuf>, Duration);
 
-/// The extensions the loaders read.
-pub const MODEL_EXTENSIONS: &[&str] = &["glb", "gltf", "obj", "stl", "ply"];
+/// The extensions the loaders read (STEP and IGES through OpenCASCADE).
+pub const MODEL_EXTENSIONS: &[&str] = &hrtao_scene::SUPPORTED_EXTENSIONS;
 
 /// The file to open from the paths dropped on the window: the first with a model extension (so dropping a
 /// model with its .mtl or textures opens the model); None when nothing was dropped; an error naming the
@@ -72,7 +72,7 @@ impl Viewer {
             .spawn(move || {
                 let mut dialog = rfd::FileDialog::new()
                     .set_title("Open a model")
-                    .add_filter("Models (glTF, OBJ, STL, PLY)", MODEL_EXTENSIONS)
+                    .add_filter("Models (glTF, OBJ, STL, PLY, STEP, IGES)", MODEL_EXTENSIONS)
                     .add_filter("All files", &["*"]);
                 if let Some(dir) = start {
                     dialog = dialog.set_directory(dir);
@@ -142,6 +142,11 @@ mod tests {
             err.contains("part.mtl") && err.contains("not a model file"),
             "{err}"
         );
+        let step = dir.join("Part.STP");
+        std::fs::write(&step, "ISO-10303-21;").unwrap();
+        assert_eq!(dropped_model(&[mtl.clone(), step.clone()]), Ok(Some(step)));
+        let err = dropped_model(std::slice::from_ref(&mtl)).unwrap_err();
+        assert!(err.contains("step") && err.contains("igs"), "{err}");
         let folder = dir.join("folder.stl");
         std::fs::create_dir_all(&folder).unwrap();
         assert!(dropped_model(&[folder]).is_err());

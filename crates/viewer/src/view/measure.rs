@@ -41,6 +41,13 @@ impl Unit {
         }
     }
 
+    /// The unit of this many metres, if it is one of ours (a STEP/IGES file's declared unit).
+    pub fn from_metres(m: f64) -> Option<Unit> {
+        Unit::ALL
+            .into_iter()
+            .find(|u| (u.metres() / m - 1.0).abs() < 1e-6)
+    }
+
     /// What one file unit is, by the file's format: glTF and generated scenes are in metres; STL, PLY and
     /// OBJ carry no unit, and CAD tools mostly export them in millimetres.
     pub fn of_file(spec: &str) -> Unit {
@@ -334,6 +341,9 @@ mod tests {
         assert_eq!(Unit::of_file("part.STL"), Unit::Mm);
         assert_eq!(Unit::of_file("a.glb"), Unit::M);
         assert_eq!(Unit::of_file("gen:box"), Unit::M);
+        assert_eq!(Unit::from_metres(0.0254), Some(Unit::In));
+        assert_eq!(Unit::from_metres(1e-3), Some(Unit::Mm));
+        assert_eq!(Unit::from_metres(1609.344), None);
     }
 
     #[test]

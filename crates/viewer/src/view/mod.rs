@@ -738,6 +738,11 @@ impl Viewer {
         self.selection = tree::Selection::default();
         self.tree_view = tree::TreeView::default();
         self.measure = measure::Measure::for_spec(spec);
+        // STEP and IGES declare their length unit.
+        if let Some(u) = scene.unit_m.and_then(measure::Unit::from_metres) {
+            self.measure.file_unit = u;
+            self.measure.show_unit = u;
+        }
         if is_default {
             // The bundled gearbox is a CAD export in millimetres (its glTF says metres).
             self.measure.file_unit = measure::Unit::Mm;

@@ -1,0 +1,309 @@
+//! STEP and IGES through OpenCASCADE (OCCT), the B-rep kernel FreeCAD, KiCad, gmsh and F3D use.
+//!
+//! The binding is a small C++ bridge of our own (`src/bridge.cpp`, the only C++ in the project) compiled
+//! with `cc` and called through a plain C ABI (`src/bridge.h`). Why `cc` and not `cxx` or an existing crate:
+//! - the bridge needs four entry points with plain data (paths, float/index arrays, callbacks), so `cxx`'s
+//!   generated glue and its extra build-time crates buy nothing, and a C ABI keeps the C++ side a single
+//!   translation unit that compiles once against the heavy OCCT headers;
+//! - the crates that wrap OCCT (`opencascade-sys`) build OCCT from source (not an option on 2 cores) and do
+//!   not expose XCAF (assembly structure, names, colours), which is the point here;
+//! - the bridge catches every C++ exception and returns it as an error string, so no exception crosses
+//!   into Rust.
+//!
+//! The kernel is run only in a worker process (see the viewer's `occt-worker` subcommand): a crash or
+//! endless loop inside OCCT must not take the viewer down.
+//!
+//! [`read`] returns each unique part tessellated once ([`Part`]) and the product structure in pre-order
+//! ([`Node`]): every occurrence of a part is a node referring to the same part.
+
+use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::path::Path;
+
+mod ffi {
+    use super::*;
+
+    #[repr(C)]
+    pub struct Callbacks {
+        pub ctx: *mut c_void,
+        pub progress: extern "C" fn(*mut c_void, f64, *const c_char) -> c_int,
+        pub part: extern "C" fn(*mut c_void, i32, *const c_char),
+        pub primitive: extern "C" fn(*mut c_void, i32, *const f32, usize, *const u32, usize, *const f32, i32),
+        pub node: extern "C" fn(*mut c_void, i32, *const c_char, i32, *const f64, *const f32, i32) -> i32,
+    }
+
+    #[repr(C)]
+    pub struct Tessellation {
+        pub relative: f64,
+        pub absolute: f64,
+        pub angular: f64,
+    }
+
+    #[repr(C)]
+    #[derive(Default)]
+    pub struct Units {
+        pub model_m: f64,
+        pub file_m: f64,
+    }
+
+    extern "C" {
+        pub fn hr_read(
+            path: *const c_char,
+            format: i32,
+            tess: *const Tessellation,
+            cb: *const Callbacks,
+            units: *mut Units,
+            err: *mut c_char,
+            err_len: usize,
+        ) -> c_int;
+        pub fn hr_write_test(
+            path: *const c_char,
+            format: i32,
+            kind: i32,
+            count: i32,
+            err: *mut c_char,
+            err_len: usize,
+        ) -> c_int;
+    }
+}
+
+/// The exchange format of a file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Step,
+    Iges,
+}
+
+impl Format {
+    /// By extension (`.step`, `.stp`, `.iges`, `.igs`, any case).
+    pub fn of_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
+        match ext.as_str() {
+            "step" | "stp" => Some(Format::Step),
+            "iges" | "igs" => Some(Format::Iges),
+            _ => None,
+        }
+    }
+}
+
+/// How finely parts are tessellated (`BRepMesh_IncrementalMesh`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tessellation {
+    /// Linear deflection as a fraction of each part's bounding-box diagonal; 0 uses `absolute`.
+    pub relative: f64,
+    /// Linear deflection in millimetres, used when `relative` is 0 (F3D's way).
+    pub absolute: f64,
+    /// Angular deflection in radians.
+    pub angular: f64,
+}
+
+impl Default for Tessellation {
+    /// 0.1 % of each part's size and 10°: curved faces shade smoothly with geometric normals (the
+    /// renderer's crease angle is larger) and feature edges stay on real creases.
+    fn default() -> Self {
+        Tessellation {
+            relative: 1e-3,
+            absolute: 0.0,
+            angular: 10f64.to_radians(),
+        }
+    }
+}
+
+pub use hrtao_scene::cad::{CadModel as Model, CadNode as Node, CadPart as Part, CadPrimitive as Primitive};
+
+/// Why a read failed.
+#[derive(thiserror::Error, Debug)]
+pub enum Error {
+    #[error("{0}")]
+    Kernel(String),
+    #[error("stopped")]
+    Stopped,
+}
+
+struct Ctx<'a> {
+    model: Model,
+    progress: &'a mut dyn FnMut(&str, f64) -> bool,
+    bad: Option<String>,
+}
+
+fn cstr(p: *const c_char) -> String {
+    if p.is_null() {
+        return String::new();
+    }
+    // SAFETY: the bridge passes NUL-terminated strings valid for the call.
+    unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+}
+
+fn rgba(p: *const f32) -> Option<[f32; 4]> {
+    // SAFETY: non-null colour pointers point at 4 floats.
+    (!p.is_null()).then(|| unsafe { *(p as *const [f32; 4]) })
+}
+
+extern "C" fn on_progress(ctx: *mut c_void, f: f64, stage: *const c_char) -> c_int {
+    // SAFETY: ctx is the &mut Ctx passed to hr_read, alive for the call.
+    let ctx = unsafe { &mut *(ctx as *mut Ctx) };
+    let stage = cstr(stage);
+    c_int::from((ctx.progress)(&stage, f))
+}
+
+extern "C" fn on_part(ctx: *mut c_void, id: i32, name: *const c_char) {
+    // SAFETY: as above.
+    let ctx = unsafe { &mut *(ctx as *mut Ctx) };
+    if id as usize != ctx.model.parts.len() {
+        ctx.bad = Some(format!("part {id} out of order"));
+    }
+    ctx.model.parts.push(Part {
+        name: cstr(name),
+        primitives: Vec::new(),
+    });
+}
+
+#[allow(clippy::too_many_arguments)]
+extern "C" fn on_primitive(
+    ctx: *mut c_void,
+    part: i32,
+    pos: *const f32,
+    nverts: usize,
+    idx: *const u32,
+    nidx: usize,
+    color: *const f32,
+    face: i32,
+) {
+    // SAFETY: as above; the arrays hold nverts*3 floats and nidx indices.
+    let ctx = unsafe { &mut *(ctx as *mut Ctx) };
+    let positions = unsafe { std::slice::from_raw_parts(pos as *const [f32; 3], nverts) }.to_vec();
+    let indices = unsafe { std::slice::from_raw_parts(idx, nidx) }.to_vec();
+    match ctx.model.parts.get_mut(part as usize) {
+        Some(p) => p.primitives.push(Primitive {
+            positions,
+            indices,
+            color: rgba(color),
+            face_color: face != 0,
+        }),
+        None => ctx.bad = Some(format!("primitive of unknown part {part}")),
+    }
+}
+
+extern "C" fn on_node(
+    ctx: *mut c_void,
+    parent: i32,
+    name: *const c_char,
+    part: i32,
+    world: *const f64,
+    color: *const f32,
+    visible: i32,
+) -> i32 {
+    // SAFETY: as above; world points at 16 doubles.
+    let ctx = unsafe { &mut *(ctx as *mut Ctx) };
+    let world = unsafe { *(world as *const [f64; 16]) };
+    let id = ctx.model.nodes.len() as i32;
+    ctx.model.nodes.push(Node {
+        name: cstr(name),
+        parent: u32::try_from(parent).ok(),
+        part: u32::try_from(part).ok(),
+        world,
+        color: rgba(color),
+        visible: visible != 0,
+    });
+    id
+}
+
+fn c_path(path: &Path) -> Result<CString, Error> {
+    use std::os::unix::ffi::OsStrExt;
+    CString::new(path.as_os_str().as_bytes())
+        .map_err(|_| Error::Kernel(format!("{}: a path with a NUL byte", path.display())))
+}
+
+/// Reads a STEP or IGES file, tessellating each unique part once. `progress(stage, fraction)` returning
+/// `true` stops the kernel (OCCT's user break) with [`Error::Stopped`].
+pub fn read(
+    path: &Path,
+    format: Format,
+    tess: &Tessellation,
+    progress: &mut dyn FnMut(&str, f64) -> bool,
+) -> Result<Model, Error> {
+    let cpath = c_path(path)?;
+    let mut ctx = Ctx {
+        model: Model::default(),
+        progress,
+        bad: None,
+    };
+    let cb = ffi::Callbacks {
+        ctx: &mut ctx as *mut Ctx as *mut c_void,
+        progress: on_progress,
+        part: on_part,
+        primitive: on_primitive,
+        node: on_node,
+    };
+    let t = ffi::Tessellation {
+        relative: tess.relative,
+        absolute: tess.absolute,
+        angular: tess.angular,
+    };
+    let mut units = ffi::Units::default();
+    let mut err = vec![0 as c_char; 2048];
+    // SAFETY: every pointer is valid for the call; the callbacks only touch ctx.
+    let rc = unsafe {
+        ffi::hr_read(
+            cpath.as_ptr(),
+            matches!(format, Format::Iges) as i32,
+            &t,
+            &cb,
+            &mut units,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    match rc {
+        0 => {}
+        2 => return Err(Error::Stopped),
+        _ => return Err(Error::Kernel(cstr(err.as_ptr()))),
+    }
+    if let Some(bad) = ctx.bad {
+        return Err(Error::Kernel(bad));
+    }
+    let mut model = ctx.model;
+    model.model_unit_m = units.model_m;
+    model.file_unit_m = (units.file_m > 0.0 && units.file_m.is_finite()).then_some(units.file_m);
+    Ok(model)
+}
+
+/// Small models written by OCCT itself, for tests.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TestModel {
+    /// Three boxes as separate free shapes.
+    Boxes,
+    /// One bolt shape placed `n` times on a plate, in one assembly.
+    BoltPattern(u32),
+    /// Part, face and occurrence colours, and a hidden occurrence.
+    Coloured,
+    /// `n` separate box solids in one shape.
+    ManySolids(u32),
+}
+
+/// Writes a [`TestModel`] as STEP or IGES (tests only).
+pub fn write_test_model(path: &Path, format: Format, model: TestModel) -> Result<(), Error> {
+    let cpath = c_path(path)?;
+    let (kind, count) = match model {
+        TestModel::Boxes => (0, 0),
+        TestModel::BoltPattern(n) => (1, n),
+        TestModel::Coloured => (2, 0),
+        TestModel::ManySolids(n) => (3, n),
+    };
+    let mut err = vec![0 as c_char; 2048];
+    // SAFETY: valid pointers for the call.
+    let rc = unsafe {
+        ffi::hr_write_test(
+            cpath.as_ptr(),
+            matches!(format, Format::Iges) as i32,
+            kind,
+            count.min(i32::MAX as u32) as i32,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(Error::Kernel(cstr(err.as_ptr())))
+    }
+}

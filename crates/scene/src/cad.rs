@@ -1,0 +1,380 @@
+//! What a CAD kernel hands back for a STEP or IGES file (unique parts tessellated once, the product structure as
+//! nodes, units), and the framing that carries it from the kernel's worker process to the loader.
+//!
+//! The worker writes frames to its stdout; each frame is a tag byte, a little-endian `u64` payload length and the
+//! payload: `P` progress (stage, fraction), `M` the model, `E` an error message. The reader checks every count
+//! against the bytes the frame holds before allocating, so a truncated or corrupt stream is an error, never a
+//! huge allocation.
+
+use std::io::{Read, Write};
+
+/// Most entities a STEP/IGES file may have: the kernel keeps every entity in memory, and 2 million take about
+/// 2 GiB.
+pub const MAX_CAD_ENTITIES: u64 = 2_000_000;
+/// Memory the kernel takes per entity of the file, as estimated for the memory limit (a B-rep entity read and
+/// transferred by OpenCASCADE takes about 1 KiB).
+pub const CAD_ENTITY_BYTES: u64 = 1024;
+
+/// Triangles of one colour of a part, in the part's coordinates (the model unit).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CadPrimitive {
+    pub positions: Vec<[f32; 3]>,
+    pub indices: Vec<u32>,
+    /// Linear RGBA, `None` without colour.
+    pub color: Option<[f32; 4]>,
+    /// The colour was set on the part's faces: it wins over an occurrence's colour.
+    pub face_color: bool,
+}
+
+/// A unique part (one shape definition), tessellated once.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CadPart {
+    pub name: String,
+    pub primitives: Vec<CadPrimitive>,
+}
+
+/// A node of the product structure, in pre-order (a parent comes before its children).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CadNode {
+    pub name: String,
+    pub parent: Option<u32>,
+    /// The part this occurrence places; `None` for an assembly (or a part without triangles).
+    pub part: Option<u32>,
+    /// Column-major placement in the file's coordinates (model unit).
+    pub world: [f64; 16],
+    /// The nearest colour set on this occurrence or an enclosing one.
+    pub color: Option<[f32; 4]>,
+    pub visible: bool,
+}
+
+/// Parts, nodes and units of a CAD file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CadModel {
+    pub parts: Vec<CadPart>,
+    pub nodes: Vec<CadNode>,
+    /// Metres per unit of the coordinates above.
+    pub model_unit_m: f64,
+    /// Metres per unit the file declares, `None` if it declares none.
+    pub file_unit_m: Option<f64>,
+}
+
+/// One frame of the worker's stream.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Frame {
+    Progress { stage: String, fraction: f64 },
+    Model(CadModel),
+    Error(String),
+}
+
+/// Writes a progress frame.
+pub fn write_progress(w: &mut impl Write, stage: &str, fraction: f64) -> std::io::Result<()> {
+    let mut p = Vec::new();
+    put_str(&mut p, stage);
+    p.extend_from_slice(&fraction.to_le_bytes());
+    frame(w, b'P', &p)
+}
+
+/// Writes an error frame.
+pub fn write_error(w: &mut impl Write, message: &str) -> std::io::Result<()> {
+    let mut p = Vec::new();
+    put_str(&mut p, message);
+    frame(w, b'E', &p)
+}
+
+/// Writes the model frame.
+pub fn write_model(w: &mut impl Write, m: &CadModel) -> std::io::Result<()> {
+    let mut p = Vec::new();
+    p.extend_from_slice(&m.model_unit_m.to_le_bytes());
+    p.extend_from_slice(&m.file_unit_m.unwrap_or(0.0).to_le_bytes());
+    p.extend_from_slice(&(m.parts.len() as u64).to_le_bytes());
+    for part in &m.parts {
+        put_str(&mut p, &part.name);
+        p.extend_from_slice(&(part.primitives.len() as u64).to_le_bytes());
+        for q in &part.primitives {
+            put_color(&mut p, q.color);
+            p.push(q.face_color as u8);
+            p.extend_from_slice(&(q.positions.len() as u64).to_le_bytes());
+            for v in &q.positions {
+                for c in v {
+                    p.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+            p.extend_from_slice(&(q.indices.len() as u64).to_le_bytes());
+            for i in &q.indices {
+                p.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+    }
+    p.extend_from_slice(&(m.nodes.len() as u64).to_le_bytes());
+    for n in &m.nodes {
+        put_str(&mut p, &n.name);
+        p.extend_from_slice(&n.parent.map_or(u64::MAX, u64::from).to_le_bytes());
+        p.extend_from_slice(&n.part.map_or(u64::MAX, u64::from).to_le_bytes());
+        for v in &n.world {
+            p.extend_from_slice(&v.to_le_bytes());
+        }
+        put_color(&mut p, n.color);
+        p.push(n.visible as u8);
+    }
+    frame(w, b'M', &p)
+}
+
+fn frame(w: &mut impl Write, tag: u8, payload: &[u8]) -> std::io::Result<()> {
+    w.write_all(&[tag])?;
+    w.write_all(&(payload.len() as u64).to_le_bytes())?;
+    w.write_all(payload)?;
+    w.flush()
+}
+
+fn put_str(p: &mut Vec<u8>, s: &str) {
+    p.extend_from_slice(&(s.len() as u64).to_le_bytes());
+    p.extend_from_slice(s.as_bytes());
+}
+
+fn put_color(p: &mut Vec<u8>, c: Option<[f32; 4]>) {
+    p.push(c.is_some() as u8);
+    for v in c.unwrap_or_default() {
+        p.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// Reads the next frame: `Ok(None)` at a clean end of stream. `max_payload` bounds a frame's size (the memory
+/// limit of the load); `reserve` is told a frame's size before it is allocated and may refuse it.
+pub fn read_frame(
+    r: &mut impl Read,
+    reserve: &mut dyn FnMut(u64) -> Result<(), String>,
+) -> Result<Option<Frame>, String> {
+    let mut head = [0u8; 9];
+    let mut got = 0;
+    while got < head.len() {
+        let n = r
+            .read(&mut head[got..])
+            .map_err(|e| format!("reading the worker's output: {e}"))?;
+        if n == 0 {
+            if got == 0 {
+                return Ok(None);
+            }
+            return Err("the worker's output ended inside a frame header".into());
+        }
+        got += n;
+    }
+    let len = u64::from_le_bytes(head[1..9].try_into().unwrap());
+    if head[0] == b'M' {
+        reserve(len)?;
+    } else if len > 1 << 20 {
+        return Err(format!("a {len}-byte message frame from the worker"));
+    }
+    let mut payload = Vec::new();
+    let read = r
+        .take(len)
+        .read_to_end(&mut payload)
+        .map_err(|e| format!("reading the worker's output: {e}"))?;
+    if read as u64 != len {
+        return Err(format!(
+            "the worker's output ended after {read} of a {len}-byte frame"
+        ));
+    }
+    let mut c = Cursor { b: &payload, at: 0 };
+    let frame = match head[0] {
+        b'P' => Frame::Progress {
+            stage: c.str()?,
+            fraction: c.f64()?,
+        },
+        b'E' => Frame::Error(c.str()?),
+        b'M' => Frame::Model(c.model()?),
+        t => return Err(format!("unknown frame tag {t:#04x} from the worker")),
+    };
+    Ok(Some(frame))
+}
+
+struct Cursor<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl Cursor<'_> {
+    fn take(&mut self, n: u64) -> Result<&[u8], String> {
+        let left = (self.b.len() - self.at) as u64;
+        if n > left {
+            return Err(format!(
+                "a model frame cut short (needs {n} more bytes, has {left})"
+            ));
+        }
+        let s = &self.b[self.at..self.at + n as usize];
+        self.at += n as usize;
+        Ok(s)
+    }
+    fn u8(&mut self) -> Result<u8, String> {
+        Ok(self.take(1)?[0])
+    }
+    fn u64(&mut self) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    fn f64(&mut self) -> Result<f64, String> {
+        Ok(f64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    fn f32(&mut self) -> Result<f32, String> {
+        Ok(f32::from_le_bytes(self.take(4)?.try_into().unwrap()))
+    }
+    /// A count of items of `size` bytes each, checked against what is left.
+    fn count(&mut self, size: u64) -> Result<usize, String> {
+        let n = self.u64()?;
+        let left = (self.b.len() - self.at) as u64;
+        if n.saturating_mul(size) > left {
+            return Err(format!(
+                "a model frame declares {n} items, more than its {left} bytes hold"
+            ));
+        }
+        Ok(n as usize)
+    }
+    fn str(&mut self) -> Result<String, String> {
+        let n = self.count(1)?;
+        Ok(String::from_utf8_lossy(self.take(n as u64)?).into_owned())
+    }
+    fn opt_index(&mut self) -> Result<Option<u32>, String> {
+        let v = self.u64()?;
+        Ok(if v == u64::MAX {
+            None
+        } else {
+            Some(u32::try_from(v).map_err(|_| format!("index {v}"))?)
+        })
+    }
+    fn color(&mut self) -> Result<Option<[f32; 4]>, String> {
+        let some = self.u8()? != 0;
+        let c = [self.f32()?, self.f32()?, self.f32()?, self.f32()?];
+        Ok(some.then_some(c))
+    }
+    fn model(&mut self) -> Result<CadModel, String> {
+        let model_unit_m = self.f64()?;
+        let file_unit_m = Some(self.f64()?).filter(|&u| u > 0.0 && u.is_finite());
+        let nparts = self.count(16)?;
+        let mut parts = Vec::with_capacity(nparts);
+        for _ in 0..nparts {
+            let name = self.str()?;
+            let nprims = self.count(34)?;
+            let mut primitives = Vec::with_capacity(nprims);
+            for _ in 0..nprims {
+                let color = self.color()?;
+                let face_color = self.u8()? != 0;
+                let nv = self.count(12)?;
+                let mut positions = Vec::with_capacity(nv);
+                for _ in 0..nv {
+                    positions.push([self.f32()?, self.f32()?, self.f32()?]);
+                }
+                let ni = self.count(4)?;
+                let mut indices = Vec::with_capacity(ni);
+                for _ in 0..ni {
+                    indices.push(u32::from_le_bytes(self.take(4)?.try_into().unwrap()));
+                }
+                primitives.push(CadPrimitive {
+                    positions,
+                    indices,
+                    color,
+                    face_color,
+                });
+            }
+            parts.push(CadPart { name, primitives });
+        }
+        let nnodes = self.count(8 + 16 + 128 + 17 + 1)?;
+        let mut nodes = Vec::with_capacity(nnodes);
+        for _ in 0..nnodes {
+            let name = self.str()?;
+            let parent = self.opt_index()?;
+            let part = self.opt_index()?;
+            let mut world = [0.0; 16];
+            for v in &mut world {
+                *v = self.f64()?;
+            }
+            let color = self.color()?;
+            let visible = self.u8()? != 0;
+            nodes.push(CadNode {
+                name,
+                parent,
+                part,
+                world,
+                color,
+                visible,
+            });
+        }
+        if self.at != self.b.len() {
+            return Err(format!("{} bytes after the model", self.b.len() - self.at));
+        }
+        Ok(CadModel {
+            parts,
+            nodes,
+            model_unit_m,
+            file_unit_m,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> CadModel {
+        CadModel {
+            parts: vec![CadPart {
+                name: "bolt".into(),
+                primitives: vec![CadPrimitive {
+                    positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                    indices: vec![0, 1, 2],
+                    color: Some([1.0, 0.0, 0.0, 1.0]),
+                    face_color: true,
+                }],
+            }],
+            nodes: vec![CadNode {
+                name: "bolt1".into(),
+                parent: None,
+                part: Some(0),
+                world: glam::DMat4::from_translation(glam::DVec3::new(5.0, 6.0, 7.0)).to_cols_array(),
+                color: None,
+                visible: false,
+            }],
+            model_unit_m: 1e-3,
+            file_unit_m: Some(0.0254),
+        }
+    }
+
+    #[test]
+    fn frames_round_trip() {
+        let mut buf = Vec::new();
+        write_progress(&mut buf, "tessellate", 0.5).unwrap();
+        write_model(&mut buf, &sample()).unwrap();
+        write_error(&mut buf, "boom").unwrap();
+        let mut r = &buf[..];
+        let mut ok = |_| Ok(());
+        assert_eq!(
+            read_frame(&mut r, &mut ok).unwrap(),
+            Some(Frame::Progress {
+                stage: "tessellate".into(),
+                fraction: 0.5
+            })
+        );
+        assert_eq!(read_frame(&mut r, &mut ok).unwrap(), Some(Frame::Model(sample())));
+        assert_eq!(
+            read_frame(&mut r, &mut ok).unwrap(),
+            Some(Frame::Error("boom".into()))
+        );
+        assert_eq!(read_frame(&mut r, &mut ok).unwrap(), None);
+    }
+
+    #[test]
+    fn every_truncation_is_an_error() {
+        let mut buf = Vec::new();
+        write_model(&mut buf, &sample()).unwrap();
+        for cut in 1..buf.len() {
+            let mut r = &buf[..cut];
+            assert!(read_frame(&mut r, &mut |_| Ok(())).is_err(), "cut at {cut}");
+        }
+        // A count that claims more than the frame holds is refused before allocating.
+        let mut bad = buf.clone();
+        bad[9 + 16..9 + 24].copy_from_slice(&u64::MAX.to_le_bytes());
+        assert!(read_frame(&mut &bad[..], &mut |_| Ok(()))
+            .unwrap_err()
+            .contains("items"));
+        // The reserve callback sees the size first.
+        let e = read_frame(&mut &buf[..], &mut |n| Err(format!("{n} over"))).unwrap_err();
+        assert!(e.ends_with("over"), "{e}");
+    }
+}

@@ -1,0 +1,402 @@
+//! STEP and IGES loading: the file is checked here (guard, format, entity count), then read and tessellated by
+//! OpenCASCADE in a worker process of hrtao's own binary (`hrtao occt-worker`, the viewer crate's
+//! `occt_worker.rs`), which streams progress and hands back unique parts and the product structure
+//! ([`crate::cad`]). A crash, endless loop or runaway allocation inside the kernel ends the worker, not the
+//! viewer: the worker runs with an address-space and a CPU-time limit, a higher OOM score than the viewer, and is
+//! killed on Cancel or when the viewer dies.
+//!
+//! The scene keeps the file's own length unit: OCCT hands back millimetres, which are scaled to the unit the file
+//! declares (inches stay inches), and [`Scene::unit_m`] says what that unit is.
+//!
+//! Colours: a colour set on a part's faces wins; else a colour set on the occurrence (or the nearest enclosing
+//! assembly occurrence); else the part's own colour; else [`DEFAULT_BASE_COLOR`]. An occurrence with its own
+//! colour gets its own copy of the part's mesh, recoloured, shared by the occurrences of that colour.
+
+use std::collections::HashMap;
+use std::io::BufReader;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use glam::{DMat4, DVec3, Vec3};
+
+use crate::aabb::Aabb;
+use crate::cad::{read_frame, CadModel, Frame, CAD_ENTITY_BYTES, MAX_CAD_ENTITIES};
+use crate::error::SceneError;
+use crate::guard::{read_model, CadFormat, CadOptions, LoadOptions};
+use crate::scene::{
+    recentre_origin, relative_transform, Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR,
+};
+use crate::tree::NodeTree;
+
+/// Address space the worker may use beyond the scene memory limit (OCCT's libraries and heap arenas).
+const WORKER_OVERHEAD: u64 = 1 << 30;
+
+pub fn load_cad(
+    path: &Path,
+    format: CadFormat,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
+    let started = Instant::now();
+    let err = |message: String| SceneError::Cad {
+        format: format.name(),
+        path: path.to_path_buf(),
+        message,
+    };
+    let (bytes, mut budget) = read_model(path, opts, progress)?;
+    let entities = match format {
+        CadFormat::Step => step_entities(&bytes).map_err(err)?,
+        CadFormat::Iges => iges_entities(&bytes).map_err(err)?,
+    };
+    let cap = MAX_CAD_ENTITIES.min(opts.max_memory / CAD_ENTITY_BYTES);
+    if entities > cap {
+        return Err(SceneError::TooLarge(format!(
+            "{}: {entities} entities, over the cap of {cap} (at most {MAX_CAD_ENTITIES}, and {} bytes of \
+             kernel memory each within the scene memory limit, HRTAO_MAX_SCENE_MB)",
+            path.display(),
+            CAD_ENTITY_BYTES
+        )));
+    }
+    budget.reserve(entities * CAD_ENTITY_BYTES, "the kernel's entities")?;
+    drop(bytes);
+    opts.check_cancel(path)?;
+    let model = run_worker(path, format, opts, progress).map_err(|e| match e {
+        WorkerError::Cancelled => SceneError::Cancelled(path.display().to_string()),
+        WorkerError::Failed(m) => err(m),
+    })?;
+    let read_s = started.elapsed().as_secs_f64();
+    let scene = to_scene(path, model).map_err(err)?;
+    let instanced: u64 = scene.instanced_triangle_count();
+    log::info!(
+        "{}: {} unique meshes, {} instances, {} unique / {instanced} instanced triangles; read and tessellated \
+         in {read_s:.2} s (OpenCASCADE worker)",
+        path.display(),
+        scene.meshes.len(),
+        scene.instances.len(),
+        scene.unique_triangle_count(),
+    );
+    Ok(scene)
+}
+
+/// Entities in a STEP file's DATA sections (an upper bound: statements ending in `;`), or why it is no STEP file.
+fn step_entities(bytes: &[u8]) -> Result<u64, String> {
+    let start = bytes.trim_ascii_start();
+    if !start.starts_with(b"ISO-10303-21") {
+        return Err(
+            "not a STEP file: it does not start with ISO-10303-21 (the STEP physical file header)".into(),
+        );
+    }
+    let Some(data) = find(bytes, b"DATA;").or_else(|| find(bytes, b"DATA(")) else {
+        return Err("no DATA section: the file has a header but no entities".into());
+    };
+    let data = data + 5;
+    let n = bytes[data..].iter().filter(|&&b| b == b';').count() as u64;
+    if n <= 2 || find(&bytes[data..], b"#").is_none() {
+        return Err("the DATA section holds no entity".into());
+    }
+    Ok(n)
+}
+
+/// Entities of an IGES file (two directory-entry lines each), or why it is no IGES file.
+fn iges_entities(bytes: &[u8]) -> Result<u64, String> {
+    let mut sections = [0u64; 5];
+    for line in bytes.split(|&b| b == b'\n') {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        if line.len() < 73 {
+            continue;
+        }
+        if let Some(k) = b"SGDPT".iter().position(|&c| c == line[72]) {
+            sections[k] += 1;
+        }
+    }
+    if sections[1] == 0 || sections[2] == 0 {
+        return Err("not an IGES file: no global (G) and directory (D) sections in 80-column lines".into());
+    }
+    Ok(sections[2] / 2)
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+enum WorkerError {
+    Cancelled,
+    Failed(String),
+}
+
+/// Runs `WORKER occt-worker FORMAT RELATIVE ABSOLUTE ANGULAR_DEG PATH` and reads its frames until the model.
+fn run_worker(
+    path: &Path,
+    format: CadFormat,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<CadModel, WorkerError> {
+    let cad: &CadOptions = &opts.cad;
+    let Some(worker) = cad.worker.clone() else {
+        return Err(WorkerError::Failed(
+            "no OpenCASCADE worker to run: the loader needs the path of the hrtao binary (LoadOptions::cad.worker)"
+                .into(),
+        ));
+    };
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let address_space = opts.max_memory.saturating_add(WORKER_OVERHEAD);
+    let cpu_seconds = cad.cpu_seconds;
+    let mut cmd = Command::new(&worker);
+    cmd.arg("occt-worker")
+        .arg(format.name().to_ascii_lowercase())
+        .arg(cad.tessellation.relative.to_string())
+        .arg(cad.tessellation.absolute.to_string())
+        .arg(cad.tessellation.angular_deg.to_string())
+        .arg(&abs)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit());
+    // SAFETY: only async-signal-safe system calls between fork and exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            let limit = |res, soft: u64, hard: u64| {
+                let r = libc::rlimit {
+                    rlim_cur: soft as libc::rlim_t,
+                    rlim_max: hard as libc::rlim_t,
+                };
+                libc::setrlimit(res, &r)
+            };
+            limit(libc::RLIMIT_AS, address_space, address_space);
+            limit(libc::RLIMIT_CPU, cpu_seconds, cpu_seconds + 5);
+            // The worker dies with the process that started it.
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+            Ok(())
+        });
+    }
+    let mut child = cmd.spawn().map_err(|e| {
+        WorkerError::Failed(format!(
+            "cannot start the OpenCASCADE worker {}: {e}",
+            worker.display()
+        ))
+    })?;
+    let stdout = child.stdout.take().expect("piped stdout");
+    let (tx, rx) = mpsc::channel();
+    let max_payload = opts.max_memory;
+    let reader = std::thread::spawn(move || {
+        let mut r = BufReader::new(stdout);
+        let mut reserve = |n: u64| {
+            if n > max_payload {
+                Err(format!(
+                    "the tessellation takes {:.1} MiB, over the scene memory limit of {:.1} MiB \
+                     (HRTAO_MAX_SCENE_MB; a coarser tessellation takes less)",
+                    n as f64 / (1 << 20) as f64,
+                    max_payload as f64 / (1 << 20) as f64
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        loop {
+            let f = read_frame(&mut r, &mut reserve);
+            let end = !matches!(f, Ok(Some(Frame::Progress { .. })));
+            if tx.send(f).is_err() || end {
+                break;
+            }
+        }
+    });
+    let finish = |child: &mut std::process::Child, kill: bool| {
+        if kill {
+            let _ = child.kill();
+        }
+        child.wait()
+    };
+    let result = loop {
+        if opts.cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            let _ = finish(&mut child, true);
+            break Err(WorkerError::Cancelled);
+        }
+        match rx.recv_timeout(Duration::from_millis(50)) {
+            Err(mpsc::RecvTimeoutError::Timeout) => continue,
+            Ok(Ok(Some(Frame::Progress { stage, fraction }))) => progress(LoadProgress {
+                stage: match stage.as_str() {
+                    "transfer" => "transfer",
+                    "tessellate" => "tessellate",
+                    _ => "kernel",
+                },
+                done: (fraction.clamp(0.0, 1.0) * 1000.0) as u64,
+                total: 1000,
+            }),
+            Ok(Ok(Some(Frame::Model(m)))) => {
+                let _ = finish(&mut child, false);
+                break Ok(m);
+            }
+            Ok(Ok(Some(Frame::Error(m)))) => {
+                let _ = finish(&mut child, false);
+                break Err(WorkerError::Failed(m));
+            }
+            Ok(Err(e)) => {
+                let status = finish(&mut child, true);
+                break Err(WorkerError::Failed(died(status, cpu_seconds).unwrap_or(e)));
+            }
+            Ok(Ok(None)) | Err(mpsc::RecvTimeoutError::Disconnected) => {
+                let status = finish(&mut child, false);
+                break Err(WorkerError::Failed(died(status, cpu_seconds).unwrap_or_else(
+                    || "the OpenCASCADE worker ended without a model".into(),
+                )));
+            }
+        }
+    };
+    let _ = reader.join();
+    result
+}
+
+/// Why the worker ended, if it did not end normally.
+fn died(status: std::io::Result<std::process::ExitStatus>, cpu_seconds: u64) -> Option<String> {
+    let status = status.ok()?;
+    if let Some(sig) = status.signal() {
+        let why = match sig {
+            libc::SIGKILL => {
+                "killed (SIGKILL: by the user, Cancel, or the system being out of memory)".to_string()
+            }
+            libc::SIGXCPU => format!("stopped at its CPU time limit of {cpu_seconds} s (SIGXCPU)"),
+            libc::SIGSEGV => "crashed inside OpenCASCADE (SIGSEGV)".to_string(),
+            libc::SIGABRT => "aborted inside OpenCASCADE, probably out of memory (SIGABRT)".to_string(),
+            s => format!("ended by signal {s}"),
+        };
+        return Some(format!(
+            "the OpenCASCADE worker was {why} before handing back the model"
+        ));
+    }
+    (!status.success()).then(|| format!("the OpenCASCADE worker failed ({status})"))
+}
+
+/// Builds the scene: one mesh per part (and per recoloured occurrence), one instance per placed occurrence, the
+/// tree from the product structure, coordinates in the file's unit and re-centred when far from the origin.
+fn to_scene(path: &Path, model: CadModel) -> Result<Scene, String> {
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut scene = Scene::new(name.clone());
+    let model_m = if model.model_unit_m > 0.0 && model.model_unit_m.is_finite() {
+        model.model_unit_m
+    } else {
+        1e-3
+    };
+    let unit_m = model.file_unit_m.unwrap_or(model_m);
+    let scale = model_m / unit_m;
+    scene.unit_m = Some(unit_m);
+    let part_mesh = |i: usize, p: &crate::cad::CadPart, color: Option<[f32; 4]>| Mesh {
+        name: if p.name.is_empty() {
+            format!("part {}", i + 1)
+        } else {
+            p.name.clone()
+        },
+        primitives: p
+            .primitives
+            .iter()
+            .map(|q| Primitive {
+                positions: q
+                    .positions
+                    .iter()
+                    .map(|v| (Vec3::from(*v) * scale as f32).to_array())
+                    .collect(),
+                indices: q.indices.clone(),
+                base_color: match (q.face_color, color, q.color) {
+                    (true, _, Some(c)) => c,
+                    (_, Some(c), _) => c,
+                    (_, None, Some(c)) => c,
+                    _ => DEFAULT_BASE_COLOR,
+                },
+                double_sided: true,
+            })
+            .collect(),
+    };
+    for (i, p) in model.parts.iter().enumerate() {
+        scene.meshes.push(part_mesh(i, p, None));
+    }
+    let bounds: Vec<Aabb> = scene.meshes.iter().map(Mesh::local_bounds).collect();
+    // World placements in f64, in the file's unit.
+    let worlds: Vec<DMat4> = model
+        .nodes
+        .iter()
+        .map(|n| {
+            let mut m = DMat4::from_cols_array(&n.world);
+            m.w_axis = (m.w_axis.truncate() * scale).extend(1.0);
+            m
+        })
+        .collect();
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for (n, w) in model.nodes.iter().zip(&worlds) {
+        if let Some(b) = n
+            .part
+            .and_then(|p| bounds.get(p as usize))
+            .filter(|b| !b.is_empty())
+        {
+            let c = w.transform_point3(((b.min + b.max) * 0.5).as_dvec3());
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+    }
+    let origin = recentre_origin((lo + hi) * 0.5);
+    scene.origin = origin.to_array();
+    let mut recoloured: HashMap<(u32, [u32; 4]), u32> = HashMap::new();
+    let mut tree = NodeTree::default();
+    for (id, (n, w)) in model.nodes.iter().zip(&worlds).enumerate() {
+        if n.parent.is_some_and(|p| p as usize >= id) {
+            return Err(format!("node {id} comes before its parent"));
+        }
+        let label = if n.name.is_empty() {
+            format!("node {}", id + 1)
+        } else {
+            n.name.clone()
+        };
+        let node = tree.add(label.clone(), n.parent);
+        let Some(part) = n.part else { continue };
+        let Some(p) = model.parts.get(part as usize) else {
+            return Err(format!("node {id} places unknown part {part}"));
+        };
+        let mesh = match n.color {
+            Some(c) if p.primitives.iter().any(|q| !q.face_color) => {
+                let key = (part, c.map(f32::to_bits));
+                *recoloured.entry(key).or_insert_with(|| {
+                    scene.meshes.push(part_mesh(part as usize, p, Some(c)));
+                    scene.meshes.len() as u32 - 1
+                })
+            }
+            _ => part,
+        };
+        tree.nodes[node as usize]
+            .instances
+            .push(scene.instances.len() as u32);
+        scene.instances.push(Instance {
+            mesh,
+            transform: relative_transform(w, origin),
+            name: label,
+            visible: n.visible,
+        });
+    }
+    scene.tree = tree;
+    Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_entity_scan() {
+        assert!(step_entities(b"garbage").unwrap_err().contains("ISO-10303-21"));
+        let header = b"ISO-10303-21;\nHEADER;\nFILE_NAME('x');\nENDSEC;\nEND-ISO-10303-21;\n";
+        assert!(step_entities(header).unwrap_err().contains("no DATA"));
+        let ok = b"ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=A();\n#2=B(#1);\n#3=C();\nENDSEC;\nEND-ISO-10303-21;\n";
+        assert_eq!(step_entities(ok).unwrap(), 5);
+    }
+
+    #[test]
+    fn iges_entity_scan() {
+        let line = |c: char| format!("{:72}{c}{:>7}\n", "x", 1);
+        let f = [line('S'), line('G'), line('D'), line('D'), line('P'), line('T')].concat();
+        assert_eq!(iges_entities(f.as_bytes()).unwrap(), 1);
+        assert!(iges_entities(b"hello").unwrap_err().contains("not an IGES"));
+    }
+}
