@@ -207,6 +207,16 @@ extern "C" fn on_node(
     id
 }
 
+/// OCCT's data exchange keeps process-wide state (the `Interface_Static` parameters its STEP and IGES readers and
+/// writers set and read, the shared XCAF application), so two calls at once on two threads can crash the
+/// process: every call into the kernel holds this lock. The viewer runs one read per worker process anyway.
+static KERNEL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn kernel_lock() -> std::sync::MutexGuard<'static, ()> {
+    // A panic in a callback leaves nothing half-written on our side: the lock stays usable.
+    KERNEL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 fn c_path(path: &Path) -> Result<CString, Error> {
     use std::os::unix::ffi::OsStrExt;
     CString::new(path.as_os_str().as_bytes())
@@ -241,6 +251,7 @@ pub fn read(
     };
     let mut units = ffi::Units::default();
     let mut err = vec![0 as c_char; 2048];
+    let _kernel = kernel_lock();
     // SAFETY: every pointer is valid for the call; the callbacks only touch ctx.
     let rc = unsafe {
         ffi::hr_read(
@@ -290,6 +301,7 @@ pub fn write_test_model(path: &Path, format: Format, model: TestModel) -> Result
         TestModel::ManySolids(n) => (3, n),
     };
     let mut err = vec![0 as c_char; 2048];
+    let _kernel = kernel_lock();
     // SAFETY: valid pointers for the call.
     let rc = unsafe {
         ffi::hr_write_test(

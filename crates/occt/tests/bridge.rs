@@ -118,3 +118,58 @@ fn garbage_is_an_error_not_a_crash() {
     assert!(e.to_string().contains("STEP"), "{e}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Reads and writes on several threads at once (OCCT's data exchange keeps process-wide state): each thread gets
+/// the same model back as a read on one thread. Without the kernel lock in `read`/`write_test_model` the test
+/// binary aborts inside OCCT (SIGABRT, 4 runs of 4; the suite's other tests met it as a SIGSEGV).
+#[test]
+fn concurrent_reads_and_writes_each_get_their_own_model() {
+    let case = |t: u32, round: u32| {
+        let format = if (t + round) % 2 == 0 {
+            Format::Step
+        } else {
+            Format::Iges
+        };
+        (format, 2 + t)
+    };
+    let ext = |f: Format| if f == Format::Step { "step" } else { "igs" };
+    // What one thread reads, per case: (occurrences placed, their triangles).
+    let seen = |m: &Model| {
+        (
+            m.nodes.iter().filter(|n| n.part.is_some()).count(),
+            placed_triangles(m),
+        )
+    };
+    let expected: std::collections::HashMap<(bool, u32), (usize, usize)> = (0..4u32)
+        .flat_map(|t| (0..3).map(move |r| case(t, r)))
+        .map(|(f, n)| {
+            let m = roundtrip(&format!("seq-{n}.{}", ext(f)), f, TestModel::BoltPattern(n));
+            ((f == Format::Step, n), seen(&m))
+        })
+        .collect();
+    let expected = std::sync::Arc::new(expected);
+    let threads: Vec<_> = (0..4u32)
+        .map(|t| {
+            let expected = expected.clone();
+            std::thread::spawn(move || {
+                for round in 0..3 {
+                    let (f, n) = case(t, round);
+                    let m = roundtrip(
+                        &format!("race-{t}-{round}.{}", ext(f)),
+                        f,
+                        TestModel::BoltPattern(n),
+                    );
+                    assert_eq!(
+                        seen(&m),
+                        expected[&(f == Format::Step, n)],
+                        "thread {t} round {round} ({})",
+                        ext(f)
+                    );
+                }
+            })
+        })
+        .collect();
+    for t in threads {
+        t.join().unwrap();
+    }
+}
