@@ -125,7 +125,7 @@ fn garbage_is_an_error_not_a_crash() {
 #[test]
 fn concurrent_reads_and_writes_each_get_their_own_model() {
     let case = |t: u32, round: u32| {
-        let format = if (t + round) % 2 == 0 {
+        let format = if (t + round).is_multiple_of(2) {
             Format::Step
         } else {
             Format::Iges
