@@ -7,6 +7,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::SceneGpu;
+use crate::barrier::{Event, Stage, Use};
 use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
@@ -15,7 +16,7 @@ use crate::gpu::{
     self, FilterGuide, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells,
     PixelRays,
 };
-use crate::pass::{Pass, PassSet, Recorder};
+use crate::pass::{Pass, PassSet, Recorder, Resource};
 use crate::raster::{Primary, Rasterizer};
 use crate::regions::RegionTable;
 use crate::settings::{AoSettings, Invalidates, Mode};
@@ -212,6 +213,8 @@ pub struct Renderer {
     pub primary: Primary,
     /// Created on the first rasterised frame.
     raster: Option<Rasterizer>,
+    /// The commands and barriers the last `record_frame` recorded.
+    last_events: Vec<Event>,
     /// Render this window of a larger image (large screenshots); None = the camera's whole image. Both primary
     /// visibilities draw tiles (the rasteriser as an off-axis frustum).
     pub tile: Option<Tile>,
@@ -281,6 +284,7 @@ impl Renderer {
             check_bounds: false,
             primary: Primary::default(),
             raster: None,
+            last_events: Vec::new(),
             tile: None,
         };
         gpu.run_commands(|cmd| unsafe {
@@ -720,22 +724,28 @@ impl Renderer {
                 }
             }
         }
-        rec.dispatch(Pass::Composite, w, h, [0; 4]);
-        // The frame's counters, once, for `finish_frame` (the dispatch's barrier made them visible).
+        // The frame's counters, once, for `finish_frame`: composite.comp counts nothing (its declaration
+        // writes no `Stats`), so the copy is recorded before it and shares its barrier.
         let bytes = std::mem::size_of::<FrameStats>() as u64;
-        unsafe {
-            self.gpu.device.cmd_copy_buffer(
+        let (stats, readback) = (self.stats.raw, self.stats_readback.raw);
+        let uses = vec![
+            Use::read(Resource::Stats, Stage::Transfer),
+            Use::write(Resource::StatsReadback, Stage::Transfer),
+        ];
+        rec.commands("statistics copy", None, uses, |d, cmd| unsafe {
+            d.cmd_copy_buffer(
                 cmd,
-                self.stats.raw,
-                self.stats_readback.raw,
+                stats,
+                readback,
                 &[vk::BufferCopy {
                     src_offset: 0,
                     dst_offset: 0,
                     size: bytes,
                 }],
             );
-        }
-        host_read_barrier(&self.gpu, cmd);
+        });
+        rec.dispatch(Pass::Composite, w, h, [0; 4]);
+        self.last_events = rec.finish();
         Ok(())
     }
 
@@ -1044,7 +1054,7 @@ impl Renderer {
         self.gpu.run_commands(|cmd| {
             let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
             rec.dispatch(Pass::HashTest, ROW, globals.height, push);
-            host_read_barrier(&self.gpu, cmd);
+            rec.finish();
         })?;
         buf.read(cases.len())
     }
@@ -1088,6 +1098,11 @@ impl Renderer {
     /// Descriptor writes of the TLAS binding so far (one per TLAS build a frame used).
     pub fn tlas_descriptor_writes(&self) -> u64 {
         self.passes.tlas_writes()
+    }
+
+    /// The dispatches, other commands and barriers the last recorded frame consists of, in order.
+    pub fn last_frame_events(&self) -> &[Event] {
+        &self.last_events
     }
 
     /// Frames rendered so far (the hash map's clock).
