@@ -29,7 +29,6 @@ pub enum Pass {
     Rtao,
     CellFinder,
     AoUpdate,
-    QueueArgs,
     Resolve,
     Filter,
     Residual,
@@ -39,13 +38,12 @@ pub enum Pass {
 }
 
 impl Pass {
-    pub const ALL: [Pass; 13] = [
+    pub const ALL: [Pass; 12] = [
         Pass::Clear,
         Pass::Primary,
         Pass::GbufferFromVis,
         Pass::Rtao,
         Pass::CellFinder,
-        Pass::QueueArgs,
         Pass::AoUpdate,
         Pass::Resolve,
         Pass::Filter,
@@ -63,7 +61,6 @@ impl Pass {
             Pass::GbufferFromVis => "gbuffer_from_vis",
             Pass::Rtao => "rtao",
             Pass::CellFinder => "cell_finder",
-            Pass::QueueArgs => "queue_args",
             Pass::AoUpdate => "ao_update",
             Pass::Resolve => "resolve",
             Pass::Filter => "filter",
@@ -81,7 +78,7 @@ impl Pass {
             Pass::Primary | Pass::GbufferFromVis => "primary visibility",
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
-            Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
+            Pass::AoUpdate => "ray-tracing update",
             Pass::Resolve | Pass::Residual | Pass::Detail => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",
@@ -112,7 +109,8 @@ pub enum Resource {
     RayQueue,
     /// The pixels the filter runs over.
     FilterQueue,
-    /// The indirect dispatch arguments queue_args.comp writes.
+    /// The indirect dispatch arguments the last work group of the cell finder and of the resolve writes
+    /// (queue_args.glsl).
     DispatchArgs,
     /// The frame's statistics counters (`FrameStats`, device memory).
     Stats,
@@ -217,12 +215,19 @@ impl Pass {
             Pass::Primary => &[Instances, Geometries],
             Pass::GbufferFromVis => &[Visibility, Geometries],
             Pass::Rtao => &[GBuffer, Stats],
-            Pass::CellFinder => &[GBuffer, PixelCells, Regions, HashCells, Stats],
-            Pass::QueueArgs => &[Stats],
+            Pass::CellFinder => &[GBuffer, PixelCells, Regions, HashCells, Stats, DispatchArgs],
             Pass::AoUpdate => &[
                 Stats, RayQueue, GBuffer, PixelCells, HashCells, FilterTmp, PixelRays,
             ],
-            Pass::Resolve => &[GBuffer, PixelCells, HashCells, PixelRays, Regions, Stats],
+            Pass::Resolve => &[
+                GBuffer,
+                PixelCells,
+                HashCells,
+                PixelRays,
+                Regions,
+                Stats,
+                DispatchArgs,
+            ],
             Pass::Filter => &[
                 Stats,
                 FilterQueue,
@@ -256,11 +261,10 @@ impl Pass {
     pub fn writes(self) -> &'static [Resource] {
         use Resource::*;
         match self {
-            Pass::Clear => &[Stats],
+            Pass::Clear => &[Stats, DispatchArgs],
             Pass::Primary | Pass::GbufferFromVis => &[GBuffer],
             Pass::Rtao => &[PixelRays, Stats],
-            Pass::CellFinder => &[HashCells, PixelCells, PixelRays, RayQueue, Stats],
-            Pass::QueueArgs => &[DispatchArgs],
+            Pass::CellFinder => &[HashCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
             Pass::AoUpdate => &[HashCells, FilterTmp, PixelRays, Stats],
             Pass::Resolve => &[
                 FilterGuide,
@@ -270,6 +274,7 @@ impl Pass {
                 FilterTmp,
                 FilterQueue,
                 Stats,
+                DispatchArgs,
             ],
             Pass::Filter => &[Ao, FilterTmp],
             Pass::Residual => &[Ao],
@@ -571,7 +576,7 @@ impl<'a> Recorder<'a> {
     }
 
     /// Dispatches `pass` with the group counts at word `offset` of `args` (the `DispatchArgs` buffer:
-    /// queue_args.comp writes them).
+    /// queue_args.glsl writes them).
     pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, offset: u32, push: [u32; 4]) {
         let mut uses = pass_uses(pass);
         uses.push(Use::read(Resource::DispatchArgs, Stage::Indirect));

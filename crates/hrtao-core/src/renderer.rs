@@ -172,7 +172,8 @@ pub struct Renderer {
     /// at the end of every frame.
     stats: Buffer,
     stats_readback: Buffer,
-    /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by queue_args.comp.
+    /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by the last work group of the cell finder and of the resolve
+    /// (queue_args.glsl).
     dispatch_args: Buffer,
     targets: Targets,
     hash: HashMapGpu,
@@ -684,13 +685,12 @@ impl Renderer {
             rec.dispatch(Pass::Rtao, w, h, [0; 4]);
         } else if mode.uses_hash() {
             // The last cell-finder dispatch also queues the pixels whose cell still takes rays, packed densely
-            // (the update then runs no idle lanes).
+            // (the update then runs no idle lanes), and its last work group writes the update's dispatch size.
             for &(top, bottom) in &cell_levels {
                 rec.dispatch(Pass::CellFinder, w, h, [top, bottom, 0, 0]);
             }
             let rays = gpu::RAY_ARGS_OFFSET;
             let args = self.dispatch_args.raw;
-            rec.dispatch(Pass::QueueArgs, 1, 1, [gpu::STAT_RAY_QUEUE, rays, 0, 0]);
             if adaptive_split {
                 // Adaptive sampling (ours): a quarter of the budget, the weights, the rest shared by them.
                 for phase in 1..=3 {
@@ -703,10 +703,9 @@ impl Renderer {
             let iterations = self.settings.filter_iterations;
             if self.settings.filter && iterations > 0 {
                 // Over the pixels the resolve queued (those whose plan takes an iteration). Ping-pong:
-                // iteration i reads one buffer and writes the other; an even count ends in `ao`. The queue's
-                // arguments are timed with the ray-tracing update's (the same one-thread pass).
+                // iteration i reads one buffer and writes the other; an even count ends in `ao`. The resolve's
+                // last work group wrote the queue's dispatch size.
                 let filter = gpu::FILTER_ARGS_OFFSET;
-                rec.dispatch(Pass::QueueArgs, 1, 1, [gpu::STAT_FILTER_QUEUE, filter, 0, 0]);
                 for i in 0..iterations {
                     rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
                 }
