@@ -32,13 +32,14 @@ pub enum Pass {
     Resolve,
     Filter,
     Residual,
+    Obscurance,
     Detail,
     Composite,
     HashTest,
 }
 
 impl Pass {
-    pub const ALL: [Pass; 12] = [
+    pub const ALL: [Pass; 13] = [
         Pass::Clear,
         Pass::Primary,
         Pass::GbufferFromVis,
@@ -48,6 +49,7 @@ impl Pass {
         Pass::Resolve,
         Pass::Filter,
         Pass::Residual,
+        Pass::Obscurance,
         Pass::Detail,
         Pass::Composite,
         Pass::HashTest,
@@ -65,6 +67,7 @@ impl Pass {
             Pass::Resolve => "resolve",
             Pass::Filter => "filter",
             Pass::Residual => "residual",
+            Pass::Obscurance => "obscurance",
             Pass::Detail => "detail",
             Pass::Composite => "composite",
             Pass::HashTest => "hash_test",
@@ -79,7 +82,7 @@ impl Pass {
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
             Pass::AoUpdate => "ray-tracing update",
-            Pass::Resolve | Pass::Residual | Pass::Detail => "per-pixel AO",
+            Pass::Resolve | Pass::Residual | Pass::Obscurance | Pass::Detail => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",
             Pass::HashTest => "hash test",
@@ -239,6 +242,7 @@ impl Pass {
                 FilterTmp,
             ],
             Pass::Residual => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Ao],
+            Pass::Obscurance => &[GBuffer],
             Pass::Detail => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Obscurance, Ao],
             Pass::Composite => &[
                 PixelCells,
@@ -278,7 +282,8 @@ impl Pass {
             ],
             Pass::Filter => &[Ao, FilterTmp],
             Pass::Residual => &[Ao],
-            Pass::Detail => &[Obscurance, Ao, Stats],
+            Pass::Obscurance => &[Obscurance],
+            Pass::Detail => &[Ao, Stats],
             Pass::Composite => &[BiasEvidence, Ao, Accum, Output],
             Pass::HashTest => &[HashTestCases],
         }

@@ -681,6 +681,11 @@ impl Renderer {
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
         }
+        let contact_detail = mode.uses_hash() && self.settings.contact_detail > 0.0 && young;
+        if contact_detail {
+            // Contact detail's obscurance reads only the G-buffer: beside the cell finder, after one barrier.
+            rec.dispatch(Pass::Obscurance, w, h, [0; 4]);
+        }
         if mode == Mode::Rtao {
             rec.dispatch(Pass::Rtao, w, h, [0; 4]);
         } else if mode.uses_hash() {
@@ -714,10 +719,9 @@ impl Renderer {
                 // Over the pixels that traced into their cells (the ray queue), while the map is young.
                 rec.dispatch_indirect(Pass::Residual, args, rays, [0; 4]);
             }
-            if self.settings.contact_detail > 0.0 && young {
-                // Contact detail (ours): the obscurance of every pixel, then over the ray queue the fit of its
-                // gain to this frame's rays and the correction (detail.comp's three phases).
-                rec.dispatch(Pass::Detail, w, h, [0; 4]);
+            if contact_detail {
+                // Contact detail (ours): over the ray queue the fit of its gain to this frame's rays and the
+                // correction (detail.comp's two phases), from the obscurance found after primary visibility.
                 for phase in 1..=2 {
                     rec.dispatch_indirect(Pass::Detail, args, rays, [phase, 0, 0, 0]);
                 }
