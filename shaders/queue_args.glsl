@@ -1,7 +1,7 @@
 // The indirect dispatch size of a queue of pixels, written by the last work group of the pass that fills the
 // queue (no dispatch of its own). Groups are laid out in 2-D so no dimension exceeds 65,535 (the portable
 // limit), e.g. for 3840x2160 screenshots; a pass dispatched over the queue reads its entry with `queue_entry`
-// (common.glsl). The word after a queue's three arguments counts the work groups done (clear.comp zeroes it).
+// (common.glsl). The word after a queue's three arguments counts the work groups done (clear.glsl zeroes it).
 #ifndef HRTAO_QUEUE_ARGS_GLSL
 #define HRTAO_QUEUE_ARGS_GLSL
 

@@ -23,7 +23,6 @@ include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 /// Every compute pass of the renderer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Pass {
-    Clear,
     Primary,
     GbufferFromVis,
     Rtao,
@@ -39,8 +38,7 @@ pub enum Pass {
 }
 
 impl Pass {
-    pub const ALL: [Pass; 13] = [
-        Pass::Clear,
+    pub const ALL: [Pass; 12] = [
         Pass::Primary,
         Pass::GbufferFromVis,
         Pass::Rtao,
@@ -58,7 +56,6 @@ impl Pass {
     /// The shader file (`shaders/<name>.comp`).
     pub fn shader(self) -> &'static str {
         match self {
-            Pass::Clear => "clear",
             Pass::Primary => "primary",
             Pass::GbufferFromVis => "gbuffer_from_vis",
             Pass::Rtao => "rtao",
@@ -77,7 +74,6 @@ impl Pass {
     /// The timing section it belongs to (the paper's Table 2 columns, plus ours).
     pub fn section(self) -> &'static str {
         match self {
-            Pass::Clear => "clear",
             Pass::Primary | Pass::GbufferFromVis => "primary visibility",
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
@@ -214,7 +210,6 @@ impl Pass {
     pub fn reads(self) -> &'static [Resource] {
         use Resource::*;
         match self {
-            Pass::Clear => &[],
             Pass::Primary => &[Instances, Geometries],
             Pass::GbufferFromVis => &[Visibility, Geometries],
             Pass::Rtao => &[GBuffer, Stats],
@@ -265,8 +260,8 @@ impl Pass {
     pub fn writes(self) -> &'static [Resource] {
         use Resource::*;
         match self {
-            Pass::Clear => &[Stats, DispatchArgs],
-            Pass::Primary | Pass::GbufferFromVis => &[GBuffer],
+            // One thread also resets the frame's counters (clear.glsl).
+            Pass::Primary | Pass::GbufferFromVis => &[GBuffer, Stats, DispatchArgs],
             Pass::Rtao => &[PixelRays, Stats],
             Pass::CellFinder => &[HashCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
             Pass::AoUpdate => &[HashCells, FilterTmp, PixelRays, Stats],

@@ -652,7 +652,6 @@ impl Renderer {
         let young = self.young_map();
         let adaptive_split = self.settings.adaptive_rays && young;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
-        rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
                 // A perspective tile is an off-axis part of the full image's frustum: the full image's axis,
