@@ -464,7 +464,6 @@ fn parser_finds_reads_writes_and_atomics() {
 
 /// The pass table in docs/architecture.md is the one the declarations give (between the marker comments).
 #[test]
-#[ignore = "the table is inserted into docs/architecture.md by its owner"]
 fn architecture_doc_has_the_pass_table() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/architecture.md");
     let doc = std::fs::read_to_string(&path).unwrap();
