@@ -9,8 +9,9 @@
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "ray_target.glsl"
+#include "queue_args.glsl"
 
-void main() {
+void find_cells() {
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
@@ -33,4 +34,10 @@ void main() {
     }
     cells.v[index] = pc;
     if (bottom == 0u) queue_for_rays(index, px, pc);
+}
+
+void main() {
+    find_cells();
+    // The last level's dispatch queued the pixels: the ray-tracing update's dispatch size.
+    if (push.y == 0u) write_queue_args(STAT_RAY_QUEUE, RAY_ARGS_OFFSET);
 }

@@ -8,8 +8,7 @@
 // weighted by their rays t: k = Σ t (y - a) d / Σ t d², shrunk by the Wiener weight k² / (k² + v) against its
 // binomial noise v <= 1/4 / Σ t d², and never positive (more geometry around a pixel never opens it). The
 // pixels' own rays enter a through its cells, but their noise is independent of d, so the fit is not biased.
-// push.x is the phase:
-//   0 over every pixel: its obscurance into `obscurance`;
+// push.x is the phase (obscurance.comp, dispatched after primary visibility, wrote every pixel's obscurance):
 //   1 over the ray queue: the corrected pixels' sums into STAT_DETAIL_SUMS;
 //   2 over the ray queue: the correction, in place in `ao` (a pixel writes only its own value).
 // The same pixels as the pooled residual's (residual.comp): those of young cells, outside refinement frames.
@@ -18,30 +17,6 @@
 #include "pool.glsl"
 
 layout(buffer_reference, scalar, buffer_reference_align = 8) buffer DetailSumsRef { int64_t v[2]; };
-
-// The obscurance's taps: the (2 r + 1)^2 - 1 pixels around the pixel.
-const int OBSCURANCE_RADIUS = 3;
-// The cosine a neighbour must rise above the tangent plane by to count (a curved face's own tessellation
-// does not).
-const float OBSCURANCE_BIAS = 0.05;
-
-float obscurance(uvec2 pix, GPixel px) {
-    float sum = 0.0;
-    for (int dy = -OBSCURANCE_RADIUS; dy <= OBSCURANCE_RADIUS; ++dy) {
-        for (int dx = -OBSCURANCE_RADIUS; dx <= OBSCURANCE_RADIUS; ++dx) {
-            ivec2 q = ivec2(pix) + ivec2(dx, dy);
-            if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
-            GPixel pq = GBufferRef(g.gbuffer).px[uint(q.y) * g.width + uint(q.x)];
-            if (pq.t < 0.0) continue;
-            vec3 d = pq.position - px.position;
-            float len = length(d);
-            if (len <= 0.0) continue;
-            sum += max(dot(px.normal, d) / len - OBSCURANCE_BIAS, 0.0) * max(1.0 - len / g.ao_radius, 0.0);
-        }
-    }
-    int side = 2 * OBSCURANCE_RADIUS + 1;
-    return sum / float(side * side - 1);
-}
 
 // The pixel's obscurance minus the mean of its surface's 3x3 neighbours' (itself included).
 float detail(uvec2 pix, GPixel px) {
@@ -64,14 +39,6 @@ float detail(uvec2 pix, GPixel px) {
 
 void main() {
     uint phase = push.x;
-    if (phase == 0u) {
-        uvec2 pix;
-        uint index;
-        if (!pixel_coords(pix, index)) return;
-        GPixel px = GBufferRef(g.gbuffer).px[index];
-        FloatRef(g.obscurance).v[index] = px.t >= 0.0 ? obscurance(pix, px) : 0.0;
-        return;
-    }
     if (refine_frame()) return;
     uint q;
     if (!queue_entry(StatsRef(g.stats).counters[STAT_RAY_QUEUE], q)) return;

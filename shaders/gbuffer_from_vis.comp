@@ -6,10 +6,12 @@
 #include "common.glsl"
 #include "gpixel.glsl"
 #include "visibility.glsl"
+#include "clear.glsl"
 
 layout(buffer_reference, scalar) readonly buffer VisRef { uvec4 v[]; };
 
 void main() {
+    clear_frame_counters();
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;

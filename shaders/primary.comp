@@ -3,8 +3,10 @@
 // instance id, base colour). The ray is clipped to the region the section planes keep.
 #include "common.glsl"
 #include "gpixel.glsl"
+#include "clear.glsl"
 
 void main() {
+    clear_frame_counters();
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;

@@ -12,6 +12,7 @@
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
 #include "pool.glsl"
+#include "queue_args.glsl"
 
 // Linear cells (ours, cell_gradient > 0, docs/algorithm.md): the AO of cell `c` (s rays) at offset `d` (in cell
 // widths) from its centre: the rays' mean plus the least-squares slope of the open rays against where they
@@ -75,7 +76,7 @@ vec4 interpolate(vec3 position, int lod, ivec3 nq) {
     return vec4(sum, near, wsum, w2s > 0.0 ? wsum * wsum / w2s : 0.0);
 }
 
-void main() {
+void resolve_pixel() {
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
@@ -166,4 +167,10 @@ void main() {
     GuideRef(g.filter_guide).v[index] = make_guide(px, used < LOD_COUNT);
     store_resolved(index, plan, clamp(ao, 0.0, 1.0), iterations);
     UintRef(g.lod_used).v[index] = used;
+}
+
+void main() {
+    resolve_pixel();
+    // The filter's dispatch size over the pixels queued for it.
+    write_queue_args(STAT_FILTER_QUEUE, FILTER_ARGS_OFFSET);
 }

@@ -110,7 +110,7 @@ gpu_consts! {
     /// cell also takes are counted here too).
     RAYS_CELL: u32 = 2;
     RAYS_COUNT: u32 = 3;
-    /// Offsets in words into the indirect dispatch arguments (`dispatch_args`, written by queue_args.comp):
+    /// Offsets in words into the indirect dispatch arguments (`dispatch_args`, written by the last work group of the cell finder and of the resolve, queue_args.glsl):
     /// the ray-tracing update's, then the filter's.
     RAY_ARGS_OFFSET: u32 = 0;
     FILTER_ARGS_OFFSET: u32 = 4;

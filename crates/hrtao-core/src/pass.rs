@@ -2,13 +2,17 @@
 //!
 //! Every pass shares one pipeline layout: set 0 = { binding 0: the TLAS, binding 1: `FrameGlobals` },
 //! plus 16 bytes of push constants. Buffers are reached through device addresses stored in `FrameGlobals`,
-//! so a pass is only its shader: `Pass` names it, `PassSet` builds all pipelines, `Recorder::dispatch`
-//! binds, dispatches over pixels, times it under its Table-2 section and inserts the barrier after it.
+//! so a pass is its shader and the buffers it reads and writes (`Pass::reads`, `Pass::writes`: the validation
+//! layer cannot see accesses through device addresses, so these declarations are the one source of truth,
+//! checked against the shaders by `tests/pass_declarations.rs`). `PassSet` builds all pipelines;
+//! `Recorder::dispatch` binds, inserts the barrier the declarations call for (`barrier::Tracker`), dispatches
+//! over pixels and times it under its Table-2 section.
 use std::sync::Arc;
 
 use ash::vk;
 
-use crate::buffer::{full_barrier, Buffer};
+use crate::barrier::{pass_uses, Barrier, Event, Stage, Tracker, Use};
+use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::WORKGROUP_SIZE;
@@ -19,29 +23,27 @@ include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 /// Every compute pass of the renderer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Pass {
-    Clear,
     Primary,
     GbufferFromVis,
     Rtao,
     CellFinder,
     AoUpdate,
-    QueueArgs,
     Resolve,
     Filter,
     Residual,
+    Obscurance,
     Detail,
     Composite,
     HashTest,
 }
 
 impl Pass {
-    pub const ALL: [Pass; 13] = [
-        Pass::Clear,
+    pub const ALL: [Pass; 12] = [
         Pass::Primary,
         Pass::GbufferFromVis,
+        Pass::Obscurance,
         Pass::Rtao,
         Pass::CellFinder,
-        Pass::QueueArgs,
         Pass::AoUpdate,
         Pass::Resolve,
         Pass::Filter,
@@ -54,16 +56,15 @@ impl Pass {
     /// The shader file (`shaders/<name>.comp`).
     pub fn shader(self) -> &'static str {
         match self {
-            Pass::Clear => "clear",
             Pass::Primary => "primary",
             Pass::GbufferFromVis => "gbuffer_from_vis",
             Pass::Rtao => "rtao",
             Pass::CellFinder => "cell_finder",
-            Pass::QueueArgs => "queue_args",
             Pass::AoUpdate => "ao_update",
             Pass::Resolve => "resolve",
             Pass::Filter => "filter",
             Pass::Residual => "residual",
+            Pass::Obscurance => "obscurance",
             Pass::Detail => "detail",
             Pass::Composite => "composite",
             Pass::HashTest => "hash_test",
@@ -73,17 +74,238 @@ impl Pass {
     /// The timing section it belongs to (the paper's Table 2 columns, plus ours).
     pub fn section(self) -> &'static str {
         match self {
-            Pass::Clear => "clear",
             Pass::Primary | Pass::GbufferFromVis => "primary visibility",
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
-            Pass::QueueArgs | Pass::AoUpdate => "ray-tracing update",
-            Pass::Resolve | Pass::Residual | Pass::Detail => "per-pixel AO",
+            Pass::AoUpdate => "ray-tracing update",
+            Pass::Resolve | Pass::Residual | Pass::Obscurance | Pass::Detail => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",
             Pass::HashTest => "hash test",
         }
     }
+}
+
+/// The GPU buffers the passes read and write (each reached in the shaders through its `FrameGlobals` address,
+/// `Resource::field`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Resource {
+    /// The scene's instance table (`InstanceInfo`; the selection flags).
+    Instances,
+    /// The scene's geometry table (vertex and index addresses).
+    Geometries,
+    /// The rasterised visibility copied to a buffer (raster primary visibility only).
+    Visibility,
+    /// The G-buffer (`GPixel` per pixel).
+    GBuffer,
+    /// The local-edit region epochs.
+    Regions,
+    /// The world-space hash map's cells (paper §1).
+    HashCells,
+    /// Per pixel, the cells the cell finder found (`PixelCells`).
+    PixelCells,
+    /// The pixels whose cell takes rays this frame.
+    RayQueue,
+    /// The pixels the filter runs over.
+    FilterQueue,
+    /// The indirect dispatch arguments the last work group of the cell finder and of the resolve writes
+    /// (queue_args.glsl).
+    DispatchArgs,
+    /// The frame's statistics counters (`FrameStats`, device memory).
+    Stats,
+    /// Its host-visible copy, made once at the end of the frame.
+    StatsReadback,
+    /// Per pixel, the rays it traced itself (`PixelRays`).
+    PixelRays,
+    /// The AO image (the filter's ping).
+    Ao,
+    /// The filter's pong (and adaptive sampling's scratch weights).
+    FilterTmp,
+    /// Per pixel, the filter plan (filter_plan.glsl).
+    FilterPlan,
+    /// Per pixel, the filter's guide (`FilterGuide`).
+    FilterGuide,
+    /// Per pixel, the LOD its AO came from.
+    LodUsed,
+    /// Contact detail's per-pixel obscurance.
+    Obscurance,
+    /// Still refinement's own-ray residuals.
+    BiasEvidence,
+    /// Still refinement's accumulation (`PixelAccum`).
+    Accum,
+    /// The composited RGBA8 image.
+    Output,
+    /// The cases of the hash test pass (tests only).
+    HashTestCases,
+}
+
+impl Resource {
+    pub const ALL: [Resource; 23] = [
+        Resource::Instances,
+        Resource::Geometries,
+        Resource::Visibility,
+        Resource::GBuffer,
+        Resource::Regions,
+        Resource::HashCells,
+        Resource::PixelCells,
+        Resource::RayQueue,
+        Resource::FilterQueue,
+        Resource::DispatchArgs,
+        Resource::Stats,
+        Resource::StatsReadback,
+        Resource::PixelRays,
+        Resource::Ao,
+        Resource::FilterTmp,
+        Resource::FilterPlan,
+        Resource::FilterGuide,
+        Resource::LodUsed,
+        Resource::Obscurance,
+        Resource::BiasEvidence,
+        Resource::Accum,
+        Resource::Output,
+        Resource::HashTestCases,
+    ];
+
+    /// The `FrameGlobals` field holding its device address, which is how shaders reach it; None for a buffer
+    /// a pass gets through its push constants (the visibility, the hash test cases) or no shader reads.
+    pub fn field(self) -> Option<&'static str> {
+        Some(match self {
+            Resource::Instances => "instances",
+            Resource::Geometries => "geometries",
+            Resource::GBuffer => "gbuffer",
+            Resource::Regions => "regions",
+            Resource::HashCells => "hash_cells",
+            Resource::PixelCells => "pixel_cells",
+            Resource::RayQueue => "ray_queue",
+            Resource::FilterQueue => "filter_queue",
+            Resource::DispatchArgs => "dispatch_args",
+            Resource::Stats => "stats",
+            Resource::PixelRays => "pixel_rays",
+            Resource::Ao => "ao",
+            Resource::FilterTmp => "filter_tmp",
+            Resource::FilterPlan => "filter_plan",
+            Resource::FilterGuide => "filter_guide",
+            Resource::LodUsed => "lod_used",
+            Resource::Obscurance => "obscurance",
+            Resource::BiasEvidence => "bias_evidence",
+            Resource::Accum => "accum",
+            Resource::Output => "output_rgba",
+            Resource::Visibility | Resource::StatsReadback | Resource::HashTestCases => return None,
+        })
+    }
+
+    /// The buffer reference type a pass reaches it through when it comes in its push constants.
+    pub fn push_type(self) -> Option<&'static str> {
+        match self {
+            Resource::Visibility => Some("VisRef"),
+            Resource::HashTestCases => Some("HashTestRef"),
+            _ => None,
+        }
+    }
+}
+
+impl Pass {
+    /// The buffers its shader reads (`tests/pass_declarations.rs` checks them against the shader). An
+    /// indirect dispatch also reads `DispatchArgs` (the recorder adds it).
+    pub fn reads(self) -> &'static [Resource] {
+        use Resource::*;
+        match self {
+            Pass::Primary => &[Instances, Geometries],
+            Pass::GbufferFromVis => &[Visibility, Geometries],
+            Pass::Rtao => &[GBuffer, Stats],
+            Pass::CellFinder => &[GBuffer, PixelCells, Regions, HashCells, Stats, DispatchArgs],
+            Pass::AoUpdate => &[
+                Stats, RayQueue, GBuffer, PixelCells, HashCells, FilterTmp, PixelRays,
+            ],
+            Pass::Resolve => &[
+                GBuffer,
+                PixelCells,
+                HashCells,
+                PixelRays,
+                Regions,
+                Stats,
+                DispatchArgs,
+            ],
+            Pass::Filter => &[
+                Stats,
+                FilterQueue,
+                FilterPlan,
+                GBuffer,
+                LodUsed,
+                FilterGuide,
+                Ao,
+                FilterTmp,
+            ],
+            Pass::Residual => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Ao],
+            Pass::Obscurance => &[GBuffer],
+            Pass::Detail => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Obscurance, Ao],
+            Pass::Composite => &[
+                PixelCells,
+                LodUsed,
+                HashCells,
+                Instances,
+                GBuffer,
+                BiasEvidence,
+                FilterPlan,
+                Ao,
+                PixelRays,
+                Accum,
+                Regions,
+            ],
+            Pass::HashTest => &[HashTestCases],
+        }
+    }
+
+    /// The buffers its shader writes (atomics count as reads and writes).
+    pub fn writes(self) -> &'static [Resource] {
+        use Resource::*;
+        match self {
+            // One thread also resets the frame's counters (clear.glsl).
+            Pass::Primary | Pass::GbufferFromVis => &[GBuffer, Stats, DispatchArgs],
+            Pass::Rtao => &[PixelRays, Stats],
+            Pass::CellFinder => &[HashCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
+            Pass::AoUpdate => &[HashCells, FilterTmp, PixelRays, Stats],
+            Pass::Resolve => &[
+                FilterGuide,
+                LodUsed,
+                FilterPlan,
+                Ao,
+                FilterTmp,
+                FilterQueue,
+                Stats,
+                DispatchArgs,
+            ],
+            Pass::Filter => &[Ao, FilterTmp],
+            Pass::Residual => &[Ao],
+            Pass::Obscurance => &[Obscurance],
+            Pass::Detail => &[Ao, Stats],
+            Pass::Composite => &[BiasEvidence, Ao, Accum, Output],
+            Pass::HashTest => &[HashTestCases],
+        }
+    }
+}
+
+/// The pass table of docs/architecture.md, rendered from the declarations: one row per pass in frame order,
+/// with its shader, its Table-2 timing section and the buffers it reads and writes.
+pub fn pass_table_markdown() -> String {
+    let list = |rs: &[Resource]| {
+        if rs.is_empty() {
+            "—".to_string()
+        } else {
+            rs.iter().map(|r| format!("{r:?}")).collect::<Vec<_>>().join(", ")
+        }
+    };
+    let mut out = String::from("| pass | shader | section | reads | writes |\n|---|---|---|---|---|\n");
+    for pass in Pass::ALL {
+        out += &format!(
+            "| {pass:?} | `shaders/{}.comp` | {} | {} | {} |\n",
+            pass.shader(),
+            pass.section(),
+            list(pass.reads()),
+            list(pass.writes())
+        );
+    }
+    out
 }
 
 /// Pipelines of all passes and their shared layout and descriptor set.
@@ -281,12 +503,31 @@ impl Drop for PassSet {
     }
 }
 
-/// Records passes into one command buffer.
+/// Records passes into one command buffer, each after the barrier its declared accesses call for.
 pub struct Recorder<'a> {
     pub gpu: &'a Gpu,
     pub cmd: vk::CommandBuffer,
     passes: &'a PassSet,
     timer: Option<&'a mut GpuTimer>,
+    tracker: Tracker,
+}
+
+fn record_barrier(gpu: &Gpu, cmd: vk::CommandBuffer, b: &Barrier) {
+    let barrier = [vk::MemoryBarrier::builder()
+        .src_access_mask(b.src_access)
+        .dst_access_mask(b.dst_access)
+        .build()];
+    unsafe {
+        gpu.device.cmd_pipeline_barrier(
+            cmd,
+            b.src_stages,
+            b.dst_stages,
+            vk::DependencyFlags::empty(),
+            &barrier,
+            &[],
+            &[],
+        );
+    }
 }
 
 impl<'a> Recorder<'a> {
@@ -314,40 +555,65 @@ impl<'a> Recorder<'a> {
             cmd,
             passes,
             timer,
+            tracker: Tracker::default(),
         }
     }
 
-    /// Dispatches `pass` over a `width` x `height` grid of threads (one per pixel), with push constants `push`,
-    /// then a barrier so the next pass sees its writes.
+    /// Records the barrier `uses` call for (see `barrier::Tracker`) before a command.
+    fn sync(&mut self, label: &'static str, pass: Option<Pass>, indirect: bool, uses: Vec<Use>) {
+        if let Some(b) = self.tracker.command(label, pass, indirect, uses) {
+            record_barrier(self.gpu, self.cmd, &b);
+        }
+    }
+
+    /// Dispatches `pass` over a `width` x `height` grid of threads (one per pixel), with push constants `push`.
     pub fn dispatch(&mut self, pass: Pass, width: u32, height: u32, push: [u32; 4]) {
+        self.sync(pass.shader(), Some(pass), false, pass_uses(pass));
         let groups = (width.div_ceil(WORKGROUP_SIZE), height.div_ceil(WORKGROUP_SIZE));
         self.record(pass, push, |d, cmd| unsafe {
             d.cmd_dispatch(cmd, groups.0, groups.1, 1)
         });
     }
 
-    /// Dispatches `pass` with the work-group counts a previous pass wrote into `args` (VkDispatchIndirectCommand).
-    /// Dispatches `pass` with the group counts at word `offset` of `args` (queue_args.comp writes them).
+    /// Dispatches `pass` with the group counts at word `offset` of `args` (the `DispatchArgs` buffer:
+    /// queue_args.glsl writes them).
     pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, offset: u32, push: [u32; 4]) {
+        let mut uses = pass_uses(pass);
+        uses.push(Use::read(Resource::DispatchArgs, Stage::Indirect));
+        self.sync(pass.shader(), Some(pass), true, uses);
         self.record(pass, push, |d, cmd| unsafe {
             d.cmd_dispatch_indirect(cmd, args, offset as u64 * 4)
         });
     }
 
-    /// Records commands that are not a compute pass (the rasterised visibility) under the timing section
-    /// `section`, then the barrier after them.
-    pub fn commands(&mut self, section: &'static str, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) {
-        if let Some(t) = self.timer.as_deref_mut() {
+    /// Records commands that are not a compute pass (the rasterised visibility, copies) with their accesses
+    /// `uses`, after the barrier they call for, timed under `section` when given.
+    pub fn commands(
+        &mut self,
+        label: &'static str,
+        section: Option<&'static str>,
+        uses: Vec<Use>,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) {
+        self.sync(label, None, false, uses);
+        if let (Some(t), Some(section)) = (self.timer.as_deref_mut(), section) {
             t.begin(self.cmd, section);
         }
         record(&self.gpu.device, self.cmd);
-        if let Some(t) = self.timer.as_deref_mut() {
+        if let (Some(t), Some(_)) = (self.timer.as_deref_mut(), section) {
             t.end(self.cmd);
         }
-        full_barrier(self.gpu, self.cmd);
     }
 
-    /// Binds `pass`, pushes its constants, records the dispatch under its timing section, then the barrier.
+    /// Ends the recording with a barrier that makes every write visible to the host and to later copies and
+    /// shaders; returns what was recorded.
+    pub fn finish(mut self) -> Vec<Event> {
+        let b = self.tracker.finish();
+        record_barrier(self.gpu, self.cmd, &b);
+        self.tracker.take_events()
+    }
+
+    /// Binds `pass`, pushes its constants and records the dispatch under its timing section.
     fn record(&mut self, pass: Pass, push: [u32; 4], dispatch: impl FnOnce(&ash::Device, vk::CommandBuffer)) {
         let d = &self.gpu.device;
         if let Some(t) = self.timer.as_deref_mut() {
@@ -371,6 +637,5 @@ impl<'a> Recorder<'a> {
         if let Some(t) = self.timer.as_deref_mut() {
             t.end(self.cmd);
         }
-        full_barrier(self.gpu, self.cmd);
     }
 }

@@ -14,11 +14,12 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use hrtao_scene::Scene;
 
+use crate::barrier::{Stage, Use};
 use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{FrameGlobals, RasterInstance, RasterPush, NO_INSTANCE, PROJECTION_ORTHOGRAPHIC};
-use crate::pass::{shader_module, Pass, Recorder};
+use crate::pass::{shader_module, Pass, Recorder, Resource};
 
 /// How the renderer finds the surface seen through each pixel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -481,97 +482,108 @@ impl Rasterizer {
             globals: globals_address,
         };
         let extent = vk::Extent2D { width: w, height: h };
-        rec.commands(Pass::Primary.section(), |d, cmd| unsafe {
-            let clear = [
-                vk::ClearValue {
-                    color: vk::ClearColorValue {
-                        uint32: [NO_INSTANCE, 0, 0, 0],
+        // The draws read the scene's geometry table; the visibility image is copied to a buffer that
+        // gbuffer_from_vis.comp reads.
+        let uses = vec![
+            Use::read(Resource::Geometries, Stage::Graphics),
+            Use::write(Resource::Visibility, Stage::Transfer),
+        ];
+        rec.commands(
+            "raster visibility",
+            Some(Pass::Primary.section()),
+            uses,
+            |d, cmd| unsafe {
+                let clear = [
+                    vk::ClearValue {
+                        color: vk::ClearColorValue {
+                            uint32: [NO_INSTANCE, 0, 0, 0],
+                        },
                     },
-                },
-                vk::ClearValue {
-                    depth_stencil: vk::ClearDepthStencilValue {
-                        depth: 0.0,
-                        stencil: 0,
+                    vk::ClearValue {
+                        depth_stencil: vk::ClearDepthStencilValue {
+                            depth: 0.0,
+                            stencil: 0,
+                        },
                     },
-                },
-            ];
-            d.cmd_begin_render_pass(
-                cmd,
-                &vk::RenderPassBeginInfo::builder()
-                    .render_pass(self.render_pass)
-                    .framebuffer(t.framebuffer)
-                    .render_area(vk::Rect2D {
+                ];
+                d.cmd_begin_render_pass(
+                    cmd,
+                    &vk::RenderPassBeginInfo::builder()
+                        .render_pass(self.render_pass)
+                        .framebuffer(t.framebuffer)
+                        .render_area(vk::Rect2D {
+                            offset: vk::Offset2D::default(),
+                            extent,
+                        })
+                        .clear_values(&clear),
+                    vk::SubpassContents::INLINE,
+                );
+                d.cmd_set_viewport(
+                    cmd,
+                    0,
+                    &[vk::Viewport {
+                        x: 0.0,
+                        y: 0.0,
+                        width: w as f32,
+                        height: h as f32,
+                        min_depth: 0.0,
+                        max_depth: 1.0,
+                    }],
+                );
+                d.cmd_set_scissor(
+                    cmd,
+                    0,
+                    &[vk::Rect2D {
                         offset: vk::Offset2D::default(),
                         extent,
-                    })
-                    .clear_values(&clear),
-                vk::SubpassContents::INLINE,
-            );
-            d.cmd_set_viewport(
-                cmd,
-                0,
-                &[vk::Viewport {
-                    x: 0.0,
-                    y: 0.0,
-                    width: w as f32,
-                    height: h as f32,
-                    min_depth: 0.0,
-                    max_depth: 1.0,
-                }],
-            );
-            d.cmd_set_scissor(
-                cmd,
-                0,
-                &[vk::Rect2D {
-                    offset: vk::Offset2D::default(),
-                    extent,
-                }],
-            );
-            // A section plane opens the solids: their back faces show through the cut.
-            let cull = globals.section_count == 0;
-            let mut bound = None;
-            for draw in &scene.draws {
-                let faces = if cull { draw.faces } else { Faces::Both };
-                if bound != Some(faces) {
-                    d.cmd_bind_pipeline(
+                    }],
+                );
+                // A section plane opens the solids: their back faces show through the cut.
+                let cull = globals.section_count == 0;
+                let mut bound = None;
+                for draw in &scene.draws {
+                    let faces = if cull { draw.faces } else { Faces::Both };
+                    if bound != Some(faces) {
+                        d.cmd_bind_pipeline(
+                            cmd,
+                            vk::PipelineBindPoint::GRAPHICS,
+                            self.pipelines[faces as usize],
+                        );
+                        bound = Some(faces);
+                    }
+                    push.geometry = draw.geometry.geometry;
+                    d.cmd_push_constants(
                         cmd,
-                        vk::PipelineBindPoint::GRAPHICS,
-                        self.pipelines[faces as usize],
+                        self.layout,
+                        vk::ShaderStageFlags::VERTEX,
+                        0,
+                        bytemuck::bytes_of(&push),
                     );
-                    bound = Some(faces);
+                    d.cmd_bind_index_buffer(
+                        cmd,
+                        scene.index_buffer,
+                        draw.geometry.index_offset,
+                        vk::IndexType::UINT32,
+                    );
+                    d.cmd_draw_indexed(
+                        cmd,
+                        draw.geometry.triangles * 3,
+                        draw.instance_count,
+                        0,
+                        0,
+                        draw.first_instance,
+                    );
                 }
-                push.geometry = draw.geometry.geometry;
-                d.cmd_push_constants(
+                d.cmd_end_render_pass(cmd);
+                d.cmd_copy_image_to_buffer(
                     cmd,
-                    self.layout,
-                    vk::ShaderStageFlags::VERTEX,
-                    0,
-                    bytemuck::bytes_of(&push),
+                    t.vis.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    t.vis_buffer.raw,
+                    &[crate::buffer::whole_image_copy(w, h)],
                 );
-                d.cmd_bind_index_buffer(
-                    cmd,
-                    scene.index_buffer,
-                    draw.geometry.index_offset,
-                    vk::IndexType::UINT32,
-                );
-                d.cmd_draw_indexed(
-                    cmd,
-                    draw.geometry.triangles * 3,
-                    draw.instance_count,
-                    0,
-                    0,
-                    draw.first_instance,
-                );
-            }
-            d.cmd_end_render_pass(cmd);
-            d.cmd_copy_image_to_buffer(
-                cmd,
-                t.vis.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                t.vis_buffer.raw,
-                &[crate::buffer::whole_image_copy(w, h)],
-            );
-        });
+            },
+        );
         let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
         rec.dispatch(
             Pass::GbufferFromVis,

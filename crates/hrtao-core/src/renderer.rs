@@ -7,6 +7,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::SceneGpu;
+use crate::barrier::{Event, Stage, Use};
 use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
@@ -15,7 +16,7 @@ use crate::gpu::{
     self, FilterGuide, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells,
     PixelRays,
 };
-use crate::pass::{Pass, PassSet, Recorder};
+use crate::pass::{Pass, PassSet, Recorder, Resource};
 use crate::raster::{Primary, Rasterizer};
 use crate::regions::RegionTable;
 use crate::settings::{AoSettings, Invalidates, Mode};
@@ -171,7 +172,8 @@ pub struct Renderer {
     /// at the end of every frame.
     stats: Buffer,
     stats_readback: Buffer,
-    /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by queue_args.comp.
+    /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by the last work group of the cell finder and of the resolve
+    /// (queue_args.glsl).
     dispatch_args: Buffer,
     targets: Targets,
     hash: HashMapGpu,
@@ -212,6 +214,8 @@ pub struct Renderer {
     pub primary: Primary,
     /// Created on the first rasterised frame.
     raster: Option<Rasterizer>,
+    /// The commands and barriers the last `record_frame` recorded.
+    last_events: Vec<Event>,
     /// Render this window of a larger image (large screenshots); None = the camera's whole image. Both primary
     /// visibilities draw tiles (the rasteriser as an off-axis frustum).
     pub tile: Option<Tile>,
@@ -281,6 +285,7 @@ impl Renderer {
             check_bounds: false,
             primary: Primary::default(),
             raster: None,
+            last_events: Vec::new(),
             tile: None,
         };
         gpu.run_commands(|cmd| unsafe {
@@ -647,7 +652,6 @@ impl Renderer {
         let young = self.young_map();
         let adaptive_split = self.settings.adaptive_rays && young;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
-        rec.dispatch(Pass::Clear, 1, 1, [0; 4]);
         match (primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
                 // A perspective tile is an off-axis part of the full image's frustum: the full image's axis,
@@ -676,17 +680,21 @@ impl Renderer {
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
         }
+        let contact_detail = mode.uses_hash() && self.settings.contact_detail > 0.0 && young;
+        if contact_detail {
+            // Contact detail's obscurance reads only the G-buffer: beside the cell finder, after one barrier.
+            rec.dispatch(Pass::Obscurance, w, h, [0; 4]);
+        }
         if mode == Mode::Rtao {
             rec.dispatch(Pass::Rtao, w, h, [0; 4]);
         } else if mode.uses_hash() {
             // The last cell-finder dispatch also queues the pixels whose cell still takes rays, packed densely
-            // (the update then runs no idle lanes).
+            // (the update then runs no idle lanes), and its last work group writes the update's dispatch size.
             for &(top, bottom) in &cell_levels {
                 rec.dispatch(Pass::CellFinder, w, h, [top, bottom, 0, 0]);
             }
             let rays = gpu::RAY_ARGS_OFFSET;
             let args = self.dispatch_args.raw;
-            rec.dispatch(Pass::QueueArgs, 1, 1, [gpu::STAT_RAY_QUEUE, rays, 0, 0]);
             if adaptive_split {
                 // Adaptive sampling (ours): a quarter of the budget, the weights, the rest shared by them.
                 for phase in 1..=3 {
@@ -699,10 +707,9 @@ impl Renderer {
             let iterations = self.settings.filter_iterations;
             if self.settings.filter && iterations > 0 {
                 // Over the pixels the resolve queued (those whose plan takes an iteration). Ping-pong:
-                // iteration i reads one buffer and writes the other; an even count ends in `ao`. The queue's
-                // arguments are timed with the ray-tracing update's (the same one-thread pass).
+                // iteration i reads one buffer and writes the other; an even count ends in `ao`. The resolve's
+                // last work group wrote the queue's dispatch size.
                 let filter = gpu::FILTER_ARGS_OFFSET;
-                rec.dispatch(Pass::QueueArgs, 1, 1, [gpu::STAT_FILTER_QUEUE, filter, 0, 0]);
                 for i in 0..iterations {
                     rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
                 }
@@ -711,31 +718,36 @@ impl Renderer {
                 // Over the pixels that traced into their cells (the ray queue), while the map is young.
                 rec.dispatch_indirect(Pass::Residual, args, rays, [0; 4]);
             }
-            if self.settings.contact_detail > 0.0 && young {
-                // Contact detail (ours): the obscurance of every pixel, then over the ray queue the fit of its
-                // gain to this frame's rays and the correction (detail.comp's three phases).
-                rec.dispatch(Pass::Detail, w, h, [0; 4]);
+            if contact_detail {
+                // Contact detail (ours): over the ray queue the fit of its gain to this frame's rays and the
+                // correction (detail.comp's two phases), from the obscurance found after primary visibility.
                 for phase in 1..=2 {
                     rec.dispatch_indirect(Pass::Detail, args, rays, [phase, 0, 0, 0]);
                 }
             }
         }
-        rec.dispatch(Pass::Composite, w, h, [0; 4]);
-        // The frame's counters, once, for `finish_frame` (the dispatch's barrier made them visible).
+        // The frame's counters, once, for `finish_frame`: composite.comp counts nothing (its declaration
+        // writes no `Stats`), so the copy is recorded before it and shares its barrier.
         let bytes = std::mem::size_of::<FrameStats>() as u64;
-        unsafe {
-            self.gpu.device.cmd_copy_buffer(
+        let (stats, readback) = (self.stats.raw, self.stats_readback.raw);
+        let uses = vec![
+            Use::read(Resource::Stats, Stage::Transfer),
+            Use::write(Resource::StatsReadback, Stage::Transfer),
+        ];
+        rec.commands("statistics copy", None, uses, |d, cmd| unsafe {
+            d.cmd_copy_buffer(
                 cmd,
-                self.stats.raw,
-                self.stats_readback.raw,
+                stats,
+                readback,
                 &[vk::BufferCopy {
                     src_offset: 0,
                     dst_offset: 0,
                     size: bytes,
                 }],
             );
-        }
-        host_read_barrier(&self.gpu, cmd);
+        });
+        rec.dispatch(Pass::Composite, w, h, [0; 4]);
+        self.last_events = rec.finish();
         Ok(())
     }
 
@@ -1044,7 +1056,7 @@ impl Renderer {
         self.gpu.run_commands(|cmd| {
             let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
             rec.dispatch(Pass::HashTest, ROW, globals.height, push);
-            host_read_barrier(&self.gpu, cmd);
+            rec.finish();
         })?;
         buf.read(cases.len())
     }
@@ -1088,6 +1100,11 @@ impl Renderer {
     /// Descriptor writes of the TLAS binding so far (one per TLAS build a frame used).
     pub fn tlas_descriptor_writes(&self) -> u64 {
         self.passes.tlas_writes()
+    }
+
+    /// The dispatches, other commands and barriers the last recorded frame consists of, in order.
+    pub fn last_frame_events(&self) -> &[Event] {
+        &self.last_events
     }
 
     /// Frames rendered so far (the hash map's clock).

@@ -1,0 +1,279 @@
+//! Barriers derived from declared accesses: the recorder tells a `Tracker` the buffers each command reads and
+//! writes (`Pass::reads`/`Pass::writes`, plus the indirect arguments, copies and raster draws), and the tracker
+//! answers whether a barrier must come first, and with which stages and access masks.
+//!
+//! The rule: a barrier before a command that has a read-after-write, write-after-read or write-after-write
+//! hazard with a command recorded since the last barrier, or that reads a buffer whose last write has not yet
+//! been made visible to the stage it reads in (an indirect-argument read after a barrier that served compute
+//! reads only). Every barrier includes the compute stage and shader reads and writes on both sides, so its
+//! dependency chains with the barriers before and after it and serves every later pass.
+use ash::vk;
+
+use crate::pass::{Pass, Resource};
+
+/// Where in the pipeline a buffer is accessed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// A compute shader (every pass).
+    Compute,
+    /// The work-group counts of an indirect dispatch.
+    Indirect,
+    /// A copy command.
+    Transfer,
+    /// The rasterised visibility draws (vertex and fragment shaders).
+    Graphics,
+}
+
+impl Stage {
+    pub fn flags(self) -> vk::PipelineStageFlags {
+        match self {
+            Stage::Compute => vk::PipelineStageFlags::COMPUTE_SHADER,
+            Stage::Indirect => vk::PipelineStageFlags::DRAW_INDIRECT,
+            Stage::Transfer => vk::PipelineStageFlags::TRANSFER,
+            Stage::Graphics => {
+                vk::PipelineStageFlags::VERTEX_SHADER
+                    | vk::PipelineStageFlags::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+            }
+        }
+    }
+
+    pub fn access(self, write: bool) -> vk::AccessFlags {
+        match (self, write) {
+            (Stage::Compute | Stage::Graphics, false) => vk::AccessFlags::SHADER_READ,
+            (Stage::Compute | Stage::Graphics, true) => vk::AccessFlags::SHADER_WRITE,
+            (Stage::Indirect, _) => vk::AccessFlags::INDIRECT_COMMAND_READ,
+            (Stage::Transfer, false) => vk::AccessFlags::TRANSFER_READ,
+            (Stage::Transfer, true) => vk::AccessFlags::TRANSFER_WRITE,
+        }
+    }
+}
+
+/// One declared access of a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Use {
+    pub resource: Resource,
+    pub write: bool,
+    pub stage: Stage,
+}
+
+impl Use {
+    pub fn read(resource: Resource, stage: Stage) -> Use {
+        Use {
+            resource,
+            write: false,
+            stage,
+        }
+    }
+    pub fn write(resource: Resource, stage: Stage) -> Use {
+        Use {
+            resource,
+            write: true,
+            stage,
+        }
+    }
+}
+
+/// The accesses of a compute pass, as declared next to its definition.
+pub fn pass_uses(pass: Pass) -> Vec<Use> {
+    let reads = pass.reads().iter().map(|&r| Use::read(r, Stage::Compute));
+    let writes = pass.writes().iter().map(|&r| Use::write(r, Stage::Compute));
+    reads.chain(writes).collect()
+}
+
+/// One `vkCmdPipelineBarrier` with a global memory barrier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Barrier {
+    pub src_stages: vk::PipelineStageFlags,
+    pub src_access: vk::AccessFlags,
+    pub dst_stages: vk::PipelineStageFlags,
+    pub dst_access: vk::AccessFlags,
+}
+
+/// What a frame recorded, in order (`Renderer::last_frame_events`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    Barrier(Barrier),
+    /// A dispatch (`pass` set) or other commands (the raster draws, the statistics copy), with its accesses.
+    Command {
+        label: &'static str,
+        pass: Option<Pass>,
+        indirect: bool,
+        uses: Vec<Use>,
+    },
+}
+
+/// Follows the accesses recorded since the last barrier and the stages each buffer's last write is visible to.
+#[derive(Default)]
+pub struct Tracker {
+    /// Accesses since the last barrier.
+    pending: Vec<Use>,
+    /// Per buffer written so far: the stage of its last write and the stages it has been made visible to.
+    written: Vec<(Resource, Stage, vk::PipelineStageFlags)>,
+    events: Vec<Event>,
+}
+
+impl Tracker {
+    /// The barrier `uses` need before their command, if any; records the command (and the barrier).
+    pub fn command(
+        &mut self,
+        label: &'static str,
+        pass: Option<Pass>,
+        indirect: bool,
+        uses: Vec<Use>,
+    ) -> Option<Barrier> {
+        let mut hazard = false;
+        let mut src_stages = vk::PipelineStageFlags::COMPUTE_SHADER;
+        let mut src_access = vk::AccessFlags::empty();
+        for u in &uses {
+            if self
+                .pending
+                .iter()
+                .any(|p| p.resource == u.resource && (p.write || u.write))
+            {
+                hazard = true;
+            }
+            // A write made visible to other stages only (or not yet at all, if pending).
+            if let Some(&(_, stage, visible)) = self.written.iter().find(|w| w.0 == u.resource) {
+                if !visible.contains(u.stage.flags()) {
+                    hazard = true;
+                    src_stages |= stage.flags();
+                    src_access |= stage.access(true);
+                }
+            }
+        }
+        let barrier = hazard.then(|| {
+            for p in &self.pending {
+                src_stages |= p.stage.flags();
+                if p.write {
+                    src_access |= p.stage.access(true);
+                }
+            }
+            // Compute on both sides always: writes made visible here serve every later pass.
+            let mut dst_stages = vk::PipelineStageFlags::COMPUTE_SHADER;
+            let mut dst_access = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
+            for u in &uses {
+                dst_stages |= u.stage.flags();
+                dst_access |= u.stage.access(u.write);
+                if u.write {
+                    // A write after a write is ordered, and its resource may be read-modified.
+                    dst_access |= u.stage.access(false);
+                }
+            }
+            let b = Barrier {
+                src_stages,
+                src_access,
+                dst_stages,
+                dst_access,
+            };
+            self.pending.clear();
+            for w in &mut self.written {
+                w.2 |= dst_stages;
+            }
+            self.events.push(Event::Barrier(b));
+            b
+        });
+        for u in &uses {
+            if u.write {
+                match self.written.iter_mut().find(|w| w.0 == u.resource) {
+                    Some(w) => *w = (u.resource, u.stage, vk::PipelineStageFlags::empty()),
+                    None => self
+                        .written
+                        .push((u.resource, u.stage, vk::PipelineStageFlags::empty())),
+                }
+            }
+        }
+        self.pending.extend(uses.iter().copied());
+        self.events.push(Event::Command {
+            label,
+            pass,
+            indirect,
+            uses,
+        });
+        barrier
+    }
+
+    /// The barrier at the end of the command buffer: every access before it happens before every access after
+    /// it, in this submission (the viewer copies the output image) or a later one (the next frame: its first
+    /// passes need no barrier of their own), and every write is visible to the host (read-backs).
+    pub fn finish(&mut self) -> Barrier {
+        let all_stages = vk::PipelineStageFlags::COMPUTE_SHADER
+            | vk::PipelineStageFlags::TRANSFER
+            | vk::PipelineStageFlags::DRAW_INDIRECT
+            | Stage::Graphics.flags();
+        let b = Barrier {
+            src_stages: all_stages,
+            src_access: vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE,
+            dst_stages: all_stages | vk::PipelineStageFlags::HOST,
+            dst_access: vk::AccessFlags::HOST_READ
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE
+                | vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::INDIRECT_COMMAND_READ,
+        };
+        self.pending.clear();
+        self.events.push(Event::Barrier(b));
+        b
+    }
+
+    pub fn events(&self) -> &[Event] {
+        &self.events
+    }
+
+    pub fn take_events(&mut self) -> Vec<Event> {
+        std::mem::take(&mut self.events)
+    }
+}
+
+/// Checks a recorded sequence: every pair of commands with a hazard on a buffer (one writes it) has a barrier
+/// between them whose source stages include the earlier access's stage, and a barrier between them (the same
+/// or a later one, chained through the compute stage every barrier includes) whose destination stages include
+/// the later access's stage, with its access mask for a read after a write. Returns the hazards not covered,
+/// each as "pass A (writes X) → pass B (reads X)".
+pub fn uncovered_hazards(events: &[Event]) -> Vec<String> {
+    let mut problems = Vec::new();
+    let commands: Vec<(usize, &'static str, &Vec<Use>)> = events
+        .iter()
+        .enumerate()
+        .filter_map(|(i, e)| match e {
+            Event::Command { label, uses, .. } => Some((i, *label, uses)),
+            Event::Barrier(_) => None,
+        })
+        .collect();
+    for (a, &(ia, la, ua)) in commands.iter().enumerate() {
+        for &(ib, lb, ub) in &commands[a + 1..] {
+            for x in ua {
+                for y in ub
+                    .iter()
+                    .filter(|y| y.resource == x.resource && (x.write || y.write))
+                {
+                    let between = || {
+                        events[ia + 1..ib].iter().filter_map(|e| match e {
+                            Event::Barrier(b) => Some(b),
+                            _ => None,
+                        })
+                    };
+                    let src = between().any(|b| b.src_stages.contains(x.stage.flags()));
+                    let dst = between().any(|b| {
+                        b.dst_stages.contains(y.stage.flags())
+                            && (!x.write || b.dst_access.contains(y.stage.access(y.write)))
+                    });
+                    if !(src && dst) {
+                        let verb = |w: bool| if w { "writes" } else { "reads" };
+                        problems.push(format!(
+                            "{la} ({} {:?}) → {lb} ({} {:?}): no barrier between them",
+                            verb(x.write),
+                            x.resource,
+                            verb(y.write),
+                            y.resource
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    problems.sort();
+    problems.dedup();
+    problems
+}
