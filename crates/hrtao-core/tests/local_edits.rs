@@ -7,32 +7,6 @@ use glam::{Mat4, Vec3};
 use hrtao_core::{AoSettings, Camera, Renderer, SceneGpu, SectionPlane, Sections};
 use hrtao_scene::{Instance, Mesh, Primitive, Scene};
 
-/// A closed axis-aligned box of half extents `h` centred at the origin.
-fn cube(h: Vec3) -> Primitive {
-    let faces = [
-        (Vec3::X, Vec3::Y, Vec3::Z),
-        (-Vec3::X, Vec3::Z, Vec3::Y),
-        (Vec3::Y, Vec3::Z, Vec3::X),
-        (-Vec3::Y, Vec3::X, Vec3::Z),
-        (Vec3::Z, Vec3::X, Vec3::Y),
-        (-Vec3::Z, Vec3::Y, Vec3::X),
-    ];
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for (n, a, b) in faces {
-        let base = positions.len() as u32;
-        let q = quad(n * h, a * h, b * h);
-        positions.extend(q.positions);
-        indices.extend(q.indices.iter().map(|i| i + base));
-    }
-    Primitive {
-        positions,
-        indices,
-        base_color: [0.8, 0.8, 0.8, 1.0],
-        double_sided: true,
-    }
-}
-
 /// A floor (instance 0) with a row of 2 x 2 x 2 blocks (instances 1..) standing on it along x, 12 apart.
 fn yard() -> Scene {
     yard_on(floor())

@@ -7,20 +7,9 @@ mod common;
 use common::*;
 
 use hrtao_core::barrier::{uncovered_hazards, Event};
-use hrtao_core::{AoSettings, Camera, Primary, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Primary, Renderer, SceneGpu};
 
 const R: f32 = 8.0;
-
-fn bundled() -> (hrtao_scene::Scene, Camera) {
-    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
-    let scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
-    let cam = Camera {
-        width: 160,
-        height: 90,
-        ..Camera::load(&assets.join("default.camera.json")).unwrap()
-    };
-    (scene, cam)
-}
 
 /// (dispatches, barriers) of a recorded frame.
 fn counts(events: &[Event]) -> (usize, usize) {
@@ -46,7 +35,7 @@ fn sequence(events: &[Event]) -> String {
 /// Records a young frame and a navigation frame with `primary` and checks both; returns their counts.
 fn young_and_navigation(settings: AoSettings, primary: Primary) -> [(usize, usize); 2] {
     let gpu = gpu();
-    let (scene, cam) = bundled();
+    let (scene, cam) = bundled(160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
     r.primary = primary;
@@ -129,7 +118,7 @@ fn raster_visibility_hands_off_to_compute_behind_a_barrier() {
 #[test]
 fn checker_reports_a_removed_barrier() {
     let gpu = gpu();
-    let (scene, cam) = bundled();
+    let (scene, cam) = bundled(160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let mut r = Renderer::new(&gpu, cam.width, cam.height, defaults()).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();

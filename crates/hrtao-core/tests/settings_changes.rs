@@ -7,21 +7,9 @@ use common::*;
 use std::sync::Arc;
 
 use hrtao_core::{AoSettings, Camera, Gpu, Invalidates, Renderer, SceneGpu};
-use hrtao_scene::Scene;
 
 /// The AO radius used with the bundled scene (assets/README.md).
 const R: f32 = 8.0;
-
-fn bundled() -> (Scene, Camera) {
-    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
-    let scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
-    let cam = Camera {
-        width: 160,
-        height: 90,
-        ..Camera::load(&assets.join("default.camera.json")).unwrap()
-    };
-    (scene, cam)
-}
 
 /// The defaults at R with refinement off (cells show) and a table sized for 160 x 90.
 fn base() -> AoSettings {
@@ -178,7 +166,7 @@ fn changed_values() -> Vec<(&'static str, serde_json::Value)> {
 #[test]
 fn every_setting_changed_mid_run_gives_a_fresh_renderers_image() {
     let gpu = gpu();
-    let (scene, cam) = bundled();
+    let (scene, cam) = bundled(160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let base = base();
     let fields = serde_json::to_value(&base).unwrap();
@@ -251,7 +239,7 @@ fn every_setting_changed_mid_run_gives_a_fresh_renderers_image() {
 #[test]
 fn a_radius_change_mid_run_ends_at_a_fresh_renders_image() {
     let gpu = gpu();
-    let (scene, cam) = bundled();
+    let (scene, cam) = bundled(160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let from = base();
     let to = AoSettings {

@@ -1,5 +1,7 @@
 //! `hrtao bench` end to end on a tiny run (64×36, 3 navigation frames, validation on): the JSON schema, the
 //! self-consistency of its numbers (no timing assertion), and the `--report` markdown + plots.
+/// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
+#[path = "../../scene/tests/common/mod.rs"]
 mod common;
 
 use std::path::PathBuf;

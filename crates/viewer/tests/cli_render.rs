@@ -1,4 +1,6 @@
 //! `hrtao render` end to end: a test scene with its reference camera, image outputs, and bad input.
+/// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
+#[path = "../../scene/tests/common/mod.rs"]
 mod common;
 
 use common::{test_scene, testdata};

@@ -2,6 +2,8 @@
 //! image (exit 0, finite AO), never a panic, a hang or an abort. Files whose references lead to devices, FIFOs,
 //! directories or outside the model's folder end within seconds under 1 GB of memory, naming the reference, in
 //! `render` and in the running viewer (which keeps its scene).
+/// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
+#[path = "../../scene/tests/common/mod.rs"]
 mod common;
 
 use std::process::{Command, Stdio};

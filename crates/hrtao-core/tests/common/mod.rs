@@ -36,6 +36,32 @@ pub fn quad(center: Vec3, a: Vec3, b: Vec3) -> Primitive {
     }
 }
 
+/// A closed axis-aligned box of half extents `h` centred at the origin.
+pub fn cube(h: Vec3) -> Primitive {
+    let faces = [
+        (Vec3::X, Vec3::Y, Vec3::Z),
+        (-Vec3::X, Vec3::Z, Vec3::Y),
+        (Vec3::Y, Vec3::Z, Vec3::X),
+        (-Vec3::Y, Vec3::X, Vec3::Z),
+        (Vec3::Z, Vec3::X, Vec3::Y),
+        (-Vec3::Z, Vec3::Y, Vec3::X),
+    ];
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for (n, a, b) in faces {
+        let base = positions.len() as u32;
+        let q = quad(n * h, a * h, b * h);
+        positions.extend(q.positions);
+        indices.extend(q.indices.iter().map(|i| i + base));
+    }
+    Primitive {
+        positions,
+        indices,
+        base_color: [0.8, 0.8, 0.8, 1.0],
+        double_sided: true,
+    }
+}
+
 pub fn scene_of(prims: Vec<Primitive>) -> Scene {
     let mut s = Scene::new("test");
     s.meshes.push(Mesh {
@@ -362,4 +388,16 @@ pub fn z_up_camera(eye: [f32; 3], target: [f32; 3], width: u32, height: u32) -> 
         height,
         ..Camera::default()
     }
+}
+
+/// The bundled scene (`assets/default.glb`) and its camera (`assets/default.camera.json`) at `w` x `h`.
+pub fn bundled(w: u32, h: u32) -> (Scene, Camera) {
+    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
+    let cam = Camera {
+        width: w,
+        height: h,
+        ..Camera::load(&assets.join("default.camera.json")).unwrap()
+    };
+    (scene, cam)
 }
