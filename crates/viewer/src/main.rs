@@ -42,6 +42,10 @@ const ENVIRONMENT: &[(&str, &str)] = &[
         "refuse device allocations past this many MiB (simulates a small GPU)",
     ),
     (
+        "HRTAO_OCCT_CPU_SECONDS",
+        "CPU seconds the STEP/IGES kernel's worker process may use per file (default 300)",
+    ),
+    (
         "XDG_CONFIG_HOME",
         "the viewer's settings are $XDG_CONFIG_HOME/hrtao/viewer.json (default ~/.config)",
     ),

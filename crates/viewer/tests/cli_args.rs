@@ -115,7 +115,7 @@ fn help_hides_scripted_flags_and_lists_examples_keys_and_environment() {
     let long = text(&hrtao(&["--help"]));
     for w in [
         "Examples:",
-        "hrtao model.glb",
+        "hrtao model.step",
         "Viewer keys and mouse",
         "Ctrl+Q",
         "F11",
@@ -125,6 +125,7 @@ fn help_hides_scripted_flags_and_lists_examples_keys_and_environment() {
         "HRTAO_MAX_SCENE_MB",
         "HRTAO_DEVICE",
         "HRTAO_VALIDATION",
+        "HRTAO_OCCT_CPU_SECONDS",
         "XDG_PICTURES_DIR",
         "[possible values: y, z]",
         "[FILE]",
