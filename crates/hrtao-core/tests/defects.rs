@@ -3,26 +3,13 @@
 mod common;
 
 use common::*;
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use hrtao_core::{AoSettings, Camera, Renderer, SceneGpu};
-use hrtao_scene::{Instance, Mesh, Scene};
+use hrtao_scene::Scene;
 
 /// A floor (instance 0) with three 2 x 2 x 2 blocks standing on it (instances 1..=3), 6 apart along x.
 fn blocks() -> Scene {
-    let mut s = scene_of(vec![floor()]);
-    s.meshes.push(Mesh {
-        name: "block".into(),
-        primitives: vec![cube(Vec3::ONE)],
-    });
-    for i in 0..3 {
-        s.instances.push(Instance {
-            mesh: 1,
-            transform: Mat4::from_translation(Vec3::new(-6.0 + 6.0 * i as f32, 0.0, 1.0)),
-            name: format!("block {i}"),
-            visible: true,
-        });
-    }
-    s
+    row_of_blocks(floor(), 3, 6.0)
 }
 
 fn camera() -> Camera {
@@ -339,7 +326,7 @@ fn a_local_edit_with_refinement_shows_no_ghost_of_the_removed_part() {
 
 /// The frame's counters live in device memory and reach the report through one copy at the end of the frame:
 /// per-pixel RTAO reports exactly its rays (every surface pixel traces the budget), frame after frame (the
-/// clear pass empties the per-frame counters, the u64 ray counters included). Catches a missing end-of-frame
+/// first thread of primary visibility empties the per-frame counters, the u64 ray counters included). Catches a missing end-of-frame
 /// copy (the report would read zeros) and per-frame counters that are not cleared (they would add up).
 #[test]
 fn ray_counts_reach_the_report_exactly_each_frame() {

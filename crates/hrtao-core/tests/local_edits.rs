@@ -5,7 +5,7 @@ mod common;
 use common::*;
 use glam::{Mat4, Vec3};
 use hrtao_core::{AoSettings, Camera, Renderer, SceneGpu, SectionPlane, Sections};
-use hrtao_scene::{Instance, Mesh, Primitive, Scene};
+use hrtao_scene::{Primitive, Scene};
 
 /// A floor (instance 0) with a row of 2 x 2 x 2 blocks (instances 1..) standing on it along x, 12 apart.
 fn yard() -> Scene {
@@ -14,20 +14,7 @@ fn yard() -> Scene {
 
 /// The yard on a given floor.
 fn yard_on(floor: Primitive) -> Scene {
-    let mut s = scene_of(vec![floor]);
-    s.meshes.push(Mesh {
-        name: "block".into(),
-        primitives: vec![cube(Vec3::ONE)],
-    });
-    for i in 0..7 {
-        s.instances.push(Instance {
-            mesh: 1,
-            transform: Mat4::from_translation(Vec3::new(-36.0 + 12.0 * i as f32, 0.0, 1.0)),
-            name: format!("block {i}"),
-            visible: true,
-        });
-    }
-    s
+    row_of_blocks(floor, 7, 12.0)
 }
 
 const RADIUS: f32 = 3.0;

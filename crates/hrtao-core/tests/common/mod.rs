@@ -62,6 +62,26 @@ pub fn cube(h: Vec3) -> Primitive {
     }
 }
 
+/// `floor` (instance 0) with `n` 2 x 2 x 2 blocks (instances 1..=n) standing on it in a row along x, `spacing`
+/// apart and centred on the origin.
+pub fn row_of_blocks(floor: Primitive, n: u32, spacing: f32) -> Scene {
+    let mut s = scene_of(vec![floor]);
+    s.meshes.push(Mesh {
+        name: "block".into(),
+        primitives: vec![cube(Vec3::ONE)],
+    });
+    let first = -spacing * (n as f32 - 1.0) / 2.0;
+    for i in 0..n {
+        s.instances.push(Instance {
+            mesh: 1,
+            transform: Mat4::from_translation(Vec3::new(first + spacing * i as f32, 0.0, 1.0)),
+            name: format!("block {i}"),
+            visible: true,
+        });
+    }
+    s
+}
+
 pub fn scene_of(prims: Vec<Primitive>) -> Scene {
     let mut s = Scene::new("test");
     s.meshes.push(Mesh {
