@@ -44,18 +44,24 @@ fn main() -> anyhow::Result<()> {
     camera.width = w;
     camera.height = h;
     let mut settings = cli_args::with_overrides(&AoSettings::default(), &extra)?;
-    settings.rays_per_pixel = rays;
-    settings.trace_fraction = fraction;
+    settings.map.rays_per_pixel = rays;
     let gpu = Gpu::new(&ContextOptions::default())?;
     let sg = SceneGpu::new(&gpu, &scene)?;
-    let mut r = Renderer::new(&gpu, w, h, settings)?;
-    r.view_height = view_height;
-    r.primary = primary;
+    let mut r = Renderer::new(&gpu)?;
+    r.set_primary(primary);
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut walls, mut rays_sum) = (Vec::new(), 0u64);
     let up = Vec3::from(camera.up).normalize();
     for i in 0..frames {
-        let rep = r.render(&sg, scene.f(), &camera)?;
+        let frame = hrtao_core::FrameDesc {
+            view_height,
+            budget: Some(hrtao_core::RayBudget {
+                rays_per_pixel: rays,
+                trace_fraction: fraction,
+            }),
+            ..hrtao_core::FrameDesc::new(&sg, scene.f(), camera, &settings)
+        };
+        let rep = r.render(&frame)?;
         if i >= 4 {
             walls.push(rep.wall_ms);
             rays_sum += rep.rays;

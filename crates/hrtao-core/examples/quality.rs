@@ -74,15 +74,16 @@ fn main() -> anyhow::Result<()> {
         let cam = Camera::load(&root.join(format!("refs/{key}_{size}.camera.json")))?;
         let (_, _, reference) = read_exr(&root.join(format!("refs/{key}_{size}.cycles.exr")))?;
         let sg = SceneGpu::new(&gpu, &scene)?;
-        let base = AoSettings {
-            ao_radius: radius,
-            rays_per_pixel: rays,
-            ..Default::default()
+        let base = {
+            let mut s = AoSettings::default();
+            s.map.ao_radius = radius;
+            s.map.rays_per_pixel = rays;
+            s
         };
         let mut settings = cli_args::with_overrides(&base, &extra)?;
-        settings.mode = Mode::Hrtao;
+        settings.display.mode = Mode::Hrtao;
         // HRTAO: one frame, then still frames.
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone())?;
+        let mut r = Renderer::new(&gpu)?;
         let mut total_rays = 0u64;
         let mut hrtao_1 = 0.0;
         let mut prev: Vec<f32> = Vec::new();
@@ -90,7 +91,7 @@ fn main() -> anyhow::Result<()> {
         let mut ms = (0.0, 0.0);
         let mut hrtao_curve = Vec::new(); // (frames, cumulative rays, MAE)
         for f in 0..frames {
-            let rep = r.render(&sg, scene.f(), &cam)?;
+            let rep = r.render(&hrtao_core::FrameDesc::new(&sg, scene.f(), cam, &settings))?;
             total_rays += rep.rays;
             if f == 0 {
                 ms.0 = rep.wall_ms;
@@ -151,15 +152,16 @@ fn main() -> anyhow::Result<()> {
         let geometry = gbuf.iter().filter(|p| p.t >= 0.0).count().max(1) as f64;
         let rays_px = total_rays as f64 / geometry;
         // Per-pixel RTAO: one frame, and the frame count that matches HRTAO's total rays.
-        let rt_settings = AoSettings {
-            mode: Mode::Rtao,
-            ..settings.clone()
+        let rt_settings = {
+            let mut s = settings.clone();
+            s.display.mode = Mode::Rtao;
+            s
         };
-        let mut rt = Renderer::new(&gpu, cam.width, cam.height, rt_settings)?;
+        let mut rt = Renderer::new(&gpu)?;
         let eq_frames = ((rays_px / rays as f64).round() as u32).max(1);
         let mut rtao_curve = Vec::new();
         for i in 0..eq_frames.max(frames) {
-            rt.render(&sg, scene.f(), &cam)?;
+            rt.render(&hrtao_core::FrameDesc::new(&sg, scene.f(), cam, &rt_settings))?;
             let ao = rt.read_ao()?;
             if i == 0 && !dump.is_empty() {
                 let path = PathBuf::from(&dump).join(format!("{key}_rtao1.pfm"));

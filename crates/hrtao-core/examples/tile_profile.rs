@@ -2,7 +2,7 @@
 //! until converged, as `view/shot.rs` does, and prints GPU milliseconds per pass summed over the tile's frames.
 //!
 //! `cargo run -p hrtao-core --example tile_profile -- [--size 3840x2160] [--slice 84560] [--tile 60]
-//! [--set '{"filter_sigma": 0}'] [--primary raster|rayquery]`
+//! [--set '{"variance_filter": false}'] [--primary raster|rayquery]`
 mod cli_args;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -28,9 +28,9 @@ fn main() -> anyhow::Result<()> {
         ..Camera::load(&assets.join("default.camera.json"))?
     };
     let mut settings = cli_args::with_overrides(&AoSettings::default(), &extra)?;
-    settings.rays_per_pixel = settings.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
-    let margin = if settings.filter {
-        2 * ((1u32 << settings.filter_iterations.min(8)) - 1) + 1
+    settings.map.rays_per_pixel = settings.still.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
+    let margin = if settings.filter.filter_iterations > 0 {
+        2 * ((1u32 << settings.filter.filter_iterations.min(8)) - 1) + 1
     } else {
         1
     };
@@ -38,16 +38,28 @@ fn main() -> anyhow::Result<()> {
     let (tw, th) = grid.render_size();
     let gpu = Gpu::new(&ContextOptions::default())?;
     let sg = SceneGpu::new(&gpu, &scene)?;
-    let mut r = Renderer::new(&gpu, tw, th, settings)?;
-    r.jitter = true;
-    r.primary = primary;
-    r.tile = Some(grid.tile(tile.min(grid.len() - 1)));
+    let mut r = Renderer::new(&gpu)?;
+    r.set_primary(primary);
+    let frame = hrtao_core::FrameDesc {
+        jitter: true,
+        tile: Some(grid.tile(tile.min(grid.len() - 1))),
+        ..hrtao_core::FrameDesc::new(
+            &sg,
+            scene.f(),
+            Camera {
+                width: tw,
+                height: th,
+                ..camera
+            },
+            &settings,
+        )
+    };
     println!("{} tiles of {tw}x{th} (margin {margin})", grid.len());
     let mut sums: BTreeMap<String, f64> = BTreeMap::new();
     let t0 = std::time::Instant::now();
     let (mut frames, mut gpu_total, mut rays) = (0, 0.0, 0u64);
     loop {
-        let rep = r.render(&sg, scene.f(), &camera)?;
+        let rep = r.render(&frame)?;
         frames += 1;
         gpu_total += rep.gpu_total_ms;
         rays += rep.rays;

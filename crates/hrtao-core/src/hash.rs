@@ -300,10 +300,10 @@ mod tests {
     /// ±1/2), and the paper's floor(3n) (edges at 0) as a default.
     #[test]
     fn default_normal_bins_keep_cad_normals_off_their_edges() {
-        let d = crate::AoSettings::default();
+        let d = crate::AoSettings::default().map;
         let bins = NormalBins {
             s_nd: d.s_nd,
-            offset: d.normal_offset,
+            offset: d.normal_offset(),
         };
         let edges = bins.edges();
         assert!(edges.len() >= 2 * d.s_nd as usize, "{edges:?}");
@@ -332,11 +332,11 @@ mod tests {
     /// The paper's mode keeps eq. (5) as published: floor(n s_nd).
     #[test]
     fn paper_normal_bins_are_eq_5() {
-        let p = crate::AoSettings::default().paper();
-        assert_eq!(p.normal_offset, 0.0);
+        let p = crate::AoSettings::default().paper().map;
+        assert_eq!(p.normal_offset(), 0.0);
         let bins = NormalBins {
             s_nd: p.s_nd,
-            offset: p.normal_offset,
+            offset: p.normal_offset(),
         };
         for x in [-1.0f32, -0.7, -0.34, -0.01, 0.0, 0.2, 0.34, 0.5, 0.99, 1.0] {
             let n = Vec3::new(x, 0.0, 0.0);

@@ -12,6 +12,7 @@ use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
+use crate::frame::{Change, FrameDesc, FrameKey, MapChange};
 use crate::gpu::{
     self, FilterGuide, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells,
     PixelRays,
@@ -19,8 +20,7 @@ use crate::gpu::{
 use crate::pass::{Pass, PassSet, Recorder, Resource};
 use crate::raster::{Primary, Rasterizer};
 use crate::regions::RegionTable;
-use crate::settings::{AoSettings, Invalidates, Mode};
-use crate::tile::Tile;
+use crate::settings::{AoSettings, Mode};
 use crate::timer::GpuTimer;
 
 /// Buffers whose size follows the image resolution.
@@ -95,31 +95,6 @@ const NEW_MAP: (u64, u64) = (u64::MAX, 0);
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
 
-/// What must stay equal for frames to accumulate into one still image (settings: up to changes that invalidate
-/// nothing, `AoSettings::invalidates`).
-#[derive(Clone)]
-struct StillKey {
-    camera: Camera,
-    settings: AoSettings,
-    scene_f: u32,
-    tlas: vk::AccelerationStructureKHR,
-    scene_version: u64,
-    view_height: u32,
-    jitter: bool,
-    primary: Primary,
-    tile: Option<Tile>,
-}
-
-impl PartialEq for StillKey {
-    fn eq(&self, o: &StillKey) -> bool {
-        self.settings.invalidates(&o.settings) == Invalidates::Nothing
-            && (self.camera, self.scene_f, self.tlas, self.scene_version)
-                == (o.camera, o.scene_f, o.tlas, o.scene_version)
-            && (self.view_height, self.jitter, self.primary, self.tile)
-                == (o.view_height, o.jitter, o.primary, o.tile)
-    }
-}
-
 /// The world-space hash map (paper §1), persistent across frames.
 struct HashMapGpu {
     capacity: u32,
@@ -164,7 +139,6 @@ pub struct FrameReport {
 
 pub struct Renderer {
     gpu: Arc<Gpu>,
-    pub settings: AoSettings,
     passes: PassSet,
     timer: Option<GpuTimer>,
     globals: Buffer,
@@ -172,21 +146,23 @@ pub struct Renderer {
     /// at the end of every frame.
     stats: Buffer,
     stats_readback: Buffer,
-    /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by the last work group of the cell finder and of the resolve
-    /// (queue_args.glsl).
+    /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by the last work group of the
+    /// cell finder and of the resolve (queue_args.glsl).
     dispatch_args: Buffer,
+    /// 1 x 1 until the first frame, then the size of every frame (reallocated when it differs).
     targets: Targets,
-    hash: HashMapGpu,
+    /// Allocated with the capacity of the first frame's settings, again when a frame's capacity differs.
+    hash: Option<HashMapGpu>,
+    /// What the last frame depended on (`FrameDesc::key`): the next frame's change is decided against it.
+    prev: Option<FrameKey>,
     /// Monotonic count of rendered frames (a hash cell's "last used" stamp).
     frame_index: u32,
     /// Frames since the view last changed (0 = new view).
     still_index: u32,
-    still_key: Option<StillKey>,
-    /// F of the previous frame, and the frame_index of the first frame rendered with it (eq. 6).
-    last_f: Option<(u32, u32)>,
+    /// `frame_index` of the first frame rendered with the current key F (eq. 6).
     f_start_frame: u32,
-    /// The F cells are keyed with (eq. 6): the scene's F after a global change; local edits leave it and
-    /// bump region epochs instead (`regions`).
+    /// The F cells are keyed with (eq. 6): the scene's F (plus section changes) after a global change, plus
+    /// `settings_f`; local edits leave it and bump region epochs instead (`regions`).
     key_f: u32,
     /// Settings changes that invalidated the whole map (`Invalidates::WholeMap`): added to the F cells are keyed
     /// with, so that key F values only ever grow and a key never reverts to one of before such a change.
@@ -201,29 +177,21 @@ pub struct Renderer {
     /// Rays the cells took in the last finished frame (u64::MAX before the first), and that frame's ray
     /// budget: see `young_map`.
     last_cell_rays: (u64, u64),
-    /// Jitter the primary samples of still frames (anti-aliasing). `hrtao render` keeps pixel centres.
-    pub jitter: bool,
-    /// Height of the view in pixels when the renderer works at a reduced internal resolution (0 = the internal
-    /// height): s_p is measured in view pixels, so cells do not change with the render scale.
-    pub view_height: u32,
-    pub background_top: [f32; 3],
-    pub background_bottom: [f32; 3],
-    pub output_bgra: bool,
-    pub check_bounds: bool,
-    /// How primary visibility is found (ray queries by default).
-    pub primary: Primary,
+    /// Shaders check buffer bounds and count violations (`FrameReport::bounds_violations`; tests).
+    check_bounds: bool,
+    /// The next frame starts a new still image (`restart_still_image`).
+    restart: bool,
+    /// How primary visibility is found (ray queries by default; `pick_primary` measures).
+    primary: Primary,
     /// Created on the first rasterised frame.
     raster: Option<Rasterizer>,
     /// The commands and barriers the last `record_frame` recorded.
     last_events: Vec<Event>,
-    /// Render this window of a larger image (large screenshots); None = the camera's whole image. Both primary
-    /// visibilities draw tiles (the rasteriser as an off-axis frustum).
-    pub tile: Option<Tile>,
 }
 
 impl Renderer {
-    pub fn new(gpu: &Arc<Gpu>, width: u32, height: u32, settings: AoSettings) -> Result<Renderer> {
-        settings.validate().map_err(CoreError::Invalid)?;
+    /// A renderer; its image size, hash map and settings come with each frame (`FrameDesc`).
+    pub fn new(gpu: &Arc<Gpu>) -> Result<Renderer> {
         let globals = Buffer::new(
             gpu,
             "frame globals",
@@ -253,8 +221,7 @@ impl Renderer {
             vk::BufferUsageFlags::INDIRECT_BUFFER,
         )?;
         let passes = PassSet::new(gpu, &globals)?;
-        let hash = Self::create_hash(gpu, settings.hash_capacity)?;
-        let mut r = Renderer {
+        let r = Renderer {
             gpu: gpu.clone(),
             timer: GpuTimer::new(gpu)?,
             passes,
@@ -262,13 +229,11 @@ impl Renderer {
             stats,
             stats_readback,
             dispatch_args,
-            targets: Targets::new(gpu, width.max(1), height.max(1))?,
-            hash,
-            settings,
+            targets: Targets::new(gpu, 1, 1)?,
+            hash: None,
+            prev: None,
             frame_index: 0,
             still_index: 0,
-            still_key: None,
-            last_f: None,
             f_start_frame: 0,
             key_f: 0,
             settings_f: 0,
@@ -277,50 +242,51 @@ impl Renderer {
             last_converged: false,
             levelwise_until: 0,
             last_cell_rays: NEW_MAP,
-            jitter: false,
-            view_height: 0,
-            background_top: [0.62, 0.68, 0.76],
-            background_bottom: [0.93, 0.94, 0.95],
-            output_bgra: false,
             check_bounds: false,
+            restart: false,
             primary: Primary::default(),
             raster: None,
             last_events: Vec::new(),
-            tile: None,
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
             gpu.device
                 .cmd_fill_buffer(cmd, r.stats_readback.raw, 0, vk::WHOLE_SIZE, 0);
         })?;
-        r.sync_region_size();
         Ok(r)
     }
 
-    /// Region grids for the current settings (`RegionTable::region_lod`); new grids forget local edits. Only
-    /// with a new F (`invalidate_map`, or before the first frame): epochs back at 0 under the same F would
-    /// give cells their pre-edit keys back.
-    fn sync_region_size(&mut self) {
-        let s = &self.settings;
+    /// The next frame starts a new still image whatever it shares with the last one (a benchmark's runs).
+    pub fn restart_still_image(&mut self) {
+        self.restart = true;
+    }
+
+    /// Shaders check buffer bounds and count violations in `FrameReport::bounds_violations` (tests).
+    pub fn set_check_bounds(&mut self, on: bool) {
+        self.check_bounds = on;
+    }
+
+    /// How primary visibility is found (`pick_primary` measures which is faster).
+    pub fn primary(&self) -> Primary {
+        self.primary
+    }
+
+    pub fn set_primary(&mut self, primary: Primary) {
+        self.primary = primary;
+    }
+
+    /// Region grids for `settings` (`RegionTable::region_lod`); new grids forget local edits. Only with a new F
+    /// (a whole-map change): epochs back at 0 under the same F would give cells their pre-edit keys back.
+    fn sync_region_size(&mut self, settings: &AoSettings) {
+        let m = &settings.map;
         let l = RegionTable::region_lod_for(
-            s.ao_radius * s.max_cell_fraction,
-            crate::hash::log2_s_min(s.s_min),
+            m.ao_radius * crate::settings::MAX_CELL_FRACTION,
+            crate::hash::log2_s_min(m.s_min),
         );
         if l != self.regions.region_lod {
             self.regions.region_lod = l;
             self.regions.reset();
         }
-    }
-
-    /// Invalidates every cell of the map (eq. 6, as a global edit does): the next frame keys cells with a new
-    /// F, never used before, and the old cells become reclaimable.
-    fn invalidate_map(&mut self) {
-        self.settings_f = self.settings_f.wrapping_add(1);
-        if let Some((f, sections)) = self.last_f {
-            self.key_f = f.wrapping_add(sections).wrapping_add(self.settings_f);
-            self.f_start_frame = self.frame_index;
-        }
-        self.last_cell_rays = NEW_MAP;
     }
 
     /// The LOD setting the grids of the local-edit region table (`RegionTable::region_lod`).
@@ -346,30 +312,18 @@ impl Renderer {
         &self.gpu
     }
 
+    /// The size of the last frame (1 x 1 before the first).
     pub fn size(&self) -> (u32, u32) {
         (self.targets.width, self.targets.height)
     }
 
-    /// Changes the internal resolution (the hash map is world space and survives).
-    pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
-        let (w, h) = (width.max(1), height.max(1));
-        if (w, h) != self.size() {
+    /// The hash map with `capacity` cells: the one in use, else a new empty one (eq. 6's map is world space and
+    /// survives everything else).
+    fn ensure_hash(&mut self, capacity: u32) -> Result<()> {
+        if self.hash.as_ref().map(|h| h.capacity) != Some(capacity) {
             self.gpu.wait_idle();
-            self.targets = Targets::new(&self.gpu, w, h)?;
-            self.still_key = None;
-        }
-        Ok(())
-    }
-
-    /// Applies new settings, invalidating what their change invalidates (`AoSettings::invalidates`): the whole
-    /// map gets a new F (a new hash capacity reallocates and empties it); the still image restarts at the next
-    /// frame unless nothing shown changed.
-    pub fn set_settings(&mut self, settings: AoSettings) -> Result<()> {
-        settings.validate().map_err(CoreError::Invalid)?;
-        let whole_map = self.settings.invalidates(&settings) == Invalidates::WholeMap;
-        if settings.hash_capacity != self.hash.capacity {
-            self.gpu.wait_idle();
-            self.hash = Self::create_hash(&self.gpu, settings.hash_capacity)?;
+            self.hash = None;
+            self.hash = Some(Self::create_hash(&self.gpu, capacity)?);
             self.gpu.run_commands(|cmd| unsafe {
                 // The occupancy counter restarts with the empty table.
                 self.gpu
@@ -378,20 +332,18 @@ impl Renderer {
             })?;
             self.last_cell_rays = NEW_MAP;
         }
-        self.settings = settings;
-        if whole_map {
-            self.invalidate_map();
-            self.sync_region_size();
-        }
         Ok(())
     }
 
     /// Empties the hash map (all cached AO is forgotten).
     pub fn clear_cache(&mut self) -> Result<()> {
         self.gpu.wait_idle();
-        let (cells, stats) = (self.hash.cells.raw, self.stats.raw);
+        let stats = self.stats.raw;
+        let cells = self.hash.as_ref().map(|h| h.cells.raw);
         self.gpu.run_commands(|cmd| unsafe {
-            self.gpu.device.cmd_fill_buffer(cmd, cells, 0, vk::WHOLE_SIZE, 0);
+            if let Some(cells) = cells {
+                self.gpu.device.cmd_fill_buffer(cmd, cells, 0, vk::WHOLE_SIZE, 0);
+            }
             self.gpu.device.cmd_fill_buffer(cmd, stats, 0, vk::WHOLE_SIZE, 0);
         })?;
         self.regions.reset();
@@ -399,15 +351,74 @@ impl Renderer {
         Ok(())
     }
 
-    fn globals_for(&self, camera: &Camera, key_f: u32) -> FrameGlobals {
-        let s = &self.settings;
+    /// Makes the renderer ready for `frame`: targets of its size, a map of its capacity, and what its change
+    /// from the previous frame invalidates (`Change::between`) applied: the still image restarts, the regions
+    /// of a local edit get new epochs, or every cell gets a new key F (eq. 6).
+    fn prepare(&mut self, frame: &FrameDesc) -> Result<()> {
+        frame.validate().map_err(CoreError::Invalid)?;
+        let (w, h) = frame.size();
+        if (w, h) != self.size() {
+            self.gpu.wait_idle();
+            self.targets = Targets::new(&self.gpu, w, h)?;
+        }
+        self.ensure_hash(frame.settings.map.hash_capacity)?;
+        let key = frame.key(self.primary);
+        let change = match &self.prev {
+            None => Change::first(),
+            Some(prev) => Change::between(prev, &key, |p, n| {
+                // Located edits and plane moves: only the regions within reach of them.
+                let mut boxes = frame.scene.changes_between(p.scene_f, n.scene_f)?;
+                boxes.extend(
+                    frame
+                        .scene
+                        .section_changes_between(p.section_changes, n.section_changes)?,
+                );
+                Some(boxes)
+            }),
+        };
+        let mut map = change.map;
+        if let MapChange::Regions(boxes) = &map {
+            let reach = frame.settings.map.ao_radius;
+            if !self.regions.invalidate(boxes, reach, self.frame_index) {
+                map = MapChange::Whole;
+            }
+        }
+        if map == MapChange::Whole {
+            if change.settings_invalidate_map {
+                self.settings_f = self.settings_f.wrapping_add(1);
+            }
+            self.key_f = frame.effective_f().wrapping_add(self.settings_f);
+            self.f_start_frame = self.frame_index;
+            self.last_cell_rays = NEW_MAP;
+            self.sync_region_size(frame.settings);
+        }
+        let restart = std::mem::take(&mut self.restart);
+        if change.still_image || map == MapChange::Whole || restart {
+            self.still_index = 0;
+        } else {
+            self.still_index = self.still_index.saturating_add(1);
+        }
+        if matches!(map, MapChange::Regions(_)) || self.still_index == 0 {
+            self.edit_still_index = self.still_index;
+        }
+        self.prev = Some(key);
+        Ok(())
+    }
+
+    /// The frame's GPU parameters: its camera, tile and output, each settings group's share
+    /// (`AoSettings::write_gpu`), and the renderer's own state (map, clock, buffers).
+    fn globals_for(&self, frame: &FrameDesc, key_f: u32) -> FrameGlobals {
+        let s = frame.settings;
         let t = &self.targets;
+        let camera = &frame.camera;
+        let (width, height) = frame.size();
         let cam = Camera {
-            width: t.width,
-            height: t.height,
+            width,
+            height,
             ..*camera
         };
-        let (f, view_height, (top, bottom)) = match self.tile {
+        let (top, bottom) = frame.output.background;
+        let (f, view_height, (top, bottom)) = match frame.tile {
             // A tile: the full image's rays, cells sized for the full image's pixels.
             Some(tile) => (
                 tile.frame(
@@ -417,53 +428,21 @@ impl Renderer {
                         ..*camera
                     }
                     .frame(),
-                    (t.width, t.height),
+                    (width, height),
                     camera.is_orthographic(),
                 ),
                 tile.full.1,
-                tile.gradient(self.background_top, self.background_bottom, t.height),
+                tile.gradient(top, bottom, height),
             ),
-            None => (
-                cam.frame(),
-                t.height,
-                (self.background_top, self.background_bottom),
-            ),
+            None => (cam.frame(), height, (top, bottom)),
         };
-        let view_height = if self.view_height > 0 {
-            self.view_height
+        let view_height = if frame.view_height > 0 {
+            frame.view_height
         } else {
             view_height
         };
-        let feature_size = crate::hash::FeatureSize::for_camera(&cam, view_height, s.s_p);
-        let mut flags = 0;
-        if self.output_bgra {
-            flags |= gpu::FLAG_OUTPUT_BGRA;
-        }
-        if s.filter && s.filter_iterations > 0 {
-            flags |= gpu::FLAG_FILTER;
-        }
-        if self.check_bounds {
-            flags |= gpu::FLAG_CHECK_BOUNDS;
-        }
-        if s.shaded {
-            flags |= gpu::FLAG_SHADED;
-        }
-        if s.refine {
-            flags |= gpu::FLAG_REFINE;
-        }
-        if s.edges {
-            flags |= gpu::FLAG_EDGES;
-        }
-        if self.regions.any_edit() {
-            flags |= gpu::FLAG_REGION_EPOCHS;
-        }
-        if self.young_map() {
-            flags |= gpu::FLAG_YOUNG_MAP;
-            if s.near_weight > 0.0 {
-                flags |= gpu::FLAG_NEAR_FIELD;
-            }
-        }
-        let jitter = if self.jitter && s.accumulates() && self.still_index > 0 {
+        let feature_size = crate::hash::FeatureSize::for_camera(&cam, view_height, s.map.s_p);
+        let jitter = if frame.jitter && s.accumulates() && self.still_index > 0 {
             // R2 points in the pixel, frame after frame (the centre first).
             let i = self.still_index as f64;
             [
@@ -475,43 +454,26 @@ impl Renderer {
         };
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
-        FrameGlobals {
+        let hash = self.hash.as_ref();
+        let mut g = FrameGlobals {
             eye: v4(f.eye),
             cam_u: v4(f.u),
             cam_v: v4(f.v),
             cam_w: v4(f.w),
             jitter,
-            width: t.width,
-            height: t.height,
+            width,
+            height,
             still_index: self.still_index,
             scene_f: key_f,
             frame_index: self.frame_index,
             f_start_frame: self.f_start_frame,
-            mode: s.mode.gpu_value(),
-            flags,
-            rays_per_pixel: s.rays_per_pixel,
-            ao_radius: s.ao_radius,
             s_w_per_distance: feature_size.per_distance,
-            s_w_max: s.ao_radius * s.max_cell_fraction,
-            log2_s_min: crate::hash::log2_s_min(s.s_min),
-            s_nd: s.s_nd,
-            hash_capacity: self.hash.capacity,
-            max_samples: s.max_samples,
-            min_samples: s.min_samples,
-            max_probe: s.max_probe,
-            stale_frames: s.stale_frames,
-            filter_iterations: s.filter_iterations,
-            prior_rays: s.prior_rays,
-            prior_rays_max: s.prior_rays_max,
-            prior_sigma: s.prior_sigma,
-            filter_sigma: s.filter_sigma,
+            s_w_base: feature_size.base,
+            hash_capacity: hash.map_or(0, |h| h.capacity),
             region_lod: self.regions.region_lod,
-            crease_cos: s.crease_deg.to_radians().cos(),
             background_top: c4(top),
             background_bottom: c4(bottom),
             gbuffer: t.gbuffer.address,
-            instances: 0,
-            geometries: 0,
             ao: t.ao.address,
             lod_used: t.lod_used.address,
             filter_plan: t.filter_plan.address,
@@ -520,103 +482,65 @@ impl Renderer {
             pixel_rays: t.pixel_rays.address,
             accum: t.accum.address,
             output_rgba: t.output.address,
-            hash_cells: self.hash.cells.address,
+            hash_cells: hash.map_or(0, |h| h.cells.address),
             pixel_cells: t.pixel_cells.address,
             stats: self.stats.address,
             ray_queue: t.ray_queue.address,
             filter_queue: t.filter_queue.address,
             dispatch_args: self.dispatch_args.address,
             regions: self.regions.address(),
+            obscurance: t.obscurance.address,
+            bias_evidence: t.bias_evidence.address,
             projection: match cam.projection {
                 Projection::Perspective => gpu::PROJECTION_PERSPECTIVE,
                 Projection::Orthographic => gpu::PROJECTION_ORTHOGRAPHIC,
             },
-            s_w_base: feature_size.base,
             view_height,
             edge_width: EDGE_WIDTH,
-            section0: [0.0; 4],
-            section1: [0.0; 4],
-            section2: [0.0; 4],
-            section_count: 0,
-            residual_sigma: s.residual_sigma,
-            still_smoothing: s.still_smoothing,
-            pooled_residual: s.pooled_residual,
-            cell_gradient: s.cell_gradient,
-            contact_detail: s.contact_detail,
-            obscurance: t.obscurance.address,
-            trace_fraction: s.trace_fraction,
-            level_blend: s.level_blend,
-            bias_evidence: t.bias_evidence.address,
-            near_weight: s.near_weight,
-            near_fraction: s.near_fraction,
-            normal_offset: s.normal_offset,
-            pad0: 0,
+            ..bytemuck::Zeroable::zeroed()
+        };
+        s.write_gpu(&mut g);
+        let budget = frame.budget();
+        g.rays_per_pixel = budget.rays_per_pixel;
+        g.trace_fraction = budget.trace_fraction;
+        if frame.output.bgra {
+            g.flags |= gpu::FLAG_OUTPUT_BGRA;
         }
-    }
-
-    fn still_key_for(&self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> StillKey {
-        let scene_f = Self::effective_f(scene, scene_f);
-        StillKey {
-            camera: Camera {
-                width: self.targets.width,
-                height: self.targets.height,
-                ..*camera
-            },
-            settings: self.settings.clone(),
-            scene_f,
-            tlas: scene.tlas.raw,
-            scene_version: scene.version(),
-            view_height: self.view_height,
-            jitter: self.jitter,
-            primary: self.primary,
-            tile: self.tile,
+        if self.check_bounds {
+            g.flags |= gpu::FLAG_CHECK_BOUNDS;
         }
-    }
-
-    /// True when the output buffer already holds the final image of this view: the last frame converged and
-    /// nothing it depends on (camera, size, settings, scene, instances) has changed since. A viewer can then
-    /// present the output again instead of rendering (expose events, UI repaints).
-    pub fn shows_final(&self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> bool {
-        self.last_converged && self.still_key.as_ref() == Some(&self.still_key_for(scene, scene_f, camera))
-    }
-
-    /// The F the frame hashes with (eq. 6): the caller's, plus one per section plane change, since moving a
-    /// plane changes the AO as an edit does. Both only grow, so the sum changes whenever either does.
-    pub fn effective_f(scene: &SceneGpu, scene_f: u32) -> u32 {
-        scene_f.wrapping_add(scene.section_changes())
-    }
-
-    /// Prepares the frame's globals and records all passes into `cmd` (the caller submits and then calls
-    /// `finish_frame`). The output is left in `output_buffer()`.
-    pub fn record_frame(
-        &mut self,
-        cmd: vk::CommandBuffer,
-        scene: &SceneGpu,
-        scene_f: u32,
-        camera: &Camera,
-    ) -> Result<()> {
-        let local_edit = self.scene_changed(scene, scene_f);
-        let key = self.still_key_for(scene, scene_f, camera);
-        if local_edit {
-            // A local edit keeps the still accumulation of the view; composite.comp restarts it only in the
-            // edited regions.
-            if let Some(k) = self.still_key.as_mut() {
-                k.scene_f = key.scene_f;
-                k.tlas = key.tlas;
-                k.scene_version = key.scene_version;
+        if self.regions.any_edit() {
+            g.flags |= gpu::FLAG_REGION_EPOCHS;
+        }
+        if self.young_map() {
+            g.flags |= gpu::FLAG_YOUNG_MAP;
+            if s.young.near_field {
+                g.flags |= gpu::FLAG_NEAR_FIELD;
             }
         }
-        if self.still_key.as_ref() == Some(&key) {
-            self.still_index = self.still_index.saturating_add(1);
-        } else {
-            self.still_index = 0;
-            self.still_key = Some(key);
-        }
-        if local_edit || self.still_index == 0 {
-            self.edit_still_index = self.still_index;
-        }
+        g
+    }
+
+    /// True when the output buffer already holds the final image of `frame`: the last frame converged and
+    /// nothing it depends on (camera, size, settings, scene, instances, output) has changed since. A viewer can
+    /// then present the output again instead of rendering (expose events, UI repaints).
+    pub fn shows_final(&self, frame: &FrameDesc) -> bool {
+        self.last_converged && self.prev.as_ref() == Some(&frame.key(self.primary))
+    }
+
+    /// Records all passes of `frame` into `cmd` (the caller submits and then calls `finish_frame`). The output
+    /// is left in `output_buffer()`.
+    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<()> {
+        self.prepare(frame)?;
+        self.record_prepared(cmd, frame)
+    }
+
+    /// `record_frame` after `prepare`: records only (preparing may submit work of its own, a new map's clear,
+    /// so it runs before the caller's command buffer is taken).
+    fn record_prepared(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<()> {
+        let (scene, camera, settings) = (frame.scene, &frame.camera, frame.settings);
         self.regions.upload()?;
-        let mut globals = self.globals_for(camera, self.key_f);
+        let mut globals = self.globals_for(frame, self.key_f);
         if camera.is_orthographic() {
             // Orthographic rays start in front of the whole scene: nothing is clipped by the eye plane.
             let b = scene.raster.bounds();
@@ -647,16 +571,16 @@ impl Renderer {
             };
             raster.prepare(w, h)?;
         }
-        let mode = self.settings.mode;
+        let mode = settings.display.mode;
         let cell_levels = self.cell_levels();
         let young = self.young_map();
-        let adaptive_split = self.settings.adaptive_rays && young;
+        let adaptive_split = settings.young.adaptive_rays && young;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         match (primary, &self.raster) {
             (Primary::Raster, Some(raster)) => {
                 // A perspective tile is an off-axis part of the full image's frustum: the full image's axis,
                 // moved by the tile's centre (an orthographic tile moves its eye instead, as its rays do).
-                let off_axis = match self.tile {
+                let off_axis = match frame.tile {
                     Some(tile) if !camera.is_orthographic() => Some((
                         Camera {
                             width: tile.full.0,
@@ -680,7 +604,7 @@ impl Renderer {
             }
             _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
         }
-        let contact_detail = mode.uses_hash() && self.settings.contact_detail > 0.0 && young;
+        let contact_detail = mode.uses_hash() && settings.young.contact_detail && young;
         if contact_detail {
             // Contact detail's obscurance reads only the G-buffer: beside the cell finder, after one barrier.
             rec.dispatch(Pass::Obscurance, w, h, [0; 4]);
@@ -704,8 +628,8 @@ impl Renderer {
                 rec.dispatch_indirect(Pass::AoUpdate, args, rays, [0; 4]);
             }
             rec.dispatch(Pass::Resolve, w, h, [0; 4]);
-            let iterations = self.settings.filter_iterations;
-            if self.settings.filter && iterations > 0 {
+            let iterations = settings.filter.filter_iterations;
+            if iterations > 0 {
                 // Over the pixels the resolve queued (those whose plan takes an iteration). Ping-pong:
                 // iteration i reads one buffer and writes the other; an even count ends in `ao`. The resolve's
                 // last work group wrote the queue's dispatch size.
@@ -714,7 +638,7 @@ impl Renderer {
                     rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
                 }
             }
-            if self.settings.pooled_residual > 0.0 && young {
+            if settings.young.pooled_residual && young {
                 // Over the pixels that traced into their cells (the ray queue), while the map is young.
                 rec.dispatch_indirect(Pass::Residual, args, rays, [0; 4]);
             }
@@ -751,36 +675,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// Follows the scene's F (eq. 6). Returns true for a local edit: the change is located
-    /// (`SceneGpu::changes_between`), `local_edits` is on and the regions within reach of it (R plus a region,
-    /// so every cell whose AO can change) got new epochs; cells elsewhere keep their keys. Otherwise, as the
-    /// paper does, the new F re-keys every cell and the old ones become reclaimable.
-    fn scene_changed(&mut self, scene: &SceneGpu, scene_f: u32) -> bool {
-        let now = (scene_f, scene.section_changes());
-        let last = self.last_f.replace(now);
-        if last == Some(now) {
-            return false;
-        }
-        if let Some((f0, sections0)) = last {
-            // Located edits and plane moves: only the regions within reach of them.
-            let located = scene.changes_between(f0, scene_f).and_then(|mut boxes| {
-                boxes.extend(scene.section_changes_between(sections0, now.1)?);
-                Some(boxes)
-            });
-            if let (true, Some(boxes)) = (self.settings.local_edits, located) {
-                if self
-                    .regions
-                    .invalidate(&boxes, self.settings.ao_radius, self.frame_index)
-                {
-                    return true;
-                }
-            }
-        }
-        self.key_f = Self::effective_f(scene, scene_f).wrapping_add(self.settings_f);
-        self.f_start_frame = self.frame_index;
-        false
-    }
-
     /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4). While the map has room every
     /// level is found in one pass over the pixels. Where it may not (more pixels than half the capacity: cells
     /// claimed in a frame stay live for `stale_frames`, so the first frame decides), and for LEVELWISE_FRAMES
@@ -788,7 +682,8 @@ impl Renderer {
     /// pixels, then take the free slots before any finer one, and pixels whose fine cells fail fall back to them.
     fn cell_levels(&self) -> Vec<(u32, u32)> {
         let top = gpu::LOD_COUNT - 1;
-        let crowded = self.pixel_count() as u64 > self.hash.capacity as u64 / 2;
+        let capacity = self.hash.as_ref().map_or(0, |h| h.capacity);
+        let crowded = self.pixel_count() as u64 > capacity as u64 / 2;
         // Frame numbers wrap: compare their difference.
         if crowded || (self.levelwise_until.wrapping_sub(self.frame_index) as i32) > 0 {
             (0..=top).rev().map(|l| (l, l)).collect()
@@ -800,7 +695,7 @@ impl Renderer {
     /// Whether the map is young this frame: new, re-keyed (eq. 6), or its cells still take many rays (in the
     /// last frame at least 1/YOUNG_CELL_RAYS_DEN of the budget: a new view, the first still frames). Our
     /// first-frame additions run only then: adaptive sampling's three dispatches (`adaptive_rays`), the
-    /// near-field control variate's ray classification (`near_weight`), the pooled residual
+    /// near-field control variate's ray classification (`near_field`), the pooled residual
     /// (`pooled_residual`) and contact detail (`contact_detail`). In a navigation frame a few newly seen
     /// cells take rays, and in a late still frame the pixels' own: they trace as in the paper, one dispatch of
     /// first-hit queries.
@@ -816,8 +711,13 @@ impl Renderer {
         !(self.gpu.info.is_software && self.primary == Primary::Raster)
     }
 
-    /// Reads the statistics of the frame just completed.
-    pub fn finish_frame(&mut self, scene_f: u32, wall_ms: f64) -> Result<FrameReport> {
+    /// Reads the statistics of the frame just recorded and completed.
+    pub fn finish_frame(&mut self, wall_ms: f64) -> Result<FrameReport> {
+        let Some(key) = self.prev.clone() else {
+            return Err(CoreError::Invalid(
+                "finish_frame before any recorded frame".into(),
+            ));
+        };
         self.frame_index = self.frame_index.wrapping_add(1);
         let stats: FrameStats = self.stats_readback.read(1)?[0];
         let c = stats.counters;
@@ -832,11 +732,12 @@ impl Renderer {
         }
         let young_pixels =
             c[gpu::STAT_RAY_QUEUE as usize] as u64 + c[gpu::STAT_UNPICKED_PIXELS as usize] as u64;
-        self.last_converged = self.converged(young_pixels);
+        self.last_converged = self.converged(&key, young_pixels);
         let budget = self.pixel_count() as f64
-            * self.settings.rays_per_pixel as f64
-            * self.settings.trace_fraction.clamp(0.0, 1.0) as f64;
+            * key.budget.rays_per_pixel as f64
+            * key.budget.trace_fraction.clamp(0.0, 1.0) as f64;
         self.last_cell_rays = (rays(gpu::RAYS_CELL), budget.ceil() as u64);
+        let capacity = self.hash.as_ref().map_or(1, |h| h.capacity);
         Ok(FrameReport {
             gpu_total_ms: gpu_ms.iter().fold(0.0, |sum, (_, ms)| sum + ms),
             gpu_ms,
@@ -849,10 +750,8 @@ impl Renderer {
             bounds_violations: c[gpu::STAT_BOUNDS_VIOLATIONS as usize],
             capped_pixels: c[gpu::STAT_CAPPED_PIXELS as usize],
             occupied_cells: occupied,
-            load_factor: occupied as f64 / self.hash.capacity as f64,
-            scene_f: self
-                .last_f
-                .map_or(scene_f, |(f, sections)| f.wrapping_add(sections)),
+            load_factor: occupied as f64 / capacity as f64,
+            scene_f: key.scene_f.wrapping_add(key.section_changes),
             map_f: self.key_f,
             accumulated_frames: self.still_index + 1,
             refine_rays: rays(gpu::RAYS_REFINE),
@@ -864,46 +763,44 @@ impl Renderer {
     }
 
     /// Renders one frame headless and waits for it.
-    pub fn render(&mut self, scene: &SceneGpu, scene_f: u32, camera: &Camera) -> Result<FrameReport> {
+    pub fn render(&mut self, frame: &FrameDesc) -> Result<FrameReport> {
         let t0 = Instant::now();
         let gpu = self.gpu.clone();
+        self.prepare(frame)?;
         let mut recorded = Ok(());
-        gpu.run_commands(|cmd| recorded = self.record_frame(cmd, scene, scene_f, camera))?;
+        gpu.run_commands(|cmd| recorded = self.record_prepared(cmd, frame))?;
         recorded?;
-        self.finish_frame(scene_f, t0.elapsed().as_secs_f64() * 1e3)
+        self.finish_frame(t0.elapsed().as_secs_f64() * 1e3)
     }
 
-    /// Chooses the faster primary visibility for `scene` by measurement: a frame without AO with each, timed
-    /// on the wall clock (GPU timestamps after a render pass are unreliable on lavapipe), after a warm-up frame
-    /// each (the first dispatch compiles pipelines). Keeps the choice in `self.primary` and returns it with the
+    /// Chooses the faster primary visibility for `frame`'s scene by measurement: a frame without AO with each,
+    /// timed on the wall clock (GPU timestamps after a render pass are unreliable on lavapipe), after a warm-up
+    /// frame each (the first dispatch compiles pipelines). Keeps the choice (`primary()`) and returns it with the
     /// two times in ms (ray queries, raster; NaN when a scene above `RASTER_TRIAL_TRIANGLES`, or a device that
-    /// cannot rasterise it, is not tried).
-    pub fn pick_primary(
-        &mut self,
-        scene: &SceneGpu,
-        scene_f: u32,
-        camera: &Camera,
-    ) -> Result<(Primary, f64, f64)> {
+    /// cannot rasterise it, is not tried). The hash map is untouched; the next frame starts a new still image.
+    pub fn pick_primary(&mut self, frame: &FrameDesc) -> Result<(Primary, f64, f64)> {
         if let Err(e) = Rasterizer::available(&self.gpu) {
             log::info!("{e}");
             self.primary = Primary::RayQuery;
             return Ok((self.primary, f64::NAN, f64::NAN));
         }
-        if scene.raster.triangles() > RASTER_TRIAL_TRIANGLES {
+        if frame.scene.raster.triangles() > RASTER_TRIAL_TRIANGLES {
             self.primary = Primary::RayQuery;
             return Ok((self.primary, f64::NAN, f64::NAN));
         }
-        let saved = self.settings.clone();
-        self.settings.mode = Mode::NoAo;
+        let mut no_ao = frame.settings.clone();
+        no_ao.display.mode = Mode::NoAo;
+        let probe = FrameDesc {
+            settings: &no_ao,
+            ..*frame
+        };
         let time = |r: &mut Renderer, primary| -> Result<f64> {
             r.primary = primary;
-            r.render(scene, scene_f, camera)?;
-            Ok(r.render(scene, scene_f, camera)?.wall_ms)
+            r.render(&probe)?;
+            Ok(r.render(&probe)?.wall_ms)
         };
         let ray_query = time(self, Primary::RayQuery);
         let raster = time(self, Primary::Raster);
-        self.settings = saved;
-        self.still_key = None;
         let (ray_query, raster) = (ray_query?, raster?);
         self.primary = if raster < ray_query {
             Primary::Raster
@@ -913,20 +810,21 @@ impl Renderer {
         Ok((self.primary, ray_query, raster))
     }
 
-    /// Whether the frame just rendered (`still_index` frames into its view, `young_pixels` of it on
+    /// Whether the frame just rendered (`key`, `still_index` frames into its view, `young_pixels` of it on
     /// cells that still take rays, traced this frame or not) is final: per-pixel RTAO and HRTAO with refinement
     /// once each pixel has `still_samples` of its own rays (and, with jitter, `AA_FRAMES` samples); the paper's
     /// HRTAO once no pixel on screen has a cell that takes rays; other modes once anti-aliased.
-    fn converged(&self, young_pixels: u64) -> bool {
-        let s = &self.settings;
+    fn converged(&self, key: &FrameKey, young_pixels: u64) -> bool {
+        let s = &key.settings;
+        let rpp = key.budget.rays_per_pixel as u64;
         let frames = self.still_index + 1;
-        let aa = !self.jitter || frames >= AA_FRAMES;
-        let own_rays = |frames: u32| frames as u64 * s.rays_per_pixel as u64 >= s.still_samples as u64;
-        match s.mode {
-            Mode::Rtao => aa && (s.rays_per_pixel == 0 || own_rays(frames)),
+        let aa = !key.jitter || frames >= AA_FRAMES;
+        let own_rays = |frames: u32| frames as u64 * rpp >= s.still.still_samples as u64;
+        match s.display.mode {
+            Mode::Rtao => aa && (rpp == 0 || own_rays(frames)),
             // Pixels near a local edit restarted their own rays then.
-            Mode::Hrtao if s.refine => {
-                aa && (s.rays_per_pixel == 0 || own_rays(self.still_index - self.edit_still_index))
+            Mode::Hrtao if s.still.refine => {
+                aa && (rpp == 0 || own_rays(self.still_index - self.edit_still_index))
             }
             Mode::Hrtao => young_pixels == 0 && frames > 1,
             _ => aa,
@@ -1038,14 +936,23 @@ impl Renderer {
     }
 
     pub fn read_hash_cells(&self) -> Result<Vec<HashCell>> {
-        self.read_buffer(&self.hash.cells, self.hash.capacity as usize)
+        match &self.hash {
+            Some(h) => self.read_buffer(&h.cells, h.capacity as usize),
+            None => Ok(Vec::new()),
+        }
     }
 
-    /// Evaluates the shaders' hash on `cases` (for the CPU-mirror test), with this renderer's s_min, s_nd and
-    /// capacity. Needs a scene only for the descriptor set's TLAS binding.
-    pub fn hash_on_gpu(&mut self, scene: &SceneGpu, cases: &[HashTestCase]) -> Result<Vec<HashTestCase>> {
+    /// Evaluates the shaders' hash on `cases` (for the CPU-mirror test), with the s_min, s_nd and capacity of
+    /// `settings`. Needs a scene only for the descriptor set's TLAS binding.
+    pub fn hash_on_gpu(
+        &mut self,
+        scene: &SceneGpu,
+        settings: &AoSettings,
+        cases: &[HashTestCase],
+    ) -> Result<Vec<HashTestCase>> {
+        self.ensure_hash(settings.map.hash_capacity)?;
         let buf = Buffer::from_slice(&self.gpu, "hash test cases", cases, vk::BufferUsageFlags::empty())?;
-        let mut globals = self.globals_for(&Camera::default(), 0);
+        let mut globals = self.globals_for(&FrameDesc::new(scene, 0, Camera::default(), settings), 0);
         const ROW: u32 = 256;
         globals.width = ROW;
         globals.height = (cases.len() as u32).div_ceil(ROW).max(1);
@@ -1063,14 +970,17 @@ impl Renderer {
 
     /// The keys of the cells the cell finder gives a G-buffer sample at each level (a CPU mirror of
     /// cell_finder.comp for tests of the map).
-    pub fn pixel_cell_keys(&self, camera: &Camera, scene_f: u32, px: &GPixel) -> [crate::hash::CellKey; 4] {
-        // The F cells are keyed with: the renderer's after a local edit of this F, else `scene_f`.
-        let key_f = if self.last_f.map(|l| l.0) == Some(scene_f) {
-            self.key_f
-        } else {
-            scene_f.wrapping_add(self.settings_f)
+    pub fn pixel_cell_keys(&self, frame: &FrameDesc, px: &GPixel) -> [crate::hash::CellKey; 4] {
+        // The F cells are keyed with: the renderer's for the last frame's F (after a local edit too), else the
+        // frame's.
+        let key_f = match &self.prev {
+            Some(k) if (k.scene_f, k.section_changes) == (frame.scene_f, frame.scene.section_changes()) => {
+                self.key_f
+            }
+            _ => frame.effective_f().wrapping_add(self.settings_f),
         };
-        let g = self.globals_for(camera, key_f);
+        let mut g = self.globals_for(frame, key_f);
+        g.hash_capacity = frame.settings.map.hash_capacity;
         let size = crate::hash::FeatureSize {
             base: g.s_w_base,
             per_distance: g.s_w_per_distance,

@@ -166,12 +166,13 @@ fn near_field_control_variate_cuts_contact_error() {
         sum / n as f32
     };
     let ours = hrtao(8, radius);
-    assert!(ours.near_weight > 0.0, "the correction is on by default");
+    assert!(ours.young.near_field, "the correction is on by default");
     // The paper's cell estimate: neither the near-field variate nor the contact detail (session 10) corrects it.
-    let cells = contact_error(hrtao_core::AoSettings {
-        near_weight: 0.0,
-        contact_detail: 0.0,
-        ..ours.clone()
+    let cells = contact_error({
+        let mut s = ours.clone();
+        s.young.near_field = false;
+        s.young.contact_detail = false;
+        s
     });
     let corrected = contact_error(ours);
     println!("wedge contact, HRTAO 1 frame: cells {cells:.4}, near-field corrected {corrected:.4}");
@@ -198,7 +199,7 @@ fn adaptive_sampling_and_level_blend_cut_first_frame_error_at_equal_rays() {
     let cam = wedge_camera([10.0, 0.0, 12.0], [4.0, 0.0, 0.0]);
     let sg = hrtao_core::SceneGpu::new(&gpu, &scene).expect("scene upload");
     let first_frame = |settings: hrtao_core::AoSettings| {
-        let mut r = hrtao_core::Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
+        let mut r = Headless::new(&gpu, cam.width, cam.height, settings).expect("renderer");
         let rays = r.render(&sg, scene.f(), &cam).expect("frame").rays;
         let ao = r.read_ao().unwrap();
         let gb = r.read_gbuffer().unwrap();
@@ -221,16 +222,21 @@ fn adaptive_sampling_and_level_blend_cut_first_frame_error_at_equal_rays() {
         (sum / n as f32, rays)
     };
     let ours = hrtao(8, radius);
-    assert!(ours.adaptive_rays && ours.level_blend > 0.0, "on by default");
-    let paper_like = hrtao_core::AoSettings {
-        adaptive_rays: false,
-        level_blend: 0.0,
-        ..ours.clone()
+    assert!(
+        ours.young.adaptive_rays && ours.young.level_blend,
+        "on by default"
+    );
+    let paper_like = {
+        let mut s = ours.clone();
+        s.young.adaptive_rays = false;
+        s.young.level_blend = false;
+        s
     };
     let (before, rays_before) = first_frame(paper_like);
-    let (blend, _) = first_frame(hrtao_core::AoSettings {
-        adaptive_rays: false,
-        ..ours.clone()
+    let (blend, _) = first_frame({
+        let mut s = ours.clone();
+        s.young.adaptive_rays = false;
+        s
     });
     let (after, rays_after) = first_frame(ours);
     println!(

@@ -2,31 +2,32 @@
 //! pixels traces each frame; the cells, which pool the rays of all their pixels (§3), still fill and converge.
 mod common;
 use common::*;
-use hrtao_core::{AoSettings, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, FrameDesc, RayBudget, SceneGpu};
 
 #[test]
 fn a_quarter_of_the_pixels_trace_and_the_cells_still_converge() {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene("rod", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let run = |settings: AoSettings, frames: u32| {
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    let run = |settings: AoSettings, fraction: f32, frames: u32| {
+        let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
+        r.budget = Some(RayBudget {
+            rays_per_pixel: 2,
+            trace_fraction: fraction,
+        });
         let mut rays = Vec::new();
         for _ in 0..frames {
             rays.push(r.render(&sg, scene.f(), &cam).unwrap().rays);
         }
         (rays, r.read_ao().unwrap())
     };
-    let full = AoSettings {
-        refine: false,
-        ..hrtao(2, radius)
+    let full = {
+        let mut s = hrtao(2, radius);
+        s.still.refine = false;
+        s
     };
-    let quarter = AoSettings {
-        trace_fraction: 0.25,
-        ..full.clone()
-    };
-    let (full_rays, full_ao) = run(full, 4);
-    let (quarter_rays, quarter_ao) = run(quarter, 16);
+    let (full_rays, full_ao) = run(full.clone(), 1.0, 4);
+    let (quarter_rays, quarter_ao) = run(full.clone(), 0.25, 16);
     // The first frame from an empty map: every pixel's cell takes rays, so the fraction is the ray ratio.
     let ratio = quarter_rays[0] as f64 / full_rays[0] as f64;
     println!(
@@ -47,11 +48,16 @@ fn a_quarter_of_the_pixels_trace_and_the_cells_still_converge() {
     );
     assert_clean(&gpu);
     // Out-of-range fractions are refused.
+    let mut r = hrtao_core::Renderer::new(&gpu).unwrap();
     for bad in [0.0, -1.0, 1.5, f32::NAN] {
-        let s = AoSettings {
-            trace_fraction: bad,
-            ..AoSettings::default()
+        let frame = FrameDesc {
+            budget: Some(RayBudget {
+                rays_per_pixel: 2,
+                trace_fraction: bad,
+            }),
+            ..FrameDesc::new(&sg, scene.f(), cam, &full)
         };
-        assert!(s.validate().is_err(), "{bad} accepted");
+        let e = r.render(&frame).unwrap_err().to_string();
+        assert!(e.contains("trace fraction"), "{bad} accepted: {e}");
     }
 }

@@ -14,7 +14,7 @@ fn contact_detail_lowers_the_first_frame_error() {
         "cycloidal",
         320,
         180,
-        &[r#"{"contact_detail": 0}"#, r#"{"contact_detail": 1}"#],
+        &[r#"{"contact_detail": false}"#, r#"{"contact_detail": true}"#],
     );
     println!(
         "cycloidal 320x180, HRTAO 1 frame: without contact detail {:.4}, with {:.4}",

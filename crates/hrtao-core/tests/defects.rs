@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use hrtao_core::{AoSettings, Camera, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, SceneGpu};
 use hrtao_scene::Scene;
 
 /// A floor (instance 0) with three 2 x 2 x 2 blocks standing on it (instances 1..=3), 6 apart along x.
@@ -26,12 +26,9 @@ fn camera() -> Camera {
 
 /// The paper's mode (refinement off) at 4 rays and R = 3, with `overrides`.
 fn cells_only(overrides: &str) -> AoSettings {
-    AoSettings {
-        refine: false,
-        ..hrtao(4, 3.0)
-    }
-    .with_overrides(overrides)
-    .unwrap()
+    let mut s = hrtao(4, 3.0);
+    s.still.refine = false;
+    s.with_overrides(overrides).unwrap()
 }
 
 /// `min_samples = 0` (the panel allows it) resolves as 1 does: the finest cell with rays. Before the fix
@@ -44,9 +41,17 @@ fn min_samples_zero_shows_no_white_holes() {
     let cam = camera();
     let image = |min_samples: u32| {
         let s = cells_only(&format!(
-            r#"{{"min_samples": {min_samples}, "trace_fraction": 0.05, "filter": false}}"#
+            r#"{{"min_samples": {min_samples}, "filter_iterations": 0}}"#
         ));
-        let (r, _sg) = render(&gpu, &scene, &cam, s, 2);
+        let sg = SceneGpu::new(&gpu, &scene).unwrap();
+        let mut r = Headless::new(&gpu, cam.width, cam.height, s).unwrap();
+        r.budget = Some(hrtao_core::RayBudget {
+            rays_per_pixel: 4,
+            trace_fraction: 0.05,
+        });
+        for _ in 0..2 {
+            r.render(&sg, scene.f(), &cam).unwrap();
+        }
         (r.read_ao().unwrap(), r.read_gbuffer().unwrap())
     };
     let (zero, gbuf) = image(0);
@@ -82,7 +87,7 @@ fn the_tlas_descriptor_is_rewritten_after_every_rebuild() {
     let mut scene = blocks();
     let cam = camera();
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, cells_only("{}")).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, cells_only("{}")).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     let before = r.tlas_descriptor_writes();
@@ -148,7 +153,7 @@ fn the_papers_mode_never_reports_convergence_with_young_cells_on_screen() {
     // Cells that fill in a few frames of the full budget until some thousand pixels are left on young cells,
     // then a fractional budget that picks none of them in most frames.
     let s = cells_only(r#"{"max_samples": 256, "rays_per_pixel": 8}"#);
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
     let mut counts = Vec::new();
     for _ in 0..64 {
         let young = r.render(&sg, scene.f(), &cam).unwrap().ray_pixels;
@@ -160,7 +165,7 @@ fn the_papers_mode_never_reports_convergence_with_young_cells_on_screen() {
     eprintln!("pixels on young cells, frame by frame: {counts:?}");
     assert!((1..4000).contains(counts.last().unwrap()));
     // The pixels on young cells, from the last frame's cells.
-    let young_pixels = |r: &Renderer, max_samples: u32| {
+    let young_pixels = |r: &Headless, max_samples: u32| {
         let cells = r.read_hash_cells().unwrap();
         r.read_pixel_cells()
             .unwrap()
@@ -173,14 +178,13 @@ fn the_papers_mode_never_reports_convergence_with_young_cells_on_screen() {
     };
     let mut reported = Vec::new();
     for fraction in [0.0005, 1.0] {
-        let s = AoSettings {
+        r.budget = Some(hrtao_core::RayBudget {
+            rays_per_pixel: s.map.rays_per_pixel,
             trace_fraction: fraction,
-            ..s.clone()
-        };
-        r.set_settings(s.clone()).unwrap();
+        });
         for frame in 0..64 {
             if r.render(&sg, scene.f(), &cam).unwrap().converged {
-                let young = young_pixels(&r, s.max_samples);
+                let young = young_pixels(&r, s.map.max_samples);
                 eprintln!("trace fraction {fraction}: converged at frame {frame} with {young} pixels on young cells");
                 reported.push((fraction, frame, young));
                 break;
@@ -201,7 +205,7 @@ fn the_papers_mode_never_reports_convergence_with_young_cells_on_screen() {
 
 /// Surface pixels of the floor (instance 0) next to where block `part` stood: within `ring` of its old box,
 /// outside it (its contact shadow).
-fn ring_pixels(r: &Renderer, bounds: hrtao_scene::Aabb, ring: f32) -> Vec<usize> {
+fn ring_pixels(r: &Headless, bounds: hrtao_scene::Aabb, ring: f32) -> Vec<usize> {
     let gbuf = r.read_gbuffer().unwrap();
     (0..gbuf.len())
         .filter(|&i| {
@@ -231,7 +235,7 @@ fn a_deleted_parts_contact_shadow_does_not_come_back_when_the_radius_crosses_a_p
     let cam = camera();
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
     let s = cells_only(r#"{"max_samples": 64}"#);
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
     for _ in 0..24 {
         r.render(&sg, scene.f(), &cam).unwrap();
     }
@@ -246,13 +250,14 @@ fn a_deleted_parts_contact_shadow_does_not_come_back_when_the_radius_crosses_a_p
     }
     let lod = r.region_lod();
     // R x max_cell_fraction: 0.75 -> 1.125, the largest finest cell crosses 1 (a power of two).
-    let wider = AoSettings {
-        ao_radius: 4.5,
-        ..s.clone()
+    let wider = {
+        let mut s = s.clone();
+        s.map.ao_radius = 4.5;
+        s
     };
     r.set_settings(wider.clone()).unwrap();
-    assert_ne!(r.region_lod(), lod, "the region grids change");
     r.render(&sg, scene.f(), &cam).unwrap();
+    assert_ne!(r.region_lod(), lod, "the region grids change");
     let after = mean_at(&r.read_ao().unwrap(), &ring);
     let (fresh, _sg) = render(&gpu, &scene, &cam, wider, 1);
     let expected = mean_at(&fresh.read_ao().unwrap(), &ring);
@@ -285,13 +290,10 @@ fn a_local_edit_with_refinement_shows_no_ghost_of_the_removed_part() {
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
     // Cells wider than the contact shadow: the pixels' own rays find it darker than their cells, and their
     // residuals (pooled with the neighbours') hold it.
-    let s = AoSettings {
-        s_p: 16.0,
-        max_cell_fraction: 1.0,
-        ..hrtao(4, 3.0)
-    };
-    assert!(s.refine && s.local_edits && s.residual_sigma > 0.0);
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
+    let mut s = hrtao(4, 3.0);
+    s.map.s_p = 16.0;
+    assert!(s.still.refine && s.edits.local_edits);
+    let mut r = Headless::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
     for _ in 0..24 {
         r.render(&sg, scene.f(), &cam).unwrap();
     }
@@ -334,11 +336,12 @@ fn ray_counts_reach_the_report_exactly_each_frame() {
     let scene = blocks();
     let cam = camera();
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let s = AoSettings {
-        mode: hrtao_core::Mode::Rtao,
-        ..hrtao(7, 3.0)
+    let s = {
+        let mut s = hrtao(7, 3.0);
+        s.display.mode = hrtao_core::Mode::Rtao;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, s).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, s).unwrap();
     for frame in 0..3 {
         let rep = r.render(&sg, scene.f(), &cam).unwrap();
         let surface = r.read_gbuffer().unwrap().iter().filter(|p| p.t >= 0.0).count() as u64;

@@ -2,7 +2,7 @@
 mod common;
 use common::*;
 use hrtao_core::gpu::NO_INSTANCE;
-use hrtao_core::{AoSettings, Renderer, SceneGpu};
+use hrtao_core::SceneGpu;
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{Instance, Mesh};
 
@@ -48,11 +48,12 @@ fn outline_check(cam: &hrtao_core::Camera) {
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     // Per-pixel RTAO: deterministic, so the AO images can be compared exactly.
     let frame = |edges: bool| {
-        let settings = AoSettings {
-            edges,
-            ..rtao(4, 3.0)
+        let settings = {
+            let mut s = rtao(4, 3.0);
+            s.display.edges = edges;
+            s
         };
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+        let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
         for _ in 0..2 {
             r.render(&sg, scene.f(), cam).unwrap();
         }
@@ -108,15 +109,11 @@ fn edge_pixels(
     let cam = top_down_camera(10.0, w, h);
     let sg = SceneGpu::new(gpu, scene).unwrap();
     let image = |edges: bool| {
-        let mut r = Renderer::new(
-            gpu,
-            w,
-            h,
-            AoSettings {
-                edges,
-                ..rtao(1, 3.0)
-            },
-        )
+        let mut r = Headless::new(gpu, w, h, {
+            let mut s = rtao(1, 3.0);
+            s.display.edges = edges;
+            s
+        })
         .unwrap();
         r.view_height = view_height;
         r.render(&sg, scene.f(), &cam).unwrap();

@@ -5,11 +5,11 @@
 mod common;
 use common::*;
 use glam::{Quat, Vec3};
-use hrtao_core::{gpu, FrameReport, Renderer, SceneGpu};
+use hrtao_core::{gpu, FrameReport, SceneGpu};
 
 /// Filter iterations summed over the pixels, and the pixels with AO. The frame's filter queue (`report`) holds
 /// exactly the pixels that take an iteration.
-fn planned(r: &Renderer, report: &FrameReport) -> (u64, usize) {
+fn planned(r: &Headless, report: &FrameReport) -> (u64, usize) {
     let mask = (1u32 << gpu::FILTER_PLAN_BITS) - 1;
     let plan = r.read_filter_plan().unwrap();
     let lods = r.read_lod_used().unwrap();
@@ -25,8 +25,8 @@ fn young_cells_take_every_iteration_and_settled_navigation_filters_like_the_pape
     let (scene, mut cam, radius) = shared_scene("rod", 320, 180);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let ours = hrtao(8, radius);
-    let iterations = ours.filter_iterations as f64;
-    let mut rs = [ours.clone(), ours.paper()].map(|s| Renderer::new(&gpu, cam.width, cam.height, s).unwrap());
+    let iterations = ours.filter.filter_iterations as f64;
+    let mut rs = [ours.clone(), ours.paper()].map(|s| Headless::new(&gpu, cam.width, cam.height, s).unwrap());
 
     // The first frame from an empty map: every cell is young (tens of rays), so ours smooths with nearly every
     // iteration while the paper's filter stays within the cells' footprint (one or two).

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use hrtao_core::camera::UpAxis;
-use hrtao_core::{Camera, Renderer, SceneGpu};
+use hrtao_core::{Camera, SceneGpu};
 
 /// A generated city block (towers with recessed windows: many faces of a few pixels beside parallel ones).
 const CITY: &str = "gen:city?blocks=2&per_block=2&floors=12&seed=3";
@@ -23,8 +23,11 @@ fn guided_filter_reach_first_frame_error() {
     let converged = reference(&gpu, &scene, &cam, radius, 64, 16);
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
     let settings = hrtao(8, radius);
-    assert!(settings.filter_sigma > 0.0, "the guided filter is on by default");
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
+    assert!(
+        settings.filter.variance_filter,
+        "the guided filter is on by default"
+    );
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).expect("renderer");
     let rays = r.render(&sg, scene.f(), &cam).expect("frame").rays;
     let e = mae(&r.read_ao().unwrap(), &converged);
     println!("city 320x180, HRTAO 1 frame: {e:.4} ({rays} rays)");

@@ -2,7 +2,7 @@
 mod common;
 use common::*;
 use hrtao_core::gpu::HashTestCase;
-use hrtao_core::{hash, AoSettings, Renderer, SceneGpu};
+use hrtao_core::{hash, AoSettings, SceneGpu};
 use hrtao_scene::glam::Vec3;
 
 /// A small deterministic generator (no rand dependency).
@@ -25,12 +25,13 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
     let gpu = gpu();
     let scene = scene_of(vec![floor()]);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let settings = AoSettings {
-        hash_capacity: 1 << 16,
-        s_nd: 3.0,
-        ..Default::default()
+    let settings = {
+        let mut s = AoSettings::default();
+        s.map.hash_capacity = 1 << 16;
+        s.map.s_nd = 3.0;
+        s
     };
-    let mut r = Renderer::new(&gpu, 16, 16, settings.clone()).unwrap();
+    let mut r = Headless::new(&gpu, 16, 16, settings.clone()).unwrap();
     let mut rng = Lcg(7);
     let mut cases = Vec::new();
     for i in 0..4096u32 {
@@ -59,7 +60,7 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
         });
     }
     let out = r.hash_on_gpu(&sg, &cases).unwrap();
-    let l2 = hash::log2_s_min(settings.s_min);
+    let l2 = hash::log2_s_min(settings.map.s_min);
     let mut mismatches = 0;
     for (c, g) in cases.iter().zip(&out) {
         let lod = hash::lod_of(c.s_w, l2) + c.lod_offset as i32;
@@ -68,12 +69,12 @@ fn gpu_hash_matches_cpu_bit_for_bit() {
             Vec3::from(c.normal),
             lod,
             hash::NormalBins {
-                s_nd: settings.s_nd,
-                offset: settings.normal_offset,
+                s_nd: settings.map.s_nd,
+                offset: settings.map.normal_offset(),
             },
             c.scene_f,
             c.epoch,
-            settings.hash_capacity,
+            settings.map.hash_capacity,
         );
         let region = hash::region_index(hash::cell_coord(Vec3::from(c.position), lod), lod, r.region_lod());
         if (g.lod, g.index, g.checksum, g.region) != (lod, key.slot, key.checksum, region) {

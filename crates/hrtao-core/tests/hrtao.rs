@@ -2,7 +2,7 @@
 //! counter F after edits, and hash-map overload.
 mod common;
 use common::*;
-use hrtao_core::{gpu, AoSettings, Renderer, SceneGpu};
+use hrtao_core::{gpu, SceneGpu};
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{Instance, Mesh};
 
@@ -15,7 +15,7 @@ fn quality_on(key: &str) {
     let pp_mae = mae(&pp.read_ao().unwrap(), &reference);
 
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(rays, radius)).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, hrtao(rays, radius)).unwrap();
     let mut errors = Vec::new();
     for _ in 0..4 {
         r.render(&sg, scene.f(), &cam).unwrap();
@@ -54,12 +54,13 @@ fn navigation_reuses_capped_cells() {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene("cycloidal", 320, 180);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let settings = AoSettings {
-        max_samples: 64,
-        refine: false,
-        ..hrtao(16, radius)
+    let settings = {
+        let mut s = hrtao(16, radius);
+        s.map.max_samples = 64;
+        s.still.refine = false;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
     let first = r.render(&sg, scene.f(), &cam).unwrap();
     // The paper's navigation runs on a warm map: the view rests for two more frames.
     for _ in 0..2 {
@@ -117,11 +118,12 @@ fn edits_bump_f_and_old_cells_are_never_read() {
         ..Default::default()
     };
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let settings = AoSettings {
-        local_edits: false,
-        ..hrtao(8, 4.0)
+    let settings = {
+        let mut s = hrtao(8, 4.0);
+        s.edits.local_edits = false;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
     let mut map_f = 0;
     for _ in 0..3 {
         map_f = r.render(&sg, scene.f(), &cam).unwrap().map_f;
@@ -162,7 +164,7 @@ fn edits_bump_f_and_old_cells_are_never_read() {
     assert!(before < 0.6, "the plate darkens the floor ({before})");
     assert!(after > 0.97, "the freed floor is open again ({after})");
     // Every cell a pixel uses holds its key of the new F.
-    check_map(&r, &cam, scene.f(), None);
+    check_map(&r, &sg, &cam, scene.f(), None);
     assert_clean(&gpu);
 }
 
@@ -174,25 +176,27 @@ fn overloaded_map_stays_finite_and_falls_back_to_coarser_levels() {
     let reference = reference(&gpu, &scene, &cam, radius, 32, 4);
     // How many cells this view needs, with room to spare.
     // Small cells (s_p = 1.5) so the view needs many of them.
-    let base = AoSettings {
-        s_p: 1.5,
-        ..hrtao(4, radius)
+    let base = {
+        let mut s = hrtao(4, radius);
+        s.map.s_p = 1.5;
+        s
     };
-    let mut roomy = Renderer::new(&gpu, cam.width, cam.height, base.clone()).unwrap();
+    let mut roomy = Headless::new(&gpu, cam.width, cam.height, base.clone()).unwrap();
     let need = roomy.render(&sg, scene.f(), &cam).unwrap().occupied_cells;
     let capacity = (need / 10 + 1).next_power_of_two() / 2;
     let overload = need as f32 / capacity as f32;
-    let settings = AoSettings {
-        hash_capacity: capacity,
-        ..base
+    let settings = {
+        let mut s = base;
+        s.map.hash_capacity = capacity;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
     let mut failed = 0;
     for _ in 0..4 {
         let before = r.read_hash_cells().unwrap();
         let rep = r.render(&sg, scene.f(), &cam).unwrap();
         failed += rep.failed_inserts;
-        check_map(&r, &cam, scene.f(), Some(&before));
+        check_map(&r, &sg, &cam, scene.f(), Some(&before));
     }
     let ao = r.read_ao().unwrap();
     assert!(ao.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
@@ -216,7 +220,7 @@ fn debug_views_show_cells_lods_and_samples() {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, radius)).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, hrtao(4, radius)).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     let mut colours = Vec::new();
     for mode in [
@@ -224,9 +228,10 @@ fn debug_views_show_cells_lods_and_samples() {
         hrtao_core::Mode::DebugLod,
         hrtao_core::Mode::DebugSamples,
     ] {
-        r.set_settings(AoSettings {
-            mode,
-            ..r.settings.clone()
+        r.set_settings({
+            let mut s = r.settings.clone();
+            s.display.mode = mode;
+            s
         })
         .unwrap();
         r.render(&sg, scene.f(), &cam).unwrap();
@@ -251,13 +256,14 @@ fn stale_cells_are_reclaimed_so_the_map_never_fills() {
     let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     // A small map and a short staleness window; the camera visits new places every frame.
-    let settings = AoSettings {
-        hash_capacity: 8192,
-        stale_frames: 2,
-        cell_gradient: 2.0,
-        ..hrtao(1, radius)
+    let settings = {
+        let mut s = hrtao(1, radius);
+        s.map.hash_capacity = 8192;
+        s.map.stale_frames = 2;
+        s.young.linear_cells = true;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
     let (mut reclaimed, mut last_failed) = (0, 0);
     for i in 0..12 {
         let mut c = cam;
@@ -271,7 +277,7 @@ fn stale_cells_are_reclaimed_so_the_map_never_fills() {
         let rep = r.render(&sg, scene.f(), &c).unwrap();
         reclaimed += rep.reclaimed;
         last_failed = rep.failed_inserts;
-        check_map(&r, &c, scene.f(), Some(&before));
+        check_map(&r, &sg, &c, scene.f(), Some(&before));
     }
     println!("8192-cell map, 12 views: {reclaimed} cells reclaimed, {last_failed} failed inserts in the last frame");
     assert!(reclaimed > 1000, "stale cells must be reused");
@@ -286,28 +292,25 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
     let gpu = gpu();
     let (mut scene, cam, radius) = shared_scene("rod", 320, 180);
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let base = AoSettings {
-        s_p: 1.0,
-        cell_gradient: 2.0,
-        ..hrtao(4, radius)
+    let base = {
+        let mut s = hrtao(4, radius);
+        s.map.s_p = 1.0;
+        s.young.linear_cells = true;
+        s
     };
-    let need = Renderer::new(&gpu, cam.width, cam.height, base.clone())
+    let need = Headless::new(&gpu, cam.width, cam.height, base.clone())
         .unwrap()
         .render(&sg, scene.f(), &cam)
         .unwrap()
         .occupied_cells;
     // The largest power of two at most a tenth of the need (the map's smallest size is 1024).
     let capacity = (1u32 << (31 - (need / 10).max(1).leading_zeros())).max(1024);
-    let mut r = Renderer::new(
-        &gpu,
-        cam.width,
-        cam.height,
-        AoSettings {
-            hash_capacity: capacity,
-            stale_frames: 3,
-            ..base
-        },
-    )
+    let mut r = Headless::new(&gpu, cam.width, cam.height, {
+        let mut s = base;
+        s.map.hash_capacity = capacity;
+        s.map.stale_frames = 3;
+        s
+    })
     .unwrap();
     let start = scene.instances[0].transform;
     let (mut failed, mut reclaimed, mut live) = (0u64, 0u64, 0usize);
@@ -325,7 +328,7 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
         let rep = r.render(&sg, scene.f(), &c).unwrap();
         failed += rep.failed_inserts as u64;
         reclaimed += rep.reclaimed as u64;
-        live = check_map(&r, &c, scene.f(), Some(&before)).live_cells;
+        live = check_map(&r, &sg, &c, scene.f(), Some(&before)).live_cells;
     }
     println!(
         "{need} cells needed, capacity {capacity}: {failed} failed inserts, {reclaimed} reclaimed, {live} live cells at the end"
@@ -345,11 +348,12 @@ fn a_still_view_converges_and_then_reports_it() {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene("rod", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let settings = AoSettings {
-        still_samples: 32,
-        ..hrtao(8, radius)
+    let settings = {
+        let mut s = hrtao(8, radius);
+        s.still.still_samples = 32;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
     let done: Vec<bool> = (0..6)
         .map(|_| r.render(&sg, scene.f(), &cam).unwrap().converged)
         .collect();
@@ -367,16 +371,12 @@ fn a_still_view_converges_and_then_reports_it() {
         "instance updates invalidate the image"
     );
     assert!(!r.render(&sg, scene.f(), &moved).unwrap().converged);
-    let mut paper = Renderer::new(
-        &gpu,
-        cam.width,
-        cam.height,
-        AoSettings {
-            refine: false,
-            max_samples: 64,
-            ..settings
-        },
-    )
+    let mut paper = Headless::new(&gpu, cam.width, cam.height, {
+        let mut s = settings;
+        s.still.refine = false;
+        s.map.max_samples = 64;
+        s
+    })
     .unwrap();
     let mut frames = 0;
     while !paper.render(&sg, scene.f(), &cam).unwrap().converged {

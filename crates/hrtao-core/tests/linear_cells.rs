@@ -15,8 +15,8 @@ fn linear_cells_lower_the_first_frame_error() {
         320,
         180,
         &[
-            r#"{"cell_gradient": 0, "contact_detail": 0}"#,
-            r#"{"cell_gradient": 2, "contact_detail": 0}"#,
+            r#"{"linear_cells": false, "contact_detail": false}"#,
+            r#"{"linear_cells": true, "contact_detail": false}"#,
         ],
     );
     println!(

@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use glam::{Mat4, Vec3};
-use hrtao_core::{AoSettings, Camera, Renderer, SceneGpu, SectionPlane, Sections};
+use hrtao_core::{AoSettings, Camera, SceneGpu, SectionPlane, Sections};
 use hrtao_scene::{Primitive, Scene};
 
 /// A floor (instance 0) with a row of 2 x 2 x 2 blocks (instances 1..) standing on it along x, 12 apart.
@@ -83,8 +83,8 @@ fn run(
     control_sg
         .set_sections(&control_scene, sections, u32::MAX)
         .unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
-    let mut control = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+    let mut control = Headless::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
     let mut cell_rays_empty = 0;
     for f in 0..24 {
         let rep = r.render(&sg, scene.f(), &cam).unwrap();
@@ -117,7 +117,7 @@ fn run(
     // The edited scene (and planes) from an empty map, same settings and frame count.
     let mut fresh_sg = SceneGpu::new(&gpu, &scene).unwrap();
     fresh_sg.set_sections(&scene, sg.sections(), u32::MAX).unwrap();
-    let mut fresh = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
+    let mut fresh = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
     for _ in 0..17 {
         fresh.render(&fresh_sg, scene.f(), &cam).unwrap();
     }
@@ -175,10 +175,9 @@ fn assert_local(e: &EditRun) {
 
 /// Cells full after 16 rays per pixel, so that after 24 frames only new cells take rays.
 fn settings() -> AoSettings {
-    AoSettings {
-        max_samples: 64,
-        ..hrtao(4, RADIUS)
-    }
+    let mut s = hrtao(4, RADIUS);
+    s.map.max_samples = 64;
+    s
 }
 
 #[test]
@@ -187,9 +186,10 @@ fn moving_one_part_keeps_the_ao_far_from_it() {
     let ours = run(yard, settings(), &none, move_part);
     let paper = run(
         yard,
-        AoSettings {
-            local_edits: false,
-            ..settings()
+        {
+            let mut s = settings();
+            s.edits.local_edits = false;
+            s
         },
         &none,
         move_part,

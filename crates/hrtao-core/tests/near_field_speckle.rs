@@ -53,7 +53,7 @@ fn roughness(ao: &[f32], f: &FirstFrames, w: usize, h: usize) -> f32 {
 #[test]
 fn near_field_correction_does_not_speckle_the_first_frame() {
     let (w, h) = (640, 360);
-    let f = first_frames("cycloidal", w, h, &[r#"{"near_weight": 0}"#, "{}"]);
+    let f = first_frames("cycloidal", w, h, &[r#"{"near_field": false}"#, "{}"]);
     let rough: Vec<f32> =
         f.ao.iter()
             .map(|a| roughness(a, &f, w as usize, h as usize))

@@ -4,7 +4,7 @@ mod common;
 use common::*;
 use hrtao_core::camera::Projection;
 use hrtao_core::gpu::NO_INSTANCE;
-use hrtao_core::{Camera, Primary, Renderer, SceneGpu};
+use hrtao_core::{Camera, Primary, SceneGpu};
 use hrtao_scene::glam::Vec3;
 
 /// A closed box `2 a.x x 2 a.y x 2 a.z` centred at `c`.
@@ -37,8 +37,8 @@ fn orthographic_box_silhouette_has_its_analytic_extent() {
     // 64 pixels span 4 world units: the box covers 32 x 16 pixel centres, at any eye height, even with the eye
     // inside the box (orthographic rays start in front of the scene bounds: nothing is clipped).
     let hits = |cam: &Camera, primary: Primary| {
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, rtao(1, 1.0)).unwrap();
-        r.primary = primary;
+        let mut r = Headless::new(&gpu, cam.width, cam.height, rtao(1, 1.0)).unwrap();
+        r.set_primary(primary);
         r.render(&sg, scene.f(), cam).unwrap();
         r.read_gbuffer().unwrap()
     };
@@ -83,7 +83,8 @@ fn orthographic_box_silhouette_has_its_analytic_extent() {
 fn orthographic_feature_size_does_not_depend_on_distance() {
     let gpu = gpu();
     let settings = hrtao(4, 2.0);
-    let r = Renderer::new(&gpu, 64, 64, settings.clone()).unwrap();
+    let r = Headless::new(&gpu, 64, 64, settings.clone()).unwrap();
+    let sg = SceneGpu::new(&gpu, &scene_of(vec![floor()])).unwrap();
     let px = |t: f32| hrtao_core::gpu::GPixel {
         position: [0.3, 0.2, 0.0],
         t,
@@ -95,18 +96,18 @@ fn orthographic_feature_size_does_not_depend_on_distance() {
     // Orthographic: the same cell at 1 and 1000 units from the eye plane; its size is s_p ortho_height / R_y.
     let cam = ortho_top_down(10.0, 4.0, 64, 64);
     assert_eq!(
-        r.pixel_cell_keys(&cam, 0, &px(1.0)),
-        r.pixel_cell_keys(&cam, 0, &px(1000.0))
+        r.pixel_cell_keys(&sg, &cam, 0, &px(1.0)),
+        r.pixel_cell_keys(&sg, &cam, 0, &px(1000.0))
     );
-    let s_w = settings.s_p * 4.0 / 64.0;
-    let size = hrtao_core::hash::FeatureSize::for_camera(&cam, 64, settings.s_p);
+    let s_w = settings.map.s_p * 4.0 / 64.0;
+    let size = hrtao_core::hash::FeatureSize::for_camera(&cam, 64, settings.map.s_p);
     assert_eq!(size.at(1.0), s_w);
     assert_eq!(size.at(1000.0), s_w);
     // Perspective: the cells grow with the distance.
     let persp = top_down_camera(10.0, 64, 64);
     assert_ne!(
-        r.pixel_cell_keys(&persp, 0, &px(1.0)),
-        r.pixel_cell_keys(&persp, 0, &px(1000.0))
+        r.pixel_cell_keys(&sg, &persp, 0, &px(1.0)),
+        r.pixel_cell_keys(&sg, &persp, 0, &px(1000.0))
     );
     assert_clean(&gpu);
 }
@@ -118,7 +119,7 @@ fn orthographic_hrtao_converges_to_orthographic_rtao() {
     let cam = persp.with_projection(Projection::Orthographic);
     let reference = reference(&gpu, &scene, &cam, radius, 64, 4);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, radius)).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, hrtao(4, radius)).unwrap();
     let mut errors = Vec::new();
     for _ in 0..16 {
         r.render(&sg, scene.f(), &cam).unwrap();
@@ -132,7 +133,7 @@ fn orthographic_hrtao_converges_to_orthographic_rtao() {
     );
     assert!(covered > gb.len() / 10, "the framing keeps the part in view");
     // The GPU's cells are the CPU mirror's keys for the orthographic eq. 2.
-    check_map(&r, &cam, scene.f(), None);
+    check_map(&r, &sg, &cam, scene.f(), None);
     assert!(errors[15] <= 0.02, "MAE after 16 frames: {}", errors[15]);
     assert!(errors[15] < errors[0], "{errors:?}");
     assert_clean(&gpu);

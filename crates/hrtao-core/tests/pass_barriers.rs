@@ -7,7 +7,7 @@ mod common;
 use common::*;
 
 use hrtao_core::barrier::{uncovered_hazards, Event};
-use hrtao_core::{AoSettings, Primary, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Primary, SceneGpu};
 
 const R: f32 = 8.0;
 
@@ -37,8 +37,8 @@ fn young_and_navigation(settings: AoSettings, primary: Primary) -> [(usize, usiz
     let gpu = gpu();
     let (scene, cam) = bundled(160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
-    r.primary = primary;
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
+    r.set_primary(primary);
     let mut out = Vec::new();
     let young = r.render(&sg, scene.f(), &cam).unwrap();
     assert!(young.ray_pixels > 0, "the first frame queues pixels for rays");
@@ -73,11 +73,9 @@ fn young_and_navigation(settings: AoSettings, primary: Primary) -> [(usize, usiz
 }
 
 fn defaults() -> AoSettings {
-    AoSettings {
-        ao_radius: R,
-        hash_capacity: 1 << 17,
-        ..AoSettings::default()
-    }
+    let mut s = AoSettings::default().with_radius(R);
+    s.map.hash_capacity = 1 << 17;
+    s
 }
 
 #[test]
@@ -120,7 +118,7 @@ fn checker_reports_a_removed_barrier() {
     let gpu = gpu();
     let (scene, cam) = bundled(160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, defaults()).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, defaults()).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     let events = r.last_frame_events().to_vec();
     let last = events.len() - 1;

@@ -2,7 +2,7 @@
 //! filter, a young cell's pixel is corrected by the rays its 3x3 same-plane neighbours traced this frame.
 mod common;
 use common::*;
-use hrtao_core::{AoSettings, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, SceneGpu};
 
 /// One frame from an empty map at 8 rays per pixel on the cycloidal gearbox (320x180) against its Cycles
 /// reference: the correction lowers the error at the same rays (measured 0.0185 -> 0.0166, the same on a second
@@ -14,16 +14,17 @@ fn pooled_residual_cuts_first_frame_error_at_equal_rays() {
     let cycles = cycles_ref("cycloidal", 320, 180);
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
     let first_frame = |settings: AoSettings| {
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
+        let mut r = Headless::new(&gpu, cam.width, cam.height, settings).expect("renderer");
         let rays = r.render(&sg, scene.f(), &cam).expect("frame").rays;
         (mae(&r.read_ao().unwrap(), &cycles), rays)
     };
     let ours = hrtao(8, radius);
-    assert!(ours.pooled_residual > 0.0, "on by default");
-    assert_eq!(ours.paper().pooled_residual, 0.0, "off in the paper's mode");
-    let (before, rays_before) = first_frame(AoSettings {
-        pooled_residual: 0.0,
-        ..ours.clone()
+    assert!(ours.young.pooled_residual, "on by default");
+    assert!(!ours.paper().young.pooled_residual, "off in the paper's mode");
+    let (before, rays_before) = first_frame({
+        let mut s = ours.clone();
+        s.young.pooled_residual = false;
+        s
     });
     let (after, rays_after) = first_frame(ours);
     println!(
@@ -46,21 +47,23 @@ fn pooled_residual_leaves_full_cells_alone() {
     let sg = SceneGpu::new(&gpu, &scene).expect("scene upload");
     // One map for both images: which pixel takes which of a cell's samples depends on the GPU's thread order,
     // so two renderers fill their cells with different rays (a few pixels differ between runs).
-    let settings = AoSettings {
-        max_samples: 16,
-        refine: false,
-        pooled_residual: 16.0,
-        ..hrtao(8, radius)
+    let settings = {
+        let mut s = hrtao(8, radius);
+        s.map.max_samples = 16;
+        s.still.refine = false;
+        s.young.pooled_residual = true;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).expect("renderer");
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings.clone()).expect("renderer");
     let mut last_rays = 0;
     for _ in 0..6 {
         last_rays = r.render(&sg, scene.f(), &cam).expect("frame").rays;
     }
     let on = r.read_ao().unwrap();
-    r.set_settings(AoSettings {
-        pooled_residual: 0.0,
-        ..settings
+    r.set_settings({
+        let mut s = settings;
+        s.young.pooled_residual = false;
+        s
     })
     .expect("settings");
     r.render(&sg, scene.f(), &cam).expect("frame");

@@ -7,7 +7,7 @@ use common::*;
 use hrtao_core::camera::UpAxis;
 use hrtao_core::gpu::{GPixel, NO_INSTANCE};
 use hrtao_core::section::{SectionPlane, Sections};
-use hrtao_core::{AoSettings, Camera, Gpu, Primary, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, Gpu, Primary, SceneGpu};
 use hrtao_scene::Scene;
 
 /// G-buffer and AO after `frames` frames with the given primary visibility.
@@ -20,8 +20,8 @@ fn render_with(
     primary: Primary,
     frames: u32,
 ) -> (Vec<GPixel>, Vec<f32>) {
-    let mut r = Renderer::new(gpu, cam.width, cam.height, settings.clone()).unwrap();
-    r.primary = primary;
+    let mut r = Headless::new(gpu, cam.width, cam.height, settings.clone()).unwrap();
+    r.set_primary(primary);
     for _ in 0..frames {
         r.render(sg, scene.f(), cam).unwrap();
     }
@@ -218,15 +218,15 @@ fn raster_follows_resizes_and_mode_switches() {
     let gpu = gpu();
     let scene = hrtao_scene::generate("gen:slab?h=1&size=10&ground=100", &mut |_| {}).unwrap();
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, 64, 48, rtao(1, 1.0)).unwrap();
-    r.primary = Primary::Raster;
+    let mut r = Headless::new(&gpu, 64, 48, rtao(1, 1.0)).unwrap();
+    r.set_primary(Primary::Raster);
     for (w, h) in [(64, 48), (81, 59)] {
-        r.resize(w, h).unwrap();
+        r.resize(w, h);
         let cam = top_down_camera(20.0, w, h);
-        r.primary = Primary::Raster;
+        r.set_primary(Primary::Raster);
         r.render(&sg, scene.f(), &cam).unwrap();
         let raster = r.read_gbuffer().unwrap();
-        r.primary = Primary::RayQuery;
+        r.set_primary(Primary::RayQuery);
         r.render(&sg, scene.f(), &cam).unwrap();
         let rq = r.read_gbuffer().unwrap();
         assert_eq!(raster.len(), (w * h) as usize);
@@ -242,8 +242,8 @@ fn jittered_still_frames_sample_the_same_surfaces() {
     let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let gbuffer = |primary| {
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
-        r.primary = primary;
+        let mut r = Headless::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
+        r.set_primary(primary);
         r.jitter = true;
         for _ in 0..3 {
             r.render(&sg, scene.f(), &cam).unwrap();
@@ -258,7 +258,7 @@ fn jittered_still_frames_sample_the_same_surfaces() {
         fraction * 100.0
     );
     // And the jitter is real: the third frame's samples are not the pixel centres.
-    let mut centred = Renderer::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
+    let mut centred = Headless::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
     centred.render(&sg, scene.f(), &cam).unwrap();
     let c = centred.read_gbuffer().unwrap();
     let moved = c
@@ -280,7 +280,7 @@ fn primary_visibility_is_picked_by_measurement_and_massive_scenes_keep_ray_queri
     let b = scene.bounds();
     let cam = Camera::fit(b.min, b.max, UpAxis::Z, 45.0, 160, 100);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, hrtao(4, 4.0)).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, hrtao(4, 4.0)).unwrap();
     let (picked, rq_ms, raster_ms) = r.pick_primary(&sg, scene.f(), &cam).unwrap();
     println!("city: {picked:?} (ray queries {rq_ms:.1} ms, raster {raster_ms:.1} ms)");
     assert!(rq_ms > 0.0 && raster_ms > 0.0);
@@ -292,9 +292,9 @@ fn primary_visibility_is_picked_by_measurement_and_massive_scenes_keep_ray_queri
             Primary::RayQuery
         }
     );
-    assert_eq!(r.primary, picked);
+    assert_eq!(r.primary(), picked);
     assert_eq!(
-        r.settings.mode,
+        r.settings.display.mode,
         hrtao_core::Mode::Hrtao,
         "the trial restores the settings"
     );
@@ -324,8 +324,8 @@ fn reported_pass_times_account_for_the_frame() {
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let mut timed = 0;
     for primary in [Primary::RayQuery, Primary::Raster] {
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, AoSettings::default()).unwrap();
-        r.primary = primary;
+        let mut r = Headless::new(&gpu, cam.width, cam.height, AoSettings::default()).unwrap();
+        r.set_primary(primary);
         for frame in 0..3 {
             let rep = r.render(&sg, scene.f(), &cam).unwrap();
             println!(

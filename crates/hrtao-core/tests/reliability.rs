@@ -1,7 +1,7 @@
 //! Reliability: device trouble gives clear errors; a long run with edits stays bounded and clean.
 mod common;
 use common::*;
-use hrtao_core::{AoSettings, ContextOptions, CoreError, Gpu, Renderer, SceneGpu};
+use hrtao_core::{ContextOptions, CoreError, Gpu, SceneGpu};
 use hrtao_scene::glam::{Mat4, Vec3};
 
 #[test]
@@ -70,13 +70,14 @@ fn soak_with_edits_stays_bounded_and_clean() {
     let (mut scene, cam, radius) = shared_scene("rod", 160, 90);
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
     let capacity = 1 << 14;
-    let settings = AoSettings {
-        hash_capacity: capacity,
-        stale_frames: 30,
-        ..hrtao(2, radius)
+    let settings = {
+        let mut s = hrtao(2, radius);
+        s.map.hash_capacity = capacity;
+        s.map.stale_frames = 30;
+        s
     };
-    let mut r = Renderer::new(&gpu, 64, 36, settings).unwrap();
-    r.check_bounds = true;
+    let mut r = Headless::new(&gpu, 64, 36, settings).unwrap();
+    r.set_check_bounds(true);
     let base = scene.instances[0].transform;
     let (mut mem_after_warmup, mut rss_after_warmup) = (0, 0);
     let (mut max_occupied, mut edits, mut failed, mut reclaimed) = (0, 0, 0u64, 0u64);
@@ -113,7 +114,7 @@ fn soak_with_edits_stays_bounded_and_clean() {
                 "frame {i}: the occupancy counter disagrees with the table"
             );
             // Every pixel reads a cell of its key under the current F; no duplicates; counters bounded.
-            check_map(&r, &c, scene.f(), None);
+            check_map(&r, &sg, &c, scene.f(), None);
             let ao = r.read_ao().unwrap();
             assert!(ao.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
         }
@@ -151,10 +152,11 @@ fn target_cells_stop_taking_rays_at_max_samples() {
     let gpu = gpu();
     let scene = scene_of(vec![floor()]);
     let cam = top_down_camera(20.0, 64, 36);
-    let settings = AoSettings {
-        max_samples: 32,
-        refine: false,
-        ..hrtao(4, 8.0)
+    let settings = {
+        let mut s = hrtao(4, 8.0);
+        s.map.max_samples = 32;
+        s.still.refine = false;
+        s
     };
     let (r, _sg) = render(&gpu, &scene, &cam, settings.clone(), 12);
     let cells = r.read_hash_cells().unwrap();
@@ -168,9 +170,9 @@ fn target_cells_stop_taking_rays_at_max_samples() {
     let (mut worst, mut full) = (0i64, 0usize);
     for (&c, &pixels) in &targets {
         let q = cells[c as usize].qmc_index;
-        let bound = settings.max_samples + 4 * settings.rays_per_pixel * pixels;
-        worst = worst.max(q as i64 - settings.max_samples as i64);
-        full += (q >= settings.max_samples) as usize;
+        let bound = settings.map.max_samples + 4 * settings.map.rays_per_pixel * pixels;
+        worst = worst.max(q as i64 - settings.map.max_samples as i64);
+        full += (q >= settings.map.max_samples) as usize;
         assert!(q <= bound, "cell {c} ({pixels} pixels): QMC index {q} > {bound}");
     }
     eprintln!(

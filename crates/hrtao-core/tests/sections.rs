@@ -3,7 +3,7 @@
 mod common;
 use common::*;
 use hrtao_core::gpu::GPIXEL_SECTION;
-use hrtao_core::{AoSettings, Camera, Primary, Renderer, SceneGpu, SectionPlane, Sections};
+use hrtao_core::{AoSettings, Camera, Primary, SceneGpu, SectionPlane, Sections};
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{Instance, Mesh, Primitive, Scene};
 
@@ -77,8 +77,8 @@ fn render_cut(
     let gpu = gpu();
     let mut sg = SceneGpu::new(&gpu, scene).unwrap();
     sg.set_sections(scene, sections, u32::MAX).unwrap();
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
-    r.primary = primary;
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
+    r.set_primary(primary);
     for _ in 0..frames {
         r.render(&sg, f, cam).unwrap();
     }
@@ -151,12 +151,12 @@ fn a_plane_cutting_a_box_away_gives_the_ao_of_the_scene_without_it() {
             let e = mae(&with_plane.ao, &reference.ao);
             eprintln!(
                 "{:?}, sides {sides:?}: MAE {e} against the scene without B",
-                settings.mode
+                settings.display.mode
             );
             assert!(
                 e <= 0.01,
                 "{:?}, sides {sides:?}: MAE {e} against the scene without B",
-                settings.mode
+                settings.display.mode
             );
             assert!(
                 !with_plane.section.iter().any(|&s| s),
@@ -182,9 +182,13 @@ fn a_plane_through_a_box_shows_a_section_cap_and_the_ao_of_the_cut_box() {
     let cam = camera([1.5, -4.0, 5.0], [0.0, 0.0, 0.5]);
     let cut = plane([0.0, 0.0, 1.0], 1.0);
     // Without feature edges, which darken the cap's outline.
-    let no_edges = |s: AoSettings| AoSettings { edges: false, ..s };
+    let no_edges = |s: AoSettings| {
+        let mut s = s;
+        s.display.edges = false;
+        s
+    };
     for settings in [no_edges(rtao(8, 3.0)), no_edges(hrtao(8, 3.0))] {
-        let frames = if settings.mode == hrtao_core::Mode::Rtao {
+        let frames = if settings.display.mode == hrtao_core::Mode::Rtao {
             4
         } else {
             12
@@ -215,12 +219,12 @@ fn a_plane_through_a_box_shows_a_section_cap_and_the_ao_of_the_cut_box() {
             let e = mae(&cut_frame.ao, &reference.ao);
             eprintln!(
                 "{:?} {primary:?}: MAE {e} against the half-height box",
-                settings.mode
+                settings.display.mode
             );
             assert!(
                 e <= 0.01,
                 "{:?} {primary:?}: MAE {e} against the half-height box",
-                settings.mode
+                settings.display.mode
             );
             // The cap: where the half box shows its top face (the only surface at z = 1 facing up), in the
             // section colour.
@@ -252,11 +256,12 @@ fn a_plane_change_is_a_scene_change() {
     let s = scene(vec![a, b]);
     let cam = camera([-0.6, -3.0, 3.5], [-0.6, 0.0, 0.5]);
     let mut sg = SceneGpu::new(&gpu, &s).unwrap();
-    let paper = AoSettings {
-        local_edits: false,
-        ..hrtao(4, 1.0)
+    let paper = {
+        let mut s = hrtao(4, 1.0);
+        s.edits.local_edits = false;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, paper).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, paper).unwrap();
     let f0 = r.render(&sg, s.f(), &cam).unwrap().scene_f;
     assert_eq!(r.render(&sg, s.f(), &cam).unwrap().accumulated_frames, 2);
     let tlas = sg.tlas.raw;
@@ -309,11 +314,12 @@ fn a_moved_plane_invalidates_only_its_slab() {
     let mut sg = SceneGpu::new(&gpu, &s).unwrap();
     sg.set_sections(&s, &before, u32::MAX).unwrap();
     // Cells full after 64 rays: after 8 frames only new cells take rays.
-    let settings = AoSettings {
-        max_samples: 64,
-        ..hrtao(8, 1.0)
+    let settings = {
+        let mut s = hrtao(8, 1.0);
+        s.map.max_samples = 64;
+        s
     };
-    let mut r = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
     let first = r.render(&sg, s.f(), &cam).unwrap();
     for _ in 0..7 {
         r.render(&sg, s.f(), &cam).unwrap();

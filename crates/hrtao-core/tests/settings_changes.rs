@@ -6,18 +6,17 @@ mod common;
 use common::*;
 use std::sync::Arc;
 
-use hrtao_core::{AoSettings, Camera, Gpu, Invalidates, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, Gpu, Invalidates, SceneGpu};
 
 /// The AO radius used with the bundled scene (assets/README.md).
 const R: f32 = 8.0;
 
 /// The defaults at R with refinement off (cells show) and a table sized for 160 x 90.
 fn base() -> AoSettings {
-    AoSettings {
-        refine: false,
-        hash_capacity: 1 << 17,
-        ..hrtao(4, R)
-    }
+    let mut s = hrtao(4, R);
+    s.still.refine = false;
+    s.map.hash_capacity = 1 << 17;
+    s
 }
 
 /// Mean |a - b| over the pixels where either is not open.
@@ -36,11 +35,12 @@ fn fresh(
     warmup: u32,
     f: u32,
 ) -> Vec<f32> {
-    let mut r = Renderer::new(gpu, cam.width, cam.height, s.clone()).unwrap();
+    let mut r = Headless::new(gpu, cam.width, cam.height, s.clone()).unwrap();
     if warmup > 0 {
-        r.set_settings(AoSettings {
-            mode: hrtao_core::Mode::NoAo,
-            ..s.clone()
+        r.set_settings({
+            let mut s = s.clone();
+            s.display.mode = hrtao_core::Mode::NoAo;
+            s
         })
         .unwrap();
         for _ in 0..warmup {
@@ -81,7 +81,7 @@ fn change(
     before: u32,
     after: u32,
 ) -> Changed {
-    let mut r = Renderer::new(gpu, cam.width, cam.height, from.clone()).unwrap();
+    let mut r = Headless::new(gpu, cam.width, cam.height, from.clone()).unwrap();
     let mut f_before = 0;
     for _ in 0..before {
         f_before = r.render(sg, 0, cam).unwrap().map_f;
@@ -121,38 +121,30 @@ fn changed_values() -> Vec<(&'static str, serde_json::Value)> {
         ("mode", json!("rtao")),
         ("ao_radius", json!(1.5 * R)),
         ("rays_per_pixel", json!(8)),
-        ("trace_fraction", json!(0.5)),
         ("s_p", json!(8.0)),
         ("s_nd", json!(5.0)),
-        ("normal_offset", json!(0.5)),
+        ("offset_bins", json!(false)),
         ("s_min", json!(0.5)),
         ("max_samples", json!(200)),
         ("min_samples", json!(0)),
-        ("filter", json!(false)),
-        ("filter_iterations", json!(2)),
-        ("filter_sigma", json!(0.0)),
         ("hash_capacity", json!(1 << 18)),
-        ("max_probe", json!(16)),
         ("stale_frames", json!(100)),
-        ("shaded", json!(false)),
+        ("cell_cap", json!(false)),
+        ("filter_iterations", json!(2)),
+        ("variance_filter", json!(false)),
         ("refine", json!(true)),
-        ("prior_rays", json!(8.0)),
-        ("prior_rays_max", json!(1024.0)),
-        ("prior_sigma", json!(2.0)),
-        ("residual_sigma", json!(0.0)),
-        ("still_smoothing", json!(1.0)),
         ("still_samples", json!(16)),
-        ("max_cell_fraction", json!(0.5)),
+        ("adaptive_prior", json!(true)),
+        ("adaptive_rays", json!(false)),
+        ("near_field", json!(false)),
+        ("level_blend", json!(false)),
+        ("pooled_residual", json!(false)),
+        ("contact_detail", json!(false)),
+        ("linear_cells", json!(true)),
+        ("local_edits", json!(false)),
+        ("shaded", json!(false)),
         ("edges", json!(false)),
         ("crease_deg", json!(20.0)),
-        ("local_edits", json!(false)),
-        ("near_weight", json!(0.0)),
-        ("near_fraction", json!(0.25)),
-        ("level_blend", json!(0.0)),
-        ("adaptive_rays", json!(false)),
-        ("pooled_residual", json!(0.0)),
-        ("cell_gradient", json!(2.0)),
-        ("contact_detail", json!(0.0)),
     ]
 }
 
@@ -191,11 +183,12 @@ fn every_setting_changed_mid_run_gives_a_fresh_renderers_image() {
     let edited = base
         .with_overrides(r#"{"ao_radius": 12.0, "s_nd": 5.0}"#)
         .unwrap();
-    let defaults = AoSettings {
-        ao_radius: R,
-        refine: false,
-        hash_capacity: 1 << 17,
-        ..AoSettings::default()
+    let defaults = {
+        let mut s = AoSettings::default();
+        s.map.ao_radius = R;
+        s.still.refine = false;
+        s.map.hash_capacity = 1 << 17;
+        s
     };
     cases.push(("Defaults preset".into(), edited, defaults));
     let mut failures = Vec::new();
@@ -242,9 +235,10 @@ fn a_radius_change_mid_run_ends_at_a_fresh_renders_image() {
     let (scene, cam) = bundled(160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let from = base();
-    let to = AoSettings {
-        ao_radius: 1.5 * R,
-        ..from.clone()
+    let to = {
+        let mut s = from.clone();
+        s.map.ao_radius = 1.5 * R;
+        s
     };
     let c = change(&gpu, &sg, &cam, &from, &to, 32, 32);
     assert_eq!(c.class, Invalidates::WholeMap);

@@ -3,7 +3,7 @@
 mod common;
 use common::*;
 use hrtao_core::tile::TileGrid;
-use hrtao_core::{AoSettings, Camera, Mode, Primary, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, Mode, Primary, SceneGpu};
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{Instance, Mesh};
 
@@ -38,12 +38,13 @@ fn tiles_assemble_into_the_whole_image() {
     };
     let ortho = perspective.with_projection(hrtao_core::camera::Projection::Orthographic);
     for cam in [perspective, ortho] {
-        let settings = AoSettings {
-            mode: Mode::NoAo,
-            edges: true,
-            ..Default::default()
+        let settings = {
+            let mut s = AoSettings::default();
+            s.display.mode = Mode::NoAo;
+            s.display.edges = true;
+            s
         };
-        let mut whole = Renderer::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+        let mut whole = Headless::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
         whole.render(&sg, scene.f(), &cam).unwrap();
         let expected = whole.read_rgba().unwrap();
 
@@ -52,8 +53,8 @@ fn tiles_assemble_into_the_whole_image() {
         let (tw, th) = grid.render_size();
         // Both primary visibilities: rays through the tile's frame, and the rasteriser's off-axis frustum.
         for primary in [Primary::RayQuery, Primary::Raster] {
-            let mut r = Renderer::new(&gpu, tw, th, settings.clone()).unwrap();
-            r.primary = primary;
+            let mut r = Headless::new(&gpu, tw, th, settings.clone()).unwrap();
+            r.set_primary(primary);
             let mut image = vec![0u8; expected.len()];
             for i in 0..grid.len() {
                 r.tile = Some(grid.tile(i));

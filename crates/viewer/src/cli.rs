@@ -227,25 +227,25 @@ pub struct AoArgs {
     #[arg(long)]
     pub radius: Option<f32>,
     /// Ray budget: rays per pixel per frame.
-    #[arg(long, default_value_t = AoSettings::default().rays_per_pixel)]
+    #[arg(long, default_value_t = AoSettings::default().map.rays_per_pixel)]
     pub rays: u32,
     /// s_p: target feature size in pixels (eq. 2).
-    #[arg(long, default_value_t = AoSettings::default().s_p)]
+    #[arg(long, default_value_t = AoSettings::default().map.s_p)]
     pub sp: f32,
     /// s_nd: normal discretisation (eq. 5).
-    #[arg(long, default_value_t = AoSettings::default().s_nd)]
+    #[arg(long, default_value_t = AoSettings::default().map.s_nd)]
     pub snd: f32,
     /// Rays per hash cell after which the cell stops receiving rays.
-    #[arg(long, default_value_t = AoSettings::default().max_samples)]
+    #[arg(long, default_value_t = AoSettings::default().map.max_samples)]
     pub max_samples: u32,
     /// Minimum samples before a cell is used instead of a coarser one (§4).
-    #[arg(long, default_value_t = AoSettings::default().min_samples)]
+    #[arg(long, default_value_t = AoSettings::default().map.min_samples)]
     pub min_samples: u32,
     /// À-trous filter iterations (0 disables the filter, §5).
-    #[arg(long, default_value_t = AoSettings::default().filter_iterations)]
+    #[arg(long, default_value_t = AoSettings::default().filter.filter_iterations)]
     pub filter_iterations: u32,
     /// Hash map capacity in cells (a power of two).
-    #[arg(long, default_value_t = AoSettings::default().hash_capacity, value_parser = parse_hash_capacity)]
+    #[arg(long, default_value_t = AoSettings::default().map.hash_capacity, value_parser = parse_hash_capacity)]
     pub hash_capacity: u32,
     /// Render a uniform grey clay instead of the materials' base colours.
     #[arg(long)]
@@ -254,10 +254,10 @@ pub struct AoArgs {
     #[arg(long)]
     pub edges: bool,
     /// Crease angle of the feature edges, in degrees.
-    #[arg(long, default_value_t = AoSettings::default().crease_deg)]
+    #[arg(long, default_value_t = AoSettings::default().display.crease_deg)]
     pub crease: f32,
     /// Any other AO setting, as a JSON object of `AoSettings` fields (applied last), e.g.
-    /// `--set '{"near_weight": 0, "adaptive_rays": false}'`.
+    /// `--set '{"near_field": false, "adaptive_rays": false}'`.
     #[arg(long, value_name = "JSON", value_parser = parse_settings_json)]
     pub set: Option<String>,
 }
@@ -269,22 +269,19 @@ impl AoArgs {
         } else {
             1.0
         };
-        let settings = AoSettings {
-            mode: self.mode,
-            ao_radius: self.radius.unwrap_or((scene_diagonal * 0.05).max(1e-6)),
-            rays_per_pixel: self.rays,
-            s_p: self.sp,
-            s_nd: self.snd,
-            max_samples: self.max_samples,
-            min_samples: self.min_samples,
-            filter: self.filter_iterations > 0,
-            filter_iterations: self.filter_iterations,
-            hash_capacity: self.hash_capacity,
-            shaded: !self.clay,
-            edges: self.edges,
-            crease_deg: self.crease,
-            ..AoSettings::default()
-        };
+        let mut settings = AoSettings::default();
+        settings.display.mode = self.mode;
+        settings.map.ao_radius = self.radius.unwrap_or((scene_diagonal * 0.05).max(1e-6));
+        settings.map.rays_per_pixel = self.rays;
+        settings.map.s_p = self.sp;
+        settings.map.s_nd = self.snd;
+        settings.map.max_samples = self.max_samples;
+        settings.map.min_samples = self.min_samples;
+        settings.filter.filter_iterations = self.filter_iterations;
+        settings.map.hash_capacity = self.hash_capacity;
+        settings.display.shaded = !self.clay;
+        settings.display.edges = self.edges;
+        settings.display.crease_deg = self.crease;
         match &self.set {
             Some(json) => settings.with_overrides(json).map_err(anyhow::Error::msg),
             None => Ok(settings),

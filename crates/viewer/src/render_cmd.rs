@@ -2,7 +2,7 @@
 use std::time::Instant;
 
 use anyhow::{anyhow, Result};
-use hrtao_core::{imageio, Camera, FrameReport, Renderer, SceneGpu};
+use hrtao_core::{imageio, Camera, FrameDesc, FrameReport, Renderer, SceneGpu};
 
 use crate::cli::{DeviceArgs, RenderArgs};
 use crate::common::{default_scene_path, load_scene, open_gpu, progress, write_json};
@@ -56,7 +56,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
     let mut settings = args.ao.settings(bounds.diagonal().length())?;
     if bundled && args.ao.radius.is_none() {
-        settings.ao_radius = crate::view::BUNDLED_RADIUS;
+        settings.map.ao_radius = crate::view::BUNDLED_RADIUS;
     }
     settings.validate().map_err(|e| anyhow::anyhow!(e))?;
 
@@ -71,7 +71,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene_gpu.stats.tlas_instances,
         scene_gpu.stats.tlas_ms
     );
-    let mut renderer = Renderer::new(&gpu, camera.width, camera.height, settings.clone())?;
+    let mut renderer = Renderer::new(&gpu)?;
     let t0 = Instant::now();
     let mut frames = Vec::new();
     let bar = progress(args.frames as u64, "rendering");
@@ -82,15 +82,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 .with_overrides(json)
                 .map_err(|e| anyhow!("--set-at-frame {i}: {e}"))?;
             log::info!("settings after frame {i}: {json}");
-            renderer.set_settings(settings.clone())?;
         }
-        let report = renderer.render(&scene_gpu, scene.f(), &camera)?;
+        let report = renderer.render(&FrameDesc::new(&scene_gpu, scene.f(), camera, &settings))?;
         log::info!(
             "frame {i}: {:.1} ms wall, {:.1} ms GPU, {} rays{}",
             report.wall_ms,
             report.gpu_total_ms,
             report.rays,
-            if settings.mode.uses_hash() {
+            if settings.display.mode.uses_hash() {
                 format!(
                     ", {} cells ({:.1}% load), {} failed inserts",
                     report.occupied_cells,

@@ -32,7 +32,7 @@ impl Args {
     }
 }
 
-/// `base` with the fields of the JSON object `overrides` replaced (e.g. `{"filter_sigma": 0}`).
+/// `base` with the fields of the JSON object `overrides` replaced (e.g. `{"variance_filter": false}`).
 pub fn with_overrides(base: &AoSettings, overrides: &str) -> anyhow::Result<AoSettings> {
     base.with_overrides(overrides).map_err(anyhow::Error::msg)
 }

@@ -2,7 +2,10 @@
 #![allow(dead_code)]
 use std::sync::Arc;
 
-use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Mode, Renderer, SceneGpu};
+use hrtao_core::{
+    AoSettings, Camera, ContextOptions, FrameDesc, FrameReport, Gpu, Mode, Output, RayBudget, Renderer,
+    SceneGpu,
+};
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{Instance, Mesh, Primitive, Scene};
 
@@ -115,11 +118,142 @@ pub fn top_down_camera(height: f32, w: u32, h: u32) -> Camera {
 }
 
 pub fn rtao(rays: u32, radius: f32) -> AoSettings {
-    AoSettings {
-        mode: Mode::Rtao,
-        rays_per_pixel: rays,
-        ao_radius: radius,
-        ..Default::default()
+    let mut s = hrtao(rays, radius);
+    s.display.mode = Mode::Rtao;
+    s
+}
+
+/// A renderer and the frame description a test keeps from frame to frame, as a viewer would: the settings, the
+/// render size (the camera's size is replaced by it), tile, jitter, view height and budget. Everything else of
+/// the renderer is reached through `Deref`.
+#[allow(dead_code)]
+pub struct Headless {
+    pub r: Renderer,
+    pub settings: AoSettings,
+    pub size: (u32, u32),
+    pub jitter: bool,
+    pub tile: Option<hrtao_core::tile::Tile>,
+    pub view_height: u32,
+    pub budget: Option<RayBudget>,
+    pub output: Output,
+}
+
+#[allow(dead_code)]
+impl Headless {
+    pub fn new(
+        gpu: &Arc<Gpu>,
+        width: u32,
+        height: u32,
+        settings: AoSettings,
+    ) -> hrtao_core::Result<Headless> {
+        settings.validate().map_err(hrtao_core::CoreError::Invalid)?;
+        Ok(Headless {
+            r: Renderer::new(gpu)?,
+            settings,
+            size: (width.max(1), height.max(1)),
+            jitter: false,
+            tile: None,
+            view_height: 0,
+            budget: None,
+            output: Output::default(),
+        })
+    }
+
+    pub fn set_settings(&mut self, settings: AoSettings) -> hrtao_core::Result<()> {
+        settings.validate().map_err(hrtao_core::CoreError::Invalid)?;
+        self.settings = settings;
+        Ok(())
+    }
+
+    pub fn resize(&mut self, width: u32, height: u32) {
+        self.size = (width.max(1), height.max(1));
+    }
+
+    pub fn set_primary(&mut self, primary: hrtao_core::Primary) {
+        self.r.set_primary(primary);
+    }
+
+    /// The frame of `cam` (at this renderer's size) of `scene` at F = `scene_f` with `settings`.
+    pub fn frame_with<'a>(
+        &self,
+        scene: &'a SceneGpu,
+        scene_f: u32,
+        cam: &Camera,
+        settings: &'a AoSettings,
+    ) -> FrameDesc<'a> {
+        let camera = Camera {
+            width: self.size.0,
+            height: self.size.1,
+            ..*cam
+        };
+        FrameDesc {
+            view_height: self.view_height,
+            budget: self.budget,
+            tile: self.tile,
+            jitter: self.jitter,
+            output: self.output,
+            ..FrameDesc::new(scene, scene_f, camera, settings)
+        }
+    }
+
+    pub fn render(
+        &mut self,
+        scene: &SceneGpu,
+        scene_f: u32,
+        cam: &Camera,
+    ) -> hrtao_core::Result<FrameReport> {
+        let settings = self.settings.clone();
+        let frame = self.frame_with(scene, scene_f, cam, &settings);
+        self.r.render(&frame)
+    }
+
+    pub fn pick_primary(
+        &mut self,
+        scene: &SceneGpu,
+        scene_f: u32,
+        cam: &Camera,
+    ) -> hrtao_core::Result<(hrtao_core::Primary, f64, f64)> {
+        let settings = self.settings.clone();
+        let frame = self.frame_with(scene, scene_f, cam, &settings);
+        self.r.pick_primary(&frame)
+    }
+
+    pub fn shows_final(&self, scene: &SceneGpu, scene_f: u32, cam: &Camera) -> bool {
+        self.r
+            .shows_final(&self.frame_with(scene, scene_f, cam, &self.settings))
+    }
+
+    pub fn pixel_cell_keys(
+        &self,
+        scene: &SceneGpu,
+        cam: &Camera,
+        scene_f: u32,
+        px: &hrtao_core::gpu::GPixel,
+    ) -> [hrtao_core::hash::CellKey; 4] {
+        self.r
+            .pixel_cell_keys(&self.frame_with(scene, scene_f, cam, &self.settings), px)
+    }
+
+    pub fn hash_on_gpu(
+        &mut self,
+        scene: &SceneGpu,
+        cases: &[hrtao_core::gpu::HashTestCase],
+    ) -> hrtao_core::Result<Vec<hrtao_core::gpu::HashTestCase>> {
+        let settings = self.settings.clone();
+        self.r.hash_on_gpu(scene, &settings, cases)
+    }
+}
+
+impl std::ops::Deref for Headless {
+    type Target = Renderer;
+    fn deref(&self) -> &Renderer {
+        &self.r
+    }
+}
+
+impl std::ops::DerefMut for Headless {
+    fn deref_mut(&mut self) -> &mut Renderer {
+        &mut self.r
     }
 }
 
@@ -130,9 +264,9 @@ pub fn render(
     cam: &Camera,
     settings: AoSettings,
     frames: u32,
-) -> (Renderer, SceneGpu) {
+) -> (Headless, SceneGpu) {
     let sg = SceneGpu::new(gpu, scene).expect("scene upload");
-    let mut r = Renderer::new(gpu, cam.width, cam.height, settings).expect("renderer");
+    let mut r = Headless::new(gpu, cam.width, cam.height, settings).expect("renderer");
     for _ in 0..frames {
         r.render(&sg, scene.f(), cam).expect("frame");
     }
@@ -202,7 +336,7 @@ pub fn first_frames(key: &str, w: u32, h: u32, variants: &[&str]) -> FirstFrames
             let settings = hrtao(8, radius)
                 .with_overrides(variant)
                 .expect("settings overrides");
-            let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).expect("renderer");
+            let mut r = Headless::new(&gpu, cam.width, cam.height, settings).expect("renderer");
             r.render(&sg, scene.f(), &cam).expect("frame");
             gbuffer = r.read_gbuffer().unwrap();
             r.read_ao().unwrap()
@@ -242,12 +376,9 @@ pub fn reference(
 }
 
 pub fn hrtao(rays: u32, radius: f32) -> AoSettings {
-    AoSettings {
-        mode: Mode::Hrtao,
-        rays_per_pixel: rays,
-        ao_radius: radius,
-        ..Default::default()
-    }
+    let mut s = AoSettings::default().with_radius(radius);
+    s.map.rays_per_pixel = rays;
+    s
 }
 
 /// What `check_map` found: cells stamped in the last frame and pixels whose keys were checked.
@@ -266,7 +397,8 @@ pub struct MapCheck {
 /// - if `before` (the map before the frame) is given: no cell used this frame lost samples (a reset of a live
 ///   cell), unless its key changed.
 pub fn check_map(
-    r: &Renderer,
+    r: &Headless,
+    sg: &SceneGpu,
     cam: &Camera,
     scene_f: u32,
     before: Option<&[hrtao_core::gpu::HashCell]>,
@@ -276,7 +408,7 @@ pub fn check_map(
     let gbuf = r.read_gbuffer().unwrap();
     let pcs = r.read_pixel_cells().unwrap();
     let now = r.frame_index().wrapping_sub(1);
-    let s = &r.settings;
+    let s = &r.settings.map;
     let slack = (gbuf.len() as u32) * s.rays_per_pixel;
     let mut used = std::collections::HashSet::new();
     let mut out = MapCheck::default();
@@ -284,7 +416,7 @@ pub fn check_map(
         if px.t < 0.0 {
             continue;
         }
-        let keys = r.pixel_cell_keys(cam, scene_f, px);
+        let keys = r.pixel_cell_keys(sg, cam, scene_f, px);
         for (level, &c) in pc.cells.iter().enumerate() {
             if c == gpu::INVALID_CELL {
                 continue;
@@ -297,7 +429,7 @@ pub fn check_map(
             );
             let dist = c.wrapping_sub(keys[level].slot) & (s.hash_capacity - 1);
             assert!(
-                dist < s.max_probe,
+                dist < hrtao_core::settings::MAX_PROBE,
                 "cell {c} lies {dist} slots from its key's home"
             );
             assert_eq!(cell.last_frame(), now, "a cell used this frame was not stamped");
@@ -370,7 +502,7 @@ pub fn check_map(
             continue;
         }
         out.live_cells += 1;
-        for d in 1..s.max_probe as usize {
+        for d in 1..hrtao_core::settings::MAX_PROBE as usize {
             for j in [(i + d) % cap, (i + cap - d) % cap] {
                 let b = &cells[j];
                 let live = now.wrapping_sub(b.last_frame()) <= s.stale_frames;
@@ -381,8 +513,8 @@ pub fn check_map(
                 );
             }
         }
-        if let Some(before) = before {
-            let old = &before[i];
+        // (Before a renderer's first frame there is no map: nothing to compare with.)
+        if let Some(old) = before.and_then(|b| b.get(i)) {
             if old.checksum() == a.checksum() {
                 assert!(
                     a.samples >= old.samples,

@@ -18,7 +18,7 @@ use std::collections::BTreeMap;
 use anyhow::{bail, Context, Result};
 use hrtao_core::camera::UpAxis;
 use hrtao_core::metrics::{ao_error, AoError};
-use hrtao_core::{imageio, AoSettings, Camera, FrameReport, Mode, Renderer, SceneGpu};
+use hrtao_core::{imageio, AoSettings, Camera, FrameDesc, FrameReport, Mode, Renderer, SceneGpu};
 use serde::{Deserialize, Serialize};
 
 use crate::cli::{AutoCamera, BenchArgs};
@@ -487,17 +487,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         bail!("no navigation frame (--orbit 0)");
     }
     let mut hrtao_settings = args.ao.settings(bounds.diagonal().length())?;
-    hrtao_settings.mode = Mode::Hrtao;
+    hrtao_settings.display.mode = Mode::Hrtao;
     hrtao_settings.validate().map_err(|e| anyhow::anyhow!(e))?;
-    if hrtao_settings.rays_per_pixel == 0 {
+    if hrtao_settings.map.rays_per_pixel == 0 {
         bail!("--rays must be at least 1 for a benchmark");
     }
     if args.ao.mode != Mode::Hrtao {
         log::warn!("--mode is ignored: the bench runs HRTAO and per-pixel RTAO side by side");
     }
-    let rtao_settings = AoSettings {
-        mode: Mode::Rtao,
-        ..hrtao_settings.clone()
+    let rtao_settings = {
+        let mut s = hrtao_settings.clone();
+        s.display.mode = Mode::Rtao;
+        s
     };
 
     // Progress by phase: build, warm-up, HRTAO timing, per-pixel RTAO timing, quality.
@@ -519,34 +520,41 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         scene_gpu.stats.tlas_instances,
         scene_gpu.stats.tlas_ms
     );
-    let mut r = Renderer::new(&gpu, w, h, hrtao_settings.clone())?;
+    let mut r = Renderer::new(&gpu)?;
     let device_total_bytes = gpu.device_memory_bytes();
     let (device_scene_bytes, device_total_bytes, device_bytes_source) =
         if sane_bytes(device_scene_bytes) && sane_bytes(device_total_bytes) {
             (device_scene_bytes, device_total_bytes, "allocator")
         } else {
             log::warn!("the allocator's device byte count is not usable: reporting an estimate");
-            let total = scene_estimate + renderer_device_estimate(w, h, hrtao_settings.hash_capacity);
+            let total = scene_estimate + renderer_device_estimate(w, h, hrtao_settings.map.hash_capacity);
             (scene_estimate, total, "estimate")
         };
     let sf = scene.f();
 
     // The paper's behaviour (our additions off) on a renderer of its own, so both run side by side.
-    let mut paper_r = Renderer::new(&gpu, w, h, hrtao_settings.paper())?;
+    let mut paper_r = Renderer::new(&gpu)?;
+    let paper_settings = hrtao_settings.paper();
 
     bar.inc(1);
     bar.set_message("warm-up");
     // Warm-up (pipeline compilation, caches) for every mode.
-    r.render(&scene_gpu, sf, &camera)?;
-    paper_r.render(&scene_gpu, sf, &camera)?;
-    r.set_settings(rtao_settings.clone())?;
-    r.render(&scene_gpu, sf, &camera)?;
+    let frame = |cam: &Camera, s| FrameDesc::new(&scene_gpu, sf, *cam, s);
+    r.render(&frame(&camera, &hrtao_settings))?;
+    paper_r.render(&frame(&camera, &paper_settings))?;
+    r.render(&frame(&camera, &rtao_settings))?;
 
     bar.inc(1);
     bar.set_message("HRTAO timing");
     // 1. Timing: HRTAO and the paper's behaviour, frame by frame over the same cameras.
-    r.set_settings(hrtao_settings.clone())?;
-    let [hrtao, paper] = time_hrtao([&mut r, &mut paper_r], &scene_gpu, sf, &camera, &nav_cams, args)?;
+    let [hrtao, paper] = time_hrtao(
+        [(&mut r, &hrtao_settings), (&mut paper_r, &paper_settings)],
+        &scene_gpu,
+        sf,
+        &camera,
+        &nav_cams,
+        args,
+    )?;
     drop(paper_r);
     log::info!(
         "HRTAO: first {:.1} ms (passes {:.1} ms), nav {:.1} ms (passes {:.1} ms), GPU medians",
@@ -570,16 +578,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     bar.inc(1);
     bar.set_message("RTAO timing");
     // Per-pixel RTAO at the same B over the same cameras (no accumulation: each first frame after a reset).
-    r.set_settings(rtao_settings.clone())?;
+    r.restart_still_image();
     let mut first = Vec::new();
     for i in 0..args.repeat {
         // Repetitions accumulate (same camera), at the same cost per frame: B rays per covered pixel.
-        let rep = r.render(&scene_gpu, sf, &camera)?;
+        let rep = r.render(&frame(&camera, &rtao_settings))?;
         first.push(FrameRecord::new(i as usize, "first", &rep));
     }
     let mut nav = Vec::new();
     for (i, cam) in nav_cams.iter().enumerate() {
-        let rep = r.render(&scene_gpu, sf, cam)?;
+        let rep = r.render(&frame(cam, &rtao_settings))?;
         nav.push(FrameRecord::new(i + 1, "nav", &rep));
     }
     let rtao = ModeRun::new(first, Vec::new(), nav);
@@ -670,7 +678,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 /// always the one that runs first after the host's work: the first frame `--repeat` times from an empty map,
 /// static frames until each map has settled, then the navigation cameras.
 fn time_hrtao<const N: usize>(
-    rs: [&mut Renderer; N],
+    rs: [(&mut Renderer, &AoSettings); N],
     scene_gpu: &SceneGpu,
     sf: u32,
     camera: &Camera,
@@ -688,8 +696,8 @@ fn time_hrtao<const N: usize>(
     let mut first: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
     for i in 0..args.repeat as usize {
         for k in turn(i) {
-            rs[k].clear_cache()?;
-            let rep = rs[k].render(scene_gpu, sf, camera)?;
+            rs[k].0.clear_cache()?;
+            let rep = rs[k].0.render(&FrameDesc::new(scene_gpu, sf, *camera, rs[k].1))?;
             first[k].push(FrameRecord::new(i, "first", &rep));
         }
     }
@@ -700,7 +708,7 @@ fn time_hrtao<const N: usize>(
             if settled[k] {
                 continue;
             }
-            let rep = rs[k].render(scene_gpu, sf, camera)?;
+            let rep = rs[k].0.render(&FrameDesc::new(scene_gpu, sf, *camera, rs[k].1))?;
             settle[k].push(FrameRecord::new(i as usize + 1, "settle", &rep));
             // Settled once the cells take few rays (the still-camera refinement's own rays, which every pixel
             // traces while the view rests, do not count; the cells take some of them).
@@ -714,7 +722,7 @@ fn time_hrtao<const N: usize>(
     let mut nav: [Vec<FrameRecord>; N] = std::array::from_fn(|_| Vec::new());
     for (i, cam) in nav_cams.iter().enumerate() {
         for k in turn(i) {
-            let rep = rs[k].render(scene_gpu, sf, cam)?;
+            let rep = rs[k].0.render(&FrameDesc::new(scene_gpu, sf, *cam, rs[k].1))?;
             nav[k].push(FrameRecord::new(i + 1, "nav", &rep));
         }
     }
@@ -803,7 +811,7 @@ fn measure_quality(
     camera: &Camera,
     hrtao_settings: &AoSettings,
 ) -> Result<Quality> {
-    let b = hrtao_settings.rays_per_pixel;
+    let b = hrtao_settings.map.rays_per_pixel;
     let step = args.step;
     let max_rays = if args.max_rays == 0 {
         (64 * b).max(64)
@@ -817,12 +825,13 @@ fn measure_quality(
     let half = search_frames + ref_frames / 2;
 
     // Progressive per-pixel RTAO, `step` rays per frame, one accumulation.
-    r.set_settings(hrtao_settings.clone())?;
-    r.set_settings(AoSettings {
-        mode: Mode::Rtao,
-        rays_per_pixel: step,
-        ..hrtao_settings.clone()
-    })?;
+    let progressive = {
+        let mut s = hrtao_settings.clone();
+        s.display.mode = Mode::Rtao;
+        s.map.rays_per_pixel = step;
+        s
+    };
+    r.restart_still_image();
     log::info!(
         "quality: progressive per-pixel RTAO, {total_frames} frames of {step} rays (search up to {} rays, reference {} rays)",
         search_frames * step,
@@ -831,7 +840,7 @@ fn measure_quality(
     let mut avgs: BTreeMap<u32, Vec<f32>> = BTreeMap::new();
     let mut covered = 0u64;
     for f in 1..=total_frames {
-        let rep = r.render(scene_gpu, sf, camera)?;
+        let rep = r.render(&FrameDesc::new(scene_gpu, sf, *camera, &progressive))?;
         if rep.accumulated_frames != f {
             bail!(
                 "per-pixel RTAO accumulation restarted at frame {f} (accumulated {})",
@@ -862,12 +871,13 @@ fn measure_quality(
     drop(avgs);
 
     // Per-pixel RTAO, one frame at B (samples 0..B, disjoint from the reference when B <= max_rays).
-    r.set_settings(hrtao_settings.clone())?;
-    r.set_settings(AoSettings {
-        mode: Mode::Rtao,
-        ..hrtao_settings.clone()
-    })?;
-    r.render(scene_gpu, sf, camera)?;
+    let rtao_b = {
+        let mut s = hrtao_settings.clone();
+        s.display.mode = Mode::Rtao;
+        s
+    };
+    r.restart_still_image();
+    r.render(&FrameDesc::new(scene_gpu, sf, *camera, &rtao_b))?;
     let rtao_b_img = r.read_ao()?;
     let rtao_same_b = err_point(b as f64, ao_error(&rtao_b_img, &reference));
 
@@ -976,7 +986,7 @@ fn still_run(
     reference: &[f32],
     (mae_curve, rmse_curve): (Curve, Curve),
 ) -> Result<StillRun> {
-    r.set_settings(settings.clone())?;
+    r.restart_still_image();
     r.clear_cache()?;
     let mut curve = Vec::new();
     let mut cum_rays = 0u64;
@@ -984,7 +994,7 @@ fn still_run(
     let mut prev: Vec<f32> = Vec::new();
     let (mut flicker, mut flicker_n) = (0.0, 0u32);
     for f in 1..=frames {
-        let rep = r.render(scene_gpu, sf, camera)?;
+        let rep = r.render(&FrameDesc::new(scene_gpu, sf, *camera, settings))?;
         cum_rays += rep.rays;
         let img = r.read_ao()?;
         let e = ao_error(&img, reference);

@@ -9,7 +9,7 @@ pub const MAX_RAYS_PER_FRAME: u32 = 64_000_000;
 /// The renderer's per-pixel budget is an integer of at least 1 (0 would stop the AO update altogether).
 pub const MAX_RAYS_PER_PIXEL: u32 = 64;
 
-/// The smallest fraction of the pixels that trace in a frame (`AoSettings::trace_fraction`): below it a cell of
+/// The smallest fraction of the pixels that trace in a frame (`RayBudget::trace_fraction`): below it a cell of
 /// the finest level (a pixel or two while moving) would wait too many frames for a ray.
 pub const MIN_TRACE_FRACTION: f32 = 1.0 / 16.0;
 

@@ -487,14 +487,16 @@ mod gpu_tests {
         let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
         let b = scene.bounds();
         let cam = Camera::fit(b.min, b.max, hrtao_core::camera::UpAxis::Z, 40.0, 64, 48);
-        let settings = AoSettings {
-            ao_radius: 2.0,
-            hash_capacity: 1 << 12,
-            ..Default::default()
+        let settings = {
+            let mut s = AoSettings::default();
+            s.map.ao_radius = 2.0;
+            s.map.hash_capacity = 1 << 12;
+            s
         };
-        let mut r = Renderer::new(&gpu, 64, 48, settings).unwrap();
+        let mut r = Renderer::new(&gpu).unwrap();
         let render = |r: &mut Renderer, sg: &SceneGpu, f: u32| {
-            r.render(sg, f, &cam).unwrap();
+            r.render(&hrtao_core::FrameDesc::new(sg, f, cam, &settings))
+                .unwrap();
             r.read_gbuffer()
                 .unwrap()
                 .iter()

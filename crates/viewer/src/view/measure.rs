@@ -445,13 +445,15 @@ mod gpu_tests {
             height: 192,
             ..Camera::default()
         };
-        let settings = AoSettings {
-            ao_radius: 0.5,
-            hash_capacity: 1 << 12,
-            ..Default::default()
+        let settings = {
+            let mut s = AoSettings::default();
+            s.map.ao_radius = 0.5;
+            s.map.hash_capacity = 1 << 12;
+            s
         };
-        let mut r = Renderer::new(&gpu, cam.width, cam.height, settings).unwrap();
-        r.render(&sg, scene.f(), &cam).unwrap();
+        let mut r = Renderer::new(&gpu).unwrap();
+        r.render(&hrtao_core::FrameDesc::new(&sg, scene.f(), cam, &settings))
+            .unwrap();
         let mut measure = Measure::for_spec("box.glb");
         measure.show_unit = Unit::Mm;
         let (a, b) = (Vec3::new(0.5, 0.5, 1.0), Vec3::new(3.5, 1.5, 1.0));

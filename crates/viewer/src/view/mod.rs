@@ -16,6 +16,7 @@ pub mod nav;
 pub mod prefs;
 pub mod present;
 mod sections;
+mod settings_panel;
 pub mod shot;
 pub mod stats;
 pub mod tree;
@@ -34,7 +35,9 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use hrtao_core::buffer::Buffer;
 use hrtao_core::camera::UpAxis;
-use hrtao_core::{AoSettings, Camera, ContextOptions, FrameReport, Gpu, Mode, Renderer, SceneGpu};
+use hrtao_core::{
+    Camera, ContextOptions, FrameDesc, FrameReport, Gpu, Mode, Output, RayBudget, Renderer, SceneGpu,
+};
 use hrtao_scene::Scene;
 
 use crate::cli::ViewArgs;
@@ -358,7 +361,9 @@ pub(crate) struct Viewer {
     scene_spec: String,
     scene_gpu: Option<SceneGpu>,
     renderer: Option<Renderer>,
-    settings: AoSettings,
+    /// This frame's ray budget, from `prefs.rays_per_frame` at the internal size (`apply_ray_budget`). The AO
+    /// settings live in `prefs.settings` only: every frame hands them to the renderer (`FrameDesc`).
+    ray_budget: RayBudget,
     nav: Nav,
     home: Camera,
     default_radius: f32,
@@ -435,9 +440,8 @@ impl Viewer {
             None => (Prefs::default(), None),
         };
         let prefs_saved = prefs.clone();
-        let mut settings = prefs.settings.clone();
         if let Some(m) = args.mode {
-            settings.mode = m;
+            prefs.settings.display.mode = m;
         }
         if let Some(r) = args.rays_per_frame {
             prefs.rays_per_frame = r.clamp(budget::MIN_RAYS_PER_FRAME, budget::MAX_RAYS_PER_FRAME);
@@ -476,7 +480,10 @@ impl Viewer {
             scene_spec: String::new(),
             scene_gpu: None,
             renderer: None,
-            settings,
+            ray_budget: RayBudget {
+                rays_per_pixel: 1,
+                trace_fraction: 1.0,
+            },
             nav: Nav {
                 cam: Camera::default(),
                 pivot: Vec3::ZERO,
@@ -712,8 +719,7 @@ impl Viewer {
         } else {
             (diag * 0.05).max(1e-6)
         };
-        let mut settings = self.settings.clone();
-        settings.ao_radius = self.args_radius.take().unwrap_or(self.default_radius);
+        let radius = self.args_radius.take().unwrap_or(self.default_radius);
         // Orient the camera with a true up vector (nav keeps it orthogonal).
         let mut cam = nav::orbit(&cam, nav::target(&cam), world_up.vector(), 0.0, 0.0);
         // A camera file framed for a wider image: back off so the 3D view shows the same horizontal extent.
@@ -750,24 +756,21 @@ impl Viewer {
         }
         self.edits.clear();
         if self.renderer.is_none() {
-            let (w, h) = self.internal_size();
-            let mut r = Renderer::new(&self.gpu, w, h, settings.clone())?;
-            // Still frames are jittered and accumulated: anti-aliased stills (docs/algorithm.md).
-            r.jitter = true;
-            self.renderer = Some(r);
+            self.renderer = Some(Renderer::new(&self.gpu)?);
         }
+        let (w, h) = self.internal_size();
         if let Some(r) = &mut self.renderer {
-            r.set_settings(settings.clone())?;
             // A different scene: the cached AO belongs to the old geometry.
             r.clear_cache()?;
             // Rasterised or ray-traced primary visibility, whichever is faster for this scene here.
-            let (w, h) = r.size();
             let probe = Camera {
                 width: w,
                 height: h,
                 ..self.nav.cam
             };
-            let (primary, rq_ms, raster_ms) = r.pick_primary(&scene_gpu, scene.f(), &probe)?;
+            let settings = self.prefs.settings.clone().with_radius(radius);
+            let (primary, rq_ms, raster_ms) =
+                r.pick_primary(&FrameDesc::new(&scene_gpu, scene.f(), probe, &settings))?;
             log::info!(
                 "primary visibility: {primary:?} (ray queries {rq_ms:.0} ms, raster {raster_ms:.0} ms at {w}x{h})"
             );
@@ -778,7 +781,7 @@ impl Viewer {
             // first frames tracing almost nothing (a grainy first image). Each scene starts from the default.
             self.prefs.rays_per_frame = budget::DEFAULT_RAYS_PER_FRAME;
         }
-        self.settings = settings;
+        self.prefs.settings.map.ao_radius = radius;
         self.section_state = section_state;
         self.scene_gpu = Some(scene_gpu);
         self.scene = Some(scene);
@@ -899,24 +902,21 @@ impl Viewer {
         let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) else {
             bail!("no scene is open");
         };
-        let old = r.size();
-        let bgra = r.output_bgra;
-        r.output_bgra = false;
         let cam = Camera {
             width: size.0,
             height: size.1,
             ..self.nav.cam
         };
-        let result = (|| -> Result<Vec<u8>> {
-            r.resize(size.0, size.1)?;
-            for _ in 0..frames.max(1) {
-                r.render(sg, scene.f(), &cam)?;
-            }
-            Ok(r.read_rgba()?)
-        })();
-        r.output_bgra = bgra;
-        r.resize(old.0, old.1)?;
-        result
+        // The view's frame at another size (RGBA output): the next view frame restarts its still image.
+        let frame = FrameDesc {
+            jitter: true,
+            budget: Some(self.ray_budget),
+            ..FrameDesc::new(sg, scene.f(), cam, &self.prefs.settings)
+        };
+        for _ in 0..frames.max(1) {
+            r.render(&frame)?;
+        }
+        Ok(r.read_rgba()?)
     }
 
     /// Takes a screenshot of the 3D view without UI and writes the PNG on a background thread.
@@ -980,12 +980,12 @@ impl Viewer {
                 let (w, h) = self.internal_size_at(self.motion.moving_scale.min(self.render_scale));
                 shot::BackgroundShot::new(
                     &self.gpu,
-                    &self.settings,
+                    &self.prefs.settings,
                     &self.nav.cam,
                     size,
                     path,
                     w as u64 * h as u64,
-                    renderer.primary,
+                    renderer.primary(),
                 )
             }
             _ => Err(anyhow!("no scene is open")),
@@ -1045,8 +1045,7 @@ impl Viewer {
         };
         s.viewer_frames += 1;
         s.viewer_rendered += viewer_rendered as u32;
-        let f = self.scene.as_ref().map_or(0, |sc| sc.f());
-        match s.finish(f) {
+        match s.finish() {
             Ok(None) => s.last_gpu_ms,
             Ok(Some(done)) => {
                 let ms = s.last_gpu_ms;
@@ -1199,14 +1198,19 @@ impl Viewer {
             shot_error = s.record(cmd, sg, scene.f()).err();
         }
         if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
-            r.resize(iw, ih)?;
-            let frame_settings = motion::frame_settings(&self.settings, moving);
-            if r.settings != frame_settings {
-                r.set_settings(frame_settings)?;
-            }
-            r.output_bgra = bgra_direct;
-            // s_p counts view pixels: cells keep their size when the render scale changes.
-            r.view_height = self.view_rect[3].max(1) as u32;
+            let frame_settings = motion::frame_settings(&self.prefs.settings, moving);
+            let frame = FrameDesc {
+                // s_p counts view pixels: cells keep their size when the render scale changes.
+                view_height: self.view_rect[3].max(1) as u32,
+                budget: Some(self.ray_budget),
+                // Still frames are jittered and accumulated: anti-aliased stills (docs/algorithm.md).
+                jitter: true,
+                output: Output {
+                    bgra: bgra_direct,
+                    ..Output::default()
+                },
+                ..FrameDesc::new(sg, scene.f(), cam, &frame_settings)
+            };
             // A converged image of this very view is already in the output: present it again (expose events,
             // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render, except
             // during a background screenshot, where the view rests once converged as it would for a user.
@@ -1214,8 +1218,8 @@ impl Viewer {
                 && !self.script.done
                 && self.background_shot.is_none()
                 && self.saving.is_none();
-            if scripted || !r.shows_final(sg, scene.f(), &cam) {
-                r.record_frame(cmd, sg, scene.f(), &cam)?;
+            if scripted || !r.shows_final(&frame) {
+                r.record_frame(cmd, &frame)?;
                 rendered = true;
             }
             src = Some((r.output_buffer().raw, iw, ih));
@@ -1287,8 +1291,8 @@ impl Viewer {
                 self.interval_ms_avg = ema(self.interval_ms_avg, dt);
             }
             self.last_frame_at = Some(now);
-            let (r, scene) = (self.renderer.as_mut().unwrap(), self.scene.as_ref().unwrap());
-            let report = r.finish_frame(scene.f(), gpu_wall)?;
+            let r = self.renderer.as_mut().unwrap();
+            let report = r.finish_frame(gpu_wall)?;
             self.last_drawn_cam = Some(cam);
             split.finish = laps.lap();
             let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;
@@ -1330,7 +1334,8 @@ impl Viewer {
         }
         let target = self.prefs.target_ms.max(1.0) as f64;
         self.motion.adapt(frame_ms, target, self.render_scale);
-        let traces = self.settings.mode.uses_hash() || self.settings.mode == Mode::Rtao;
+        let mode = self.prefs.settings.display.mode;
+        let traces = mode.uses_hash() || mode == Mode::Rtao;
         if traces {
             self.prefs.rays_per_frame =
                 budget::next_rays_per_frame(self.prefs.rays_per_frame, frame_ms, target);
@@ -1339,17 +1344,12 @@ impl Viewer {
 
     /// Converts the budget in rays per frame to the renderer's rays per pixel at `width`×`height`.
     fn apply_ray_budget(&mut self, width: u32, height: u32) {
-        let (rpp, fraction) = budget::per_pixel_budget(self.prefs.rays_per_frame, width, height);
-        if (rpp, fraction) == (self.settings.rays_per_pixel, self.settings.trace_fraction) {
-            return;
-        }
-        self.settings.rays_per_pixel = rpp;
-        self.settings.trace_fraction = fraction;
-        if let Some(r) = &mut self.renderer {
-            if let Err(e) = r.set_settings(self.settings.clone()) {
-                self.toast(format!("settings: {e}"), true);
-            }
-        }
+        let (rays_per_pixel, trace_fraction) =
+            budget::per_pixel_budget(self.prefs.rays_per_frame, width, height);
+        self.ray_budget = RayBudget {
+            rays_per_pixel,
+            trace_fraction,
+        };
     }
 
     /// Asks for another frame while something is still changing: input was handled (egui asks by itself),
@@ -1415,7 +1415,7 @@ impl Viewer {
             .collect::<Vec<_>>()
         {
             log::info!("scripted settings after frame {n}: {json}");
-            match self.settings.with_overrides(&json) {
+            match self.prefs.settings.with_overrides(&json) {
                 Ok(s) => self.apply_settings(s),
                 Err(e) => self.fatal(format!("--set-at-frame {n}: {e}")),
             }
@@ -1533,7 +1533,6 @@ impl Viewer {
         let Some(path) = self.prefs_path.clone() else {
             return;
         };
-        self.prefs.settings = self.settings.clone();
         self.prefs.max_render_scale = Some(self.render_scale);
         if self.prefs == self.prefs_saved {
             return;

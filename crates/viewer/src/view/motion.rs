@@ -22,7 +22,7 @@ pub const MOVING_FILTER_ITERATIONS: u32 = 1;
 pub fn frame_settings(settings: &AoSettings, moving: bool) -> AoSettings {
     let mut s = settings.clone();
     if moving {
-        s.filter_iterations = s.filter_iterations.min(MOVING_FILTER_ITERATIONS);
+        s.filter.filter_iterations = s.filter.filter_iterations.min(MOVING_FILTER_ITERATIONS);
     }
     s
 }
@@ -117,26 +117,29 @@ mod tests {
 
     #[test]
     fn moving_frames_filter_less_still_frames_keep_the_setting() {
-        let user = AoSettings {
-            filter_iterations: 4,
-            ..AoSettings::default()
+        let user = {
+            let mut s = AoSettings::default();
+            s.filter.filter_iterations = 4;
+            s
         };
         assert_eq!(
-            frame_settings(&user, true).filter_iterations,
+            frame_settings(&user, true).filter.filter_iterations,
             MOVING_FILTER_ITERATIONS
         );
         assert_eq!(frame_settings(&user, false), user);
         // Only the filter changes, and a setting below the moving one stays.
-        let off = AoSettings {
-            filter_iterations: 0,
-            ..user.clone()
+        let off = {
+            let mut s = user.clone();
+            s.filter.filter_iterations = 0;
+            s
         };
         assert_eq!(frame_settings(&off, true), off);
         let moving = frame_settings(&user, true);
         assert_eq!(
-            AoSettings {
-                filter_iterations: 4,
-                ..moving
+            {
+                let mut s = moving.clone();
+                s.filter.filter_iterations = 4;
+                s
             },
             user
         );

@@ -17,7 +17,10 @@ pub struct Bookmark {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Prefs {
-    /// AO settings (the radius is reset to the scene's default when a scene is opened).
+    /// AO settings (the radius is reset to the scene's default when a scene is opened): the viewer's only copy.
+    /// Read leniently: a setting another version wrote that this one does not know, or with another type, is
+    /// skipped (logged) instead of discarding the whole file.
+    #[serde(deserialize_with = "lenient_settings")]
     pub settings: AoSettings,
     /// Largest internal resolution as a fraction of the 3D view (None: 1): still images are rendered at it.
     pub max_render_scale: Option<f32>,
@@ -114,6 +117,15 @@ pub fn load(path: &Path) -> (Prefs, Option<String>) {
     }
 }
 
+fn lenient_settings<'de, D: serde::Deserializer<'de>>(d: D) -> Result<AoSettings, D::Error> {
+    let value = serde_json::Value::deserialize(d)?;
+    let (settings, skipped) = AoSettings::from_json_lenient(&value);
+    if !skipped.is_empty() {
+        log::warn!("preferences: AO settings {skipped:?} skipped (unknown or invalid in this version)");
+    }
+    Ok(settings)
+}
+
 pub fn save(path: &Path, prefs: &Prefs) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
@@ -135,7 +147,7 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         assert_eq!(load(&path), (Prefs::default(), None));
         let mut p = Prefs::default();
-        p.settings.rays_per_pixel = 9;
+        p.settings.map.rays_per_pixel = 9;
         p.bookmarks.push(Bookmark {
             name: "a".into(),
             scene: "s".into(),
@@ -143,6 +155,18 @@ mod tests {
         });
         save(&path, &p).unwrap();
         assert_eq!(load(&path), (p, None));
+        // A file of another version: an unknown setting and a changed type keep the rest.
+        std::fs::write(
+            &path,
+            r#"{"settings": {"ao_radius": 3.5, "near_weight": 1.0, "level_blend": 2.0}, "max_render_scale": 0.5}"#,
+        )
+        .unwrap();
+        let (old, msg) = load(&path);
+        assert_eq!(
+            (old.settings.map.ao_radius, old.max_render_scale, msg),
+            (3.5, Some(0.5), None)
+        );
+        assert!(old.settings.young.level_blend);
         std::fs::write(&path, "{ not json").unwrap();
         let (d, msg) = load(&path);
         assert_eq!(d, Prefs::default());

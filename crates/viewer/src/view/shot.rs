@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use ash::vk;
 use hrtao_core::renderer::AA_FRAMES;
 use hrtao_core::tile::TileGrid;
-use hrtao_core::{AoSettings, Camera, Gpu, Primary, Renderer, SceneGpu};
+use hrtao_core::{AoSettings, Camera, FrameDesc, Gpu, Primary, Renderer, SceneGpu};
 use serde::Serialize;
 
 /// A tile that has not converged after this many frames is kept as it is (a safety net: with refinement a tile
@@ -48,6 +48,8 @@ pub struct Finished {
 
 pub struct BackgroundShot {
     renderer: Renderer,
+    /// The shot's settings (its own capacity, budget and filter) and camera (the full image's size).
+    settings: AoSettings,
     camera: Camera,
     grid: TileGrid,
     path: PathBuf,
@@ -84,8 +86,8 @@ pub const SHOT_FILTER_ITERATIONS: u32 = 3;
 
 /// Pixels rendered around each tile: what the à-trous filter (2^i steps of 2 pixels) and the edges (1 pixel) see.
 fn margin_for(settings: &AoSettings) -> u32 {
-    let filter = if settings.filter {
-        2 * ((1u32 << settings.filter_iterations.min(8)) - 1)
+    let filter = if settings.filter.filter_iterations > 0 {
+        2 * ((1u32 << settings.filter.filter_iterations.min(8)) - 1)
     } else {
         0
     };
@@ -106,18 +108,17 @@ impl BackgroundShot {
     ) -> Result<BackgroundShot> {
         let pixels = size.0 as u64 * size.1 as u64;
         let mut settings = settings.clone();
-        settings.hash_capacity = hash_capacity_for(pixels, settings.hash_capacity);
+        settings.map.hash_capacity = hash_capacity_for(pixels, settings.map.hash_capacity);
         // With refinement: just enough rays per frame that a pixel has its own `still_samples` once the tile is
         // anti-aliased (more would not end it sooner). The viewer's budget follows its own resolution, and so
-        // does its fraction of tracing pixels: a tile's every pixel traces.
-        settings.trace_fraction = 1.0;
-        if settings.refine {
+        // does its fraction of tracing pixels: a tile's every pixel traces (the frames carry no budget).
+        if settings.still.refine {
             // A refined tile runs until its pixels have their own rays, which is what the final image shows:
             // the filter only smooths its first frames. Three iterations keep the tile margin at 15 pixels.
-            settings.filter_iterations = settings.filter_iterations.min(SHOT_FILTER_ITERATIONS);
-            settings.rays_per_pixel = settings.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
+            settings.filter.filter_iterations = settings.filter.filter_iterations.min(SHOT_FILTER_ITERATIONS);
+            settings.map.rays_per_pixel = settings.still.still_samples.div_ceil(AA_FRAMES).clamp(1, 64);
         } else {
-            settings.rays_per_pixel = settings.rays_per_pixel.max(1);
+            settings.map.rays_per_pixel = settings.map.rays_per_pixel.max(1);
         }
         let grid = TileGrid::new(
             size.0,
@@ -125,14 +126,11 @@ impl BackgroundShot {
             slice_pixels.max(MIN_SLICE_PIXELS),
             margin_for(&settings),
         );
-        let (tw, th) = grid.render_size();
-        let mut renderer =
-            Renderer::new(gpu, tw, th, settings).context("cannot create the screenshot's renderer")?;
-        renderer.jitter = true;
-        renderer.primary = primary;
-        renderer.tile = Some(grid.tile(0));
+        let mut renderer = Renderer::new(gpu).context("cannot create the screenshot's renderer")?;
+        renderer.set_primary(primary);
         Ok(BackgroundShot {
             renderer,
+            settings,
             camera: Camera {
                 width: size.0,
                 height: size.1,
@@ -160,19 +158,29 @@ impl BackgroundShot {
 
     /// Records one frame of the current tile into the viewer's command buffer.
     pub fn record(&mut self, cmd: vk::CommandBuffer, scene: &SceneGpu, scene_f: u32) -> Result<()> {
-        self.renderer.tile = Some(self.grid.tile(self.tile));
-        self.renderer.record_frame(cmd, scene, scene_f, &self.camera)?;
+        let (tw, th) = self.grid.render_size();
+        let camera = Camera {
+            width: tw,
+            height: th,
+            ..self.camera
+        };
+        let frame = FrameDesc {
+            tile: Some(self.grid.tile(self.tile)),
+            jitter: true,
+            ..FrameDesc::new(scene, scene_f, camera, &self.settings)
+        };
+        self.renderer.record_frame(cmd, &frame)?;
         self.pending = true;
         Ok(())
     }
 
     /// After the viewer's frame completed: the frame's statistics; a converged tile is copied into the image and
     /// the next one starts. Returns the image after the last tile.
-    pub fn finish(&mut self, scene_f: u32) -> Result<Option<Finished>> {
+    pub fn finish(&mut self) -> Result<Option<Finished>> {
         if !std::mem::take(&mut self.pending) {
             return Ok(None);
         }
-        let report = self.renderer.finish_frame(scene_f, 0.0)?;
+        let report = self.renderer.finish_frame(0.0)?;
         self.last_gpu_ms = report.gpu_total_ms;
         self.frames += 1;
         self.tile_frames += 1;
@@ -215,7 +223,7 @@ impl BackgroundShot {
                 viewer_rendered: self.viewer_rendered,
                 unconverged_tiles: self.unconverged_tiles,
                 failed_inserts: self.failed_inserts,
-                hash_capacity: self.renderer.settings.hash_capacity,
+                hash_capacity: self.settings.map.hash_capacity,
                 seconds: self.started.elapsed().as_secs_f64(),
             },
         }))
@@ -252,9 +260,10 @@ mod tests {
         assert_eq!(hash_capacity_for(16384 * 16384, 1 << 20), MAX_HASH_CAPACITY);
         assert_eq!(hash_capacity_for(64, 1 << 26), 1 << 26);
         // Three filter passes (a refined tile's) reach 2 + 4 + 8 pixels; the edges one more.
-        let s = AoSettings {
-            filter_iterations: SHOT_FILTER_ITERATIONS,
-            ..AoSettings::default()
+        let s = {
+            let mut s = AoSettings::default();
+            s.filter.filter_iterations = SHOT_FILTER_ITERATIONS;
+            s
         };
         assert_eq!(margin_for(&s), 15);
     }

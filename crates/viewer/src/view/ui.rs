@@ -301,20 +301,8 @@ impl Viewer {
     }
 
     fn ao_section(&mut self, ui: &mut egui::Ui) {
-        let mut s = self.settings.clone();
-        egui::ComboBox::from_label("mode")
-            .selected_text(s.mode.label())
-            .show_ui(ui, |ui| {
-                for m in Mode::ALL {
-                    ui.selectable_value(&mut s.mode, m, m.label());
-                }
-            })
-            .response
-            .on_hover_text(
-                "HRTAO: the paper's hashed ray-traced AO (§1-§5). Per-pixel RTAO: the brute-force baseline \
-                 (accumulates while nothing moves). Debug views: hash cells (Fig. 3), LOD used (§4), samples \
-                 per cell.",
-            );
+        let mut s = self.prefs.settings.clone();
+        super::settings_panel::display(ui, &mut s.display);
         ui.add_enabled(
             !self.prefs.auto_budget,
             egui::Slider::new(
@@ -329,162 +317,11 @@ impl Viewer {
              cells visible in the image (collaborative ray tracing); the renderer gets it as rays per pixel \
              (at least 1). Higher: faster convergence, slower frames.",
         );
-        ui.add(
-            egui::Slider::new(&mut s.s_p, 0.5..=32.0)
-                .logarithmic(true)
-                .text("s_p"),
-        )
-        .on_hover_text(
-            "s_p (eq. 2): target size in pixels of a hash cell's footprint; the cell size s_w grows with \
-                 distance. Larger: coarser cells, fewer rays per cell needed, blurrier AO.",
-        );
-        ui.add(egui::Slider::new(&mut s.s_nd, 0.5..=16.0).text("s_nd"))
-            .on_hover_text(
-                "s_nd (eq. 5): normal discretisation; cells are keyed by position and quantised normal so \
-                 surfaces with different orientations don't share AO.",
-            );
-        let r0 = self.default_radius;
-        ui.horizontal(|ui| {
-            ui.add(
-                egui::Slider::new(&mut s.ao_radius, r0 * 0.01..=r0 * 20.0)
-                    .logarithmic(true)
-                    .text("AO radius"),
-            )
-            .on_hover_text(
-                "AO radius R (§1): occlusion rays longer than this count as unoccluded. Default: 8 mm for the \
-                 bundled gearbox, 5% of the bounding-box diagonal otherwise.",
-            );
-            if ui.small_button("↺").on_hover_text("scene default").clicked() {
-                s.ao_radius = r0;
-            }
-        });
-        ui.add(
-            egui::Slider::new(&mut s.max_samples, 16..=10000)
-                .logarithmic(true)
-                .text("max samples"),
-        )
-        .on_hover_text(
-            "Maximum samples per cell (§6, 1000 in the paper): a converged cell stops receiving rays, \
-                 freeing the budget for the others.",
-        );
-        ui.add(egui::Slider::new(&mut s.min_samples, 0..=256).text("min samples"))
-            .on_hover_text(
-                "Minimum samples (§4): a cell with fewer samples is replaced by its coarser LOD (eq. 3) \
-                 until it has gathered enough.",
-            );
-        ui.horizontal(|ui| {
-            ui.checkbox(&mut s.filter, "filter").on_hover_text(
-                "Adaptive à-trous filter (§5): smooths the remaining cell quantisation with a footprint \
-                 proportional to the cell size.",
-            );
-            ui.add_enabled(
-                s.filter,
-                egui::Slider::new(&mut s.filter_iterations, 1..=8).text("iterations"),
-            )
-            .on_hover_text("À-trous iterations (§5); each doubles the filter's reach.");
-        });
-        ui.add(egui::Slider::new(&mut s.near_weight, 0.0..=1.0).text("contact correction"))
-            .on_hover_text(
-                "Ours (docs/algorithm.md): each pixel corrects its cell's AO with its own rays that hit within \
-                 half the AO radius, restoring contact shadows a cell averages away, where its neighbours' rays \
-                 agree. 0: the paper's cells.",
-            );
-        ui.add(egui::Slider::new(&mut s.level_blend, 0.0..=8.0).text("level blend λ"))
-            .on_hover_text(
-                "Ours (docs/algorithm.md): while a pixel's finest cell is young, its AO leans on the next coarser \
-                 level where the two agree within the finest cell's noise (λ scales that noise), so a young map's \
-                 first frames are smoother (not while navigating a settled map). 0: the paper's finest level alone.",
-            );
-        ui.horizontal(|ui| {
-            ui.checkbox(&mut s.adaptive_rays, "adaptive rays").on_hover_text(
-                "Ours (docs/algorithm.md): while the hash map is young, pixels trace a quarter of the ray budget \
-                 first and the rest goes to the cells that are still noisy. Off: every pixel traces the same \
-                 number of rays (the paper).",
-            );
-            ui.label("pooled residual λ");
-            ui.add(egui::DragValue::new(&mut s.pooled_residual).speed(0.5).clamp_range(0.0..=256.0))
-                .on_hover_text(
-                    "Ours (docs/algorithm.md): while a cell is young, each pixel is corrected by the rays it and \
-                     its neighbours on the same surface traced this frame, where they differ from the cell by \
-                     more than their noise (λ scales it): faces smaller than a cell keep their own AO. 0: off.",
-                );
-        });
-        ui.add(egui::Slider::new(&mut s.cell_gradient, 0.0..=16.0).text("linear cells λ"))
-            .on_hover_text(
-                "Ours (docs/algorithm.md): each cell also keeps the slope of its AO across the cell, from where \
-                 its rays started, and a pixel reads the cell's line at its own position instead of the cell's \
-                 mean; the slope is shrunk against its noise (λ scales it; 2 measured best). 0: constant cells \
-                 (the paper). Only rays traced while it is on give a cell its slope.",
-            );
-        ui.add(egui::Slider::new(&mut s.contact_detail, 0.0..=2.0).text("contact detail"))
-            .on_hover_text(
-                "Ours (docs/algorithm.md): while cells are young, the creases and contacts that the G-buffer \
-                 shows around a pixel, finer than its cells, darken it by a gain fitted each frame to the rays \
-                 the pixels traced. This scales the fitted gain: 1 = the fit, 0 = off (the paper).",
-            );
-        ui.horizontal(|ui| {
-            ui.checkbox(&mut s.edges, "edges").on_hover_text(
-                "Feature edges over the shading: silhouettes (depth and part changes) and creases. In \
-                 screenshots, never in the AO image.",
-            );
-            ui.add_enabled(
-                s.edges,
-                egui::Slider::new(&mut s.crease_deg, 5.0..=120.0).text("crease °"),
-            )
-            .on_hover_text("Faces meeting at more than this angle draw a crease line.");
-        });
-        ui.checkbox(&mut s.refine, "refine when still").on_hover_text(
-            "Ours (docs/algorithm.md): while the view rests, each pixel traces its own rays and its AO converges \
-             from the cell estimate to the ray-traced value, with anti-aliasing. Off: the paper's behaviour.",
-        );
-        ui.horizontal(|ui| {
-            ui.label("cell weight (rays)");
-            ui.add(egui::DragValue::new(&mut s.prior_rays_max).speed(16.0).clamp_range(0.0..=16384.0))
-                .on_hover_text(
-                    "Ours: while a pixel's own rays agree with its cell, the cell counts as this many of the \
-                     pixel's rays (a steady still image); where they show the cell is biased the weight falls to \
-                     `prior_rays` (32). 0: always 32.",
-                );
-        });
-        ui.horizontal(|ui| {
-            ui.add(egui::Slider::new(&mut s.still_smoothing, 0.05..=1.0).text("still smoothing"))
-                .on_hover_text(
-                    "Ours: each still frame the shown AO moves this fraction of the way to the refined estimate \
-                     (less flicker, a lag of about 1/x - 1 frames). 1: none.",
-                );
-            ui.label("residual σ");
-            ui.add(egui::DragValue::new(&mut s.residual_sigma).speed(0.05).clamp_range(0.0..=4.0))
-                .on_hover_text(
-                    "Ours: a pixel's own-ray residual is pooled with its neighbours' that agree within this many \
-                     standard deviations of their noise. 0: its own only.",
-                );
-        });
-        ui.checkbox(&mut s.local_edits, "edits keep untouched AO").on_hover_text(
-            "Ours (docs/algorithm.md): moving, hiding or deleting a part re-keys only the hash cells within the \
-             AO radius of it; the rest of the image keeps its converged AO. Off: the paper's eq. 6 (every edit \
-             empties the map).",
-        );
-        ui.horizontal(|ui| {
-            ui.label("filter σ");
-            ui.add(egui::DragValue::new(&mut s.filter_sigma).speed(0.05).clamp_range(0.0..=10.0))
-                .on_hover_text(
-                    "Ours: the filter stops where neighbours differ by more than this many standard deviations of \
-                     the cells' noise. 0: the paper's filter (bounded by the cell footprint).",
-                );
-        });
-        let mut log2 = s.hash_capacity.trailing_zeros();
-        ui.add(
-            egui::Slider::new(&mut log2, 10..=26)
-                .text("hash capacity (log2)")
-                .custom_formatter(|v, _| format!("2^{v} = {}", 1u64 << v as u32)),
-        )
-        .on_hover_text(
-            "Hash map capacity in cells (§1, §6): the world-space cache of AO values. Changing it empties the \
-             cache. Watch the load factor and failed inserts in the statistics.",
-        );
-        s.hash_capacity = 1 << log2;
-        ui.checkbox(&mut s.shaded, "base colours")
-            .on_hover_text("Use the materials' base colours (off: uniform grey clay)");
+        super::settings_panel::map(ui, &mut s.map, self.default_radius);
+        super::settings_panel::filter(ui, &mut s.filter);
+        super::settings_panel::still(ui, &mut s.still);
+        super::settings_panel::young(ui, &mut s.young);
+        super::settings_panel::edits(ui, &mut s.edits);
         ui.separator();
         let blit = self.presenter.blit_ok || self.presenter.images.is_empty();
         ui.add_enabled(
@@ -530,10 +367,7 @@ impl Viewer {
                 .on_hover_text("AoSettings::default() with the scene's radius")
                 .clicked()
             {
-                s = hrtao_core::AoSettings {
-                    ao_radius: self.default_radius,
-                    ..Default::default()
-                };
+                s = hrtao_core::AoSettings::default().with_radius(self.default_radius);
             }
             if ui
                 .button("Paper")
@@ -547,23 +381,15 @@ impl Viewer {
                 s = s.paper();
             }
         });
-        if s != self.settings {
+        if s != self.prefs.settings {
             self.apply_settings(s);
         }
     }
 
-    /// Settings changed in the panel (or by --set-at-frame): checked, then the renderer's.
+    /// Settings changed in the panel (or by --set-at-frame): checked, then the next frame's.
     pub(crate) fn apply_settings(&mut self, s: hrtao_core::AoSettings) {
         match s.validate() {
-            Ok(()) => {
-                self.settings = s.clone();
-                if let Some(r) = &mut self.renderer {
-                    if let Err(e) = r.set_settings(s) {
-                        let msg = format!("settings: {e}");
-                        self.toast(msg, true);
-                    }
-                }
-            }
+            Ok(()) => self.prefs.settings = s,
             Err(e) => self.toast(format!("settings: {e}"), true),
         }
     }
@@ -620,19 +446,19 @@ impl Viewer {
                     rep.rays as f64 / (iw * ih).max(1) as f64
                 ),
             );
-            if self.settings.mode.uses_hash() {
+            if self.prefs.settings.display.mode.uses_hash() {
                 row(
                     "hash cells",
                     format!(
                         "{} / {} ({:.1}% load)",
                         rep.occupied_cells,
-                        self.settings.hash_capacity,
+                        self.prefs.settings.map.hash_capacity,
                         rep.load_factor * 100.0
                     ),
                 );
                 row("failed inserts", rep.failed_inserts.to_string());
                 row("longest probe", rep.longest_probe.to_string());
-            } else if self.settings.mode == Mode::Rtao {
+            } else if self.prefs.settings.display.mode == Mode::Rtao {
                 row("accumulated", format!("{} frames", rep.accumulated_frames));
             }
             if let Some(scene) = &self.scene {

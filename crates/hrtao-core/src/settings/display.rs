@@ -1,0 +1,41 @@
+//! What is shown and how: the mode, the shading and the feature edges. Never part of a cell.
+use super::{settings_group, Mode};
+use crate::gpu::{self, FrameGlobals};
+
+settings_group! {
+    /// Display.
+    pub struct DisplaySettings {
+        /// What the renderer computes and shows.
+        mode: Mode = Mode::Hrtao, StillImage, paper keep;
+        /// Base colours (else a uniform grey clay look).
+        shaded: bool = true, StillImage, paper keep;
+        /// Feature edges over the shading (silhouettes: depth and instance changes; creases: normals meeting at
+        /// more than `crease_deg`), as CAD viewports draw them. Never in the AO image.
+        edges: bool = true, StillImage, paper keep;
+        /// The crease angle of the feature edges, in degrees.
+        crease_deg: f32 = 40.0, StillImage, paper keep;
+    }
+}
+
+impl DisplaySettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.crease_deg.is_finite() && (0.0..=180.0).contains(&self.crease_deg)) {
+            return Err(format!(
+                "crease angle must be in 0..=180 degrees, got {}",
+                self.crease_deg
+            ));
+        }
+        Ok(())
+    }
+
+    pub fn write_gpu(&self, g: &mut FrameGlobals) {
+        g.mode = self.mode.gpu_value();
+        if self.shaded {
+            g.flags |= gpu::FLAG_SHADED;
+        }
+        if self.edges {
+            g.flags |= gpu::FLAG_EDGES;
+        }
+        g.crease_cos = self.crease_deg.to_radians().cos();
+    }
+}
