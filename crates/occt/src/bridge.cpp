@@ -139,7 +139,8 @@ struct Walker {
     double diag = std::sqrt(box.SquareExtent());
     double lin = tess.relative > 0 ? tess.relative * diag : tess.absolute;
     if (!(lin > 0) || !std::isfinite(lin)) lin = 1e-3 * (diag > 0 ? diag : 1.0);
-    BRepMesh_IncrementalMesh mesher(shape, lin, Standard_False, tess.angular, Standard_False);
+    // In parallel over the part's faces (OSD_Parallel's thread pool): a part of many faces meshes on every core.
+    BRepMesh_IncrementalMesh mesher(shape, lin, Standard_False, tess.angular, Standard_True);
     if (!mesher.IsDone()) return -1;
 
     // Colours set on the part's sub-shapes (faces, shells, solids) win over the part's own colour.
@@ -273,6 +274,10 @@ int read_impl(const char* path, int32_t format, const hr_tessellation* tess, con
     }
   } closer{app, doc};
   units->file_m = 0;
+  // Each stage announces its start (fraction 0): the loader logs where the time goes.
+  progress->set_stage("read");
+  progress->report(0);
+  if (progress->stopped()) throw Stopped{};
   if (format == 0) {
     STEPCAFControl_Reader reader;
     reader.SetColorMode(true);
@@ -295,6 +300,7 @@ int read_impl(const char* path, int32_t format, const hr_tessellation* tess, con
       else if (u.Search("metre") >= 0 || u.Search("meter") >= 0) units->file_m = 1.0;
     }
     progress->set_stage("transfer");
+    progress->report(0);
     if (!reader.Transfer(doc, progress->Start())) {
       if (progress->stopped()) throw Stopped{};
       throw Failure{"OpenCASCADE found no shape to transfer in the STEP file"};
@@ -315,6 +321,7 @@ int read_impl(const char* path, int32_t format, const hr_tessellation* tess, con
       if (f >= 1 && f <= 11) units->file_m = flag_m[f];
     }
     progress->set_stage("transfer");
+    progress->report(0);
     if (!reader.Transfer(doc, progress->Start())) {
       if (progress->stopped()) throw Stopped{};
       throw Failure{"OpenCASCADE found no shape to transfer in the IGES file"};
@@ -336,6 +343,9 @@ int read_impl(const char* path, int32_t format, const hr_tessellation* tess, con
   w.parts_total = shapes.Length() > 0 ? (size_t)shapes.Length() : 1;
   w.st->GetFreeShapes(roots);
   if (roots.Length() == 0) throw Failure{"the file holds no shape"};
+  progress->set_stage("tessellate");
+  progress->report(0);
+  if (progress->stopped()) throw Stopped{};
   for (Standard_Integer i = 1; i <= roots.Length(); i++) w.walk(roots.Value(i), -1, gp_Trsf(), nullptr, true, 0);
   return 0;
 }

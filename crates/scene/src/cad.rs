@@ -58,6 +58,36 @@ pub struct CadModel {
     pub file_unit_m: Option<f64>,
 }
 
+/// Meshes placed by more than one instance, the most placed first (then by mesh order): each mesh's name and its
+/// instance count. An assembly's bolts and nuts show here as one mesh each.
+pub fn shared_meshes(scene: &crate::Scene) -> Vec<(String, usize)> {
+    let mut uses = vec![0usize; scene.meshes.len()];
+    for i in &scene.instances {
+        if let Some(n) = uses.get_mut(i.mesh as usize) {
+            *n += 1;
+        }
+    }
+    let mut shared: Vec<(usize, usize)> = uses.into_iter().enumerate().filter(|(_, n)| *n > 1).collect();
+    shared.sort_by_key(|&(m, n)| (std::cmp::Reverse(n), m));
+    shared
+        .into_iter()
+        .map(|(m, n)| (scene.meshes[m].name.clone(), n))
+        .collect()
+}
+
+/// "nut ×8, bolt ×6, bracket ×2": the first `max` of [`shared_meshes`], "and K more" after them.
+pub fn shared_meshes_text(shared: &[(String, usize)], max: usize) -> String {
+    let mut parts: Vec<String> = shared
+        .iter()
+        .take(max)
+        .map(|(name, n)| format!("{name} ×{n}"))
+        .collect();
+    if shared.len() > max {
+        parts.push(format!("and {} more", shared.len() - max));
+    }
+    parts.join(", ")
+}
+
 /// One frame of the worker's stream.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Frame {

@@ -63,21 +63,30 @@ pub fn load_cad(
     budget.reserve(entities * CAD_ENTITY_BYTES, "the kernel's entities")?;
     drop(bytes);
     opts.check_cancel(path)?;
-    let model = run_worker(path, format, opts, progress).map_err(|e| match e {
+    let mut stages = StageClock::new();
+    let model = run_worker(path, format, opts, &mut stages, progress).map_err(|e| match e {
         WorkerError::Cancelled => SceneError::Cancelled(path.display().to_string()),
         WorkerError::Failed(m) => err(m),
     })?;
     let read_s = started.elapsed().as_secs_f64();
     let scene = to_scene(path, model).map_err(err)?;
+    stages.mark("scene");
     let instanced: u64 = scene.instanced_triangle_count();
+    let shared = crate::cad::shared_meshes(&scene);
     log::info!(
-        "{}: {} unique meshes, {} instances, {} unique / {instanced} instanced triangles; read and tessellated \
+        "{}: {} unique meshes, {} instances{}, {} unique / {instanced} instanced triangles; read and tessellated \
          in {read_s:.2} s (OpenCASCADE worker)",
         path.display(),
         scene.meshes.len(),
         scene.instances.len(),
+        if shared.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", crate::cad::shared_meshes_text(&shared, 4))
+        },
         scene.unique_triangle_count(),
     );
+    log::info!("{}: {}", path.display(), stages.summary());
     Ok(scene)
 }
 
@@ -122,6 +131,53 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
     hay.windows(needle.len()).position(|w| w == needle)
 }
 
+/// When each stage of a load began: the worker's start, its `read`, `transfer` and `tessellate` stages (each
+/// announced by the worker's first progress frame of the stage), the model's arrival and the scene built.
+struct StageClock {
+    start: Instant,
+    marks: Vec<(&'static str, Instant)>,
+}
+
+impl StageClock {
+    fn new() -> StageClock {
+        StageClock {
+            start: Instant::now(),
+            marks: Vec::new(),
+        }
+    }
+
+    /// Marks the start of `stage` (only its first mark counts).
+    fn mark(&mut self, stage: &'static str) {
+        if !self.marks.iter().any(|(s, _)| *s == stage) {
+            self.marks.push((stage, Instant::now()));
+        }
+    }
+
+    /// "worker start 40 ms, STEP read 60 ms, …": each span from its mark to the next.
+    fn summary(&self) -> String {
+        let name = |s: &'static str| match s {
+            "spawn" => "checks before the worker",
+            "read" => "worker start-up",
+            "transfer" => "file read and parsed",
+            "tessellate" => "XCAF transfer",
+            "model" => "tessellation and hand-over",
+            "scene" => "scene built",
+            other => other,
+        };
+        let mut out = Vec::new();
+        let mut prev = self.start;
+        for (stage, at) in &self.marks {
+            out.push(format!(
+                "{} {:.0} ms",
+                name(stage),
+                at.duration_since(prev).as_secs_f64() * 1e3
+            ));
+            prev = *at;
+        }
+        out.join(", ")
+    }
+}
+
 enum WorkerError {
     Cancelled,
     Failed(String),
@@ -132,8 +188,10 @@ fn run_worker(
     path: &Path,
     format: CadFormat,
     opts: &LoadOptions,
+    stages: &mut StageClock,
     progress: &mut dyn FnMut(LoadProgress),
 ) -> Result<CadModel, WorkerError> {
+    stages.mark("spawn");
     let cad: &CadOptions = &opts.cad;
     let Some(worker) = cad.worker.clone() else {
         return Err(WorkerError::Failed(
@@ -215,16 +273,27 @@ fn run_worker(
         }
         match rx.recv_timeout(Duration::from_millis(50)) {
             Err(mpsc::RecvTimeoutError::Timeout) => continue,
-            Ok(Ok(Some(Frame::Progress { stage, fraction }))) => progress(LoadProgress {
-                stage: match stage.as_str() {
+            Ok(Ok(Some(Frame::Progress { stage, fraction }))) => {
+                let stage = match stage.as_str() {
+                    "read" => {
+                        stages.mark("read");
+                        "kernel"
+                    }
                     "transfer" => "transfer",
                     "tessellate" => "tessellate",
                     _ => "kernel",
-                },
-                done: (fraction.clamp(0.0, 1.0) * 1000.0) as u64,
-                total: 1000,
-            }),
+                };
+                if stage != "kernel" {
+                    stages.mark(stage);
+                }
+                progress(LoadProgress {
+                    stage,
+                    done: (fraction.clamp(0.0, 1.0) * 1000.0) as u64,
+                    total: 1000,
+                })
+            }
             Ok(Ok(Some(Frame::Model(m)))) => {
+                stages.mark("model");
                 let _ = finish(&mut child, false);
                 break Ok(m);
             }

@@ -95,6 +95,11 @@ pub fn set_default_cad_tessellation(t: CadTessellation) {
         .unwrap_or_else(|e| e.into_inner()) = Some(t);
 }
 
+/// The tessellation [`set_default_cad_tessellation`] set, if it was called.
+pub fn command_line_cad_tessellation() -> Option<CadTessellation> {
+    *DEFAULT_CAD_TESSELLATION.read().unwrap_or_else(|e| e.into_inner())
+}
+
 pub(crate) fn default_cad_tessellation() -> CadTessellation {
     DEFAULT_CAD_TESSELLATION
         .read()

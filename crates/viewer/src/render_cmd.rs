@@ -37,31 +37,43 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Some(s) => s.clone(),
         None => default_scene_path().display().to_string(),
     };
-    let (scene, load_ms) = load_scene(&spec)?;
-    let bounds = scene.bounds();
-    let camera_file = args
-        .camera
-        .clone()
-        .or_else(|| bundled.then(|| std::path::Path::new(&spec).with_extension("camera.json")));
-    let mut camera = match &camera_file {
-        Some(p) => Camera::load_in(p, scene.origin)?,
-        None => Camera::fit(bounds.min, bounds.max, args.up.into(), 40.0, 640, 360),
+    // The device opens while the scene loads (a STEP file loads in a worker process; on a CPU device both take a
+    // core).
+    let early = {
+        let device = args.device.clone();
+        std::thread::spawn(move || open_gpu(&device))
     };
-    if let Some(w) = args.width {
-        camera.width = w;
-    }
-    if let Some(h) = args.height {
-        camera.height = h;
-    }
-    camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
-    let mut settings = args.ao.settings(bounds.diagonal().length())?;
-    if bundled && args.ao.radius.is_none() {
-        settings.map.ao_radius = crate::view::BUNDLED_RADIUS;
-    }
-    settings.validate().map_err(|e| anyhow::anyhow!(e))?;
-
-    let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
-    let gpu = open_gpu(&args.device)?;
+    // Everything that can fail before the device is needed; the device thread is joined whatever happens (no
+    // exit while that thread is inside the driver).
+    let prepared = (|| -> Result<_> {
+        let (scene, load_ms) = load_scene(&spec)?;
+        let bounds = scene.bounds();
+        let camera_file = args
+            .camera
+            .clone()
+            .or_else(|| bundled.then(|| std::path::Path::new(&spec).with_extension("camera.json")));
+        let mut camera = match &camera_file {
+            Some(p) => Camera::load_in(p, scene.origin)?,
+            None => Camera::fit(bounds.min, bounds.max, args.up.into(), 40.0, 640, 360),
+        };
+        if let Some(w) = args.width {
+            camera.width = w;
+        }
+        if let Some(h) = args.height {
+            camera.height = h;
+        }
+        camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
+        let mut settings = args.ao.settings(bounds.diagonal().length())?;
+        if bundled && args.ao.radius.is_none() {
+            settings.map.ao_radius = crate::view::BUNDLED_RADIUS;
+        }
+        settings.validate().map_err(|e| anyhow::anyhow!(e))?;
+        let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
+        Ok((scene, load_ms, camera, settings, sections))
+    })();
+    let device = early.join().map_err(|_| anyhow!("the device thread panicked"))?;
+    let (scene, load_ms, camera, mut settings, sections) = prepared?;
+    let gpu = device?;
     let mut scene_gpu = SceneGpu::new(&gpu, &scene)?;
     scene_gpu.set_sections(&scene, &sections, u32::MAX)?;
     log::info!(

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use super::plot::{Plot, Series, COLORS};
-use super::stats::{fit_slope, MatchKind};
+use super::stats::{fit_slope, median, MatchKind};
 use super::{BenchResult, SCHEMA};
 
 /// Loads the bench results of `dir` (files with another schema are skipped), scenes first, then by size.
@@ -866,7 +866,144 @@ fn render_markdown(
             rel(&path)
         )?;
     }
+    step_table(&mut m, &load_step_results(dir)?)?;
     Ok(m)
+}
+
+/// Schema of `scripts/bench-step.sh`'s results (`step_*.json`): one file opened to an image by hrtao and by F3D.
+pub const STEP_SCHEMA: &str = "hrtao-step-bench/1";
+
+/// One tool's runs of one file: wall seconds from process start to the written image, and the triangles drawn.
+#[derive(Clone, Debug, serde::Deserialize)]
+pub struct StepSide {
+    pub wall_s: Vec<f64>,
+    pub triangles: u64,
+}
+
+/// `scripts/bench-step.sh`'s measurement of one STEP/IGES file at one tessellation against F3D.
+#[derive(Clone, Debug, serde::Deserialize)]
+pub struct StepResult {
+    pub file: String,
+    /// `f3d` (F3D's own tolerances) or `default` (hrtao's default tessellation).
+    pub quality: String,
+    /// hrtao's tessellation flags of the runs.
+    pub tessellation: String,
+    pub width: u32,
+    pub height: u32,
+    /// Largest ratio of the medians (ours / F3D) the goal allows.
+    pub goal_ratio: f64,
+    pub ours: StepSide,
+    pub f3d: StepSide,
+    #[serde(default)]
+    pub f3d_version: String,
+    #[serde(default)]
+    pub date: String,
+}
+
+impl StepResult {
+    pub fn ratio(&self) -> f64 {
+        median(&self.ours.wall_s) / median(&self.f3d.wall_s)
+    }
+
+    /// Triangles ours / F3D's: within ±20 % is the goal at F3D's tolerances (not judged at our own quality).
+    pub fn triangle_ratio(&self) -> f64 {
+        self.ours.triangles as f64 / self.f3d.triangles as f64
+    }
+
+    /// The goals: wall time within `goal_ratio` of F3D's and, at F3D's tolerances, triangles within ±20 %.
+    pub fn goal_met(&self) -> bool {
+        let tri = self.quality != "f3d" || (0.8..=1.2).contains(&self.triangle_ratio());
+        self.ratio() <= self.goal_ratio && tri
+    }
+}
+
+/// Every `step_*.json` of `dir` with [`STEP_SCHEMA`], by file then quality (F3D's tolerances first).
+pub fn load_step_results(dir: &Path) -> Result<Vec<StepResult>> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).with_context(|| format!("cannot read {}", dir.display()))? {
+        let path = e?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if !(name.starts_with("step_") && name.ends_with(".json")) {
+            continue;
+        }
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
+            .with_context(|| format!("{}: not JSON", path.display()))?;
+        if v.get("schema").and_then(|s| s.as_str()) != Some(STEP_SCHEMA) {
+            continue;
+        }
+        out.push(
+            serde_json::from_value::<StepResult>(v)
+                .with_context(|| format!("{}: bad STEP bench result", path.display()))?,
+        );
+    }
+    out.sort_by(|a, b| (&a.file, a.quality != "f3d").cmp(&(&b.file, b.quality != "f3d")));
+    Ok(out)
+}
+
+/// The "STEP/IGES: load to image against F3D" section (nothing without results).
+fn step_table(m: &mut String, results: &[StepResult]) -> Result<()> {
+    let Some(r0) = results.first() else {
+        return Ok(());
+    };
+    writeln!(
+        m,
+        "## STEP/IGES: load to image against F3D
+"
+    )?;
+    writeln!(
+        m,
+        "Wall time from process start to a {}×{} PNG, median of {} runs each, hrtao (`hrtao render --scene FILE \
+         --out x.png`) and F3D{} (`f3d FILE --output y.png`, same OpenCASCADE kernel) run in turn; measured by \
+         `scripts/bench-step.sh`{}. Goals: at F3D's tolerances (OpenCASCADE's per-edge relative deflection 0.1 \
+         and 0.5 rad; hrtao's nearest flags are `--deflection-mm 1 --angular-deflection 28.65`) triangles within \
+         ±20 % of F3D's and wall time ≤ 1.5× F3D's; at hrtao's default tessellation ≤ 3×. hrtao's image is one \
+         frame of ray-traced ambient occlusion, F3D's a rasterised one, both on the same machine.\n",
+        r0.width,
+        r0.height,
+        r0.ours.wall_s.len(),
+        if r0.f3d_version.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", r0.f3d_version)
+        },
+        if r0.date.is_empty() {
+            String::new()
+        } else {
+            format!(" on {}", r0.date)
+        },
+    )?;
+    writeln!(
+        m,
+        "| file | tessellation | triangles hrtao / F3D | wall hrtao / F3D (s) | ratio | goal | met |"
+    )?;
+    writeln!(m, "|---|---|---|---|---|---|---|")?;
+    for r in results {
+        let quality = match r.quality.as_str() {
+            "f3d" => "F3D's",
+            "default" => "hrtao's default",
+            q => q,
+        };
+        writeln!(
+            m,
+            "| `{}` | {quality} (`{}`) | {} / {} | {} / {} | {}× | ≤ {}×{} | {} |",
+            r.file,
+            r.tessellation,
+            r.ours.triangles,
+            r.f3d.triangles,
+            f(median(&r.ours.wall_s), 2),
+            f(median(&r.f3d.wall_s), 2),
+            f(r.ratio(), 2),
+            f(r.goal_ratio, 1),
+            if r.quality == "f3d" {
+                ", triangles ±20 %"
+            } else {
+                ""
+            },
+            if r.goal_met() { "yes" } else { "no" },
+        )?;
+    }
+    writeln!(m)?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -919,6 +1056,61 @@ mod tests {
             }
         }
         found
+    }
+
+    #[test]
+    fn step_results_render_as_a_table() {
+        let dir = std::env::temp_dir().join(format!("hrtao-report-step-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let json = |quality: &str, ours: [f64; 5], tri: u64, goal: f64| {
+            format!(
+                r#"{{"schema": "hrtao-step-bench/1", "file": "as1.stp", "quality": "{quality}",
+                "tessellation": "--deflection-mm 0.1", "width": 1000, "height": 600, "goal_ratio": {goal},
+                "ours": {{"wall_s": {ours:?}, "triangles": {tri}}},
+                "f3d": {{"wall_s": [1.0, 1.2, 0.9, 1.1, 5.0], "triangles": 4408}},
+                "f3d_version": "1.3.1", "date": "2026-11-24"}}"#
+            )
+        };
+        // Median 1.5 s against F3D's 1.1 s: 1.36×, 4,000 triangles of 4,408 (-9 %): met.
+        std::fs::write(
+            dir.join("step_as1_f3d.json"),
+            json("f3d", [1.5, 1.4, 9.0, 1.6, 1.0], 4000, 1.5),
+        )
+        .unwrap();
+        // Median 3.5 s: 3.18× over the 3× goal.
+        std::fs::write(
+            dir.join("step_as1_default.json"),
+            json("default", [3.5; 5], 12000, 3.0),
+        )
+        .unwrap();
+        // Another schema and another name are not STEP results.
+        std::fs::write(dir.join("step_other.json"), r#"{"schema": "x"}"#).unwrap();
+        std::fs::write(dir.join("scene_x.json"), json("f3d", [1.0; 5], 1, 1.5)).unwrap();
+        let results = super::load_step_results(&dir).unwrap();
+        assert_eq!(results.len(), 2);
+        assert!((results[0].ratio() - 1.5 / 1.1).abs() < 1e-9);
+        let mut m = String::new();
+        super::step_table(&mut m, &results).unwrap();
+        let rows: Vec<&str> = m.lines().filter(|l| l.starts_with("| `as1.stp`")).collect();
+        assert_eq!(
+            rows,
+            [
+                "| `as1.stp` | F3D's (`--deflection-mm 0.1`) | 4000 / 4408 | 1.50 / 1.10 | 1.36× | ≤ 1.5×, triangles ±20 % | yes |",
+                "| `as1.stp` | hrtao's default (`--deflection-mm 0.1`) | 12000 / 4408 | 3.50 / 1.10 | 3.18× | ≤ 3.0× | no |",
+            ]
+        );
+        assert!(m.starts_with("## STEP/IGES: load to image against F3D\n"));
+        assert!(m.contains("1000×600 PNG, median of 5 runs"), "{m}");
+        // Triangles outside ±20 % miss the goal at F3D's tolerances whatever the time.
+        let mut few = results[0].clone();
+        few.ours.triangles = 3000;
+        assert!(!few.goal_met());
+        // No results, no section.
+        let mut none = String::new();
+        super::step_table(&mut none, &[]).unwrap();
+        assert!(none.is_empty());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

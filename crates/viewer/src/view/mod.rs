@@ -10,6 +10,7 @@
 pub mod budget;
 pub mod edits;
 mod files;
+mod load_options;
 pub mod measure;
 pub mod motion;
 pub mod nav;
@@ -450,6 +451,10 @@ impl Viewer {
         if args.no_auto_budget {
             prefs.auto_budget = false;
         }
+        // The command line's tessellation flags become the panel's load options.
+        if let Some(t) = hrtao_scene::command_line_cad_tessellation() {
+            prefs.cad_load = load_options::CadLoadOptions::from_tessellation(t);
+        }
         // The user's render scale caps the internal resolution; a still image is rendered at it.
         let render_scale = args
             .render_scale
@@ -599,7 +604,7 @@ impl Viewer {
         }
         let (tx, rx) = mpsc::channel();
         let s = spec.clone();
-        let opts = hrtao_scene::LoadOptions::default();
+        let opts = self.prefs.cad_load.load_options();
         let thread_opts = opts.clone();
         std::thread::spawn(move || {
             let t0 = Instant::now();

@@ -40,6 +40,8 @@ pub struct Prefs {
     pub screenshot_frames: u32,
     pub bookmarks: Vec<Bookmark>,
     pub dark_theme: bool,
+    /// How STEP/IGES files are tessellated when opened (the panel's load options).
+    pub cad_load: super::load_options::CadLoadOptions,
 }
 
 impl Default for Prefs {
@@ -57,6 +59,7 @@ impl Default for Prefs {
             screenshot_frames: 16,
             bookmarks: Vec::new(),
             dark_theme: true,
+            cad_load: Default::default(),
         }
     }
 }

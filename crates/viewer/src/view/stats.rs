@@ -149,6 +149,29 @@ impl StatsLog {
     }
 }
 
+/// The panel's statistics about the scene's instancing: its unique meshes, which of them several instances share
+/// (an assembly's bolts and nuts), and its instances (how many the file or the user hid).
+pub fn scene_rows(scene: &hrtao_scene::Scene) -> Vec<(&'static str, String)> {
+    let shared = hrtao_scene::cad::shared_meshes(scene);
+    let mut rows = vec![(
+        "meshes",
+        format!("{} unique, {} shared", scene.meshes.len(), shared.len()),
+    )];
+    if !shared.is_empty() {
+        rows.push(("", hrtao_scene::cad::shared_meshes_text(&shared, 3)));
+    }
+    let hidden = scene.instances.iter().filter(|i| !i.visible).count();
+    rows.push((
+        "instances",
+        if hidden > 0 {
+            format!("{}, {hidden} hidden", scene.instances.len())
+        } else {
+            scene.instances.len().to_string()
+        },
+    ));
+    rows
+}
+
 /// The median of the finite values (the bench's), None when there are none.
 pub fn median(v: Vec<f64>) -> Option<f64> {
     Some(crate::bench::stats::median(&v)).filter(|m| !m.is_nan())
@@ -183,6 +206,50 @@ mod tests {
         assert_eq!(log.median_wall_ms(true), Some(20.0));
         assert_eq!(log.median_wall_ms(false), Some(6.0));
         assert_eq!(median(Vec::new()), None);
+    }
+
+    #[test]
+    fn scene_rows_count_unique_meshes_shared_meshes_and_instances() {
+        use hrtao_scene::{Instance, Mesh, Scene};
+        let mut scene = Scene::new("bolted");
+        for name in ["plate", "bolt", "nut"] {
+            scene.meshes.push(Mesh {
+                name: name.into(),
+                primitives: Vec::new(),
+            });
+        }
+        // One plate, four bolts, six nuts (one hidden).
+        for (mesh, n) in [(0u32, 1), (1, 4), (2, 6)] {
+            for k in 0..n {
+                scene.instances.push(Instance {
+                    mesh,
+                    transform: glam::Mat4::IDENTITY,
+                    name: format!("{mesh}.{k}"),
+                    visible: !(mesh == 2 && k == 0),
+                });
+            }
+        }
+        assert_eq!(
+            scene_rows(&scene),
+            [
+                ("meshes", "3 unique, 2 shared".to_string()),
+                ("", "nut ×6, bolt ×4".to_string()),
+                ("instances", "11, 1 hidden".to_string()),
+            ]
+        );
+        let four: Vec<(String, usize)> = (0..4).map(|i| (format!("m{i}"), 5 - i)).collect();
+        assert_eq!(
+            hrtao_scene::cad::shared_meshes_text(&four, 3),
+            "m0 ×5, m1 ×4, m2 ×3, and 1 more"
+        );
+        scene.instances.truncate(1);
+        assert_eq!(
+            scene_rows(&scene),
+            [
+                ("meshes", "3 unique, 0 shared".to_string()),
+                ("instances", "1".to_string()),
+            ]
+        );
     }
 
     #[test]

@@ -210,6 +210,9 @@ impl Viewer {
         egui::CollapsingHeader::new("Scene")
             .default_open(true)
             .show(ui, |ui| self.scene_section(ui));
+        egui::CollapsingHeader::new("Load options")
+            .default_open(false)
+            .show(ui, |ui| self.load_options_section(ui));
         egui::CollapsingHeader::new("Ambient occlusion")
             .default_open(true)
             .show(ui, |ui| self.ao_section(ui));
@@ -463,7 +466,9 @@ impl Viewer {
             }
             if let Some(scene) = &self.scene {
                 row("F (scene frame)", scene.f().to_string());
-                row("instances", scene.instances.len().to_string());
+                for (label, value) in super::stats::scene_rows(scene) {
+                    row(label, value);
+                }
                 row(
                     "triangles",
                     format!("{} unique", fmt_count(scene.unique_triangle_count())),
