@@ -4,9 +4,10 @@ use super::settings_group;
 settings_group! {
     /// Scene edits.
     pub struct EditSettings {
-        /// Ours (docs/algorithm.md, `regions.rs`): an edit invalidates only the cells within reach of what it
-        /// changed (region epochs in the key); off = eq. (6), every edit empties the whole map. Needs the cell
-        /// cap (`MapSettings::cell_cap`), which bounds the cells the regions cover.
+        /// Ours: moving, hiding or deleting a part re-keys only the hash cells within the AO radius of it
+        /// (region epochs in the key, `regions.rs`); the rest of the image keeps its converged AO. Off: the
+        /// paper's eq. 6 (every edit empties the map). Needs the cell cap, which bounds the cells the regions
+        /// cover.
         local_edits: bool = true, Nothing, paper (false);
     }
 }

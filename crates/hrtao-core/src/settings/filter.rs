@@ -16,8 +16,9 @@ settings_group! {
     pub struct FilterSettings {
         /// À-trous iterations (§5); 0 = no filter.
         filter_iterations: u32 = 5, StillImage, paper keep;
-        /// Ours: variance-guided edge stopping (`FILTER_SIGMA`); off = the paper's filter, bounded by the cell
-        /// footprint.
+        /// Ours: the filter also smooths young cells' noise over more than a cell and stops where neighbours
+        /// differ by more than the cells' noise (`FILTER_SIGMA`). Off: the paper's filter (bounded by the cell
+        /// footprint).
         variance_filter: bool = true, StillImage, paper (false);
     }
 }

@@ -37,9 +37,11 @@ settings_group! {
         hash_capacity: u32 = 1 << 20, WholeMap, paper keep;
         /// Cells untouched for this many frames may be reclaimed while probing (lazy removal, eq. 6).
         stale_frames: u32 = 240, Nothing, paper keep;
-        /// Ours: eq. (5)'s normal bins offset by `NORMAL_BIN_OFFSET` of a bin.
+        /// Ours: eq. 5's normal bins shifted by a quarter bin (`NORMAL_BIN_OFFSET`), so axis-aligned faces and
+        /// 30°/45°/60° chamfers never sit on a bin edge. Off: eq. 5 as published.
         offset_bins: bool = true, WholeMap, paper (false);
-        /// Ours: the finest cell is at most `MAX_CELL_FRACTION` of R.
+        /// Ours: the finest cell is at most a quarter of the AO radius (`MAX_CELL_FRACTION`), so cells stay
+        /// small against the contact shadows they store. Off: eq. 2-3 alone (and edits empty the whole map).
         cell_cap: bool = true, WholeMap, paper (false);
     }
 }

@@ -48,6 +48,12 @@ pub enum Invalidates {
 macro_rules! settings_group {
     (@paper $v:expr, keep) => { $v.clone() };
     (@paper $v:expr, ($p:expr)) => { $p };
+    (@addition $list:ident, $name:expr, $doc:expr, $f:expr, keep) => {};
+    (@addition $list:ident, $name:expr, $doc:expr, $f:expr, ($p:expr)) => {
+        if let Some(on) = $crate::settings::AsToggle::as_toggle(&mut $f) {
+            $list.push($crate::settings::Addition { name: $name, doc: $doc, on });
+        }
+    };
     (
         $(#[$meta:meta])*
         pub struct $name:ident {
@@ -90,10 +96,60 @@ macro_rules! settings_group {
             pub fn paper(&self) -> Self {
                 $name { $( $field: settings_group!(@paper self.$field, $paper), )* }
             }
+
+            /// Our additions in this group (the `bool` fields the paper's mode sets), with their docs: the
+            /// panel shows each as a checkbox, so adding or deleting one does not touch the panel.
+            pub fn additions_mut(&mut self) -> Vec<$crate::settings::Addition<'_>> {
+                #[allow(unused_mut)]
+                let mut list = Vec::new();
+                $(
+                    settings_group!(
+                        @addition list, stringify!($field), concat!($($doc, "\n",)*), self.$field, $paper
+                    );
+                )*
+                list
+            }
         }
     };
 }
 pub(crate) use settings_group;
+
+/// One of our additions as a group lists it (`additions_mut`): its field name, its doc and its switch.
+pub struct Addition<'a> {
+    pub name: &'static str,
+    /// The field's doc comment, one line per source line.
+    pub doc: &'static str,
+    pub on: &'a mut bool,
+}
+
+impl Addition<'_> {
+    /// The field name as a label ("near_field" -> "near field").
+    pub fn label(&self) -> String {
+        self.name.replace('_', " ")
+    }
+
+    /// The doc as one paragraph.
+    pub fn text(&self) -> String {
+        self.doc.split_whitespace().collect::<Vec<_>>().join(" ")
+    }
+}
+
+/// A setting that is an on/off switch (an addition of ours when the paper's mode sets it).
+pub trait AsToggle {
+    fn as_toggle(&mut self) -> Option<&mut bool> {
+        None
+    }
+}
+
+impl AsToggle for bool {
+    fn as_toggle(&mut self) -> Option<&mut bool> {
+        Some(self)
+    }
+}
+
+impl AsToggle for u32 {}
+impl AsToggle for f32 {}
+impl AsToggle for Mode {}
 
 /// All AO settings: one value, in the viewer's preferences and applied to the renderer with each frame
 /// (`frame::FrameDesc`).
@@ -305,5 +361,51 @@ mod tests {
         for (k, v) in young.as_object().unwrap() {
             assert_eq!(v, &serde_json::json!(false), "{k} is on in the paper's mode");
         }
+    }
+
+    /// The panel's checkboxes (`additions_mut`) are exactly the switches the paper's mode turns off, each with
+    /// its doc, and each switches its own field.
+    #[test]
+    fn the_additions_are_the_switches_the_papers_mode_turns_off() {
+        let mut s = AoSettings::default();
+        let mut names = Vec::new();
+        let mut count = 0;
+        for list in [
+            s.map.additions_mut(),
+            s.filter.additions_mut(),
+            s.still.additions_mut(),
+            s.young.additions_mut(),
+            s.edits.additions_mut(),
+            s.display.additions_mut(),
+        ] {
+            for a in list {
+                assert!(a.text().len() > 40, "{}: no doc", a.name);
+                names.push(a.name);
+                *a.on = !*a.on;
+                count += 1;
+            }
+        }
+        names.sort();
+        let flipped = serde_json::to_value(&s).unwrap();
+        let (ours, paper) = (
+            serde_json::to_value(AoSettings::default()).unwrap(),
+            serde_json::to_value(AoSettings::default().paper()).unwrap(),
+        );
+        let mut off_in_paper: Vec<&str> = ours
+            .as_object()
+            .unwrap()
+            .iter()
+            .filter(|(k, v)| v.is_boolean() && paper[k.as_str()] == serde_json::json!(false))
+            .map(|(k, _)| k.as_str())
+            .collect();
+        off_in_paper.sort();
+        assert_eq!(names, off_in_paper);
+        let changed = ours
+            .as_object()
+            .unwrap()
+            .iter()
+            .filter(|(k, v)| flipped[k.as_str()] != **v)
+            .count();
+        assert_eq!(changed, count, "each checkbox switches its own field");
     }
 }

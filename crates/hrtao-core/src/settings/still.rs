@@ -24,8 +24,9 @@ settings_group! {
         refine: bool = true, StillImage, paper (false);
         /// A still image is final once every pixel has this many rays of its own (refinement, per-pixel RTAO).
         still_samples: u32 = 64, StillImage, paper keep;
-        /// Ours: the cell's weight k grows from `PRIOR_RAYS` toward `ADAPTIVE_PRIOR_RAYS` where the pixel's own
-        /// rays agree with the cell (an empirical-Bayes shrinkage).
+        /// Ours: while a pixel's own rays agree with its cell, the cell counts as up to 1024 of the pixel's
+        /// rays (`ADAPTIVE_PRIOR_RAYS`, a steadier still image); where they show the cell is biased the weight
+        /// falls to `PRIOR_RAYS`.
         adaptive_prior: bool = false, StillImage, paper (false);
     }
 }

@@ -21,24 +21,26 @@ const CELL_GRADIENT_LAMBDA: f32 = 2.0;
 settings_group! {
     /// The first frames of a young map.
     pub struct YoungMapSettings {
-        /// Adaptive sampling: pixels whose cells take rays trace a quarter of their budget, then the rest goes
-        /// to them in proportion to the noise their cells still have. Off: every pixel traces its budget.
+        /// While the hash map is young, pixels trace a quarter of the ray budget first and the rest goes to
+        /// the cells that are still noisy. Off: every pixel traces the same number of rays (the paper).
         adaptive_rays: bool = true, StillImage, paper (false);
-        /// Near-field control variate: a pixel that traced rays corrects its cell estimate by its own near-open
-        /// fraction minus its cells' (rays that hit nothing within r_n), restoring contact shadows a cell
-        /// averages away (`NEAR_WEIGHT`, `NEAR_FRACTION`).
+        /// Each pixel corrects its cell's AO with its own rays that hit within half the AO radius, restoring
+        /// contact shadows a cell averages away, where its neighbours' rays agree (a control variate:
+        /// `NEAR_WEIGHT`, `NEAR_FRACTION`). Off: the paper's cells.
         near_field: bool = true, StillImage, paper (false);
-        /// Level blend: a young finest cell's AO is shrunk toward the next coarser level's where they agree
-        /// within its noise (`LEVEL_BLEND_LAMBDA`).
+        /// While a pixel's finest cell is young, its AO leans on the next coarser level where the two agree
+        /// within the finest cell's noise (`LEVEL_BLEND_LAMBDA`). Off: the paper's finest level alone.
         level_blend: bool = true, StillImage, paper (false);
-        /// Pooled residual: a young cell's AO is corrected by the residual of the rays traced this frame by the
-        /// pixel and its 3x3 same-surface neighbours (`POOLED_RESIDUAL_LAMBDA`).
+        /// While a cell is young, each pixel is corrected by the rays it and its neighbours on the same
+        /// surface traced this frame, where they differ from the cell by more than their noise
+        /// (`POOLED_RESIDUAL_LAMBDA`).
         pooled_residual: bool = true, StillImage, paper (false);
-        /// Contact detail: the detail of the screen-space obscurance, with a gain fitted each frame to the
-        /// traced rays, is added to a young cell's AO (`CONTACT_DETAIL_GAIN`).
+        /// While cells are young, the creases and contacts the G-buffer shows around a pixel, finer than its
+        /// cells, darken it by a gain fitted each frame to the rays the pixels traced (`CONTACT_DETAIL_GAIN`).
         contact_detail: bool = true, StillImage, paper (false);
-        /// Linear cells: each cell keeps the least-squares slope of its AO across the cell and the resolve
-        /// evaluates that line at the pixel (`CELL_GRADIENT_LAMBDA`). Cells keep their offset sums only while on.
+        /// Each cell also keeps the slope of its AO across the cell and a pixel reads the cell's line at its
+        /// position (`CELL_GRADIENT_LAMBDA`). Only rays traced while it is on give a cell its slope (turning it
+        /// on empties the map).
         linear_cells: bool = false, WholeMap, paper (false);
     }
 }

@@ -161,7 +161,7 @@ mod tests {
         // A file of another version: an unknown setting and a changed type keep the rest.
         std::fs::write(
             &path,
-            r#"{"settings": {"ao_radius": 3.5, "near_weight": 1.0, "level_blend": 2.0}, "max_render_scale": 0.5}"#,
+            r#"{"settings": {"ao_radius": 3.5, "near_weight": 1.0, "shaded": 2.0}, "max_render_scale": 0.5}"#,
         )
         .unwrap();
         let (old, msg) = load(&path);
@@ -169,7 +169,7 @@ mod tests {
             (old.settings.map.ao_radius, old.max_render_scale, msg),
             (3.5, Some(0.5), None)
         );
-        assert!(old.settings.young.level_blend);
+        assert!(old.settings.display.shaded);
         std::fs::write(&path, "{ not json").unwrap();
         let (d, msg) = load(&path);
         assert_eq!(d, Prefs::default());

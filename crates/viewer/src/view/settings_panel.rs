@@ -80,16 +80,7 @@ pub fn map(ui: &mut egui::Ui, s: &mut MapSettings, default_radius: f32) {
             "Minimum samples (§4): a cell with fewer samples is replaced by its coarser LOD (eq. 3) \
              until it has gathered enough.",
         );
-    ui.horizontal(|ui| {
-        ui.checkbox(&mut s.cell_cap, "cell cap").on_hover_text(
-            "Ours (docs/algorithm.md): the finest cell is at most a quarter of the AO radius, so cells stay \
-             small against the contact shadows they store. Off: eq. 2-3 alone (and edits empty the whole map).",
-        );
-        ui.checkbox(&mut s.offset_bins, "offset normal bins").on_hover_text(
-            "Ours: eq. 5's bins shifted by a quarter bin, so axis-aligned faces and 30°/45°/60° chamfers never \
-             sit on a bin edge. Off: eq. 5 as published.",
-        );
-    });
+    additions(ui, s.additions_mut());
     let mut log2 = s.hash_capacity.trailing_zeros();
     ui.add(
         egui::Slider::new(&mut log2, 10..=26)
@@ -111,42 +102,14 @@ pub fn filter(ui: &mut egui::Ui, s: &mut FilterSettings) {
                 "Adaptive à-trous filter (§5): each iteration doubles its reach; the footprint follows the cell \
                  size. 0: no filter.",
             );
-        ui.checkbox(&mut s.variance_filter, "variance-guided").on_hover_text(
-            "Ours: the filter also smooths young cells' noise over more than a cell and stops where neighbours \
-             differ by more than the cells' noise. Off: the paper's filter (bounded by the cell footprint).",
-        );
+        additions(ui, s.additions_mut());
     });
 }
 
 /// The first frames of a young map.
 pub fn young(ui: &mut egui::Ui, s: &mut YoungMapSettings) {
     ui.label("first frames (ours, docs/algorithm.md):");
-    ui.horizontal_wrapped(|ui| {
-        ui.checkbox(&mut s.adaptive_rays, "adaptive rays").on_hover_text(
-            "While the hash map is young, pixels trace a quarter of the ray budget first and the rest goes to \
-             the cells that are still noisy. Off: every pixel traces the same number of rays (the paper).",
-        );
-        ui.checkbox(&mut s.near_field, "contact correction").on_hover_text(
-            "Each pixel corrects its cell's AO with its own rays that hit within half the AO radius, restoring \
-             contact shadows a cell averages away, where its neighbours' rays agree. Off: the paper's cells.",
-        );
-        ui.checkbox(&mut s.level_blend, "level blend").on_hover_text(
-            "While a pixel's finest cell is young, its AO leans on the next coarser level where the two agree \
-             within the finest cell's noise. Off: the paper's finest level alone.",
-        );
-        ui.checkbox(&mut s.pooled_residual, "pooled residual").on_hover_text(
-            "While a cell is young, each pixel is corrected by the rays it and its neighbours on the same \
-             surface traced this frame, where they differ from the cell by more than their noise.",
-        );
-        ui.checkbox(&mut s.contact_detail, "contact detail").on_hover_text(
-            "While cells are young, the creases and contacts the G-buffer shows around a pixel, finer than its \
-             cells, darken it by a gain fitted each frame to the rays the pixels traced.",
-        );
-        ui.checkbox(&mut s.linear_cells, "linear cells").on_hover_text(
-            "Each cell also keeps the slope of its AO across the cell and a pixel reads the cell's line at its \
-             position. Only rays traced while it is on give a cell its slope (turning it on empties the map).",
-        );
-    });
+    additions(ui, s.additions_mut());
 }
 
 /// Still-camera refinement.
@@ -164,18 +127,26 @@ pub fn still(ui: &mut egui::Ui, s: &mut StillSettings) {
         )
         .on_hover_text("A still image is final once every pixel has this many rays of its own.");
     });
-    ui.checkbox(&mut s.adaptive_prior, "adaptive cell weight").on_hover_text(
-        "Ours: while a pixel's own rays agree with its cell, the cell counts as up to 1024 of the pixel's rays \
-         (a steadier still image); where they show the cell is biased the weight falls to 32.",
-    );
+    let others = s
+        .additions_mut()
+        .into_iter()
+        .filter(|a| a.name != "refine")
+        .collect();
+    additions(ui, others);
 }
 
 /// Scene edits.
 pub fn edits(ui: &mut egui::Ui, s: &mut EditSettings) {
-    ui.checkbox(&mut s.local_edits, "edits keep untouched AO")
-        .on_hover_text(
-        "Ours (docs/algorithm.md): moving, hiding or deleting a part re-keys only the hash cells within the \
-         AO radius of it; the rest of the image keeps its converged AO. Off: the paper's eq. 6 (every edit \
-         empties the map).",
-    );
+    additions(ui, s.additions_mut());
+}
+
+/// Our additions of a group, a checkbox each with the setting's doc as its hover text (`additions_mut`): a new
+/// addition shows here without a line of panel code.
+fn additions(ui: &mut egui::Ui, list: Vec<hrtao_core::settings::Addition<'_>>) {
+    ui.horizontal_wrapped(|ui| {
+        for a in list {
+            let (label, text) = (a.label(), a.text());
+            ui.checkbox(a.on, label).on_hover_text(text);
+        }
+    });
 }
