@@ -42,21 +42,10 @@ float adapt_weight(CellRef cells, uint c) {
     return pow(p * (1.0 - p), ADAPT_EXP);
 }
 
-// Ray counts of one pixel for one cell: traced, open, open within the near radius; `position` is the pixel's
-// hit point and `lod` the cell's level (linear cells: the rays' offset from the cell centre).
-void add_rays(CellRef cells, uint c, uvec3 rays, vec3 position, int lod) {
+// Ray counts of one pixel for one cell: traced, open, open within the near radius.
+void add_rays(CellRef cells, uint c, uvec3 rays) {
     atomicAdd(cells.v[c].samples, rays.x);
     atomicAdd(cells.v[c].unoccluded, rays.y);
-    if (g.cell_gradient > 0.0) {
-        vec3 d = fract(ldexp(position, ivec3(-lod))) - 0.5;   // in cell widths, as cell_coord() floors
-        ivec3 qd = ivec3(round(d * float(CELL_OFFSET_SCALE)));
-        uvec3 qdd = uvec3(round(d * d * float(CELL_OFFSET_SQ_SCALE)));
-        for (int k = 0; k < 3; ++k) {
-            atomicAdd(cells.v[c].offset_sum[k], int(rays.x) * qd[k]);
-            atomicAdd(cells.v[c].open_offset_sum[k], int(rays.y) * qd[k]);
-            atomicAdd(cells.v[c].offset_sq_sum[k], rays.x * qdd[k]);
-        }
-    }
     if ((g.flags & FLAG_NEAR_FIELD) != 0u) {
         atomicAdd(cells.v[c].near_traced, rays.x);
         atomicAdd(cells.v[c].near_open, rays.z);
@@ -152,7 +141,7 @@ void main() {
     // them until it holds SAMPLE_CAP.
     int lod = pixel_lod(px.t);
     if (claimed > 0u) {
-        add_rays(cells, pc.cells[first], cell_rays, px.position, lod + int(first));
+        add_rays(cells, pc.cells[first], cell_rays);
         rays_add(RAYS_CELL, claimed);
     }
     for (uint l = first + 1u; l < LOD_COUNT; ++l) {
@@ -160,6 +149,6 @@ void main() {
         if (c == INVALID_CELL || !slot_in_bounds(c)) continue;
         // Atomic: other pixels add to the same coarse cell in this dispatch.
         uint samples = atomicLoad(cells.v[c].samples, gl_ScopeDevice, gl_StorageSemanticsBuffer, gl_SemanticsRelaxed);
-        if (samples < SAMPLE_CAP) add_rays(cells, c, all_rays, px.position, lod + int(l));
+        if (samples < SAMPLE_CAP) add_rays(cells, c, all_rays);
     }
 }

@@ -75,11 +75,6 @@ void reset_counters(CellRef cells, uint slot) {
     atomicExchange(cells.v[slot].qmc_index, 0u);
     atomicExchange(cells.v[slot].near_traced, 0u);
     atomicExchange(cells.v[slot].near_open, 0u);
-    for (int k = 0; k < 3; ++k) {
-        atomicExchange(cells.v[slot].offset_sum[k], 0);
-        atomicExchange(cells.v[slot].open_offset_sum[k], 0);
-        atomicExchange(cells.v[slot].offset_sq_sum[k], 0u);
-    }
 }
 
 // How many times a probe restarts after losing its candidate slot to another key (bounded work per thread).

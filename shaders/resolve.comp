@@ -14,26 +14,6 @@
 #include "pool.glsl"
 #include "queue_args.glsl"
 
-// Linear cells (ours, cell_gradient > 0, docs/algorithm.md): the AO of cell `c` (s rays) at offset `d` (in cell
-// widths) from its centre: the rays' mean plus the least-squares slope of the open rays against where they
-// started, times d minus the rays' mean offset. Each axis's slope is shrunk by the Wiener weight
-// g^2 / (g^2 + lambda v) against its binomial noise v; an axis the rays did not spread along (a face's normal)
-// has none. cell_gradient = 0: the cell's mean (the paper).
-const float MIN_OFFSET_VAR = 1.0 / 64.0;
-float cell_ao(CellRef cells, uint c, float s, vec3 d) {
-    float mean = float(cells.v[c].unoccluded) / s;
-    if (g.cell_gradient <= 0.0) return mean;
-    vec3 d_mean = vec3(cells.v[c].offset_sum) / (float(CELL_OFFSET_SCALE) * s);
-    vec3 d_var = vec3(cells.v[c].offset_sq_sum) / (float(CELL_OFFSET_SQ_SCALE) * s) - d_mean * d_mean;
-    vec3 cov = vec3(cells.v[c].open_offset_sum) / (float(CELL_OFFSET_SCALE) * s) - mean * d_mean;
-    vec3 spread = max(d_var, vec3(MIN_OFFSET_VAR));
-    vec3 slope = step(vec3(MIN_OFFSET_VAR), d_var) * cov / spread;
-    float p = clamp(mean, 0.5 / (s + 1.0), 1.0 - 0.5 / (s + 1.0));
-    vec3 v = p * (1.0 - p) / (s * spread);
-    slope *= slope * slope / (slope * slope + g.cell_gradient * v);
-    return clamp(mean + dot(slope, d - d_mean), 0.0, 1.0);
-}
-
 // Trilinear interpolation at level `lod` of the 8 cells around `position` (cells absent or empty drop out):
 // (sum of w AO, the near-open fraction times sum of w, sum of w, the rays the weighted mean is worth:
 // (sum w)^2 / sum w^2/s). The near-open fraction is interpolated over the cells that classified rays (-1 when
@@ -59,14 +39,11 @@ vec4 interpolate(vec3 position, int lod, ivec3 nq) {
         uint s = cells.v[c].samples;
         if (s == 0u) continue;
         w *= min(1.0, float(s) / float(max(g.min_samples, 1u)));
-        float mean = float(cells.v[c].unoccluded) / float(s);
-        float ao = cell_ao(cells, c, float(s), u - vec3(b + o));
+        float ao = float(cells.v[c].unoccluded) / float(s);
         sum += w * ao;
         uint near_traced = cells.v[c].near_traced;
         if (near_traced > 0u) {
-            // The near-open fraction takes the AO's slope too (the control variate assumes they vary alike), so
-            // the pixel's residual is taken against the line and the slope is not counted twice.
-            near_sum += w * (float(cells.v[c].near_open) / float(near_traced) + ao - mean);
+            near_sum += w * (float(cells.v[c].near_open) / float(near_traced));
             near_w += w;
         }
         wsum += w;

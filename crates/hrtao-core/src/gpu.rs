@@ -40,7 +40,7 @@ mod tests {
     fn layouts_are_scalar_compatible() {
         // Scalar block layout: a u64 field must sit at an 8-byte offset.
         assert_eq!(std::mem::size_of::<GPixel>(), 48);
-        assert_eq!(std::mem::size_of::<HashCell>(), 64);
+        assert_eq!(std::mem::size_of::<HashCell>(), 32);
         assert_eq!(std::mem::size_of::<HashTestCase>(), 56);
         assert_eq!(std::mem::size_of::<GeometryInfo>(), 32);
         assert_eq!(std::mem::size_of::<FrameGlobals>() % 8, 0);

@@ -63,10 +63,6 @@ gpu_consts! {
     /// Rays a cell accumulates at most (coarser levels stop receiving propagated rays there): far from u32
     /// overflow, and the ratio unoccluded / samples stays exact in a float.
     SAMPLE_CAP: u32 = 0x0100_0000;
-    /// Fixed point of `HashCell::offset_sum`, `open_offset_sum` (|d| <= 1/2: 64 per ray, 2^30 at `SAMPLE_CAP`).
-    CELL_OFFSET_SCALE: u32 = 128;
-    /// Fixed point of `HashCell::offset_sq_sum` (d² <= 1/4: 64 per ray).
-    CELL_OFFSET_SQ_SCALE: u32 = 256;
     /// Largest `max_samples`: the QMC index plus one frame's block claims stays far from u32 overflow.
     MAX_SAMPLES_LIMIT: u32 = 0x0010_0000;
     /// Entries of the region epoch table (local edits, ours): a power of two.
@@ -241,9 +237,8 @@ gpu_structs! {
         /// level's unless they differ by more than the fine level's noise, weighted by this (0 = the paper's
         /// finest level alone).
         level_blend: f32,
-        /// Linear cells (ours, docs/algorithm.md): the Wiener factor λ that shrinks a cell's AO slope against
-        /// its noise (0 = constant cells, the paper).
-        cell_gradient: f32,
+        /// eq. (5): the offset of the normal bins in bins, floor(n s_nd + offset) (`MapSettings::offset_bins`).
+        normal_offset: f32,
         /// Contact detail (ours, docs/algorithm.md): the weight of the fitted detail gain (0 = off). Also keeps
         /// the next address at an 8-byte offset (scalar layout aligns it to its u64).
         contact_detail: f32,
@@ -255,10 +250,6 @@ gpu_structs! {
         filter_guide: u64,
         /// Per pixel, the screen-space obscurance of its G-buffer neighbourhood (detail.comp).
         obscurance: u64,
-        /// eq. (5): the offset of the normal bins in bins, floor(n s_nd + offset) (`AoSettings::normal_offset`).
-        normal_offset: f32,
-        /// Unused: keeps the struct a whole number of 8-byte words.
-        pad0: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -343,13 +334,8 @@ gpu_structs! {
         /// r_n (only in frames of a young map, `FLAG_NEAR_FIELD`), and those of them that hit nothing there.
         near_traced: u32,
         near_open: u32,
-        /// Linear cells (ours, `cell_gradient`): over the cell's rays, the sum of the ray origin's offset d from
-        /// the cell centre (in cell widths, fixed point `CELL_OFFSET_SCALE`), the same over the open rays, and
-        /// the sum of d² per axis (fixed point `CELL_OFFSET_SQ_SCALE`): the least-squares slope of the AO across
-        /// the cell. Bounded: at `SAMPLE_CAP` rays the sums stay below 2^31.
-        offset_sum: [i32; 3],
-        open_offset_sum: [i32; 3],
-        offset_sq_sum: [u32; 3],
+        /// Rounds the cell to its 8-byte alignment (32 bytes, as std430 lays it out).
+        _pad: u32,
     }
 
     /// One CPU-vs-GPU hash test case: inputs, then the GPU's outputs (hash_test.comp).

@@ -260,7 +260,6 @@ fn stale_cells_are_reclaimed_so_the_map_never_fills() {
         let mut s = hrtao(1, radius);
         s.map.hash_capacity = 8192;
         s.map.stale_frames = 2;
-        s.young.linear_cells = true;
         s
     };
     let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
@@ -295,7 +294,6 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
     let base = {
         let mut s = hrtao(4, radius);
         s.map.s_p = 1.0;
-        s.young.linear_cells = true;
         s
     };
     let need = Headless::new(&gpu, cam.width, cam.height, base.clone())

@@ -15,8 +15,6 @@ pub const LEVEL_BLEND_LAMBDA: f32 = 1.0;
 pub const POOLED_RESIDUAL_LAMBDA: f32 = 16.0;
 /// Contact detail: the scale of the gain fitted each frame (1 = the fit).
 pub const CONTACT_DETAIL_GAIN: f32 = 1.0;
-/// Linear cells: the λ that shrinks a cell's AO slope against its noise.
-const CELL_GRADIENT_LAMBDA: f32 = 2.0;
 
 settings_group! {
     /// The first frames of a young map.
@@ -38,10 +36,6 @@ settings_group! {
         /// While cells are young, the creases and contacts the G-buffer shows around a pixel, finer than its
         /// cells, darken it by a gain fitted each frame to the rays the pixels traced (`CONTACT_DETAIL_GAIN`).
         contact_detail: bool = true, StillImage, paper (false);
-        /// Each cell also keeps the slope of its AO across the cell and a pixel reads the cell's line at its
-        /// position (`CELL_GRADIENT_LAMBDA`). Only rays traced while it is on give a cell its slope (turning it
-        /// on empties the map).
-        linear_cells: bool = false, WholeMap, paper (false);
     }
 }
 
@@ -53,6 +47,5 @@ impl YoungMapSettings {
         g.level_blend = on(self.level_blend, LEVEL_BLEND_LAMBDA);
         g.pooled_residual = on(self.pooled_residual, POOLED_RESIDUAL_LAMBDA);
         g.contact_detail = on(self.contact_detail, CONTACT_DETAIL_GAIN);
-        g.cell_gradient = on(self.linear_cells, CELL_GRADIENT_LAMBDA);
     }
 }

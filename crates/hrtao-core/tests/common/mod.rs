@@ -468,23 +468,6 @@ pub fn check_map(
                 a.near_open
             );
         }
-        // Linear cells: each ray adds its origin's offset from the cell centre, at most half a cell width
-        // (CELL_OFFSET_SCALE / 2 in fixed point), once to the cell's sums and once more if it was open; a cell
-        // claimed from another key starts its sums from zero.
-        let half = (gpu::CELL_OFFSET_SCALE / 2) as u64;
-        for k in 0..3 {
-            assert!(
-                a.offset_sum[k].unsigned_abs() as u64 <= half * a.samples as u64
-                    && a.open_offset_sum[k].unsigned_abs() as u64 <= half * a.unoccluded as u64
-                    && a.offset_sq_sum[k] as u64 * 4 <= gpu::CELL_OFFSET_SQ_SCALE as u64 * a.samples as u64,
-                "cell {i}: offset sums {:?} {:?} {:?} for {} rays, {} open",
-                a.offset_sum,
-                a.open_offset_sum,
-                a.offset_sq_sum,
-                a.samples,
-                a.unoccluded
-            );
-        }
         assert!(
             a.samples <= gpu::SAMPLE_CAP + slack,
             "cell {i}: {} samples",
