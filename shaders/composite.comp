@@ -3,7 +3,7 @@
 // accumulation over still frames (ours, docs/algorithm.md), which anti-aliases (each still frame's primary
 // sample is jittered) and, in HRTAO, moves each pixel from its cell estimate c (paper §4-5) to its own rays:
 //
-//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)) = mean(c) + S / (k + S) r,   k = prior_weight (ours),
+//   AO = (k mean(c) + sum(unoccluded)) / (k + sum(rays)) = mean(c) + S / (k + S) r,   k = prior_rays (ours),
 //
 // the cell estimate counting as k of the pixel's own rays (S of them, r = own mean - mean(c) the residual). The
 // residual is pooled with the neighbours' that agree (pooled_evidence), and the shown AO is smoothed over the
@@ -103,7 +103,6 @@ layout(buffer_reference, scalar) buffer Vec4Ref { vec4 v[]; };
 struct Evidence {
     float r;    // the pooled residual
     float s;    // the rays behind it
-    float b2;   // the squared cell bias, by empirical Bayes (for the adaptive k)
 };
 
 // The own mean's binomial noise variance v/s over s rays, about the blended estimate p.
@@ -116,8 +115,7 @@ float own_noise(float p, float s) {
 // Residuals are the cells' bias seen through each pixel's own rays: neighbours sharing a cell share most of
 // it, so pooling cuts the own rays' noise (the still image's flicker) several times while it follows the bias.
 // As the own rays grow, var(d) shrinks and only neighbours with the same residual stay: the pixel converges
-// to its own ray-traced value. b^2 (the adaptive k): (r^2 - z^2 v/s), z = prior_sigma, averaged without
-// weights over the same neighbours.
+// to its own ray-traced value.
 Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
     Vec4Ref slots = Vec4Ref(g.bias_evidence);
     uint n = g.width * g.height;
@@ -127,9 +125,6 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
     Evidence e;
     e.r = r * s;
     e.s = s;
-    float z2 = g.prior_sigma * g.prior_sigma;
-    e.b2 = r * r - z2 * own_noise(p, s);
-    float count = 1.0;
     if (s > 0.0 && g.still_index > 1u) {
         uint read_slot = n - write_slot;
         float pixel_size = pixel_world_size(px.t);
@@ -144,8 +139,6 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
                 vec2 rs = slots.v[read_slot + qi].xy;
                 if (rs.y <= 0.0) continue;
                 float vq = own_noise(p, rs.y);
-                e.b2 += rs.x * rs.x - z2 * vq;
-                count += 1.0;
                 if (g.residual_sigma > 0.0) {
                     float d = rs.x - r;
                     float var_d = own_noise(p, s) + vq;
@@ -157,26 +150,7 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
         }
     }
     e.r = e.s > 0.0 ? e.r / e.s : 0.0;
-    e.b2 /= count;
     return e;
-}
-
-// Ours: the cell estimate's weight k in rays of the pixel's own. The own residual over s rays has binomial
-// noise v/s (v = p(1-p)); the cell estimate mean(c) differs from the truth by a bias b. Weighing them k : s with
-// k = v / b^2 minimises the expected squared error (b^2 from pooled_evidence). While the own rays agree with
-// mean(c) within their noise, k is prior_rays_max (the cell, nearly noise-free, dominates: no flicker); where
-// the cell is biased, k falls toward prior_rays and the pixel converges to its own rays. k moves continuously
-// with the evidence, so it does not flicker. k never exceeds the rays of the cell the pixel used: a cell of N
-// rays carries their noise, so it is worth at most N of the pixel's (times CELLS_FILTERED, the cells the filter
-// averages, as a rough count). prior_rays_max <= prior_rays: k = prior_rays.
-const float CELLS_FILTERED = 2.0;
-float prior_weight(uvec2 pix, float p, Evidence e) {
-    float k_min = max(g.prior_rays, 1e-6);
-    float cell_rays = float(plan_samples(UintRef(g.filter_plan).v[pix.y * g.width + pix.x]));
-    float k_max = max(min(g.prior_rays_max, CELLS_FILTERED * cell_rays), k_min);
-    if (e.s <= 0.0 || k_max <= k_min) return k_min;
-    float v = max(p * (1.0 - p), 1.0 / (k_min + e.s));
-    return clamp(v / max(e.b2, 1e-12), k_min, k_max);
 }
 
 // Ours: the shown AO moves `still_smoothing` of the way to the new estimate each still frame (an exponential
@@ -263,7 +237,6 @@ void main() {
             float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);
             // A miss (mean(c) = 1, all rays open) has no residual.
             Evidence e = pooled_evidence(pix, px, r, px.t >= 0.0 ? a.rays : 0.0, p);
-            k = prior_weight(pix, p, e);
             ao = mean_c + e.s / (k + e.s) * e.r;
             ao = smoothed(index, ao, a.frames > 1.0);
             // The colour: each sample's shade weighed as above, moved with the pooled AO.

@@ -206,12 +206,6 @@ gpu_structs! {
         section1: [f32; 4],
         section2: [f32; 4],
         section_count: u32,
-        /// Still-camera refinement (ours): the cell estimate's weight k in rays is adaptive, from `prior_rays`
-        /// (the pixel's own rays disagree with the cell) up to this (they agree); see composite.comp.
-        prior_rays_max: f32,
-        /// The disagreement that counts: the squared difference between the pixel's own mean and the cell
-        /// estimate beyond this many squared standard deviations of the own rays' binomial noise.
-        prior_sigma: f32,
         /// Still-camera refinement (ours): neighbours' own-ray residuals within this many standard deviations
         /// of the pixel's join its residual (composite.comp); 0 = the pixel's own only.
         residual_sigma: f32,

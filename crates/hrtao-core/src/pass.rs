@@ -246,7 +246,6 @@ impl Pass {
                 Instances,
                 GBuffer,
                 BiasEvidence,
-                FilterPlan,
                 Ao,
                 PixelRays,
                 Accum,

@@ -11,10 +11,6 @@ pub const RESIDUAL_SIGMA: f32 = 0.5;
 /// Each still frame the shown AO moves this fraction of the way to the refined estimate (an exponential moving
 /// average, a lag of about 1/x - 1 frames).
 pub const STILL_SMOOTHING: f32 = 0.15;
-/// The adaptive prior's largest k, where the pixel's own rays agree with its cell within their noise.
-const ADAPTIVE_PRIOR_RAYS: f32 = 1024.0;
-/// The own-ray noise (in standard deviations) that a difference from the cell must exceed to count as bias.
-const PRIOR_SIGMA: f32 = 1.0;
 
 settings_group! {
     /// Still-camera refinement.
@@ -24,10 +20,6 @@ settings_group! {
         refine: bool = true, StillImage, paper (false);
         /// A still image is final once every pixel has this many rays of its own (refinement, per-pixel RTAO).
         still_samples: u32 = 64, StillImage, paper keep;
-        /// Ours: while a pixel's own rays agree with its cell, the cell counts as up to 1024 of the pixel's
-        /// rays (`ADAPTIVE_PRIOR_RAYS`, a steadier still image); where they show the cell is biased the weight
-        /// falls to `PRIOR_RAYS`.
-        adaptive_prior: bool = false, StillImage, paper (false);
     }
 }
 
@@ -37,12 +29,6 @@ impl StillSettings {
             g.flags |= gpu::FLAG_REFINE;
         }
         g.prior_rays = PRIOR_RAYS;
-        g.prior_rays_max = if self.adaptive_prior {
-            ADAPTIVE_PRIOR_RAYS
-        } else {
-            0.0
-        };
-        g.prior_sigma = PRIOR_SIGMA;
         g.residual_sigma = RESIDUAL_SIGMA;
         g.still_smoothing = STILL_SMOOTHING;
     }
