@@ -5,7 +5,6 @@
 // absent or empty drop out and the weights renormalise), so the cell grid does not show as blocks and the
 // AO is centred on the pixel rather than on its cell.
 // Ours (near_weight > 0): the near-field control variate corrects the cell estimate with the pixel's own rays.
-// Ours (level_blend > 0): a young cell is shrunk toward the next coarser level where they agree within its noise.
 // Writes into the buffer the filter's ping-pong starts from, and queues the pixels the filter runs on
 // (filter_plan.glsl, `store_resolved`).
 #include "common.glsl"
@@ -92,26 +91,6 @@ void resolve_pixel() {
             float wsum = fine.z;
             uint own = pc.cells[best];
             float own_samples = float(cells.v[own].samples);
-            // Level blend (ours, docs/algorithm.md): a young cell holds a few pixels' rays; where its level and
-            // the next coarser one agree within the fine level's binomial noise v, the coarser level (about 4x
-            // the rays on a surface) takes over, and where they differ by more, the fine level's detail stays
-            // (Wiener weight d^2 / (d^2 + lambda v)). Full cells and refinement frames are left as they are.
-            if (g.level_blend > 0.0 && !refine_frame() && !navigation_frame() && wsum > 0.0 && best + 1u < LOD_COUNT
-                && own_samples < float(g.max_samples)) {
-                vec4 coarse = interpolate(px.position, lod + 1, nq);
-                if (coarse.z > 0.0) {
-                    float a_f = sum / wsum;
-                    float a_c = coarse.x / coarse.z;
-                    float n_f = fine.w;
-                    float v = max(a_f * (1.0 - a_f), 0.5 / n_f) / n_f;
-                    float d = a_f - a_c;
-                    float k = d * d / (d * d + g.level_blend * v);
-                    sum = mix(a_c, a_f, k) * wsum;
-                    if (near_sum >= 0.0 && coarse.y >= 0.0) {
-                        near_sum = mix(coarse.y / coarse.z, near_sum / wsum, k) * wsum;
-                    }
-                }
-            }
             ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
             // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
             // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.

@@ -227,15 +227,12 @@ gpu_structs! {
         /// Fractional ray budget (ours): outside refinement frames, a pixel whose cell takes rays traces this
         /// frame with this probability (1 = every such pixel, as the paper), see ray_target.glsl.
         trace_fraction: f32,
-        /// Level blend (ours, docs/algorithm.md): a young cell's interpolated AO is shrunk toward the next coarser
-        /// level's unless they differ by more than the fine level's noise, weighted by this (0 = the paper's
-        /// finest level alone).
-        level_blend: f32,
         /// eq. (5): the offset of the normal bins in bins, floor(n s_nd + offset) (`MapSettings::offset_bins`).
         normal_offset: f32,
-        /// Contact detail (ours, docs/algorithm.md): the weight of the fitted detail gain (0 = off). Also keeps
-        /// the next address at an 8-byte offset (scalar layout aligns it to its u64).
+        /// Contact detail (ours, docs/algorithm.md): the weight of the fitted detail gain (0 = off).
         contact_detail: f32,
+        /// Unused: keeps the next address at an 8-byte offset (scalar layout aligns it to its u64).
+        _pad0: u32,
         /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the
         /// pixel takes and the rays of the cell its AO came from.
         filter_plan: u64,

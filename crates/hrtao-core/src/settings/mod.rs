@@ -25,10 +25,7 @@ pub use filter::{FilterSettings, FILTER_SIGMA};
 pub use map::{MapSettings, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};
 pub use mode::Mode;
 pub use still::{StillSettings, PRIOR_RAYS, RESIDUAL_SIGMA, STILL_SMOOTHING};
-pub use young::{
-    YoungMapSettings, CONTACT_DETAIL_GAIN, LEVEL_BLEND_LAMBDA, NEAR_FRACTION, NEAR_WEIGHT,
-    POOLED_RESIDUAL_LAMBDA,
-};
+pub use young::{YoungMapSettings, CONTACT_DETAIL_GAIN, NEAR_FRACTION, NEAR_WEIGHT, POOLED_RESIDUAL_LAMBDA};
 
 /// What a change of a setting invalidates (`AoSettings::invalidates`), from least to most. A frame's change as a
 /// whole (camera, scene, settings) is decided in `frame::Change`.

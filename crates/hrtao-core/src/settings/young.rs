@@ -9,8 +9,6 @@ pub const NEAR_WEIGHT: f32 = 1.0;
 /// The near radius r_n as a fraction of R (smaller radii make the near-open fraction curve within a cell where
 /// the AO does not, which biases the correction).
 pub const NEAR_FRACTION: f32 = 0.5;
-/// Level blend: the λ of the Wiener weight d²/(d² + λ v) that shrinks a young cell toward its coarser level.
-pub const LEVEL_BLEND_LAMBDA: f32 = 1.0;
 /// Pooled residual: the λ of the Wiener weight r²/(r² + λ v) of the 3x3 same-surface residual.
 pub const POOLED_RESIDUAL_LAMBDA: f32 = 16.0;
 /// Contact detail: the scale of the gain fitted each frame (1 = the fit).
@@ -26,9 +24,6 @@ settings_group! {
         /// contact shadows a cell averages away, where its neighbours' rays agree (a control variate:
         /// `NEAR_WEIGHT`, `NEAR_FRACTION`). Off: the paper's cells.
         near_field: bool = true, StillImage, paper (false);
-        /// While a pixel's finest cell is young, its AO leans on the next coarser level where the two agree
-        /// within the finest cell's noise (`LEVEL_BLEND_LAMBDA`). Off: the paper's finest level alone.
-        level_blend: bool = true, StillImage, paper (false);
         /// While a cell is young, each pixel is corrected by the rays it and its neighbours on the same
         /// surface traced this frame, where they differ from the cell by more than their noise
         /// (`POOLED_RESIDUAL_LAMBDA`).
@@ -44,7 +39,6 @@ impl YoungMapSettings {
         let on = |b: bool, v: f32| if b { v } else { 0.0 };
         g.near_weight = on(self.near_field, NEAR_WEIGHT);
         g.near_fraction = NEAR_FRACTION;
-        g.level_blend = on(self.level_blend, LEVEL_BLEND_LAMBDA);
         g.pooled_residual = on(self.pooled_residual, POOLED_RESIDUAL_LAMBDA);
         g.contact_detail = on(self.contact_detail, CONTACT_DETAIL_GAIN);
     }
