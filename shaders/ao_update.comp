@@ -126,7 +126,7 @@ void main() {
     // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
     if ((g.flags & FLAG_YOUNG_MAP) != 0u) {
         // This frame's rays of the pixel, for the near-field control variate (resolve.comp, when classified)
-        // and the pooled residual (residual.comp); both run only while the map is young.
+        // and the pooled residual (residual.glsl); both run only while the map is young.
         PixelRaysRef(g.pixel_rays).v[index].near_traced += rays;
         PixelRaysRef(g.pixel_rays).v[index].near_open += all_rays.z;
         PixelRaysRef(g.pixel_rays).v[index].open += all_rays.y;

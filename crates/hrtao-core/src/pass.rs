@@ -30,7 +30,6 @@ pub enum Pass {
     AoUpdate,
     Resolve,
     Filter,
-    Residual,
     Obscurance,
     Detail,
     Composite,
@@ -38,7 +37,7 @@ pub enum Pass {
 }
 
 impl Pass {
-    pub const ALL: [Pass; 12] = [
+    pub const ALL: [Pass; 11] = [
         Pass::Primary,
         Pass::GbufferFromVis,
         Pass::Obscurance,
@@ -47,7 +46,6 @@ impl Pass {
         Pass::AoUpdate,
         Pass::Resolve,
         Pass::Filter,
-        Pass::Residual,
         Pass::Detail,
         Pass::Composite,
         Pass::HashTest,
@@ -63,7 +61,6 @@ impl Pass {
             Pass::AoUpdate => "ao_update",
             Pass::Resolve => "resolve",
             Pass::Filter => "filter",
-            Pass::Residual => "residual",
             Pass::Obscurance => "obscurance",
             Pass::Detail => "detail",
             Pass::Composite => "composite",
@@ -78,7 +75,7 @@ impl Pass {
             Pass::Rtao => "per-pixel RTAO",
             Pass::CellFinder => "cell finder",
             Pass::AoUpdate => "ray-tracing update",
-            Pass::Resolve | Pass::Residual | Pass::Obscurance | Pass::Detail => "per-pixel AO",
+            Pass::Resolve | Pass::Obscurance | Pass::Detail => "per-pixel AO",
             Pass::Filter => "filtering",
             Pass::Composite => "composite",
             Pass::HashTest => "hash test",
@@ -236,7 +233,6 @@ impl Pass {
                 Ao,
                 FilterTmp,
             ],
-            Pass::Residual => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Ao],
             Pass::Obscurance => &[GBuffer],
             Pass::Detail => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Obscurance, Ao],
             Pass::Composite => &[
@@ -275,7 +271,6 @@ impl Pass {
                 DispatchArgs,
             ],
             Pass::Filter => &[Ao, FilterTmp],
-            Pass::Residual => &[Ao],
             Pass::Obscurance => &[Obscurance],
             Pass::Detail => &[Ao, Stats],
             Pass::Composite => &[BiasEvidence, Ao, Accum, Output],

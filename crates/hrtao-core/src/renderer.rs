@@ -638,16 +638,14 @@ impl Renderer {
                     rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
                 }
             }
-            if settings.young.pooled_residual && young {
-                // Over the pixels that traced into their cells (the ray queue), while the map is young.
-                rec.dispatch_indirect(Pass::Residual, args, rays, [0; 4]);
-            }
-            if contact_detail {
-                // Contact detail (ours): over the ray queue the fit of its gain to this frame's rays and the
-                // correction (detail.comp's two phases), from the obscurance found after primary visibility.
-                for phase in 1..=2 {
-                    rec.dispatch_indirect(Pass::Detail, args, rays, [phase, 0, 0, 0]);
-                }
+            // A young map's corrections (ours, detail.comp) over the pixels that traced into their cells (the
+            // ray queue): the pooled residual, then the contact detail's gain fitted to this frame's rays (from
+            // the obscurance found after primary visibility) in phase 1, and its correction in phase 2.
+            let residual = settings.young.pooled_residual && young;
+            let corrections = residual as u32 | (contact_detail as u32) << 1;
+            let phases = if contact_detail { 2 } else { residual as u32 };
+            for phase in 1..=phases {
+                rec.dispatch_indirect(Pass::Detail, args, rays, [phase, corrections, 0, 0]);
             }
         }
         // The frame's counters, once, for `finish_frame`: composite.comp counts nothing (its declaration
