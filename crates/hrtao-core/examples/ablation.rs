@@ -39,6 +39,14 @@ struct SceneMetrics {
     nav_gpu_ms: f64,
     /// Rays traced in the first frame.
     first_rays: u64,
+    /// The same costs in CPU milliseconds of the process (all its threads, so lavapipe's work too): on a
+    /// shared CPU they vary far less with the other processes' load than the wall or timestamp time.
+    #[serde(default)]
+    first_cpu_ms: f64,
+    #[serde(default)]
+    still_cpu_ms: f64,
+    #[serde(default)]
+    nav_cpu_ms: f64,
 }
 
 /// One configuration's file, `NAME.json`.
@@ -118,6 +126,20 @@ fn utc_now() -> String {
     )
 }
 
+/// CPU milliseconds the process has used (user and system, all threads); 0 where unsupported.
+fn cpu_ms() -> f64 {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        // SAFETY: getrusage writes the struct it is given.
+        let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+        if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } == 0 {
+            let ms = |t: libc::timeval| t.tv_sec as f64 * 1e3 + t.tv_usec as f64 * 1e-3;
+            return ms(u.ru_utime) + ms(u.ru_stime);
+        }
+    }
+    0.0
+}
+
 fn git_commit() -> String {
     std::process::Command::new("git")
         .args(["rev-parse", "--short", "HEAD"])
@@ -170,18 +192,22 @@ fn measure(
         radius,
         ..Default::default()
     };
-    let (mut still_wall, mut still_gpu) = (Vec::new(), Vec::new());
+    let (mut still_wall, mut still_gpu, mut still_cpu) = (Vec::new(), Vec::new(), Vec::new());
     let mut prev: Vec<f32> = Vec::new();
     let (mut flicker, mut flicker_n) = (0.0f64, 0u32);
     for f in 0..o.frames {
+        let cpu = cpu_ms();
         let rep = r.render(&sg, scene.f(), &cam)?;
+        let cpu = cpu_ms() - cpu;
         if f == 0 {
             m.first_wall_ms = rep.wall_ms;
             m.first_gpu_ms = rep.gpu_total_ms;
+            m.first_cpu_ms = cpu;
             m.first_rays = rep.rays;
         } else {
             still_wall.push(rep.wall_ms);
             still_gpu.push(rep.gpu_total_ms);
+            still_cpu.push(cpu);
         }
         let ao = r.read_ao()?;
         if f == 0 {
@@ -198,14 +224,19 @@ fn measure(
     m.flicker = flicker / flicker_n.max(1) as f64;
     m.still_wall_ms = median(&still_wall);
     m.still_gpu_ms = median(&still_gpu);
-    let (mut nav_wall, mut nav_gpu) = (Vec::new(), Vec::new());
+    m.still_cpu_ms = median(&still_cpu);
+    let (mut nav_wall, mut nav_gpu, mut nav_cpu) = (Vec::new(), Vec::new(), Vec::new());
     for i in 1..=o.nav_frames {
-        let rep = r.render(&sg, scene.f(), &orbit(&cam, o.nav_deg * i as f32))?;
+        let cam = orbit(&cam, o.nav_deg * i as f32);
+        let cpu = cpu_ms();
+        let rep = r.render(&sg, scene.f(), &cam)?;
+        nav_cpu.push(cpu_ms() - cpu);
         nav_wall.push(rep.wall_ms);
         nav_gpu.push(rep.gpu_total_ms);
     }
     m.nav_wall_ms = median(&nav_wall);
     m.nav_gpu_ms = median(&nav_gpu);
+    m.nav_cpu_ms = median(&nav_cpu);
     Ok(m)
 }
 
@@ -250,13 +281,15 @@ fn run(mut args: cli_args::Args) -> anyhow::Result<()> {
         let t = std::time::Instant::now();
         let m = measure(&gpu, &root, key, entry, &settings, &o)?;
         eprintln!(
-            "{name} {key}: 1f {:.4}, {}f {:.4}, flicker {:.5}, first {:.0} ms, nav {:.0} ms ({:.0} s)",
+            "{name} {key}: 1f {:.4}, {}f {:.4}, flicker {:.5}, first {:.0} ms ({:.0} CPU), nav {:.0} ms ({:.0} CPU) ({:.0} s)",
             m.mae_1,
             o.frames,
             m.mae_n,
             m.flicker,
             m.first_wall_ms,
+            m.first_cpu_ms,
             m.nav_wall_ms,
+            m.nav_cpu_ms,
             t.elapsed().as_secs_f64()
         );
         scenes.insert(key.clone(), m);
@@ -302,16 +335,26 @@ const QUALITY_THRESHOLD: f64 = 0.03;
 const COST_THRESHOLD: f64 = 0.05;
 const MIN_SCENES: usize = 3;
 
-/// A metric's value; costs are GPU milliseconds when the device measured them, else wall milliseconds.
-fn value(m: &SceneMetrics, metric: &str, gpu: bool) -> f64 {
-    match (metric, gpu) {
+/// The clock costs are read on: the process's CPU time when every run measured it, else the GPU timestamps
+/// when every run has them, else the wall clock.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Clock {
+    Cpu,
+    Gpu,
+    Wall,
+}
+
+fn value(m: &SceneMetrics, metric: &str, clock: Clock) -> f64 {
+    match (metric, clock) {
         ("mae_1", _) => m.mae_1,
         ("mae_n", _) => m.mae_n,
         ("flicker", _) => m.flicker,
-        ("first", true) => m.first_gpu_ms,
-        ("first", false) => m.first_wall_ms,
-        ("nav", true) => m.nav_gpu_ms,
-        ("nav", false) => m.nav_wall_ms,
+        ("first", Clock::Cpu) => m.first_cpu_ms,
+        ("first", Clock::Gpu) => m.first_gpu_ms,
+        ("first", Clock::Wall) => m.first_wall_ms,
+        ("nav", Clock::Cpu) => m.nav_cpu_ms,
+        ("nav", Clock::Gpu) => m.nav_gpu_ms,
+        ("nav", Clock::Wall) => m.nav_wall_ms,
         _ => unreachable!("unknown metric {metric}"),
     }
 }
@@ -347,7 +390,7 @@ struct Verdict {
     counts: Vec<(&'static str, usize)>,
 }
 
-fn verdict(off: &Run, on: &Run, spread: &BTreeMap<(&str, String), f64>, gpu: bool) -> Verdict {
+fn verdict(off: &Run, on: &Run, spread: &BTreeMap<(&str, String), f64>, clock: Clock) -> Verdict {
     let mut counts = Vec::new();
     let mut keep = false;
     for (metric, label, cost) in METRICS {
@@ -358,7 +401,7 @@ fn verdict(off: &Run, on: &Run, spread: &BTreeMap<(&str, String), f64>, gpu: boo
             .filter_map(|(key, m_on)| off.scenes.get(key).map(|m_off| (key, m_on, m_off)))
             .filter(|(key, m_on, m_off)| {
                 let s = spread.get(&(metric, (*key).clone())).copied().unwrap_or(0.0);
-                rel(value(m_off, metric, gpu), value(m_on, metric, gpu)) >= threshold.max(s)
+                rel(value(m_off, metric, clock), value(m_on, metric, clock)) >= threshold.max(s)
             })
             .count();
         keep |= n >= MIN_SCENES;
@@ -410,18 +453,20 @@ fn report(runs: &[Run]) -> String {
     }
     let preferred = ["rod", "cycloidal", "engine", "duplex", "sf"];
     keys.sort_by_key(|k| preferred.iter().position(|p| p == k).unwrap_or(preferred.len()));
-    // Costs in GPU milliseconds only if every run measured them.
-    let gpu = runs.iter().all(|r| {
-        r.scenes
-            .values()
-            .all(|m| m.first_gpu_ms > 0.0 && m.nav_gpu_ms > 0.0)
-    });
+    let all = |f: fn(&SceneMetrics) -> bool| runs.iter().all(|r| r.scenes.values().all(f));
+    let clock = if all(|m| m.first_cpu_ms > 0.0 && m.nav_cpu_ms > 0.0) {
+        Clock::Cpu
+    } else if all(|m| m.first_gpu_ms > 0.0 && m.nav_gpu_ms > 0.0) {
+        Clock::Gpu
+    } else {
+        Clock::Wall
+    };
     let mut spread = BTreeMap::new();
     if let (Some(a), Some(b)) = (by_name.get("default"), by_name.get("default-rerun")) {
         for (metric, _, _) in METRICS {
             for (key, ma) in &a.scenes {
                 if let Some(mb) = b.scenes.get(key) {
-                    let s = rel(value(mb, metric, gpu), value(ma, metric, gpu)).abs();
+                    let s = rel(value(mb, metric, clock), value(ma, metric, clock)).abs();
                     spread.insert((metric, key.clone()), s);
                 }
             }
@@ -433,7 +478,11 @@ fn report(runs: &[Run]) -> String {
         "Each cell: {} ({} costs), relative change in % against the row's reference; \
          absolute values on the reference rows (MAE and flicker ×1000, ms).\n\n",
         labels.join(" / "),
-        if gpu { "GPU" } else { "wall" }
+        match clock {
+            Clock::Cpu => "CPU",
+            Clock::Gpu => "GPU",
+            Clock::Wall => "wall",
+        }
     );
     out += &format!("| configuration | vs | {} | verdict |\n", keys.join(" | "));
     out += &format!("|---|---|{}---|\n", "---|".repeat(keys.len()));
@@ -441,7 +490,7 @@ fn report(runs: &[Run]) -> String {
         METRICS
             .iter()
             .map(|(metric, _, cost)| {
-                let v = value(m, metric, gpu);
+                let v = value(m, metric, clock);
                 if *cost {
                     format!("{v:.0}")
                 } else {
@@ -458,7 +507,7 @@ fn report(runs: &[Run]) -> String {
             (_, Some((reference, on))) => match by_name.get(reference) {
                 Some(refr) => {
                     let (off, on_run) = if on { (*refr, *r) } else { (*r, *refr) };
-                    let v = verdict(off, on_run, &spread, gpu);
+                    let v = verdict(off, on_run, &spread, clock);
                     let counts: Vec<String> = v.counts.iter().map(|(l, n)| format!("{l} {n}")).collect();
                     let word = if v.keep { "**keep**" } else { "delete" };
                     (Some(*refr), format!("{word} ({})", counts.join(", ")))
@@ -472,7 +521,7 @@ fn report(runs: &[Run]) -> String {
                 |k| match (r.scenes.get(k), reference.and_then(|x| x.scenes.get(k))) {
                     (Some(m), Some(mr)) => METRICS
                         .iter()
-                        .map(|(metric, _, _)| pct(rel(value(m, metric, gpu), value(mr, metric, gpu))))
+                        .map(|(metric, _, _)| pct(rel(value(m, metric, clock), value(mr, metric, clock))))
                         .collect::<Vec<_>>()
                         .join(" / "),
                     (Some(m), None) => absolute(m),
