@@ -674,6 +674,41 @@ mod tests {
     }
 
     #[test]
+    fn costs_are_read_on_the_cpu_clock_when_every_run_has_it() {
+        // Wall clock: 20 % dearer without the addition; CPU clock: the same. CPU wins, so no cost verdict.
+        let with_cpu = |first_cpu: f64| {
+            let mut s = base();
+            for m in &mut s {
+                m.first_cpu_ms = first_cpu;
+                m.nav_cpu_ms = 400.0;
+            }
+            s
+        };
+        let mut off = with_cpu(800.0);
+        for m in &mut off {
+            m.first_wall_ms = 1200.0;
+        }
+        let runs = [
+            run("default", "default", with_cpu(800.0)),
+            run("no-w", "default", off.clone()),
+        ];
+        let text = report(&runs);
+        assert!(text.contains("(CPU costs)"), "{text}");
+        assert!(
+            text.contains("delete (1f 0, 32f 0, flicker 0, first ms 0, nav ms 0)"),
+            "{text}"
+        );
+        // One run without CPU times: the wall clock for all, and the 20 % counts on every scene.
+        let runs = [run("default", "default", base()), run("no-w", "default", off)];
+        let text = report(&runs);
+        assert!(
+            text.contains("(wall costs)") && text.contains("**keep** ("),
+            "{text}"
+        );
+        assert!(text.contains("first ms 5,"), "{text}");
+    }
+
+    #[test]
     fn the_median_and_the_orbit_are_right() {
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
