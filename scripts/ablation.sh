@@ -17,33 +17,28 @@ export HRTAO_SHARED
 export MESA_SHADER_CACHE_DISABLE=false MESA_SHADER_CACHE_DIR=$PWD/target/mesa-shader-cache
 unset HRTAO_VALIDATION
 
-# name | base | AoSettings overrides. "Off" rows turn one addition off on the default settings, "with-" rows
-# turn on one that is off by default, "paper+" rows turn one on alone on the paper's mode.
+# name | base | AoSettings overrides. "Off" rows turn one addition off on the default settings, "paper+" rows
+# turn one on alone on the paper's mode. (Rows of additions since deleted, measured before their deletion:
+# no-level-blend, with-linear-cells, with-adaptive-prior; their JSON records the commit they ran on.)
 CONFIGS=$(cat <<'EOF'
 default|default|{}
 default-rerun|default|{}
 paper|paper|{}
-no-contact-detail|default|{"contact_detail":0}
-no-pooled-residual|default|{"pooled_residual":0}
-no-level-blend|default|{"level_blend":0}
-no-near-field|default|{"near_weight":0}
+no-contact-detail|default|{"contact_detail":false}
+no-pooled-residual|default|{"pooled_residual":false}
+no-near-field|default|{"near_field":false}
 no-adaptive-rays|default|{"adaptive_rays":false}
-no-variance-filter|default|{"filter_sigma":0}
-no-cell-cap|default|{"max_cell_fraction":1e30}
-no-normal-offset|default|{"normal_offset":0}
-no-residual-pooling|default|{"residual_sigma":0}
-no-still-smoothing|default|{"still_smoothing":1}
+no-variance-filter|default|{"variance_filter":false}
+no-cell-cap|default|{"cell_cap":false}
+no-offset-bins|default|{"offset_bins":false}
 no-refine|default|{"refine":false}
-with-linear-cells|default|{"cell_gradient":2}
-with-adaptive-prior|default|{"prior_rays_max":1024}
-paper+contact-detail|paper|{"contact_detail":1}
-paper+pooled-residual|paper|{"pooled_residual":16}
-paper+level-blend|paper|{"level_blend":1}
-paper+near-field|paper|{"near_weight":1}
+paper+contact-detail|paper|{"contact_detail":true}
+paper+pooled-residual|paper|{"pooled_residual":true}
+paper+near-field|paper|{"near_field":true}
 paper+adaptive-rays|paper|{"adaptive_rays":true}
-paper+variance-filter|paper|{"filter_sigma":1}
-paper-cell-cap|paper|{"max_cell_fraction":1e30}
-paper+normal-offset|paper|{"normal_offset":0.25}
+paper+variance-filter|paper|{"variance_filter":true}
+paper+cell-cap|paper|{"cell_cap":true}
+paper+offset-bins|paper|{"offset_bins":true}
 paper+refine|paper|{"refine":true}
 EOF
 )

@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use hrtao_core::{metrics, AoSettings, Camera, ContextOptions, Gpu, Mode, Renderer, SceneGpu};
+use hrtao_core::{metrics, AoSettings, Camera, ContextOptions, FrameDesc, Gpu, Mode, Renderer, SceneGpu};
 use serde::{Deserialize, Serialize};
 
 /// The quality and cost of one configuration on one view.
@@ -183,11 +183,8 @@ fn measure(
         cam.height
     );
     let sg = SceneGpu::new(gpu, &scene)?;
-    let settings = AoSettings {
-        ao_radius: radius,
-        ..settings.clone()
-    };
-    let mut r = Renderer::new(gpu, cam.width, cam.height, settings)?;
+    let settings = settings.clone().with_radius(radius);
+    let mut r = Renderer::new(gpu)?;
     let mut m = SceneMetrics {
         radius,
         ..Default::default()
@@ -197,7 +194,7 @@ fn measure(
     let (mut flicker, mut flicker_n) = (0.0f64, 0u32);
     for f in 0..o.frames {
         let cpu = cpu_ms();
-        let rep = r.render(&sg, scene.f(), &cam)?;
+        let rep = r.render(&FrameDesc::new(&sg, scene.f(), cam, &settings))?;
         let cpu = cpu_ms() - cpu;
         if f == 0 {
             m.first_wall_ms = rep.wall_ms;
@@ -229,7 +226,7 @@ fn measure(
     for i in 1..=o.nav_frames {
         let cam = orbit(&cam, o.nav_deg * i as f32);
         let cpu = cpu_ms();
-        let rep = r.render(&sg, scene.f(), &cam)?;
+        let rep = r.render(&FrameDesc::new(&sg, scene.f(), cam, &settings))?;
         nav_cpu.push(cpu_ms() - cpu);
         nav_wall.push(rep.wall_ms);
         nav_gpu.push(rep.gpu_total_ms);
@@ -260,8 +257,8 @@ fn run(mut args: cli_args::Args) -> anyhow::Result<()> {
         b => anyhow::bail!("--base {b:?}: default or paper"),
     };
     let mut settings = cli_args::with_overrides(&base, &overrides)?;
-    settings.rays_per_pixel = rays;
-    settings.mode = Mode::Hrtao;
+    settings.map.rays_per_pixel = rays;
+    settings.display.mode = Mode::Hrtao;
     let root = shared_root()?;
     let index_path = root.join("refs/index.json");
     let index: serde_json::Map<String, serde_json::Value> = serde_json::from_str(
