@@ -136,6 +136,9 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
                 GPixel o = GBufferRef(g.gbuffer).px[qi];
                 if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) continue;
                 if (abs(dot(o.position - px.position, px.normal)) > 2.0 * pixel_size) continue;
+                // A neighbour a local edit restarted this frame holds the residual of its pre-edit cells (the
+                // removed part's contact shadow): not evidence any more. Unedited neighbours' still is.
+                if (edited_near(o.position, g.ao_radius + exp2(float(pixel_lod(o.t))))) continue;
                 vec2 rs = slots.v[read_slot + qi].xy;
                 if (rs.y <= 0.0) continue;
                 float vq = own_noise(p, rs.y);
@@ -196,8 +199,10 @@ void main() {
         PixelAccumRef accum = PixelAccumRef(g.accum);
         PixelAccum a;
         // A local edit (ours) restarts the accumulation only of pixels whose AO it can change: within the AO
-        // radius (plus their cell) of what it changed.
-        bool edited = px.t >= 0.0 && edited_near(px.position, g.ao_radius + exp2(float(pixel_lod(px.t))));
+        // radius (plus their cell) of what it changed, and the pixels that see nothing after it (a part cut
+        // away or removed may have left them: what they accumulated was its AO; a miss is exact at once).
+        bool edited = px.t >= 0.0 ? edited_near(px.position, g.ao_radius + exp2(float(pixel_lod(px.t))))
+                                  : edited_this_frame();
         if (!accumulates || g.still_index == 0u || edited) {
             a.shade_cell = vec3(0.0);
             a.cell = 0.0;

@@ -44,6 +44,12 @@ uint region_epoch(ivec3 c, int lod) {
 CellKey region_cell_key(ivec3 c, int lod, ivec3 nq) {
     return cell_key_at(c, lod, nq, g.scene_f, region_epoch(c, lod), g.hash_capacity);
 }
+// Whether a local edit changed anything this frame.
+bool edited_this_frame() {
+    RegionRef t = RegionRef(g.regions);
+    return t.v[REGION_COUNT] == g.frame_index && t.v[REGION_COUNT + 1u] > 0u;
+}
+
 // True when a local edit of this frame changed geometry within `reach` of `p` (its boxes follow the epochs).
 bool edited_near(vec3 p, float reach) {
     RegionRef t = RegionRef(g.regions);

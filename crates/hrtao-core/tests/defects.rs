@@ -278,11 +278,10 @@ fn a_deleted_parts_contact_shadow_does_not_come_back_when_the_radius_crosses_a_p
 /// A local edit with refinement on does not show the old contact shadow for a frame. Pixels the edit restarts
 /// have one frame of their own rays and pool their 3 x 3 neighbours' residuals of the previous frame, measured
 /// before the edit, which still hold the removed block's contact shadow (AO 0.939 the frame after the edit
-/// against 0.999 fresh). Not fixed yet: leaving the pre-edit residuals out of the pool (composite.comp
-/// `pooled_evidence`) removes the ghost (0.994) but raises sections.rs `a_moved_plane_invalidates_only_its_slab`
-/// from MAE 0.0192 to 0.0201, over its 0.02 gate.
+/// against 0.999 fresh). Fixed: `pooled_evidence` leaves out the neighbours the edit restarted (their residual is
+/// of their pre-edit cells); the unedited neighbours' evidence stays (the frame after the edit: 0.999, fresh
+/// 1.000).
 #[test]
-#[ignore = "known defect: pre-edit residuals pooled for one frame after a local edit"]
 fn a_local_edit_with_refinement_shows_no_ghost_of_the_removed_part() {
     let gpu = gpu();
     let mut scene = blocks();

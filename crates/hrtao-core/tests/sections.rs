@@ -337,20 +337,36 @@ fn a_moved_plane_invalidates_only_its_slab() {
         r.render(&sg, s.f(), &cam).unwrap();
     }
     let moved = r.read_ao().unwrap();
-    let (fresh, _) = render_cut(
-        &scene(vec![a]),
-        &Sections::default(),
-        0,
-        &cam,
-        settings,
-        Primary::RayQuery,
-        12,
-    );
-    let e = mae(&moved, &fresh.ao);
+    // Against the scene without B converged (48 frames), as close as a fresh render of it of the same age (12
+    // frames): both carry the still refinement's noise of 12 frames. Catches pixels that see nothing once B is
+    // cut away but go on with B's accumulated AO (MAE 0.0198 against the fresh render's 0.0050 before the
+    // composite restarted them; an absolute gate of 0.02 let it pass).
+    let without_b = scene(vec![a]);
+    let fresh_after = |frames| {
+        render_cut(
+            &without_b,
+            &Sections::default(),
+            0,
+            &cam,
+            settings.clone(),
+            Primary::RayQuery,
+            frames,
+        )
+        .0
+        .ao
+    };
+    let (fresh, truth) = (fresh_after(12), fresh_after(48));
+    let (e, e_fresh) = (mae(&moved, &truth), mae(&fresh, &truth));
     println!(
-        "after moving the plane: {} cell rays (empty map: {}), MAE {e:.4} against a fresh render",
-        report.cell_rays, first.cell_rays
+        "after moving the plane: {} cell rays (empty map: {}), MAE {e:.4} against the converged scene without \
+         B (a fresh render of the same age: {e_fresh:.4}, the two: {:.4})",
+        report.cell_rays,
+        first.cell_rays,
+        mae(&moved, &fresh)
     );
-    assert!(e <= 0.02, "MAE {e} against the scene without B");
+    assert!(
+        e <= 1.25 * e_fresh + 0.002,
+        "MAE {e} against the scene without B, a fresh render {e_fresh}"
+    );
     assert_clean(&gpu);
 }
