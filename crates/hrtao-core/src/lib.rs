@@ -19,6 +19,7 @@ pub mod error;
 pub mod frame;
 pub mod gpu;
 pub mod hash;
+pub mod hash_map;
 pub mod imageio;
 pub mod metrics;
 pub mod pass;

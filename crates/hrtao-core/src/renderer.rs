@@ -1,4 +1,4 @@
-//! The frame: per-resolution targets, the persistent world-space hash map, and the pass sequence
+//! The frame: per-resolution targets, the world-space hash map (owned by `hash_map.rs`), and the pass sequence
 //! primary visibility → (per-pixel RTAO | cell finder → ray-tracing update → per-pixel AO → filter) → composite.
 use std::sync::Arc;
 use std::time::Instant;
@@ -17,9 +17,9 @@ use crate::gpu::{
     self, FilterGuide, FrameGlobals, FrameStats, GPixel, HashCell, HashTestCase, PixelAccum, PixelCells,
     PixelRays,
 };
+use crate::hash_map::WorldHashMap;
 use crate::pass::{Pass, PassSet, Recorder, Resource};
 use crate::raster::{Primary, Rasterizer};
-use crate::regions::RegionTable;
 use crate::settings::{AoSettings, Mode};
 use crate::timer::GpuTimer;
 
@@ -85,21 +85,8 @@ pub const RASTER_TRIAL_TRIANGLES: u64 = 20_000_000;
 /// larger than the view).
 pub const EDGE_WIDTH: f32 = 1.0;
 
-/// Frames the cell finder stays level by level after a failed insert (`Renderer::cell_levels`).
-const LEVELWISE_FRAMES: u32 = 64;
-/// The map counts as young in frames after one whose cells took at least 1/this of its budget (`young_map`).
-const YOUNG_CELL_RAYS_DEN: u64 = 4;
-/// `Renderer::last_cell_rays` of an empty map: its next frame is young.
-const NEW_MAP: (u64, u64) = (u64::MAX, 0);
-
 /// Still frames with jitter before an image counts as anti-aliased.
 pub const AA_FRAMES: u32 = 16;
-
-/// The world-space hash map (paper §1), persistent across frames.
-struct HashMapGpu {
-    capacity: u32,
-    cells: Buffer,
-}
 
 /// What one frame did.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -151,32 +138,18 @@ pub struct Renderer {
     dispatch_args: Buffer,
     /// 1 x 1 until the first frame, then the size of every frame (reallocated when it differs).
     targets: Targets,
-    /// Allocated with the capacity of the first frame's settings, again when a frame's capacity differs.
-    hash: Option<HashMapGpu>,
+    /// The world-space hash map and what its keys mean (F, region epochs).
+    map: WorldHashMap,
     /// What the last frame depended on (`FrameDesc::key`): the next frame's change is decided against it.
     prev: Option<FrameKey>,
     /// Monotonic count of rendered frames (a hash cell's "last used" stamp).
     frame_index: u32,
     /// Frames since the view last changed (0 = new view).
     still_index: u32,
-    /// `frame_index` of the first frame rendered with the current key F (eq. 6).
-    f_start_frame: u32,
-    /// The F cells are keyed with (eq. 6): the scene's F (plus section changes) after a global change, plus
-    /// `settings_f`; local edits leave it and bump region epochs instead (`regions`).
-    key_f: u32,
-    /// Settings changes that invalidated the whole map (`Invalidates::WholeMap`): added to the F cells are keyed
-    /// with, so that key F values only ever grow and a key never reverts to one of before such a change.
-    settings_f: u32,
-    regions: RegionTable,
     /// `still_index` at the last local edit: pixels near it restarted their refinement then.
     edit_still_index: u32,
     /// The last finished frame reported `converged`.
     last_converged: bool,
-    /// Until this frame the cell finder runs level by level (the map was full somewhere, see `cell_levels`).
-    levelwise_until: u32,
-    /// Rays the cells took in the last finished frame (u64::MAX before the first), and that frame's ray
-    /// budget: see `young_map`.
-    last_cell_rays: (u64, u64),
     /// Shaders check buffer bounds and count violations (`FrameReport::bounds_violations`; tests).
     check_bounds: bool,
     /// The next frame starts a new still image (`restart_still_image`).
@@ -230,18 +203,12 @@ impl Renderer {
             stats_readback,
             dispatch_args,
             targets: Targets::new(gpu, 1, 1)?,
-            hash: None,
+            map: WorldHashMap::new(gpu)?,
             prev: None,
             frame_index: 0,
             still_index: 0,
-            f_start_frame: 0,
-            key_f: 0,
-            settings_f: 0,
-            regions: RegionTable::new(gpu)?,
             edit_still_index: 0,
             last_converged: false,
-            levelwise_until: 0,
-            last_cell_rays: NEW_MAP,
             check_bounds: false,
             restart: false,
             primary: Primary::default(),
@@ -275,37 +242,9 @@ impl Renderer {
         self.primary = primary;
     }
 
-    /// Region grids for `settings` (`RegionTable::region_lod`); new grids forget local edits. Only with a new F
-    /// (a whole-map change): epochs back at 0 under the same F would give cells their pre-edit keys back.
-    fn sync_region_size(&mut self, settings: &AoSettings) {
-        let m = &settings.map;
-        let l = RegionTable::region_lod_for(
-            m.ao_radius * crate::settings::MAX_CELL_FRACTION,
-            crate::hash::log2_s_min(m.s_min),
-        );
-        if l != self.regions.region_lod {
-            self.regions.region_lod = l;
-            self.regions.reset();
-        }
-    }
-
     /// The LOD setting the grids of the local-edit region table (`RegionTable::region_lod`).
     pub fn region_lod(&self) -> i32 {
-        self.regions.region_lod
-    }
-
-    fn create_hash(gpu: &Arc<Gpu>, capacity: u32) -> Result<HashMapGpu> {
-        let cells = Buffer::new(
-            gpu,
-            "hash map cells",
-            capacity as u64 * std::mem::size_of::<HashCell>() as u64,
-            MemoryLocation::GpuOnly,
-            vk::BufferUsageFlags::empty(),
-        )?;
-        gpu.run_commands(|cmd| unsafe {
-            gpu.device.cmd_fill_buffer(cmd, cells.raw, 0, vk::WHOLE_SIZE, 0);
-        })?;
-        Ok(HashMapGpu { capacity, cells })
+        self.map.regions.region_lod
     }
 
     pub fn gpu(&self) -> &Arc<Gpu> {
@@ -317,38 +256,9 @@ impl Renderer {
         (self.targets.width, self.targets.height)
     }
 
-    /// The hash map with `capacity` cells: the one in use, else a new empty one (eq. 6's map is world space and
-    /// survives everything else).
-    fn ensure_hash(&mut self, capacity: u32) -> Result<()> {
-        if self.hash.as_ref().map(|h| h.capacity) != Some(capacity) {
-            self.gpu.wait_idle();
-            self.hash = None;
-            self.hash = Some(Self::create_hash(&self.gpu, capacity)?);
-            self.gpu.run_commands(|cmd| unsafe {
-                // The occupancy counter restarts with the empty table.
-                self.gpu
-                    .device
-                    .cmd_fill_buffer(cmd, self.stats.raw, 0, vk::WHOLE_SIZE, 0);
-            })?;
-            self.last_cell_rays = NEW_MAP;
-        }
-        Ok(())
-    }
-
     /// Empties the hash map (all cached AO is forgotten).
     pub fn clear_cache(&mut self) -> Result<()> {
-        self.gpu.wait_idle();
-        let stats = self.stats.raw;
-        let cells = self.hash.as_ref().map(|h| h.cells.raw);
-        self.gpu.run_commands(|cmd| unsafe {
-            if let Some(cells) = cells {
-                self.gpu.device.cmd_fill_buffer(cmd, cells, 0, vk::WHOLE_SIZE, 0);
-            }
-            self.gpu.device.cmd_fill_buffer(cmd, stats, 0, vk::WHOLE_SIZE, 0);
-        })?;
-        self.regions.reset();
-        self.last_cell_rays = NEW_MAP;
-        Ok(())
+        self.map.clear(&self.stats)
     }
 
     /// Makes the renderer ready for `frame`: targets of its size, a map of its capacity, and what its change
@@ -361,7 +271,7 @@ impl Renderer {
             self.gpu.wait_idle();
             self.targets = Targets::new(&self.gpu, w, h)?;
         }
-        self.ensure_hash(frame.settings.map.hash_capacity)?;
+        self.map.ensure(frame.settings.map.hash_capacity, &self.stats)?;
         let key = frame.key(self.primary);
         let change = match &self.prev {
             None => Change::first(),
@@ -379,18 +289,17 @@ impl Renderer {
         let mut map = change.map;
         if let MapChange::Regions(boxes) = &map {
             let reach = frame.settings.map.ao_radius;
-            if !self.regions.invalidate(boxes, reach, self.frame_index) {
+            if !self.map.invalidate_regions(boxes, reach, self.frame_index) {
                 map = MapChange::Whole;
             }
         }
         if map == MapChange::Whole {
-            if change.settings_invalidate_map {
-                self.settings_f = self.settings_f.wrapping_add(1);
-            }
-            self.key_f = frame.effective_f().wrapping_add(self.settings_f);
-            self.f_start_frame = self.frame_index;
-            self.last_cell_rays = NEW_MAP;
-            self.sync_region_size(frame.settings);
+            self.map.rekey(
+                frame.effective_f(),
+                change.settings_invalidate_map,
+                self.frame_index,
+                frame.settings,
+            );
         }
         let restart = std::mem::take(&mut self.restart);
         if change.still_image || map == MapChange::Whole || restart {
@@ -454,7 +363,6 @@ impl Renderer {
         };
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
-        let hash = self.hash.as_ref();
         let mut g = FrameGlobals {
             eye: v4(f.eye),
             cam_u: v4(f.u),
@@ -466,11 +374,11 @@ impl Renderer {
             still_index: self.still_index,
             scene_f: key_f,
             frame_index: self.frame_index,
-            f_start_frame: self.f_start_frame,
+            f_start_frame: self.map.f_start_frame(),
             s_w_per_distance: feature_size.per_distance,
             s_w_base: feature_size.base,
-            hash_capacity: hash.map_or(0, |h| h.capacity),
-            region_lod: self.regions.region_lod,
+            hash_capacity: self.map.capacity(),
+            region_lod: self.map.regions.region_lod,
             background_top: c4(top),
             background_bottom: c4(bottom),
             gbuffer: t.gbuffer.address,
@@ -482,13 +390,13 @@ impl Renderer {
             pixel_rays: t.pixel_rays.address,
             accum: t.accum.address,
             output_rgba: t.output.address,
-            hash_cells: hash.map_or(0, |h| h.cells.address),
+            hash_cells: self.map.address(),
             pixel_cells: t.pixel_cells.address,
             stats: self.stats.address,
             ray_queue: t.ray_queue.address,
             filter_queue: t.filter_queue.address,
             dispatch_args: self.dispatch_args.address,
-            regions: self.regions.address(),
+            regions: self.map.regions.address(),
             obscurance: t.obscurance.address,
             bias_evidence: t.bias_evidence.address,
             projection: match cam.projection {
@@ -509,10 +417,10 @@ impl Renderer {
         if self.check_bounds {
             g.flags |= gpu::FLAG_CHECK_BOUNDS;
         }
-        if self.regions.any_edit() {
+        if self.map.regions.any_edit() {
             g.flags |= gpu::FLAG_REGION_EPOCHS;
         }
-        if self.young_map() {
+        if self.map.young(self.frame_index) {
             g.flags |= gpu::FLAG_YOUNG_MAP;
             if s.young.near_field {
                 g.flags |= gpu::FLAG_NEAR_FIELD;
@@ -539,8 +447,8 @@ impl Renderer {
     /// so it runs before the caller's command buffer is taken).
     fn record_prepared(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<()> {
         let (scene, camera, settings) = (frame.scene, &frame.camera, frame.settings);
-        self.regions.upload()?;
-        let mut globals = self.globals_for(frame, self.key_f);
+        self.map.regions.upload()?;
+        let mut globals = self.globals_for(frame, self.map.key_f());
         if camera.is_orthographic() {
             // Orthographic rays start in front of the whole scene: nothing is clipped by the eye plane.
             let b = scene.raster.bounds();
@@ -572,8 +480,8 @@ impl Renderer {
             raster.prepare(w, h)?;
         }
         let mode = settings.display.mode;
-        let cell_levels = self.cell_levels();
-        let young = self.young_map();
+        let cell_levels = self.map.cell_levels(self.pixel_count() as u32, self.frame_index);
+        let young = self.map.young(self.frame_index);
         let adaptive_split = settings.young.adaptive_rays && young;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         match (primary, &self.raster) {
@@ -673,35 +581,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4). While the map has room every
-    /// level is found in one pass over the pixels. Where it may not (more pixels than half the capacity: cells
-    /// claimed in a frame stay live for `stale_frames`, so the first frame decides), and for LEVELWISE_FRAMES
-    /// frames after an insert failed, one dispatch per level, coarsest first: the coarse cells, shared by many
-    /// pixels, then take the free slots before any finer one, and pixels whose fine cells fail fall back to them.
-    fn cell_levels(&self) -> Vec<(u32, u32)> {
-        let top = gpu::LOD_COUNT - 1;
-        let capacity = self.hash.as_ref().map_or(0, |h| h.capacity);
-        let crowded = self.pixel_count() as u64 > capacity as u64 / 2;
-        // Frame numbers wrap: compare their difference.
-        if crowded || (self.levelwise_until.wrapping_sub(self.frame_index) as i32) > 0 {
-            (0..=top).rev().map(|l| (l, l)).collect()
-        } else {
-            vec![(top, 0)]
-        }
-    }
-
-    /// Whether the map is young this frame: new, re-keyed (eq. 6), or its cells still take many rays (in the
-    /// last frame at least 1/YOUNG_CELL_RAYS_DEN of the budget: a new view, the first still frames). Our
-    /// first-frame additions run only then: adaptive sampling's three dispatches (`adaptive_rays`), the
-    /// near-field control variate's ray classification (`near_field`), the pooled residual
-    /// (`pooled_residual`) and contact detail (`contact_detail`). In a navigation frame a few newly seen
-    /// cells take rays, and in a late still frame the pixels' own: they trace as in the paper, one dispatch of
-    /// first-hit queries.
-    fn young_map(&self) -> bool {
-        let (cell_rays, budget) = self.last_cell_rays;
-        self.f_start_frame == self.frame_index || cell_rays.saturating_mul(YOUNG_CELL_RAYS_DEN) >= budget
-    }
-
     /// Whether this frame's GPU timestamps measure its passes. Lavapipe writes the timestamps recorded after a
     /// raster pass only when the submission ends, so there every pass after raster primary visibility read about
     /// 0.1 ms in a 950 ms frame (862×800, `examples/orbit_profile`); such frames report no per-pass times.
@@ -725,17 +604,19 @@ impl Renderer {
             _ => Vec::new(),
         };
         let occupied = c[gpu::STAT_OCCUPIED as usize];
-        if c[gpu::STAT_FAILED_INSERTS as usize] > 0 {
-            self.levelwise_until = self.frame_index.wrapping_add(LEVELWISE_FRAMES);
-        }
         let young_pixels =
             c[gpu::STAT_RAY_QUEUE as usize] as u64 + c[gpu::STAT_UNPICKED_PIXELS as usize] as u64;
         self.last_converged = self.converged(&key, young_pixels);
         let budget = self.pixel_count() as f64
             * key.budget.rays_per_pixel as f64
             * key.budget.trace_fraction.clamp(0.0, 1.0) as f64;
-        self.last_cell_rays = (rays(gpu::RAYS_CELL), budget.ceil() as u64);
-        let capacity = self.hash.as_ref().map_or(1, |h| h.capacity);
+        self.map.finish_frame(
+            self.frame_index,
+            rays(gpu::RAYS_CELL),
+            budget.ceil() as u64,
+            c[gpu::STAT_FAILED_INSERTS as usize] > 0,
+        );
+        let capacity = self.map.capacity().max(1);
         Ok(FrameReport {
             gpu_total_ms: gpu_ms.iter().fold(0.0, |sum, (_, ms)| sum + ms),
             gpu_ms,
@@ -750,7 +631,7 @@ impl Renderer {
             occupied_cells: occupied,
             load_factor: occupied as f64 / capacity as f64,
             scene_f: key.scene_f.wrapping_add(key.section_changes),
-            map_f: self.key_f,
+            map_f: self.map.key_f(),
             accumulated_frames: self.still_index + 1,
             refine_rays: rays(gpu::RAYS_REFINE),
             cell_rays: rays(gpu::RAYS_CELL),
@@ -934,8 +815,8 @@ impl Renderer {
     }
 
     pub fn read_hash_cells(&self) -> Result<Vec<HashCell>> {
-        match &self.hash {
-            Some(h) => self.read_buffer(&h.cells, h.capacity as usize),
+        match self.map.cells() {
+            Some(cells) => self.read_buffer(cells, self.map.capacity() as usize),
             None => Ok(Vec::new()),
         }
     }
@@ -948,7 +829,7 @@ impl Renderer {
         settings: &AoSettings,
         cases: &[HashTestCase],
     ) -> Result<Vec<HashTestCase>> {
-        self.ensure_hash(settings.map.hash_capacity)?;
+        self.map.ensure(settings.map.hash_capacity, &self.stats)?;
         let buf = Buffer::from_slice(&self.gpu, "hash test cases", cases, vk::BufferUsageFlags::empty())?;
         let mut globals = self.globals_for(&FrameDesc::new(scene, 0, Camera::default(), settings), 0);
         const ROW: u32 = 256;
@@ -973,9 +854,9 @@ impl Renderer {
         // frame's.
         let key_f = match &self.prev {
             Some(k) if (k.scene_f, k.section_changes) == (frame.scene_f, frame.scene.section_changes()) => {
-                self.key_f
+                self.map.key_f()
             }
-            _ => frame.effective_f().wrapping_add(self.settings_f),
+            _ => self.map.key_f_after_change(frame.effective_f()),
         };
         let mut g = self.globals_for(frame, key_f);
         g.hash_capacity = frame.settings.map.hash_capacity;
@@ -987,7 +868,10 @@ impl Renderer {
         std::array::from_fn(|level| {
             let l = lod + level as i32;
             let c = crate::hash::cell_coord(px.position.into(), l);
-            let epoch = self.regions.epoch(crate::hash::region_index(c, l, g.region_lod));
+            let epoch = self
+                .map
+                .regions
+                .epoch(crate::hash::region_index(c, l, g.region_lod));
             crate::hash::cell_key_at(
                 c,
                 l,
