@@ -158,7 +158,12 @@ pub fn scene_rows(scene: &hrtao_scene::Scene) -> Vec<(&'static str, String)> {
         format!("{} unique, {} shared", scene.meshes.len(), shared.len()),
     )];
     if !shared.is_empty() {
-        rows.push(("", hrtao_scene::cad::shared_meshes_text(&shared, 3)));
+        // Short names, so that the row never widens the panel (a CAD file's part names can be long).
+        let short: Vec<(String, usize)> = shared
+            .into_iter()
+            .map(|(name, n)| (short_name(&name), n))
+            .collect();
+        rows.push(("", hrtao_scene::cad::shared_meshes_text(&short, 3)));
     }
     let hidden = scene.instances.iter().filter(|i| !i.visible).count();
     rows.push((
@@ -170,6 +175,16 @@ pub fn scene_rows(scene: &hrtao_scene::Scene) -> Vec<(&'static str, String)> {
         },
     ));
     rows
+}
+
+/// At most `SHORT_NAME` characters of a mesh name, "…" marking a cut.
+const SHORT_NAME: usize = 12;
+fn short_name(name: &str) -> String {
+    if name.chars().count() <= SHORT_NAME {
+        name.to_string()
+    } else {
+        format!("{}…", name.chars().take(SHORT_NAME - 1).collect::<String>())
+    }
 }
 
 /// The median of the finite values (the bench's), None when there are none.
@@ -237,6 +252,7 @@ mod tests {
                 ("instances", "11, 1 hidden".to_string()),
             ]
         );
+        assert_eq!(short_name("a_very_long_part_name_from_a_cad_file"), "a_very_long…");
         let four: Vec<(String, usize)> = (0..4).map(|i| (format!("m{i}"), 5 - i)).collect();
         assert_eq!(
             hrtao_scene::cad::shared_meshes_text(&four, 3),
