@@ -6,7 +6,8 @@
 #   scripts/ablation.sh --report                      prints the Markdown table of what has been measured
 #   scripts/ablation.sh --list                        lists the configurations
 #
-# A configuration whose JSON exists is skipped unless FORCE=1, so a run resumes where it stopped. Set KEYS to
+# A configuration whose JSON exists is skipped unless FORCE=1, so a run resumes where it stopped. The first run,
+# on the code before the level blend's deletion, is kept in docs/bench/ablation/v1 (OUT=... --report shows it). Set KEYS to
 # measure fewer scenes (e.g. KEYS="rod cycloidal"; the JSON then holds only those).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -56,8 +56,8 @@ struct Run {
     /// `default` or `paper`: the settings the overrides apply to.
     base: String,
     overrides: serde_json::Value,
-    /// The settings rendered with (`ao_radius` is each scene's).
-    settings: AoSettings,
+    /// The settings rendered with (`ao_radius` is each scene's), as JSON: runs of older code have other fields.
+    settings: serde_json::Value,
     date: String,
     commit: String,
     size: String,
@@ -295,7 +295,7 @@ fn run(mut args: cli_args::Args) -> anyhow::Result<()> {
         name: name.clone(),
         base: base_name,
         overrides: serde_json::from_str(&overrides)?,
-        settings,
+        settings: serde_json::to_value(&settings)?,
         date: utc_now(),
         commit: git_commit(),
         size: o.size,
@@ -577,7 +577,7 @@ mod tests {
             name: name.into(),
             base: base.into(),
             overrides: serde_json::json!({}),
-            settings: AoSettings::default(),
+            settings: serde_json::to_value(AoSettings::default()).unwrap(),
             date: String::new(),
             commit: String::new(),
             size: "640x360".into(),

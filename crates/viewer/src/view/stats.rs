@@ -252,7 +252,10 @@ mod tests {
                 ("instances", "11, 1 hidden".to_string()),
             ]
         );
-        assert_eq!(short_name("a_very_long_part_name_from_a_cad_file"), "a_very_long…");
+        assert_eq!(
+            short_name("a_very_long_part_name_from_a_cad_file"),
+            "a_very_long…"
+        );
         let four: Vec<(String, usize)> = (0..4).map(|i| (format!("m{i}"), 5 - i)).collect();
         assert_eq!(
             hrtao_scene::cad::shared_meshes_text(&four, 3),
