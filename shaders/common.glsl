@@ -41,12 +41,20 @@ void stat_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).counters[which],
 // Ray counts (u64: no wrap at 4K x 1024 rays).
 void rays_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).rays[which], uint64_t(v)); }
 
-// The pixel of this invocation, or false when it lies outside the image.
+// The lattice of pixels this frame draws (ours, slices): every lattice()-th pixel in x and y.
+uint lattice() { return max(g.lattice, 1u); }
+
+// The pixel of this invocation (passes over the image are dispatched over the frame's lattice), or false when
+// it lies outside the image.
 bool pixel_coords(out uvec2 pix, out uint index) {
-    pix = gl_GlobalInvocationID.xy;
+    pix = gl_GlobalInvocationID.xy * lattice() + uvec2(g.lattice_x, g.lattice_y);
     index = pix.y * g.width + pix.x;
     return pix.x < g.width && pix.y < g.height;
 }
+
+// The neighbour d steps away among the pixels this frame draws (d lattice steps): passes that read what their
+// neighbours found this frame (filter, pools, obscurance) read these.
+ivec2 neighbour(uvec2 pix, ivec2 d) { return ivec2(pix) + d * int(lattice()); }
 
 // The entry of this invocation in a queue of `count` pixels, in a pass dispatched indirectly over it
 // (queue_args.comp: 2-D groups of WORKGROUP_SIZE^2 threads).
@@ -87,6 +95,9 @@ vec3 view_dir(vec3 p) { return camera_orthographic() ? g.cam_w.xyz : normalize(p
 float pixel_world_size(float t) {
     return (camera_orthographic() ? 1.0 : t) * 2.0 * length(g.cam_v.xyz) / float(g.height);
 }
+
+// World size of one step between the neighbours of `neighbour` (a pixel, or the lattice's spacing).
+float step_world_size(float t) { return pixel_world_size(t) * float(lattice()); }
 
 // Offsets a ray origin off the surface along the normal, robust at any scale
 // (Waechter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems, ch. 6).

@@ -73,14 +73,16 @@ int edge_steps() {
 // the crease angle. Drawn on the nearer side, edge_width view pixels wide at any render scale.
 float edge(uvec2 pix, GPixel px) {
     if ((g.flags & FLAG_EDGES) == 0u || px.t < 0.0) return 0.0;
-    float pixel_size = pixel_world_size(px.t);
+    // In the first round of slices only the lattice's pixels show this view yet: step over the lattice.
+    int spacing = g.still_index == 0u ? int(lattice()) : 1;
+    float pixel_size = pixel_world_size(px.t) * float(spacing);
     int steps = edge_steps();
     const ivec2 OFFSETS[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
     for (int k = 1; k <= steps; ++k) {
         // Depth tests scale with the distance to the neighbour.
         float size = float(k) * pixel_size;
         for (int i = 0; i < 4; ++i) {
-            ivec2 q = ivec2(pix) + k * OFFSETS[i];
+            ivec2 q = ivec2(pix) + k * spacing * OFFSETS[i];
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             GPixel o = GBufferRef(g.gbuffer).px[uint(q.y) * g.width + uint(q.x)];
             if (o.t < 0.0) return 1.0;
@@ -173,6 +175,25 @@ float smoothed(uint index, float ao, bool continued) {
 
 const vec3 EDGE_COLOR = vec3(0.06, 0.07, 0.08);
 
+// Slices (ours): in the first round of a still image, a pixel also stands for the pixels of its lattice block
+// that later slices of the round draw (slice order: row by row within the block), so every presented frame
+// shows the whole view, at the lattice's resolution first.
+void fill_block(uvec2 pix, float ao, uint rgba) {
+    uint a = lattice();
+    if (a == 1u || g.still_index != 0u) return;
+    uvec2 anchor = pix - uvec2(g.lattice_x, g.lattice_y);
+    uint rank = g.lattice_y * a + g.lattice_x;
+    for (uint oy = 0u; oy < a; ++oy) {
+        for (uint ox = 0u; ox < a; ++ox) {
+            uvec2 q = anchor + uvec2(ox, oy);
+            if (oy * a + ox <= rank || q.x >= g.width || q.y >= g.height) continue;
+            uint qi = q.y * g.width + q.x;
+            FloatRef(g.ao).v[qi] = ao;
+            UintRef(g.output_rgba).v[qi] = rgba;
+        }
+    }
+}
+
 void main() {
     uvec2 pix;
     uint index;
@@ -257,5 +278,7 @@ void main() {
     }
     uvec3 c8 = uvec3(linear_to_srgb(color) * 255.0 + 0.5);
     if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c8 = c8.bgr;
-    UintRef(g.output_rgba).v[index] = c8.r | (c8.g << 8) | (c8.b << 16) | (255u << 24);
+    uint rgba = c8.r | (c8.g << 8) | (c8.b << 16) | (255u << 24);
+    UintRef(g.output_rgba).v[index] = rgba;
+    fill_block(pix, FloatRef(g.ao).v[index], rgba);
 }

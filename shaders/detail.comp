@@ -26,12 +26,12 @@ layout(buffer_reference, scalar, buffer_reference_align = 8) buffer DetailSumsRe
 // The pixel's obscurance minus the mean of its surface's 3x3 neighbours' (itself included).
 float detail(uvec2 pix, GPixel px) {
     FloatRef o = FloatRef(g.obscurance);
-    float tol = POOL_PLANE * pixel_world_size(px.t);
+    float tol = POOL_PLANE * step_world_size(px.t);
     float sum = 0.0;
     float n = 0.0;
     for (int dy = -POOL_RADIUS; dy <= POOL_RADIUS; ++dy) {
         for (int dx = -POOL_RADIUS; dx <= POOL_RADIUS; ++dx) {
-            ivec2 q = ivec2(pix) + ivec2(dx, dy);
+            ivec2 q = neighbour(pix, ivec2(dx, dy));
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             uint qi = uint(q.y) * g.width + uint(q.x);
             if (!same_surface(px, GBufferRef(g.gbuffer).px[qi], tol)) continue;

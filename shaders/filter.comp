@@ -48,7 +48,8 @@ void main() {
     // World size of the cell the AO came from, and of one (internal) pixel at this distance.
     int lod = pixel_lod(px.t) + int(used);
     float cell = exp2(float(lod));
-    float pixel_size = pixel_world_size(px.t);
+    // A step between taps: a pixel, or the spacing of the frame's lattice (slices).
+    float pixel_size = step_world_size(px.t);
     int step = 1 << iteration;
     bool guided = g.filter_sigma > 0.0;
     // World scale of the position weights: the cell, or in the guided filter the reach of this iteration.
@@ -79,7 +80,7 @@ void main() {
     float wsum = 0.0;
     for (int dy = -2; dy <= 2; ++dy) {
         for (int dx = -2; dx <= 2; ++dx) {
-            ivec2 q = ivec2(pix) + ivec2(dx, dy) * step;
+            ivec2 q = neighbour(pix, ivec2(dx, dy) * step);
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             uint qi = uint(q.y) * g.width + uint(q.x);
             FilterGuide guide = GuideRef(g.filter_guide).v[qi];

@@ -44,16 +44,23 @@ uint region_epoch(ivec3 c, int lod) {
 CellKey region_cell_key(ivec3 c, int lod, ivec3 nq) {
     return cell_key_at(c, lod, nq, g.scene_f, region_epoch(c, lod), g.hash_capacity);
 }
-// Whether a local edit changed anything this frame.
-bool edited_this_frame() {
-    RegionRef t = RegionRef(g.regions);
-    return t.v[REGION_COUNT] == g.frame_index && t.v[REGION_COUNT + 1u] > 0u;
+// Whether the last local edit is new to the pixels this frame draws: made this frame, or, when frames draw
+// slices, within the round of slices since (`edit_window` frames: each pixel is drawn once in them).
+bool edit_is_new(RegionRef t) {
+    return g.frame_index - t.v[REGION_COUNT] < max(g.edit_window, 1u);
 }
 
-// True when a local edit of this frame changed geometry within `reach` of `p` (its boxes follow the epochs).
+// Whether a local edit changed anything that the pixels of this frame have not seen.
+bool edited_this_frame() {
+    RegionRef t = RegionRef(g.regions);
+    return edit_is_new(t) && t.v[REGION_COUNT + 1u] > 0u;
+}
+
+// True when a local edit these pixels have not seen changed geometry within `reach` of `p` (its boxes follow
+// the epochs).
 bool edited_near(vec3 p, float reach) {
     RegionRef t = RegionRef(g.regions);
-    if (t.v[REGION_COUNT] != g.frame_index) return false;
+    if (!edit_is_new(t)) return false;
     uint n = min(t.v[REGION_COUNT + 1u], MAX_EDIT_BOXES);
     for (uint i = 0u; i < n; ++i) {
         uint w = REGION_COUNT + 4u + 8u * i;

@@ -5,7 +5,7 @@
 // cell finder (one barrier for both).
 #include "common.glsl"
 
-// The obscurance's taps: the (2 r + 1)^2 - 1 pixels around the pixel.
+// The obscurance's taps: the (2 r + 1)^2 - 1 pixels around the pixel (of the frame's lattice).
 const int OBSCURANCE_RADIUS = 3;
 // The cosine a neighbour must rise above the tangent plane by to count (a curved face's own tessellation
 // does not).
@@ -15,7 +15,7 @@ float obscurance(uvec2 pix, GPixel px) {
     float sum = 0.0;
     for (int dy = -OBSCURANCE_RADIUS; dy <= OBSCURANCE_RADIUS; ++dy) {
         for (int dx = -OBSCURANCE_RADIUS; dx <= OBSCURANCE_RADIUS; ++dx) {
-            ivec2 q = ivec2(pix) + ivec2(dx, dy);
+            ivec2 q = neighbour(pix, ivec2(dx, dy));
             if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             GPixel pq = GBufferRef(g.gbuffer).px[uint(q.y) * g.width + uint(q.x)];
             if (pq.t < 0.0) continue;

@@ -115,7 +115,7 @@ void resolve_pixel() {
                 float power = max(rq * rq, r * rq);
                 ao += g.near_weight * r * power / (power + v);
             }
-            float footprint = exp2(float(lod)) / max(pixel_world_size(px.t), 1e-30);   // cell width in pixels
+            float footprint = exp2(float(lod)) / max(step_world_size(px.t), 1e-30);   // cell width in steps
             uint own_rays = uint(own_samples);
             plan = make_plan(planned_iterations(footprint, own_rays, iterations), own_rays);
         }

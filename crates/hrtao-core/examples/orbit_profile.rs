@@ -2,7 +2,7 @@
 //! frame at the viewer's moving size, with the viewer's moving settings (1 filter iteration, the default ray
 //! budget spread over the pixels), and prints the median GPU milliseconds per pass over frames 5.. .
 //!
-//! `cargo run --release -p hrtao-core --example orbit_profile -- [--size 323x280] [--frames 40] [--rays 3] [--fraction 1] [--view-height 800]
+//! `cargo run --release -p hrtao-core --example orbit_profile -- [--size 323x280] [--frames 40] [--rays 3] [--fraction 1] [--view-height 800] [--step-deg 2 (0: still frames)] [--lattice 1]
 //! [--primary raster|rayquery] [--scene FILE] [--set '{"filter_iterations": 1}']`
 mod cli_args;
 use std::collections::BTreeMap;
@@ -30,6 +30,10 @@ fn main() -> anyhow::Result<()> {
     let view_height: u32 = args.take("--view-height", "800").parse()?;
     let primary = args.primary();
     let extra = args.take("--set", r#"{"filter_iterations": 1}"#);
+    // 0: a still camera (the viewer's still frames: jittered, refined).
+    let step_deg: f32 = args.take("--step-deg", "2").parse()?;
+    // Slices: every lattice-th pixel per frame (still frames of the viewer).
+    let lattice: u32 = args.take("--lattice", "1").parse()?;
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let scene_path = args.take("--scene", assets.join("default.glb").to_str().unwrap());
     let (w, h) = size.split_once('x').unwrap();
@@ -59,6 +63,8 @@ fn main() -> anyhow::Result<()> {
                 rays_per_pixel: rays,
                 trace_fraction: fraction,
             }),
+            jitter: step_deg == 0.0,
+            lattice,
             ..hrtao_core::FrameDesc::new(&sg, scene.f(), camera, &settings)
         };
         let rep = r.render(&frame)?;
@@ -70,7 +76,7 @@ fn main() -> anyhow::Result<()> {
             }
         }
         let t = Vec3::from(camera.target);
-        let e = Quat::from_axis_angle(up, 2f32.to_radians()) * (Vec3::from(camera.eye) - t) + t;
+        let e = Quat::from_axis_angle(up, step_deg.to_radians()) * (Vec3::from(camera.eye) - t) + t;
         camera.eye = e.into();
     }
     let n = walls.len().max(1);

@@ -19,6 +19,9 @@ pub struct RayBudget {
     pub trace_fraction: f32,
 }
 
+/// The largest slice lattice (`FrameDesc::lattice`): 64 slices of a whole frame.
+pub const MAX_LATTICE: u32 = 8;
+
 /// How the composite writes its output.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Output {
@@ -57,6 +60,11 @@ pub struct FrameDesc<'a> {
     /// Jitter the primary samples of still frames (anti-aliasing); `hrtao render` keeps pixel centres.
     pub jitter: bool,
     pub output: Output,
+    /// Slices (ours): each frame draws every `lattice`-th pixel in x and y, one of lattice² interleaved
+    /// slices in turn, so a frame costs about 1/lattice² of a whole one; a still image's round of slices
+    /// accumulates as one whole frame would (1 = whole frames). Changing it changes nothing that was drawn:
+    /// it takes effect at the next round.
+    pub lattice: u32,
 }
 
 impl<'a> FrameDesc<'a> {
@@ -72,6 +80,7 @@ impl<'a> FrameDesc<'a> {
             tile: None,
             jitter: false,
             output: Output::default(),
+            lattice: 1,
         }
     }
 
@@ -104,6 +113,12 @@ impl<'a> FrameDesc<'a> {
                     b.rays_per_pixel
                 ));
             }
+        }
+        if !(1..=MAX_LATTICE).contains(&self.lattice) {
+            return Err(format!(
+                "slice lattice must be in 1..={MAX_LATTICE}, got {}",
+                self.lattice
+            ));
         }
         Ok(())
     }

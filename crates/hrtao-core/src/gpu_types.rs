@@ -241,6 +241,15 @@ gpu_structs! {
         filter_guide: u64,
         /// Per pixel, the screen-space obscurance of its G-buffer neighbourhood (detail.comp).
         obscurance: u64,
+        /// Slices (ours, `FrameDesc::slices`): this frame draws every `lattice`-th pixel in x and y from
+        /// (`lattice_x`, `lattice_y`) (1, 0, 0: the whole image); passes that read this frame's neighbours step
+        /// by `lattice` pixels (common.glsl `neighbour`).
+        lattice: u32,
+        lattice_x: u32,
+        lattice_y: u32,
+        /// Frames, counted from a local edit's, in which a pixel drawn sees that edit (hash_map.glsl
+        /// `edited_near`): 1, or a round of slices, so each pixel sees it once.
+        edit_window: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

@@ -35,7 +35,7 @@ pub use accel::SceneGpu;
 pub use camera::Camera;
 pub use context::{ContextOptions, DeviceInfo, Gpu};
 pub use error::{CoreError, Result};
-pub use frame::{FrameDesc, Output, RayBudget};
+pub use frame::{FrameDesc, Output, RayBudget, MAX_LATTICE};
 pub use raster::Primary;
 pub use renderer::{FrameReport, Renderer};
 pub use section::{SectionPlane, Sections};

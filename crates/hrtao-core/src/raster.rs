@@ -439,6 +439,7 @@ impl Rasterizer {
         &self,
         rec: &mut Recorder,
         scene: &RasterScene,
+        grid: (u32, u32),
         globals: &FrameGlobals,
         globals_address: u64,
         target_distance: f32,
@@ -585,10 +586,11 @@ impl Rasterizer {
             },
         );
         let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
+        // Into the G-buffer of the frame's slice (`grid`: its lattice's pixels; the whole image without slices).
         rec.dispatch(
             Pass::GbufferFromVis,
-            w,
-            h,
+            grid.0,
+            grid.1,
             [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
         );
     }

@@ -122,6 +122,10 @@ pub struct FrameReport {
     pub filtered_pixels: u32,
     /// The image of this view is final: rendering more frames would not change it (see `Renderer::converged`).
     pub converged: bool,
+    /// Slices (`FrameDesc::lattice`): this frame drew slice `slice` of `slices` (0 of 1: a whole frame); a
+    /// still image's round ends with the last.
+    pub slice: u32,
+    pub slices: u32,
 }
 
 pub struct Renderer {
@@ -144,8 +148,15 @@ pub struct Renderer {
     prev: Option<FrameKey>,
     /// Monotonic count of rendered frames (a hash cell's "last used" stamp).
     frame_index: u32,
-    /// Frames since the view last changed (0 = new view).
+    /// Rounds of slices (whole frames without slices) since the view last changed (0 = new view).
     still_index: u32,
+    /// The slice this frame draws of the round's `lattice`² (`FrameDesc::lattice`, taken at a round's start).
+    slice: u32,
+    lattice: u32,
+    /// `frame_index` of the last local edit: for a round of slices after it, the pixels drawn see it.
+    edit_frame: Option<u32>,
+    /// Pixels on cells that still take rays in this round's slices so far (`converged`).
+    round_young_pixels: u64,
     /// `still_index` at the last local edit: pixels near it restarted their refinement then.
     edit_still_index: u32,
     /// The last finished frame reported `converged`.
@@ -207,6 +218,10 @@ impl Renderer {
             prev: None,
             frame_index: 0,
             still_index: 0,
+            slice: 0,
+            lattice: 1,
+            edit_frame: None,
+            round_young_pixels: 0,
             edit_still_index: 0,
             last_converged: false,
             check_bounds: false,
@@ -302,13 +317,32 @@ impl Renderer {
             );
         }
         let restart = std::mem::take(&mut self.restart);
+        let slices = self.lattice * self.lattice;
+        // A local edit's pixels see it within a round of slices from it: the lattice holds until then.
+        let edit_open = self
+            .edit_frame
+            .is_some_and(|e| self.frame_index.wrapping_sub(e) < slices);
         if change.still_image || map == MapChange::Whole || restart {
             self.still_index = 0;
+            self.slice = 0;
+            self.lattice = frame.lattice;
+        } else if self.slice + 1 < slices {
+            self.slice += 1;
         } else {
+            // A new round: every pixel has been drawn once more.
             self.still_index = self.still_index.saturating_add(1);
+            self.slice = 0;
+            if !edit_open {
+                self.lattice = frame.lattice;
+            }
         }
-        if matches!(map, MapChange::Regions(_)) || self.still_index == 0 {
-            self.edit_still_index = self.still_index;
+        if self.still_index == 0 && self.slice == 0 {
+            self.edit_still_index = 0;
+        }
+        if matches!(map, MapChange::Regions(_)) {
+            self.edit_frame = Some(self.frame_index);
+            // The pixels of the slices before this one see the edit in the next round.
+            self.edit_still_index = self.still_index + (self.slice > 0) as u32;
         }
         self.prev = Some(key);
         Ok(())
@@ -405,6 +439,10 @@ impl Renderer {
             },
             view_height,
             edge_width: EDGE_WIDTH,
+            lattice: self.lattice,
+            lattice_x: self.slice % self.lattice,
+            lattice_y: self.slice / self.lattice,
+            edit_window: self.lattice * self.lattice,
             ..bytemuck::Zeroable::zeroed()
         };
         s.write_gpu(&mut g);
@@ -471,6 +509,8 @@ impl Renderer {
         self.passes.bind_tlas(scene.tlas.raw, scene.tlas_generation());
 
         let (w, h) = self.size();
+        // Passes over the image run over this frame's slice: every lattice-th pixel (common.glsl).
+        let (gw, gh) = self.slice_grid();
         let primary = self.primary;
         if primary == Primary::Raster {
             let raster = match &mut self.raster {
@@ -504,26 +544,27 @@ impl Renderer {
                 raster.record(
                     &mut rec,
                     &scene.raster,
+                    (gw, gh),
                     &globals,
                     self.globals.address,
                     camera.distance(),
                     off_axis,
                 );
             }
-            _ => rec.dispatch(Pass::Primary, w, h, [0; 4]),
+            _ => rec.dispatch(Pass::Primary, gw, gh, [0; 4]),
         }
         let contact_detail = mode.uses_hash() && settings.young.contact_detail && young;
         if contact_detail {
             // Contact detail's obscurance reads only the G-buffer: beside the cell finder, after one barrier.
-            rec.dispatch(Pass::Obscurance, w, h, [0; 4]);
+            rec.dispatch(Pass::Obscurance, gw, gh, [0; 4]);
         }
         if mode == Mode::Rtao {
-            rec.dispatch(Pass::Rtao, w, h, [0; 4]);
+            rec.dispatch(Pass::Rtao, gw, gh, [0; 4]);
         } else if mode.uses_hash() {
             // The last cell-finder dispatch also queues the pixels whose cell still takes rays, packed densely
             // (the update then runs no idle lanes), and its last work group writes the update's dispatch size.
             for &(top, bottom) in &cell_levels {
-                rec.dispatch(Pass::CellFinder, w, h, [top, bottom, 0, 0]);
+                rec.dispatch(Pass::CellFinder, gw, gh, [top, bottom, 0, 0]);
             }
             let rays = gpu::RAY_ARGS_OFFSET;
             let args = self.dispatch_args.raw;
@@ -535,7 +576,7 @@ impl Renderer {
             } else {
                 rec.dispatch_indirect(Pass::AoUpdate, args, rays, [0; 4]);
             }
-            rec.dispatch(Pass::Resolve, w, h, [0; 4]);
+            rec.dispatch(Pass::Resolve, gw, gh, [0; 4]);
             let iterations = settings.filter.filter_iterations;
             if iterations > 0 {
                 // Over the pixels the resolve queued (those whose plan takes an iteration). Ping-pong:
@@ -576,9 +617,17 @@ impl Renderer {
                 }],
             );
         });
-        rec.dispatch(Pass::Composite, w, h, [0; 4]);
+        rec.dispatch(Pass::Composite, gw, gh, [0; 4]);
         self.last_events = rec.finish();
         Ok(())
+    }
+
+    /// The invocations of a pass over the image this frame: the pixels of its slice's lattice.
+    fn slice_grid(&self) -> (u32, u32) {
+        let (w, h) = self.size();
+        let a = self.lattice.max(1);
+        let (x, y) = (self.slice % a, self.slice / a);
+        (w.saturating_sub(x).div_ceil(a), h.saturating_sub(y).div_ceil(a))
     }
 
     /// Whether this frame's GPU timestamps measure its passes. Lavapipe writes the timestamps recorded after a
@@ -606,7 +655,14 @@ impl Renderer {
         let occupied = c[gpu::STAT_OCCUPIED as usize];
         let young_pixels =
             c[gpu::STAT_RAY_QUEUE as usize] as u64 + c[gpu::STAT_UNPICKED_PIXELS as usize] as u64;
-        self.last_converged = self.converged(&key, young_pixels);
+        // A still image is final only at the end of a round of slices, and from the whole round's pixels.
+        let slices = self.lattice * self.lattice;
+        self.round_young_pixels = if self.slice == 0 {
+            young_pixels
+        } else {
+            self.round_young_pixels + young_pixels
+        };
+        self.last_converged = self.slice + 1 == slices && self.converged(&key, self.round_young_pixels);
         let budget = self.pixel_count() as f64
             * key.budget.rays_per_pixel as f64
             * key.budget.trace_fraction.clamp(0.0, 1.0) as f64;
@@ -638,6 +694,8 @@ impl Renderer {
             ray_pixels: c[gpu::STAT_RAY_QUEUE as usize],
             filtered_pixels: c[gpu::STAT_FILTER_QUEUE as usize],
             converged: self.last_converged,
+            slice: self.slice,
+            slices,
         })
     }
 
@@ -703,7 +761,7 @@ impl Renderer {
             Mode::Rtao => aa && (rpp == 0 || own_rays(frames)),
             // Pixels near a local edit restarted their own rays then.
             Mode::Hrtao if s.still.refine => {
-                aa && (rpp == 0 || own_rays(self.still_index - self.edit_still_index))
+                aa && (rpp == 0 || own_rays(self.still_index.saturating_sub(self.edit_still_index)))
             }
             Mode::Hrtao => young_pixels == 0 && frames > 1,
             _ => aa,

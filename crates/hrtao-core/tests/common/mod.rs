@@ -136,6 +136,8 @@ pub struct Headless {
     pub view_height: u32,
     pub budget: Option<RayBudget>,
     pub output: Output,
+    /// Slices: each frame draws every `lattice`-th pixel (`FrameDesc::lattice`).
+    pub lattice: u32,
 }
 
 #[allow(dead_code)]
@@ -156,6 +158,7 @@ impl Headless {
             view_height: 0,
             budget: None,
             output: Output::default(),
+            lattice: 1,
         })
     }
 
@@ -192,6 +195,7 @@ impl Headless {
             tile: self.tile,
             jitter: self.jitter,
             output: self.output,
+            lattice: self.lattice,
             ..FrameDesc::new(scene, scene_f, camera, settings)
         }
     }

@@ -19,6 +19,7 @@ pub mod present;
 mod sections;
 mod settings_panel;
 pub mod shot;
+pub mod slices;
 pub mod stats;
 pub mod tree;
 mod ui;
@@ -365,6 +366,10 @@ pub(crate) struct Viewer {
     /// This frame's ray budget, from `prefs.rays_per_frame` at the internal size (`apply_ray_budget`). The AO
     /// settings live in `prefs.settings` only: every frame hands them to the renderer (`FrameDesc`).
     ray_budget: RayBudget,
+    /// Still frames in slices of the frame-time target (`slices.rs`).
+    slicing: slices::Slicing,
+    /// The last moving frame's wall time and pixels: the first estimate of a still frame's cost.
+    last_moving: Option<(f64, u64)>,
     nav: Nav,
     home: Camera,
     default_radius: f32,
@@ -489,6 +494,8 @@ impl Viewer {
                 rays_per_pixel: 1,
                 trace_fraction: 1.0,
             },
+            slicing: slices::Slicing::default(),
+            last_moving: None,
             nav: Nav {
                 cam: Camera::default(),
                 pivot: Vec3::ZERO,
@@ -1177,6 +1184,21 @@ impl Viewer {
         let moving = self.motion.moving(now);
         let (iw, ih) = self.internal_size_at(self.motion.scale(self.render_scale, now));
         self.apply_ray_budget(iw, ih);
+        // Still frames in slices of the frame-time target (with the target on): one budget per still image.
+        let lattice = if moving || !self.prefs.auto_budget {
+            self.slicing.moving();
+            1
+        } else {
+            let target = self.prefs.target_ms.max(1.0) as f64;
+            let pixels = iw as u64 * ih as u64;
+            self.ray_budget = self.slicing.still_budget(
+                self.prefs.rays_per_frame,
+                pixels,
+                self.last_moving,
+                target,
+            );
+            self.slicing.lattice()
+        };
         let bgra_direct = !self.presenter.blit_ok && self.presenter.is_bgra();
         let gpu = self.gpu.clone();
         let cmd = self.presenter.cmd;
@@ -1210,6 +1232,7 @@ impl Viewer {
                 budget: Some(self.ray_budget),
                 // Still frames are jittered and accumulated: anti-aliased stills (docs/algorithm.md).
                 jitter: true,
+                lattice,
                 output: Output {
                     bgra: bgra_direct,
                     ..Output::default()
@@ -1320,9 +1343,15 @@ impl Viewer {
             }
             self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
             self.last_report = Some(report);
+            // The background screenshot's share of the frame is not the view's.
+            let view_ms = (wall_ms - shot_ms).max(0.0);
             if moving {
-                // The background screenshot's share of the frame is not the view's.
-                self.frame_time_target((wall_ms - shot_ms).max(0.0));
+                self.frame_time_target(view_ms);
+                self.last_moving = Some((view_ms, iw as u64 * ih as u64));
+            } else if self.prefs.auto_budget {
+                let target = self.prefs.target_ms.max(1.0) as f64;
+                let slices = self.last_report.as_ref().map_or(1, |r| r.slices);
+                self.slicing.observe(view_ms, slices, target);
             }
             self.script_step();
         }

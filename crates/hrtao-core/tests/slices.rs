@@ -1,0 +1,203 @@
+//! Slices (ours, `FrameDesc::lattice`): a frame draws every lattice-th pixel, one interleaved slice after the
+//! other, so that a viewer's still frames cost a fraction of a whole one. Validation on. Checked here: a round
+//! of slices accumulates as a whole frame does (the still image converges to the same ray-traced image), the
+//! first slice of a new view already shows all of it (no pixel of the previous view), convergence is reported
+//! only at the end of a round, and a local edit in the middle of a round leaves no ghost in the slices drawn
+//! after it.
+mod common;
+use common::*;
+use hrtao_core::{AoSettings, Camera, SceneGpu};
+use hrtao_scene::glam::Vec3;
+
+fn blocks_scene() -> (hrtao_scene::Scene, Camera) {
+    let scene = row_of_blocks(floor(), 4, 3.0);
+    let cam = z_up_camera([4.0, -9.0, 7.0], [0.0, 0.0, 0.0], 96, 64);
+    (scene, cam)
+}
+
+fn settings() -> AoSettings {
+    let mut s = hrtao(4, 3.0);
+    s.still.still_samples = 32;
+    s
+}
+
+/// Renders until the renderer reports a converged image (at most `max_frames`); the frames it took.
+fn until_converged(
+    r: &mut Headless,
+    sg: &SceneGpu,
+    f: u32,
+    cam: &Camera,
+    max_frames: u32,
+) -> (u32, Vec<hrtao_core::FrameReport>) {
+    let mut reports = Vec::new();
+    for n in 1..=max_frames {
+        let rep = r.render(sg, f, cam).unwrap();
+        let done = rep.converged;
+        reports.push(rep);
+        if done {
+            return (n, reports);
+        }
+    }
+    panic!("no convergence within {max_frames} frames");
+}
+
+/// A still image drawn in 4 slices per round converges, in 4 times the frames, to the image whole frames
+/// converge to, and both to the per-pixel ray-traced AO; convergence is reported only at a round's end.
+/// Catches slices whose own rays or accumulation are lost or counted twice, a filter reading neighbours of
+/// other slices, and a round that ends early.
+#[test]
+fn a_round_of_slices_accumulates_as_a_whole_frame() {
+    let gpu = gpu();
+    let (scene, cam) = blocks_scene();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let reference = reference(&gpu, &scene, &cam, 3.0, 64, 16);
+
+    let mut whole = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    let (whole_frames, _) = until_converged(&mut whole, &sg, scene.f(), &cam, 64);
+    let whole_ao = whole.read_ao().unwrap();
+
+    let mut sliced = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    sliced.lattice = 2;
+    let (sliced_frames, reports) = until_converged(&mut sliced, &sg, scene.f(), &cam, 256);
+    let sliced_ao = sliced.read_ao().unwrap();
+
+    let (e_whole, e_sliced, apart) = (
+        mae(&whole_ao, &reference),
+        mae(&sliced_ao, &reference),
+        mae(&sliced_ao, &whole_ao),
+    );
+    eprintln!(
+        "converged after {whole_frames} whole frames / {sliced_frames} slices; MAE against per-pixel RTAO: \
+         whole {e_whole:.4}, sliced {e_sliced:.4}; sliced against whole {apart:.4}"
+    );
+    assert_eq!(sliced_frames, 4 * whole_frames, "a round is 4 slices");
+    for (i, rep) in reports.iter().enumerate() {
+        assert_eq!((rep.slice, rep.slices), (i as u32 % 4, 4), "frame {i}");
+        assert_eq!(rep.accumulated_frames, i as u32 / 4 + 1, "frame {i}: rounds");
+        assert_eq!(rep.converged, i + 1 == reports.len(), "frame {i}");
+    }
+    assert!(e_whole < 0.02, "whole frames converge: {e_whole}");
+    assert!(
+        e_sliced < e_whole + 0.003,
+        "slices converge as well: {e_sliced} vs {e_whole}"
+    );
+    assert!(apart < 0.01, "slices converge to the same image: {apart}");
+    assert_clean(&gpu);
+}
+
+/// The first slice of a new view stands for its whole lattice block: every pixel shows the new view at once
+/// (its block's drawn pixel), none the previous view; after the round, the image is that of one whole frame of
+/// the view. Catches a first round that leaves the pixels of later slices with the previous view (a torn or
+/// checkered image while the view refines).
+#[test]
+fn the_first_slice_of_a_view_shows_all_of_it() {
+    let gpu = gpu();
+    let (scene, cam) = blocks_scene();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    r.lattice = 3;
+    // The previous view: the scene from the other side, several rounds.
+    let other = Camera {
+        eye: [3.0, 9.0, 5.0],
+        ..cam
+    };
+    for _ in 0..18 {
+        r.render(&sg, scene.f(), &other).unwrap();
+    }
+    let before = r.read_rgba().unwrap();
+    let rep = r.render(&sg, scene.f(), &cam).unwrap();
+    assert_eq!((rep.slice, rep.slices, rep.accumulated_frames), (0, 9, 1));
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let (ao, rgba) = (r.read_ao().unwrap(), r.read_rgba().unwrap());
+    let mut changed = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let anchor = (y / 3 * 3) * w + x / 3 * 3;
+            let i = y * w + x;
+            assert_eq!(ao[i], ao[anchor], "pixel ({x}, {y}) shows its block's AO");
+            assert_eq!(
+                rgba[4 * i..4 * i + 4],
+                rgba[4 * anchor..4 * anchor + 4],
+                "({x}, {y})"
+            );
+            changed += (rgba[4 * i..4 * i + 4] != before[4 * i..4 * i + 4]) as usize;
+        }
+    }
+    assert!(
+        changed > w * h / 2,
+        "the new view replaced the old: {changed} pixels changed"
+    );
+    for _ in 1..9 {
+        r.render(&sg, scene.f(), &cam).unwrap();
+    }
+    let round = r.read_ao().unwrap();
+    let mut whole = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    whole.render(&sg, scene.f(), &cam).unwrap();
+    let one = whole.read_ao().unwrap();
+    let e = mae(&round, &one);
+    eprintln!("first round of 9 slices against one whole frame: MAE {e:.4}");
+    assert!(e < 0.03, "the first round is the view's first frame: {e}");
+    assert_clean(&gpu);
+}
+
+/// A local edit in the middle of a round (slice 2 of 4): the slices drawn in the frames after it, before the
+/// round ends, see it too, so no pixel keeps the removed block's contact shadow. Catches an edit seen only by
+/// the slice of its own frame (`edit_window`).
+#[test]
+fn a_local_edit_mid_round_reaches_every_slice() {
+    let gpu = gpu();
+    let (mut scene, cam) = blocks_scene();
+    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut s = settings();
+    s.map.s_p = 8.0;
+    assert!(s.edits.local_edits);
+    let mut r = Headless::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
+    r.lattice = 2;
+    for _ in 0..(4 * 12 + 2) {
+        r.render(&sg, scene.f(), &cam).unwrap();
+    }
+    let part = 2;
+    let bounds = scene.instance_bounds(part);
+    let gb = r.read_gbuffer().unwrap();
+    // Floor pixels around the block, within 0.6 of its footprint.
+    let ring: Vec<usize> = gb
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| {
+            let q = Vec3::from(p.position);
+            let near = q.x > bounds.min.x - 0.6
+                && q.x < bounds.max.x + 0.6
+                && q.y > bounds.min.y - 0.6
+                && q.y < bounds.max.y + 0.6;
+            let inside = q.x > bounds.min.x && q.x < bounds.max.x && q.y > bounds.min.y && q.y < bounds.max.y;
+            p.t >= 0.0 && p.normal[2] > 0.99 && q.z < 0.01 && near && !inside
+        })
+        .map(|(i, _)| i)
+        .collect();
+    let mean = |ao: &[f32]| ring.iter().map(|&i| ao[i]).sum::<f32>() / ring.len() as f32;
+    let with_part = mean(&r.read_ao().unwrap());
+    scene.set_visible(part, false).unwrap();
+    sg.update_instances(&scene, u32::MAX).unwrap();
+    // The rest of this round and the next: every slice drawn once more since the edit, and again.
+    for _ in 0..6 {
+        let rep = r.render(&sg, scene.f(), &cam).unwrap();
+        assert!(
+            rep.accumulated_frames > 1,
+            "a local edit keeps the still image elsewhere"
+        );
+    }
+    let after = mean(&r.read_ao().unwrap());
+    let (fresh, _sg) = render(&gpu, &scene, &cam, s, 3);
+    let expected = mean(&fresh.read_ao().unwrap());
+    eprintln!(
+        "{} floor pixels by the removed block: AO {with_part:.3} with it, {after:.3} 6 slices after, {expected:.3} fresh",
+        ring.len()
+    );
+    assert!(ring.len() > 40, "{}", ring.len());
+    assert!(with_part < expected - 0.1, "the block cast a contact shadow");
+    assert!(
+        after > expected - 0.04,
+        "the removed block's contact shadow stayed in some slices: AO {after:.3}, fresh {expected:.3}"
+    );
+    assert_clean(&gpu);
+}
