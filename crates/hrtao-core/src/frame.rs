@@ -120,6 +120,9 @@ impl<'a> FrameDesc<'a> {
                 self.lattice
             ));
         }
+        if self.lattice > 1 && self.tile.is_some() {
+            return Err("a tile is drawn whole: slices of a tile are not supported".into());
+        }
         Ok(())
     }
 

@@ -439,7 +439,6 @@ impl Rasterizer {
         &self,
         rec: &mut Recorder,
         scene: &RasterScene,
-        grid: (u32, u32),
         globals: &FrameGlobals,
         globals_address: u64,
         target_distance: f32,
@@ -447,11 +446,8 @@ impl Rasterizer {
     ) {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
         let (w, h) = t.size;
-        assert_eq!(
-            (w, h),
-            (globals.width, globals.height),
-            "visibility targets of another size"
-        );
+        let slice = SliceProjection::of(globals);
+        assert_eq!((w, h), slice.size, "visibility targets of another size");
         let scaled = |v: [f32; 4]| {
             let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
             [v[0] / len2, v[1] / len2, v[2] / len2, 0.0]
@@ -463,8 +459,8 @@ impl Rasterizer {
         };
         let mut push = RasterPush {
             eye: [globals.eye[0], globals.eye[1], globals.eye[2], depth],
-            cam_u: scaled(globals.cam_u),
-            cam_v: scaled(globals.cam_v),
+            cam_u: slice.scale_axis(scaled(globals.cam_u), slice.scale[0]),
+            cam_v: slice.scale_axis(scaled(globals.cam_v), slice.scale[1]),
             cam_w: match off_axis {
                 Some((axis, _)) => [axis.x, axis.y, axis.z, 0.0],
                 None => globals.cam_w,
@@ -475,9 +471,10 @@ impl Rasterizer {
             projection: globals.projection,
             jitter_ndc: {
                 let [ox, oy] = off_axis.map_or([0.0; 2], |(_, o)| o);
+                let (fw, fh) = (globals.width as f32, globals.height as f32);
                 [
-                    2.0 * globals.jitter[0] / w as f32 + ox,
-                    2.0 * globals.jitter[1] / h as f32 + oy,
+                    (2.0 * globals.jitter[0] / fw + ox + slice.offset[0]) / slice.scale[0],
+                    (2.0 * globals.jitter[1] / fh + oy + slice.offset[1]) / slice.scale[1],
                 ]
             },
             globals: globals_address,
@@ -586,11 +583,11 @@ impl Rasterizer {
             },
         );
         let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
-        // Into the G-buffer of the frame's slice (`grid`: its lattice's pixels; the whole image without slices).
+        // Over the visibility image: pixel (i, j) is the frame's lattice pixel (L i + x, L j + y).
         rec.dispatch(
             Pass::GbufferFromVis,
-            grid.0,
-            grid.1,
+            w,
+            h,
             [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
         );
     }
@@ -800,4 +797,38 @@ fn create_pipeline(
     result
         .map(|p| p[0])
         .map_err(|(_, e)| CoreError::from_vk("vkCreateGraphicsPipelines", e))
+}
+
+/// A frame's slice as a rasterised image (ours, `FrameDesc::lattice`): the visibility image has one pixel per
+/// lattice pixel, ⌈W / L⌉ × ⌈H / L⌉, and its pixel (i, j) samples the full image's pixel (L i + x, L j + y). In
+/// the full image's NDC its pixel centres lie at `scale` × its own NDC + `offset` (per axis; row 0 at the top):
+/// scale = L ⌈W / L⌉ / W, offset = (L ⌈W / L⌉ + 2 x − L + 1) / W − 1. The whole image: scale 1, offset 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SliceProjection {
+    pub size: (u32, u32),
+    pub scale: [f32; 2],
+    pub offset: [f32; 2],
+}
+
+impl SliceProjection {
+    pub fn of(globals: &FrameGlobals) -> SliceProjection {
+        let l = globals.lattice.max(1);
+        let axis = |full: u32, x: u32| {
+            let n = full.div_ceil(l);
+            let (full, l, n, x) = (full.max(1) as f32, l as f32, n as f32, x as f32);
+            (l * n / full, (l * n + 2.0 * x - l + 1.0) / full - 1.0)
+        };
+        let (sx, ox) = axis(globals.width, globals.lattice_x);
+        let (sy, oy) = axis(globals.height, globals.lattice_y);
+        SliceProjection {
+            size: (globals.width.div_ceil(l), globals.height.div_ceil(l)),
+            scale: [sx, sy],
+            offset: [ox, oy],
+        }
+    }
+
+    /// A camera axis (scaled by 1 / |axis|², as the draw takes it) for NDC `scale` times finer.
+    fn scale_axis(&self, v: [f32; 4], scale: f32) -> [f32; 4] {
+        [v[0] / scale, v[1] / scale, v[2] / scale, 0.0]
+    }
 }

@@ -517,7 +517,8 @@ impl Renderer {
                 Some(r) => r,
                 None => self.raster.insert(Rasterizer::new(&self.gpu)?),
             };
-            raster.prepare(w, h)?;
+            // One visibility pixel per pixel of the frame's slice (`SliceProjection`).
+            raster.prepare(w.div_ceil(self.lattice), h.div_ceil(self.lattice))?;
         }
         let mode = settings.display.mode;
         let cell_levels = self.map.cell_levels(self.pixel_count() as u32, self.frame_index);
@@ -544,7 +545,6 @@ impl Renderer {
                 raster.record(
                     &mut rec,
                     &scene.raster,
-                    (gw, gh),
                     &globals,
                     self.globals.address,
                     camera.distance(),

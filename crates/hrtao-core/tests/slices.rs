@@ -201,3 +201,40 @@ fn a_local_edit_mid_round_reaches_every_slice() {
     );
     assert_clean(&gpu);
 }
+
+/// Rasterised primary visibility draws a slice as an image of the lattice's pixels (`SliceProjection`): after a
+/// round, with pixel centres and 3 × 3 slices, the G-buffer is the one ray queries find for the whole image
+/// (an image 3 × 3 times smaller, offset to the slice's pixels). Catches a slice raster that samples other
+/// pixels (a shifted or scaled image) or leaves pixels of a slice unwritten. Odd sizes: the last row and
+/// column of blocks are partial.
+#[test]
+fn rasterised_slices_see_what_ray_queries_see() {
+    let gpu = gpu();
+    let (scene, mut cam) = blocks_scene();
+    (cam.width, cam.height) = (97, 65);
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut queries = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    queries.set_primary(hrtao_core::Primary::RayQuery);
+    queries.render(&sg, scene.f(), &cam).unwrap();
+    let expected = queries.read_gbuffer().unwrap();
+    let mut raster = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    raster.set_primary(hrtao_core::Primary::Raster);
+    raster.lattice = 3;
+    for _ in 0..9 {
+        raster.render(&sg, scene.f(), &cam).unwrap();
+    }
+    let got = raster.read_gbuffer().unwrap();
+    let (mut hits, mut same) = (0, 0);
+    for (a, b) in expected.iter().zip(&got) {
+        if a.t < 0.0 && b.t < 0.0 {
+            continue;
+        }
+        hits += 1;
+        let d = Vec3::from(a.position).distance(Vec3::from(b.position));
+        same += (a.instance == b.instance && d < 1e-3) as usize;
+    }
+    eprintln!("{same} of {hits} pixels with a hit agree");
+    assert!(hits > 2000);
+    assert!(same as f64 >= 0.995 * hits as f64, "{same} of {hits}");
+    assert_clean(&gpu);
+}

@@ -1191,12 +1191,16 @@ impl Viewer {
         } else {
             let target = self.prefs.target_ms.max(1.0) as f64;
             let pixels = iw as u64 * ih as u64;
-            self.ray_budget = self.slicing.still_budget(
-                self.prefs.rays_per_frame,
-                pixels,
-                self.last_moving,
-                target,
-            );
+            let s = &self.prefs.settings;
+            // Refining: the rays that complete the own rays with the anti-aliasing; else the ray budget.
+            let rays_per_pixel = if s.accumulates() {
+                slices::still_rays_per_pixel(s.still.still_samples, hrtao_core::renderer::AA_FRAMES)
+            } else {
+                self.ray_budget.rays_per_pixel
+            };
+            self.ray_budget = self
+                .slicing
+                .still_budget(rays_per_pixel, pixels, self.last_moving, target);
             self.slicing.lattice()
         };
         let bgra_direct = !self.presenter.blit_ok && self.presenter.is_bgra();
@@ -1347,8 +1351,16 @@ impl Viewer {
             let view_ms = (wall_ms - shot_ms).max(0.0);
             if moving {
                 self.frame_time_target(view_ms);
-                self.last_moving = Some((view_ms, iw as u64 * ih as u64));
-            } else if self.prefs.auto_budget {
+                // The first frames pay the pipelines' compilation (lavapipe): not a moving frame's cost.
+                if self
+                    .renderer
+                    .as_ref()
+                    .is_some_and(|r| r.frame_index() > FIRST_FRAMES_COMPILE)
+                {
+                    self.last_moving = Some((view_ms, iw as u64 * ih as u64));
+                }
+            } else if self.prefs.auto_budget && self.background_shot.is_none() {
+                // (A background screenshot's tiles share the frame: its cost is not the view's.)
                 let target = self.prefs.target_ms.max(1.0) as f64;
                 let slices = self.last_report.as_ref().map_or(1, |r| r.slices);
                 self.slicing.observe(view_ms, slices, target);
@@ -1646,6 +1658,9 @@ fn same_view(a: &Camera, b: &Camera) -> bool {
 }
 
 /// Milliseconds from `a` to `b` (0 when `b` is earlier).
+/// Frames after which a renderer's pipelines are compiled (lavapipe compiles each at its first dispatch).
+const FIRST_FRAMES_COMPILE: u32 = 2;
+
 fn ms_between(a: Instant, b: Instant) -> f64 {
     b.saturating_duration_since(a).as_secs_f64() * 1e3
 }

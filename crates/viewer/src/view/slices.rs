@@ -1,20 +1,49 @@
 //! Still frames in slices, so that input never waits for a refinement frame: while the view rests, each
-//! presented frame draws one slice of the full-resolution image (every lattice-th pixel, `FrameDesc::lattice`),
-//! about the frame-time target's worth of work, and input is handled between slices. The lattice follows the
-//! measured cost of a slice; the still image's rays per pixel are set once when it starts (a change would
-//! restart it), from the ray budget per frame over one slice's pixels, so a slice traces about the rays of a
-//! moving frame and the image converges in about as many rounds as it needs rays.
+//! presented frame draws one slice of the full-resolution image (every lattice-th pixel, `FrameDesc::lattice`)
+//! and input is handled between slices.
+//!
+//! A frame costs a floor `a` that no slice shrinks (the UI, the blit, egui, the submission) plus its share of the
+//! whole image's work, `b / L²`. The lattice is the smallest whose slices meet the frame-time target, or, where
+//! the floor alone is above it, the smallest within `FLOOR_MARGIN` of the cheapest: beyond that a larger lattice
+//! only adds frames. `a` and `b` are fitted to the frames measured at each lattice. A still image traces
+//! `still_rays_per_pixel` rays per pixel and visit, set when it starts (a change would restart it): enough that
+//! its own rays are complete when its anti-aliasing is, so it converges in the fewest rounds.
 use hrtao_core::{RayBudget, MAX_LATTICE};
 
 use super::budget::MAX_RAYS_PER_PIXEL;
 
-/// The lattice shrinks only to one whose slices would cost at most this fraction of the target (hysteresis).
-const SHRINK_BELOW: f64 = 0.8;
+/// Where the floor alone is over the target: lattices whose frames cost at most this much more than the
+/// cheapest are as good for latency, and the smallest converges fastest.
+const FLOOR_MARGIN: f64 = 1.15;
+/// The first still image's lattice, before any slice was measured, is at most this: a round of L² frames
+/// passes before the lattice can change, and a moving frame's cost, scaled by the pixels, overstates a still
+/// frame's where the floor dominates it.
+const FIRST_LATTICE_MAX: u32 = 2;
+/// A lattice whose frames cost at most this fraction of the target tries the next smaller one once.
+const PROBE_BELOW: f64 = 0.8;
+/// Weight of a new measurement in a lattice's cost.
+const COST_EMA: f64 = 0.3;
 
-/// The lattice of the still frames and the still image's budget.
+/// Rays per pixel and visit of a still image: its `still_samples` own rays in the `aa_frames` rounds its
+/// anti-aliasing takes.
+pub fn still_rays_per_pixel(still_samples: u32, aa_frames: u32) -> u32 {
+    still_samples
+        .div_ceil(aa_frames.max(1))
+        .clamp(1, MAX_RAYS_PER_PIXEL)
+}
+
+/// The lattice whose slices of a frame costing `whole_ms` cost about `target_ms`: ⌈√(whole / target)⌉.
+pub fn lattice_for(whole_ms: f64, target_ms: f64) -> u32 {
+    let n = (whole_ms.max(0.0) / target_ms.max(1.0)).sqrt().ceil();
+    (n as u32).clamp(1, MAX_LATTICE)
+}
+
+/// The lattice of the still frames, the cost measured at each, and the still image's budget.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Slicing {
     lattice: u32,
+    /// Frame milliseconds measured at lattice L (index L), smoothed.
+    costs: [Option<f64>; MAX_LATTICE as usize + 1],
     /// Set when a still image starts, kept until the view moves again.
     still_budget: Option<RayBudget>,
 }
@@ -23,15 +52,10 @@ impl Default for Slicing {
     fn default() -> Self {
         Slicing {
             lattice: 1,
+            costs: [None; MAX_LATTICE as usize + 1],
             still_budget: None,
         }
     }
-}
-
-/// The lattice whose slices of a frame costing `whole_ms` cost about `target_ms`: ⌈√(whole / target)⌉.
-pub fn lattice_for(whole_ms: f64, target_ms: f64) -> u32 {
-    let n = (whole_ms.max(0.0) / target_ms.max(1.0)).sqrt().ceil();
-    (n as u32).clamp(1, MAX_LATTICE)
 }
 
 impl Slicing {
@@ -45,12 +69,12 @@ impl Slicing {
         self.still_budget = None;
     }
 
-    /// The budget of a still frame of `pixels` (full resolution): the current still image's, or, when one
-    /// starts, its lattice from the last moving frame (`moving_ms` over `moving_pixels`, scaled to `pixels`)
-    /// and its rays per pixel from `rays_per_frame` over one slice.
+    /// The budget of a still frame: the current still image's, or, when one starts, `rays_per_pixel` and its
+    /// lattice, from the slices measured so far or else from the last moving frame (`moving_ms` over
+    /// `moving_pixels`, scaled to the still frame's `pixels`).
     pub fn still_budget(
         &mut self,
-        rays_per_frame: u32,
+        rays_per_pixel: u32,
         pixels: u64,
         moving: Option<(f64, u64)>,
         target_ms: f64,
@@ -58,34 +82,85 @@ impl Slicing {
         if let Some(b) = self.still_budget {
             return b;
         }
-        if let Some((ms, moving_pixels)) = moving {
-            let whole = ms * pixels as f64 / moving_pixels.max(1) as f64;
-            self.lattice = lattice_for(whole, target_ms);
+        if self.costs.iter().all(Option::is_none) {
+            if let Some((ms, moving_pixels)) = moving {
+                let whole = ms * pixels as f64 / moving_pixels.max(1) as f64;
+                self.lattice = lattice_for(whole, target_ms).min(FIRST_LATTICE_MAX);
+            }
         }
-        let slice_pixels = (pixels as f64 / (self.lattice * self.lattice) as f64).max(1.0);
-        let rpp = (rays_per_frame as f64 / slice_pixels).round() as u32;
         let b = RayBudget {
-            rays_per_pixel: rpp.clamp(1, MAX_RAYS_PER_PIXEL),
+            rays_per_pixel: rays_per_pixel.clamp(1, MAX_RAYS_PER_PIXEL),
             trace_fraction: 1.0,
         };
         self.still_budget = Some(b);
         b
     }
 
-    /// After a still frame that took `frame_ms` and drew one of `slices` slices: the lattice whose slice would
-    /// cost the target if the whole frame cost `frame_ms` × slices (an upper bound: the frame's fixed costs do
-    /// not shrink with the slice), shrinking only while a slice would stay under `SHRINK_BELOW` of the target.
-    /// Decided once the renderer draws the lattice asked (it takes a new one at a round's start).
+    /// After a still frame that took `frame_ms` and drew one of `slices` slices (the renderer takes a new
+    /// lattice at a round's start, so this may be an older lattice than the one asked).
     pub fn observe(&mut self, frame_ms: f64, slices: u32, target_ms: f64) {
-        if slices != self.lattice * self.lattice || !frame_ms.is_finite() {
+        let l = (slices as f64).sqrt().round() as usize;
+        if !frame_ms.is_finite() || !(1..=MAX_LATTICE as usize).contains(&l) || l * l != slices as usize {
             return;
         }
-        let whole = frame_ms * slices as f64;
-        let mut next = lattice_for(whole, target_ms);
-        if next < self.lattice && whole / (next * next) as f64 > target_ms * SHRINK_BELOW {
-            next += 1;
+        let c = &mut self.costs[l];
+        *c = Some(c.map_or(frame_ms, |c| c + COST_EMA * (frame_ms - c)));
+        let next = self.choose(l as u32, target_ms);
+        if next != self.lattice {
+            log::debug!(
+                "slices: lattice {} -> {next} ({frame_ms:.0} ms at {l} x {l}; model {:?})",
+                self.lattice,
+                self.model()
+            );
         }
         self.lattice = next;
+    }
+
+    /// The model a + b / L² fitted (least squares in 1 / L²) to the measured costs; with one lattice measured,
+    /// a frame all of whose cost shrinks with the slice (a = 0: larger lattices look cheaper than they are,
+    /// so the next measurement corrects it).
+    fn model(&self) -> Option<(f64, f64)> {
+        let pts: Vec<(f64, f64)> = (1..=MAX_LATTICE as usize)
+            .filter_map(|l| self.costs[l].map(|c| (1.0 / (l * l) as f64, c)))
+            .collect();
+        match pts.len() {
+            0 => None,
+            1 => Some((0.0, pts[0].1 / pts[0].0)),
+            n => {
+                let n = n as f64;
+                let (sx, sy) = pts.iter().fold((0.0, 0.0), |(x, y), p| (x + p.0, y + p.1));
+                let (mx, my) = (sx / n, sy / n);
+                let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+                let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+                let b = if sxx > 0.0 { (sxy / sxx).max(0.0) } else { 0.0 };
+                Some(((my - b * mx).max(0.0), b))
+            }
+        }
+    }
+
+    /// The smallest lattice predicted to meet the target, or to cost within `FLOOR_MARGIN` of the cheapest;
+    /// `drawn` is the lattice of the frame just measured.
+    fn choose(&self, drawn: u32, target_ms: f64) -> u32 {
+        let Some((a, b)) = self.model() else {
+            return drawn;
+        };
+        let cost = |l: u32| a + b / (l * l) as f64;
+        let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE));
+        let best = (1..=MAX_LATTICE)
+            .find(|&l| cost(l) <= bound)
+            .unwrap_or(MAX_LATTICE);
+        // The model overstates smaller lattices while only larger ones were measured: try one step smaller
+        // once when this one is well under the target (if it misses, the fit brings the lattice back).
+        let l = drawn;
+        let measured = |l: u32| self.costs[l as usize];
+        if best >= l
+            && l > 1
+            && measured(l - 1).is_none()
+            && measured(l).is_some_and(|c| c <= PROBE_BELOW * target_ms)
+        {
+            return l - 1;
+        }
+        best
     }
 }
 
@@ -101,49 +176,60 @@ mod tests {
         assert_eq!(lattice_for(390.0, 100.0), 2);
         assert_eq!(lattice_for(1e9, 100.0), MAX_LATTICE);
         assert_eq!(lattice_for(f64::NAN, 100.0), 1);
+        assert_eq!(still_rays_per_pixel(64, 16), 4);
+        assert_eq!(still_rays_per_pixel(1, 16), 1);
+        assert_eq!(still_rays_per_pixel(100_000, 1), MAX_RAYS_PER_PIXEL);
     }
 
     #[test]
     fn a_still_image_keeps_its_budget_until_the_view_moves() {
         let mut s = Slicing::default();
         // An 82 ms moving frame of 87k pixels: a 707k-pixel still frame would take about 666 ms.
-        let b = s.still_budget(300_000, 707_200, Some((82.0, 87_000)), 100.0);
-        assert_eq!(s.lattice(), 3);
-        // 300k rays over a ninth of the pixels: 4 rays each (3.8 rounded).
-        assert_eq!(b.rays_per_pixel, 4);
-        s.observe(150.0, 9, 100.0);
+        let b = s.still_budget(4, 707_200, Some((82.0, 87_000)), 100.0);
+        assert_eq!(
+            (s.lattice(), b.rays_per_pixel),
+            (2, 4),
+            "at most FIRST_LATTICE_MAX"
+        );
+        s.observe(330.0, 4, 100.0);
         assert_eq!(s.lattice(), 4, "a slice over the target grows the lattice");
-        assert_eq!(s.still_budget(1_000, 707_200, Some((10.0, 87_000)), 100.0), b);
+        assert_eq!(s.still_budget(1, 707_200, None, 100.0), b, "kept");
         s.moving();
-        let b2 = s.still_budget(1_000, 707_200, Some((10.0, 87_000)), 100.0);
-        assert_eq!((s.lattice(), b2.rays_per_pixel), (1, 1));
+        let b2 = s.still_budget(1, 707_200, Some((10.0, 87_000)), 100.0);
+        assert_eq!(b2.rays_per_pixel, 1);
+        assert_eq!(
+            s.lattice(),
+            4,
+            "measured slices decide the next still image's lattice"
+        );
     }
 
+    /// Frames of a device whose frame costs `a + b / L²`: the controller settles on the smallest lattice that
+    /// meets the target, or, with a floor above the target, stops growing the lattice where it stops paying.
     #[test]
-    fn the_lattice_follows_the_slices_cost() {
-        let mut s = Slicing {
-            lattice: 3,
-            still_budget: None,
+    fn the_lattice_settles_where_the_slices_meet_the_target_or_stop_paying() {
+        let settle = |a: f64, b: f64, first: u32| {
+            let mut s = Slicing {
+                lattice: first,
+                ..Slicing::default()
+            };
+            let mut drawn = first;
+            for _ in 0..12 {
+                // The renderer takes the lattice asked at the next round.
+                s.observe(a + b / (drawn * drawn) as f64, drawn * drawn, 100.0);
+                drawn = s.lattice();
+            }
+            s.lattice()
         };
-        // Not yet drawn with the lattice asked: no decision.
-        s.observe(500.0, 4, 100.0);
-        assert_eq!(s.lattice(), 3);
-        // A cheap slice: 30 ms at 9 slices is at most 68 ms at 4, under 80 % of the target.
-        s.observe(30.0, 9, 100.0);
-        assert_eq!(s.lattice(), 2);
-        // 45 ms at 4 slices: at most 180 ms whole, over 80 % of the target: stay.
-        s.observe(45.0, 4, 100.0);
-        assert_eq!(s.lattice(), 2);
-        s.observe(120.0, 4, 100.0);
-        assert_eq!(s.lattice(), 3);
-        // A first frame's estimate far too high: down in one step.
-        let mut s = Slicing {
-            lattice: MAX_LATTICE,
-            still_budget: None,
-        };
-        s.observe(5.0, MAX_LATTICE * MAX_LATTICE, 100.0);
-        assert_eq!(s.lattice(), 2);
-        s.observe(1e4, 4, 100.0);
-        assert_eq!(s.lattice(), MAX_LATTICE);
+        // A GPU: whole frames meet the target.
+        assert_eq!(settle(2.0, 10.0, 3), 1);
+        // Lavapipe today: a 30 ms floor and 500 ms of work: 4 × 4 slices of 61 ms (3 × 3 would be 86 ms: also
+        // under the target, and the smallest that is).
+        assert_eq!(settle(30.0, 500.0, 1), 3);
+        assert_eq!(settle(30.0, 500.0, 4), 3);
+        // A floor over the target: not a lattice that costs 64 frames per round for nothing.
+        let l = settle(120.0, 400.0, 2);
+        assert!(l <= 6, "{l}");
+        assert!(120.0 + 400.0 / (l * l) as f64 <= FLOOR_MARGIN * (120.0 + 400.0 / 64.0));
     }
 }
