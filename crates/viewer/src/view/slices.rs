@@ -18,7 +18,7 @@ const FLOOR_MARGIN: f64 = 1.15;
 /// The first still image's lattice, before any slice was measured, is at most this: a round of L² frames
 /// passes before the lattice can change, and a moving frame's cost, scaled by the pixels, overstates a still
 /// frame's where the floor dominates it.
-const FIRST_LATTICE_MAX: u32 = 2;
+const FIRST_LATTICE_MAX: u32 = 4;
 /// A lattice whose frames cost at most this fraction of the target tries the next smaller one once.
 const PROBE_BELOW: f64 = 0.8;
 /// Weight of a new measurement in a lattice's cost.
@@ -186,12 +186,8 @@ mod tests {
         let mut s = Slicing::default();
         // An 82 ms moving frame of 87k pixels: a 707k-pixel still frame would take about 666 ms.
         let b = s.still_budget(4, 707_200, Some((82.0, 87_000)), 100.0);
-        assert_eq!(
-            (s.lattice(), b.rays_per_pixel),
-            (2, 4),
-            "at most FIRST_LATTICE_MAX"
-        );
-        s.observe(330.0, 4, 100.0);
+        assert_eq!((s.lattice(), b.rays_per_pixel), (3, 4));
+        s.observe(150.0, 9, 100.0);
         assert_eq!(s.lattice(), 4, "a slice over the target grows the lattice");
         assert_eq!(s.still_budget(1, 707_200, None, 100.0), b, "kept");
         s.moving();
