@@ -69,8 +69,9 @@ pub fn roughness_masked(
         for x in 1..w - 1 {
             let i = y * w + x;
             let p = &gbuffer[i];
-            // NaN in the mask or the image never counts (comparisons with NaN are false).
-            if p.t < 0.0 || !(mask[i] < ROUGHNESS_OCCLUDED) || !ao[i].is_finite() {
+            // NaN in the mask or the image never counts.
+            let occluded = mask[i].is_finite() && mask[i] < ROUGHNESS_OCCLUDED;
+            if p.t < 0.0 || !occluded || !ao[i].is_finite() {
                 continue;
             }
             let mut flat = true;
