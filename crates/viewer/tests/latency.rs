@@ -192,3 +192,89 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     assert!(frames[first..conv].iter().all(|f| f["converged"] == false));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--ao-out` writes the view's AO of every rendered frame at its internal size, and `--stats` the roughness of
+/// each (occluded flat pixels by the frame's own AO).
+#[test]
+fn ao_out_writes_every_frame_and_its_roughness() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("ao");
+    let stats = dir.join("stats.json");
+    let ao = dir.join("ao");
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args([
+            "view",
+            "--size",
+            "320x200",
+            "--no-panel",
+            "--no-config",
+            "--orbit",
+            "2",
+            "--exit",
+        ])
+        .arg("--stats")
+        .arg(&stats)
+        .arg("--ao-out")
+        .arg(&ao)
+        .env("HRTAO_VALIDATION", "1")
+        .output()
+        .expect("run hrtao view");
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "hrtao view failed:\n{log}");
+    assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
+    let s = read_stats(&stats);
+    let frames = s["frames"].as_array().unwrap();
+    let mut pfms: Vec<PathBuf> = std::fs::read_dir(&ao)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    pfms.sort();
+    assert_eq!(pfms.len(), frames.len(), "one PFM per rendered frame");
+    let mut rough = Vec::new();
+    for (i, (f, p)) in frames.iter().zip(&pfms).enumerate() {
+        assert_eq!(
+            p.file_name().unwrap().to_str().unwrap(),
+            format!("frame_{i:04}.pfm")
+        );
+        let (w, h, px) = hrtao_core::imageio::read_pfm(p).unwrap();
+        assert_eq!(
+            [w as u64, h as u64],
+            [
+                f["internal"][0].as_u64().unwrap(),
+                f["internal"][1].as_u64().unwrap()
+            ]
+        );
+        assert!(px.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
+        assert!(
+            px.iter().filter(|v| **v < 0.95).count() > px.len() / 20,
+            "occlusion in frame {i}"
+        );
+        rough.push(f["roughness"].as_f64());
+    }
+    eprintln!("roughness per frame: {rough:?}");
+    // Every frame of the bundled scene has occluded flat pixels: a finite, positive roughness.
+    let rough: Vec<f64> = rough.iter().map(|r| r.expect("a roughness per frame")).collect();
+    assert!(
+        rough.iter().all(|r| r.is_finite() && *r > 0.0 && *r < 0.2),
+        "{rough:?}"
+    );
+    // The run ends on the converged image, smoother than the blocky first frame at the moving scale and than the
+    // roughest still frame of the first half of the refinement.
+    let last = frames.len() - 1;
+    assert_eq!(frames[last]["converged"], true);
+    let still: Vec<usize> = (0..frames.len())
+        .filter(|&i| frames[i]["still"] == true)
+        .collect();
+    assert!(still.len() >= 4, "{} still frames", still.len());
+    let first_half = &still[..still.len() / 2];
+    let peak = first_half.iter().map(|&i| rough[i]).fold(0.0, f64::max);
+    assert!(
+        rough[last] < rough[0] && rough[last] <= peak,
+        "converged {} against the first frame {} and the early still frames' peak {peak}",
+        rough[last],
+        rough[0]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
