@@ -215,6 +215,36 @@ def orbit_run(a, scene_args, workdir):
     }
 
 
+def roughness_run(a, scene_args, workdir):
+    """The scripted `--orbit 1 --ao-out DIR --stats` run: the roughness of every frame from the camera's stop to the
+    converged image, against the converged frame's (issue goal: every presented frame <= 1.25x the converged one)."""
+    stats = os.path.join(workdir, "roughness.json")
+    ao = os.path.join(workdir, "ao")
+    cmd = [a.hrtao, "view", *scene_args, "--no-config", "--size", a.size, "--orbit", "1", "--ao-out", ao,
+           "--stats", stats, "--exit", "--timeout", str(int(a.timeout))]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"bench-latency: the roughness run failed:\n{r.stderr}")
+    with open(stats) as f:
+        frames = json.load(f)["frames"]
+    if not a.keep:
+        subprocess.run(["rm", "-rf", ao])
+    rough = [f.get("roughness") for f in frames]
+    conv = next((i for i, f in enumerate(frames) if f["converged"]), None)
+    final = rough[conv] if conv is not None else None
+    still = [r for f, r in zip(frames, rough) if f["still"] and r is not None]
+    peak = max(still) if still else None
+    return {
+        "roughness": rough,
+        "internal": [f["internal"] for f in frames],
+        "converged_frame": conv,
+        "converged_roughness": final,
+        "max_still_roughness": peak,
+        "max_ratio": (peak / final) if (peak is not None and final) else None,
+        "first_frame_roughness": rough[0] if rough else None,
+    }
+
+
 def fmt(v, unit=""):
     return "–" if v is None else f"{v:.0f}{unit}"
 
@@ -227,6 +257,8 @@ def main():
     p.add_argument("--drags", type=int, default=20)
     p.add_argument("--runs", type=int, default=2, help="viewer launches; each one's first drag is at opening")
     p.add_argument("--orbit", type=int, default=0, help="also the scripted --orbit N --stats run")
+    p.add_argument("--roughness", action="store_true",
+                   help="also the --orbit 1 --ao-out run: each frame's roughness against the converged frame's")
     p.add_argument("--size", default="1280x800")
     p.add_argument("--no-panel", action="store_true")
     p.add_argument("--seed", type=int, default=1)
@@ -276,6 +308,9 @@ def main():
     if a.orbit:
         print(f"bench-latency: {label}: --orbit {a.orbit}", file=sys.stderr)
         result["orbit"] = orbit_run(a, scene_args, workdir)
+    if a.roughness:
+        print(f"bench-latency: {label}: roughness (--orbit 1 --ao-out)", file=sys.stderr)
+        result["roughness"] = roughness_run(a, scene_args, workdir)
     text = json.dumps(result, indent=2)
     if a.out is not None:
         out = a.out or os.path.join("docs", "bench", f"latency_{label}.json")
@@ -302,6 +337,14 @@ def main():
         print(f"| {label} | {fmt(o['moving_wall_ms']['median'])} ms | {fmt(o['still_wall_ms']['median'])} / "
               f"{fmt(o['still_wall_ms']['max'])} ms | {fmt(o['still_frames_until_converged'])} | "
               f"{fmt(conv / 1e3 if conv is not None else None)} s |")
+    if a.roughness:
+        r = result["roughness"]
+        print("\n| scene | roughness: first frame | still frames' max | converged | max / converged |")
+        print("|---|---|---|---|---|")
+        f4 = lambda v: "–" if v is None else f"{v:.4f}"
+        ratio = "–" if r["max_ratio"] is None else f"{r['max_ratio']:.2f}"
+        print(f"| {label} | {f4(r['first_frame_roughness'])} | {f4(r['max_still_roughness'])} | "
+              f"{f4(r['converged_roughness'])} | {ratio} |")
     if result["missed_drags"]:
         print(f"bench-latency: {result['missed_drags']} drags had no answering frame", file=sys.stderr)
 

@@ -134,18 +134,26 @@ impl Latency {
     /// A UI pass starts with egui's input (`had_input`: `egui_has_input`). Its input events were received at
     /// the start of the first event-loop iteration since the previous UI pass: exactly while the viewer renders
     /// continuously (one iteration per frame; events that come during a frame wait for the next iteration), and
-    /// possibly earlier than the event when the viewer rested and a timer woke it first.
+    /// possibly earlier than the event when the viewer rested and a timer woke it first. A pass without input
+    /// ends what was pending: input that moved nothing by then (a drag's release) is not credited to a later move.
     pub fn ui_pass(&mut self, had_input: bool) {
         let wake = self.wake_ms.take();
         if had_input {
             self.input_at(wake.unwrap_or_else(monotonic_ms));
+        } else {
+            self.pending_input_ms = None;
         }
     }
 
-    /// A frame was rendered: the stamp of the input it answers when its camera changed (`moved`). Input handled
-    /// before it that did not move the camera is forgotten, so a later move is not credited with an earlier stamp.
+    /// A frame was rendered: the stamp of the input it answers when its camera changed (`moved`). Input that has
+    /// not moved the camera yet stays pending while input goes on: a drag's press (egui moves nothing before the
+    /// pointer moves with the button down) is credited to the first frame the drag moves.
     pub fn take_input(&mut self, moved: bool) -> Option<f64> {
-        self.pending_input_ms.take().filter(|_| moved)
+        if moved {
+            self.pending_input_ms.take()
+        } else {
+            None
+        }
     }
 
     /// `--ao-out`: writes the renderer's AO of the frame just completed as `DIR/frame_NNNN.pfm` and returns its
@@ -217,8 +225,9 @@ mod tests {
         l.event(&press);
         assert_eq!(l.pending_input_ms, Some(t), "the earliest event is kept");
         assert!(t >= before);
-        // A frame that did not move forgets it; the next input is stamped afresh.
+        // A frame that did not move keeps it for the first frame that moves; then the next input is stamped afresh.
         assert_eq!(l.take_input(false), None);
+        assert_eq!(l.take_input(true), Some(t));
         assert_eq!(l.take_input(true), None);
         l.event(&press);
         let t2 = l.take_input(true).unwrap();
@@ -240,6 +249,11 @@ mod tests {
         assert!(w2 >= w + 3.0);
         l.ui_pass(true);
         assert_eq!(l.take_input(true), Some(w2));
+        // Input that moved nothing (a release) is dropped by the next pass without input.
+        l.ui_pass(true);
+        assert_eq!(l.take_input(false), None);
+        l.ui_pass(false);
+        assert_eq!(l.take_input(true), None);
         let ctx = egui::Context::default();
         let mut raw = egui::RawInput::default();
         raw.events.push(egui::Event::PointerMoved(egui::pos2(3.0, 4.0)));

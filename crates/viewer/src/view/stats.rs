@@ -34,7 +34,8 @@ pub struct FrameStat {
     /// The frame reflects input handled since the previous rendered frame: its camera changed by a drag, the
     /// wheel or a key.
     pub input: bool,
-    /// With `input`: when the earliest such input event reached the viewer (CLOCK_MONOTONIC milliseconds).
+    /// With `input`: when the earliest input event not answered yet reached the viewer (CLOCK_MONOTONIC
+    /// milliseconds; a drag's press counts from the frame its motion moves the camera).
     pub input_ms: Option<f64>,
     /// With `--ao-out`: the roughness of the frame's AO (`hrtao_core::metrics::roughness`: mean |AO − median of
     /// the 8 neighbours| over flat pixels whose own AO is below 0.95); None without `--ao-out` or when no pixel
