@@ -5,46 +5,14 @@
 mod common;
 use common::*;
 
-/// Pixel-scale roughness of an AO image: mean |AO - median of its 8 neighbours| over the interior pixels of
-/// flat faces (the 8 neighbours' normals within 8 degrees of the pixel's) that are occluded (Cycles < 0.95).
-/// Over such pixels the true AO is smooth, so what rises above the reference's roughness is noise.
+/// Pixel-scale roughness of an AO image (`hrtao_core::metrics::roughness_masked`) over the occluded pixels of
+/// flat faces, Cycles (< 0.95) saying which are occluded. Over such pixels the true AO is smooth, so what rises
+/// above the reference's roughness is noise.
 fn roughness(ao: &[f32], f: &FirstFrames, w: usize, h: usize) -> f32 {
-    let (mut sum, mut n) = (0.0f32, 0usize);
-    for y in 1..h - 1 {
-        for x in 1..w - 1 {
-            let i = y * w + x;
-            let p = &f.gbuffer[i];
-            if p.t < 0.0 || f.cycles[i] >= 0.95 {
-                continue;
-            }
-            let mut ring = Vec::with_capacity(8);
-            let mut flat = true;
-            for (dx, dy) in [
-                (-1, -1),
-                (0, -1),
-                (1, -1),
-                (-1, 0),
-                (1, 0),
-                (-1, 1),
-                (0, 1),
-                (1, 1),
-            ] {
-                let j = (y as i32 + dy) as usize * w + (x as i32 + dx) as usize;
-                let q = &f.gbuffer[j];
-                let dot: f32 = (0..3).map(|k| p.normal[k] * q.normal[k]).sum();
-                flat &= q.t >= 0.0 && dot > 0.99;
-                ring.push(ao[j]);
-            }
-            if !flat {
-                continue;
-            }
-            ring.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            sum += (ao[i] - 0.5 * (ring[3] + ring[4])).abs();
-            n += 1;
-        }
-    }
+    let (r, n) =
+        hrtao_core::metrics::roughness_masked(ao, &f.gbuffer, &f.cycles, w, h).expect("occluded flat pixels");
     assert!(n > 5000, "enough occluded flat pixels ({n})");
-    sum / n as f32
+    r
 }
 
 /// One frame from an empty map on the default scene's reference view (cycloidal) at the viewer's working size,

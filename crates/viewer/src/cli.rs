@@ -398,6 +398,15 @@ pub struct ViewArgs {
     /// Scripted mode: write per-frame statistics (wall/GPU ms, internal and view size, moving) to this JSON.
     #[arg(long, value_name = "FILE")]
     pub stats: Option<PathBuf>,
+    /// Scripted mode: write the view's AO of every rendered frame (at the internal size) as DIR/frame_NNNN.pfm,
+    /// and its roughness in --stats.
+    #[arg(long, value_name = "DIR", hide = true)]
+    pub ao_out: Option<PathBuf>,
+    /// Scripted mode without --frames: the viewer behaves as for a user (renders while refining, rests once
+    /// converged) and exits at its first rest at least SECONDS after the last input (or the start), writing
+    /// --stats.
+    #[arg(long, value_name = "SECONDS", hide = true, conflicts_with_all = ["frames", "orbit"])]
+    pub exit_after: Option<f64>,
     /// Scripted mode: exit after --frames (exit status 1 if anything failed or validation reported messages).
     #[arg(long)]
     pub exit: bool,

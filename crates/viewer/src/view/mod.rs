@@ -10,6 +10,7 @@
 pub mod budget;
 pub mod edits;
 mod files;
+pub mod latency;
 mod load_options;
 pub mod measure;
 pub mod motion;
@@ -263,6 +264,7 @@ impl App {
 impl egui_ash::App for App {
     fn ui(&mut self, ctx: &egui::Context) {
         let mut v = self.lock();
+        v.latency.ui_pass(latency::egui_has_input(ctx));
         v.ui(ctx);
         v.ui_done = Instant::now();
     }
@@ -273,10 +275,15 @@ impl egui_ash::App for App {
             Event::AppEvent {
                 event: AppEvent::LoopExiting,
             } => self.lock().shutdown(),
+            Event::AppEvent {
+                event: AppEvent::NewEvents(_),
+            } => self.lock().latency.wake(),
             Event::ViewportEvent {
                 event: winit::event::WindowEvent::Resized(_),
                 ..
             } => self.lock().presenter.dirty = true,
+            Event::ViewportEvent { event, .. } => self.lock().latency.event(&event),
+            Event::DeviceEvent { event, .. } => self.lock().latency.device_event(&event),
             _ => {}
         }
     }
@@ -427,6 +434,8 @@ pub(crate) struct Viewer {
     saving: Option<Saving>,
     script: Script,
     pending_ui_readback: Option<(PathBuf, Buffer, u32, u32, bool)>,
+    /// Presentation and input stamps, `--ao-out`, `--exit-after`.
+    latency: latency::Latency,
     shut_down: bool,
 }
 
@@ -559,13 +568,14 @@ impl Viewer {
                 },
                 exit: args.exit,
                 deadline: Some(scripted_timeout(args))
-                    .filter(|&t| args.exit && t > 0)
+                    .filter(|&t| (args.exit || args.exit_after.is_some()) && t > 0)
                     .map(|t| Instant::now() + Duration::from_secs(t)),
                 rendered: 0,
                 done: false,
                 ui_capture_pending: false,
             },
             pending_ui_readback: None,
+            latency: latency::Latency::new(args.ao_out.clone(), args.exit_after),
             shut_down: false,
         };
         if let Some(m) = prefs_msg {
@@ -1292,6 +1302,7 @@ impl Viewer {
         self.presenter.submit_and_wait(index)?;
         split.gpu_wait = laps.lap();
         self.presenter.present(index)?;
+        let presented_ms = latency::monotonic_ms();
         split.present = laps.lap();
         let gpu_wall = t0.elapsed().as_secs_f64() * 1e3;
         let shot_ms = self.finish_shot_frame(rendered);
@@ -1323,8 +1334,12 @@ impl Viewer {
                 self.interval_ms_avg = ema(self.interval_ms_avg, dt);
             }
             self.last_frame_at = Some(now);
+            let full = self.internal_size();
             let r = self.renderer.as_mut().unwrap();
             let report = r.finish_frame(gpu_wall)?;
+            let converged = motion::image_converged(&report) && r.size() == full;
+            let input_ms = self.latency.take_input(changed);
+            let roughness = self.latency.dump_ao(r)?;
             self.last_drawn_cam = Some(cam);
             split.finish = laps.lap();
             let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;
@@ -1340,6 +1355,13 @@ impl Viewer {
                     internal: [iw, ih],
                     view: [rect[2] as u32, rect[3] as u32],
                     moving: changed,
+                    still: !moving,
+                    refining: !moving && !converged,
+                    converged,
+                    presented_ms,
+                    input: input_ms.is_some(),
+                    input_ms,
+                    roughness,
                     rays: report.rays,
                     cpu_ms: split,
                     interval_ms,
@@ -1424,6 +1446,11 @@ impl Viewer {
             log::info!("at rest: the image has converged ({frames} frames); waiting for input");
         }
         self.resting = resting;
+        match self.latency.exit_after(resting, now) {
+            latency::ExitAfter::Now => self.exit_signal.send(ExitCode::SUCCESS),
+            latency::ExitAfter::WakeIn(d) => self.egui_ctx.request_repaint_after(d),
+            latency::ExitAfter::No => {}
+        }
     }
 
     /// Scripted mode: count frames, resize, take the screenshots, exit.

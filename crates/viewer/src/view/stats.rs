@@ -1,5 +1,6 @@
 //! `--stats FILE`: one record per rendered frame of a scripted run (wall and GPU time, internal and view size,
-//! whether the camera moved), written as JSON when the run ends.
+//! whether the camera moved, when the frame was presented and which input it answers), written as JSON when the
+//! run ends.
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -19,7 +20,27 @@ pub struct FrameStat {
     pub gpu_sections_ms: BTreeMap<String, f64>,
     pub internal: [u32; 2],
     pub view: [u32; 2],
+    /// The camera differs from the previous rendered frame's.
     pub moving: bool,
+    /// The view counts as still (the camera has rested for a moment): a full-size refinement frame.
+    pub still: bool,
+    /// A still frame after which the image has not converged yet (more frames follow without input).
+    pub refining: bool,
+    /// After this frame the image has converged at full size: the viewer rests (the log's "at rest").
+    pub converged: bool,
+    /// When the frame was presented (right after vkQueuePresentKHR), in milliseconds on CLOCK_MONOTONIC (the
+    /// clock of Python's `time.monotonic()` on Linux).
+    pub presented_ms: f64,
+    /// The frame reflects input handled since the previous rendered frame: its camera changed by a drag, the
+    /// wheel or a key.
+    pub input: bool,
+    /// With `input`: when the earliest input event not answered yet reached the viewer (CLOCK_MONOTONIC
+    /// milliseconds; a drag's press counts from the frame its motion moves the camera).
+    pub input_ms: Option<f64>,
+    /// With `--ao-out`: the roughness of the frame's AO (`hrtao_core::metrics::roughness`: mean |AO − median of
+    /// the 8 neighbours| over flat pixels whose own AO is below 0.95); None without `--ao-out` or when no pixel
+    /// qualifies.
+    pub roughness: Option<f32>,
     /// Rays traced this frame.
     pub rays: u64,
     /// Where `wall_ms` went on the CPU clock (consecutive spans: their sum is at most `wall_ms`).
@@ -93,6 +114,8 @@ struct StatsFile<'a> {
     frames: &'a [FrameStat],
     median_moving_wall_ms: Option<f64>,
     median_still_wall_ms: Option<f64>,
+    /// The index in `frames` of the first frame after which the image had converged (None: it never did).
+    converged_frame: Option<usize>,
     /// Per-field medians of the moving frames' `cpu_ms`.
     median_moving_cpu_ms: Option<CpuSplit>,
     /// A background screenshot (--screenshot-size) written during the run.
@@ -136,6 +159,7 @@ impl StatsLog {
             frames: &self.frames,
             median_moving_wall_ms: self.median_wall_ms(true),
             median_still_wall_ms: self.median_wall_ms(false),
+            converged_frame: self.frames.iter().position(|f| f.converged),
             median_moving_cpu_ms: CpuSplit::medians(
                 self.frames.iter().filter(|f| f.moving).map(|f| &f.cpu_ms),
             ),
@@ -213,6 +237,13 @@ mod tests {
                 internal: [1, 1],
                 view: [1, 1],
                 moving,
+                still: !moving,
+                refining: !moving,
+                converged: false,
+                presented_ms: 0.0,
+                input: false,
+                input_ms: None,
+                roughness: None,
                 rays: 0,
                 cpu_ms: CpuSplit::default(),
                 interval_ms: 0.0,

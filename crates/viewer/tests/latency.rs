@@ -1,0 +1,280 @@
+//! The instruments of the latency benchmark (scripts/bench-latency.sh) in the real window (Xvfb + lavapipe):
+//! `--stats` stamps each frame's presentation and the input it answers on CLOCK_MONOTONIC, `--exit-after` ends a
+//! user-like run once it rests, `--ao-out` writes the view's AO per frame with its roughness.
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn display_available() -> bool {
+    let ok = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
+    if !ok {
+        eprintln!("skipping: no DISPLAY (run the tests under `xvfb-run -a`)");
+    }
+    ok
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("hrtao-latency-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// CLOCK_MONOTONIC in milliseconds: the clock the viewer stamps frames with (and Python's time.monotonic()).
+fn monotonic_ms() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    assert_eq!(unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) }, 0);
+    ts.tv_sec as f64 * 1e3 + ts.tv_nsec as f64 * 1e-6
+}
+
+fn xdotool(args: &[&str]) -> String {
+    let out = Command::new("xdotool").args(args).output().expect("xdotool");
+    assert!(
+        out.status.success(),
+        "xdotool {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn read_stats(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).expect("stats JSON")).expect("valid JSON")
+}
+
+/// A drag sent with xdotool while the view refines is answered by a frame that says so: `input` with `input_ms`
+/// after the drag's monotonic stamp and `presented_ms` after `input_ms`; the frames before it answer no input.
+/// `--exit-after` then ends the run at its rest, with the converged frame marked and the stats written.
+#[test]
+fn a_drag_is_answered_by_a_frame_stamped_after_it() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("drag");
+    let stats = dir.join("stats.json");
+    let start = monotonic_ms();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args([
+            "view",
+            "--size",
+            "400x260",
+            "--no-panel",
+            "--no-config",
+            "--exit-after",
+            "4",
+        ])
+        .arg("--stats")
+        .arg(&stats)
+        .env("HRTAO_VALIDATION", "1")
+        .env("RUST_LOG", "info")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start hrtao view");
+    let log = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+    let sink = log.clone();
+    let stderr = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        use std::io::BufRead;
+        for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+            let mut l = sink.lock().unwrap();
+            l.push_str(&line);
+            l.push('\n');
+        }
+    });
+    let t0 = Instant::now();
+    while !log.lock().unwrap().contains("] opened ") {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60) && child.try_wait().unwrap().is_none(),
+            "the scene did not open:\n{}",
+            log.lock().unwrap()
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let pid = child.id().to_string();
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--pid", &pid])
+        .lines()
+        .next()
+        .expect("the viewer's window")
+        .trim()
+        .to_string();
+    // Raw input (device events) reaches the viewer while its window has the focus.
+    xdotool(&["windowfocus", "--sync", &window]);
+    // A moment into the still refinement, then one left drag (orbit) in the view.
+    std::thread::sleep(Duration::from_millis(300));
+    // A hover, then the button held over several frames as a hand does it (pressed and released within one or two
+    // frames of the busy viewer, egui sees a click or a drag without motion): 20 moves 75 ms apart.
+    let stamp = monotonic_ms();
+    let mut drag: Vec<String> = [
+        "mousemove",
+        "--window",
+        &window,
+        "150",
+        "130",
+        "sleep",
+        "0.05",
+        "mousedown",
+        "1",
+    ]
+    .map(String::from)
+    .to_vec();
+    for k in 1..=20 {
+        drag.extend([
+            "sleep".into(),
+            "0.075".into(),
+            "mousemove".into(),
+            "--window".into(),
+            window.clone(),
+        ]);
+        drag.extend([(150 + 5 * k).to_string(), (130 + k / 4).to_string()]);
+    }
+    drag.extend(["mouseup".into(), "1".into()]);
+    xdotool(&drag.iter().map(String::as_str).collect::<Vec<_>>());
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > Duration::from_secs(120) {
+            let _ = child.kill();
+            panic!("no exit at rest within 120 s:\n{}", log.lock().unwrap());
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let log = log.lock().unwrap().clone();
+    assert!(status.success(), "hrtao view failed ({status}):\n{log}");
+    assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
+    assert!(log.contains("at rest"), "{log}");
+
+    let s = read_stats(&stats);
+    let frames = s["frames"].as_array().unwrap();
+    assert!(frames.len() >= 3, "{} frames", frames.len());
+    let presented: Vec<f64> = frames
+        .iter()
+        .map(|f| f["presented_ms"].as_f64().unwrap())
+        .collect();
+    assert!(
+        presented[0] > start && presented.windows(2).all(|w| w[1] > w[0]),
+        "presentation times rise from the start ({start}): {presented:?}"
+    );
+    let answered: Vec<usize> = (0..frames.len())
+        .filter(|&i| frames[i]["input"] == true)
+        .collect();
+    let moved = frames.iter().filter(|f| f["moving"] == true).count();
+    let first = *answered.first().unwrap_or_else(|| {
+        panic!(
+            "no frame answers the drag ({} frames, {moved} moving)",
+            frames.len()
+        )
+    });
+    let f = &frames[first];
+    let input_ms = f["input_ms"].as_f64().unwrap();
+    assert!(
+        input_ms >= stamp && presented[first] > input_ms,
+        "stamp {stamp}, input {input_ms}, presented {}",
+        presented[first]
+    );
+    assert_eq!(f["moving"], true, "the answering frame moved the camera");
+    // Frames presented before the stamp answer no input (nothing was sent).
+    assert!(frames
+        .iter()
+        .filter(|f| f["presented_ms"].as_f64().unwrap() < stamp)
+        .all(|f| f["input"] == false && f["input_ms"].is_null()));
+    // Still refinement before the drag, and the run ends on the converged frame, which the file names.
+    assert!(frames[..first]
+        .iter()
+        .any(|f| f["still"] == true && f["refining"] == true));
+    let last = frames.len() - 1;
+    assert_eq!(frames[last]["converged"], true, "{}", frames[last]);
+    let conv = s["converged_frame"].as_u64().unwrap() as usize;
+    assert!(conv > first && frames[conv]["converged"] == true);
+    assert!(frames[first..conv].iter().all(|f| f["converged"] == false));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--ao-out` writes the view's AO of every rendered frame at its internal size, and `--stats` the roughness of
+/// each (occluded flat pixels by the frame's own AO).
+#[test]
+fn ao_out_writes_every_frame_and_its_roughness() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("ao");
+    let stats = dir.join("stats.json");
+    let ao = dir.join("ao");
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args([
+            "view",
+            "--size",
+            "320x200",
+            "--no-panel",
+            "--no-config",
+            "--orbit",
+            "2",
+            "--exit",
+        ])
+        .arg("--stats")
+        .arg(&stats)
+        .arg("--ao-out")
+        .arg(&ao)
+        .env("HRTAO_VALIDATION", "1")
+        .output()
+        .expect("run hrtao view");
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "hrtao view failed:\n{log}");
+    assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
+    let s = read_stats(&stats);
+    let frames = s["frames"].as_array().unwrap();
+    let mut pfms: Vec<PathBuf> = std::fs::read_dir(&ao)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    pfms.sort();
+    assert_eq!(pfms.len(), frames.len(), "one PFM per rendered frame");
+    let mut rough = Vec::new();
+    for (i, (f, p)) in frames.iter().zip(&pfms).enumerate() {
+        assert_eq!(
+            p.file_name().unwrap().to_str().unwrap(),
+            format!("frame_{i:04}.pfm")
+        );
+        let (w, h, px) = hrtao_core::imageio::read_pfm(p).unwrap();
+        assert_eq!(
+            [w as u64, h as u64],
+            [
+                f["internal"][0].as_u64().unwrap(),
+                f["internal"][1].as_u64().unwrap()
+            ]
+        );
+        assert!(px.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
+        assert!(
+            px.iter().filter(|v| **v < 0.95).count() > px.len() / 20,
+            "occlusion in frame {i}"
+        );
+        rough.push(f["roughness"].as_f64());
+    }
+    eprintln!("roughness per frame: {rough:?}");
+    // Every frame of the bundled scene has occluded flat pixels: a finite, positive roughness.
+    let rough: Vec<f64> = rough.iter().map(|r| r.expect("a roughness per frame")).collect();
+    assert!(
+        rough.iter().all(|r| r.is_finite() && *r > 0.0 && *r < 0.2),
+        "{rough:?}"
+    );
+    // The run ends on the converged image, smoother than the blocky first frame at the moving scale and than the
+    // roughest still frame of the first half of the refinement.
+    let last = frames.len() - 1;
+    assert_eq!(frames[last]["converged"], true);
+    let still: Vec<usize> = (0..frames.len())
+        .filter(|&i| frames[i]["still"] == true)
+        .collect();
+    assert!(still.len() >= 4, "{} still frames", still.len());
+    let first_half = &still[..still.len() / 2];
+    let peak = first_half.iter().map(|&i| rough[i]).fold(0.0, f64::max);
+    assert!(
+        rough[last] < rough[0] && rough[last] <= peak,
+        "converged {} against the first frame {} and the early still frames' peak {peak}",
+        rough[last],
+        rough[0]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
