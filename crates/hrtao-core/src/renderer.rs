@@ -449,6 +449,10 @@ impl Renderer {
         let budget = frame.budget();
         g.rays_per_pixel = budget.rays_per_pixel;
         g.trace_fraction = budget.trace_fraction;
+        if self.lattice > 1 {
+            // Slices: a round visits each pixel once with all its rays; the smoothing counts them (per ray).
+            g.still_smoothing = crate::settings::frame_smoothing(budget.rays_per_pixel);
+        }
         if frame.output.bgra {
             g.flags |= gpu::FLAG_OUTPUT_BGRA;
         }

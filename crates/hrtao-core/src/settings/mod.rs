@@ -24,7 +24,7 @@ pub use edits::EditSettings;
 pub use filter::{FilterSettings, FILTER_SIGMA};
 pub use map::{MapSettings, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};
 pub use mode::Mode;
-pub use still::{StillSettings, PRIOR_RAYS, RESIDUAL_SIGMA, STILL_SMOOTHING};
+pub use still::{frame_smoothing, StillSettings, PRIOR_RAYS, RESIDUAL_SIGMA, STILL_SMOOTHING};
 pub use young::{YoungMapSettings, CONTACT_DETAIL_GAIN, NEAR_FRACTION, NEAR_WEIGHT, POOLED_RESIDUAL_LAMBDA};
 
 /// What a change of a setting invalidates (`AoSettings::invalidates`), from least to most. A frame's change as a

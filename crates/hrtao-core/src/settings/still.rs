@@ -9,8 +9,15 @@ pub const PRIOR_RAYS: f32 = 32.0;
 /// their noise (composite.comp's residual pooling).
 pub const RESIDUAL_SIGMA: f32 = 0.5;
 /// Each still frame the shown AO moves this fraction of the way to the refined estimate (an exponential moving
-/// average, a lag of about 1/x - 1 frames).
+/// average, a lag of about 1/x - 1 frames). A round of slices counts it per ray (`frame_smoothing`).
 pub const STILL_SMOOTHING: f32 = 0.15;
+
+/// The smoothing of a round of slices of `rays_per_pixel` own rays: `STILL_SMOOTHING` per ray, so the image a
+/// round of B rays ends settles as B whole frames of one ray would. (Whole frames of several rays keep the
+/// per-frame smoothing: counted per ray there, the noise of frames 2-4 at 4 rays rose, rod MAE 0.0182 → 0.0204.)
+pub fn frame_smoothing(rays_per_pixel: u32) -> f32 {
+    1.0 - (1.0 - STILL_SMOOTHING).powi(rays_per_pixel.clamp(1, 1024) as i32)
+}
 
 settings_group! {
     /// Still-camera refinement.

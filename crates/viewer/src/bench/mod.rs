@@ -9,6 +9,7 @@
 //!    `max_rays` samples give the RTAO error curve and the samples after them form the converged reference (no
 //!    sample shared with the estimates); HRTAO from an empty cache for `--hrtao-frames` static frames gives its
 //!    curve; the per-pixel rays matching HRTAO's one-frame error are interpolated on the RTAO curve.
+pub mod latency_report;
 pub mod plot;
 pub mod report;
 pub mod stats;

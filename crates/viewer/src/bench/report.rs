@@ -867,6 +867,7 @@ fn render_markdown(
         )?;
     }
     step_table(&mut m, &load_step_results(dir)?)?;
+    super::latency_report::section(&mut m, &super::latency_report::load(&dir.join("latency"))?)?;
     Ok(m)
 }
 

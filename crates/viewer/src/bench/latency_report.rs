@@ -1,0 +1,222 @@
+//! The "Input latency and still refinement" section of docs/benchmarks.md, from `scripts/bench-latency.sh`'s
+//! results (`docs/bench/latency/<version>_<scene>.json`, schema `hrtao-latency/1`): the same benchmark before and
+//! after a change, side by side.
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use serde_json::Value;
+
+pub const LATENCY_SCHEMA: &str = "hrtao-latency/1";
+
+/// One result file: its version (the file name's prefix, e.g. `before`), scene label and content.
+pub struct LatencyResult {
+    pub version: String,
+    pub scene: String,
+    pub json: Value,
+}
+
+/// Every `<version>_<scene>.json` of `dir` with [`LATENCY_SCHEMA`], by scene then version (`before` first).
+pub fn load(dir: &Path) -> Result<Vec<LatencyResult>> {
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(out);
+    };
+    for e in entries {
+        let path = e?.path();
+        let name = path
+            .file_stem()
+            .and_then(|n| n.to_str())
+            .unwrap_or("")
+            .to_string();
+        if path.extension().and_then(|x| x.to_str()) != Some("json") {
+            continue;
+        }
+        let Some((version, _)) = name.split_once('_') else {
+            continue;
+        };
+        let json: Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
+            .with_context(|| format!("{}: not JSON", path.display()))?;
+        if json["schema"].as_str() != Some(LATENCY_SCHEMA) {
+            continue;
+        }
+        let scene = json["scene"].as_str().unwrap_or("?").to_string();
+        out.push(LatencyResult {
+            version: version.to_string(),
+            scene,
+            json,
+        });
+    }
+    out.sort_by(|a, b| {
+        (&a.scene, a.version != "before", &a.version).cmp(&(&b.scene, b.version != "before", &b.version))
+    });
+    Ok(out)
+}
+
+/// A number in milliseconds, or "–".
+fn ms(v: &Value) -> String {
+    v.as_f64().map_or("–".into(), |x| format!("{x:.0}"))
+}
+
+/// "median / p95 / max" of a summary object.
+fn spread(v: &Value) -> String {
+    format!("{} / {} / {}", ms(&v["median"]), ms(&v["p95"]), ms(&v["max"]))
+}
+
+fn seconds(v: &Value) -> String {
+    v.as_f64().map_or("–".into(), |x| format!("{:.1} s", x / 1e3))
+}
+
+fn load_avg(j: &Value) -> String {
+    j["load_avg_start"][0]
+        .as_f64()
+        .map_or("–".into(), |x| format!("{x:.1}"))
+}
+
+/// The section (nothing without results).
+pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
+    if results.is_empty() {
+        return Ok(());
+    }
+    writeln!(m, "## Input latency and still refinement\n")?;
+    writeln!(
+        m,
+        "`scripts/bench-latency.sh [--scene PATH] --orbit 20 --roughness --out JSON` runs `hrtao view` under Xvfb at \
+         1280×800 with the panel and sends 20 left drags with xdotool: in each of 2 launches one right after the \
+         scene opened, the others 0.3–3 s after the previous drag ended, during still refinement. Each drag is \
+         stamped with CLOCK_MONOTONIC just before it is sent; the viewer's `--stats` stamps each frame's \
+         presentation and the input it answers on the same clock. A drag's latency is the presentation of the \
+         first frame answering it minus its stamp. The orbit rows are `hrtao view --orbit 20 --stats` (20 frames \
+         of 2°, then still until converged). Roughness is mean |AO − median of the 8 neighbours| over occluded \
+         (AO < 0.95) flat pixels, per frame of `--orbit 1 --ao-out` at the view's size. The frame-time target is \
+         100 ms. Versions of one scene ran back to back (`load` is the load average at the start).\n"
+    )?;
+    writeln!(
+        m,
+        "| scene | version | drag latency, ms (median / p95 / max) | still frame, ms (median / p95 / max) | \
+         converged after the last drag | drags that moved nothing | load |"
+    )?;
+    writeln!(m, "|---|---|---|---|---|---|---|")?;
+    for r in results {
+        let j = &r.json;
+        writeln!(
+            m,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            r.scene,
+            r.version,
+            spread(&j["latency_ms"]),
+            spread(&j["still_frames"]["wall_ms"]),
+            seconds(&j["converge_after_last_drag_ms"]["median"]),
+            j["missed_drags"].as_u64().map_or("–".into(), |n| n.to_string()),
+            load_avg(j),
+        )?;
+    }
+    writeln!(m)?;
+    writeln!(
+        m,
+        "| scene | version | moving frame, ms (median) | still frame, ms (median / p95 / max) | still frames until \
+         converged | time to converge | largest frame after the first image |"
+    )?;
+    writeln!(m, "|---|---|---|---|---|---|---|")?;
+    for r in results {
+        let o = &r.json["orbit"];
+        if o.is_null() {
+            continue;
+        }
+        writeln!(
+            m,
+            "| {} | {} | {} | {} | {} | {} | {} ms |",
+            r.scene,
+            r.version,
+            ms(&o["moving_wall_ms"]["median"]),
+            spread(&o["still_wall_ms"]),
+            o["still_frames_until_converged"]
+                .as_u64()
+                .map_or("–".into(), |n| n.to_string()),
+            seconds(&o["converge_ms"]),
+            ms(&o["max_frame_after_first_ms"]),
+        )?;
+    }
+    writeln!(m)?;
+    if results.iter().any(|r| !r.json["roughness"].is_null()) {
+        writeln!(
+            m,
+            "| scene | version | roughness: first frame | still frames' largest | converged | largest / converged |"
+        )?;
+        writeln!(m, "|---|---|---|---|---|---|")?;
+        for r in results {
+            let g = &r.json["roughness"];
+            if g.is_null() {
+                continue;
+            }
+            let f4 = |v: &Value| v.as_f64().map_or("–".into(), |x| format!("{x:.4}"));
+            writeln!(
+                m,
+                "| {} | {} | {} | {} | {} | {} |",
+                r.scene,
+                r.version,
+                f4(&g["first_frame_roughness"]),
+                f4(&g["max_still_roughness"]),
+                f4(&g["converged_roughness"]),
+                g["max_ratio"].as_f64().map_or("–".into(), |x| format!("{x:.2}")),
+            )?;
+        }
+        writeln!(m)?;
+    }
+    for r in results {
+        if let Some(note) = r.json["note"].as_str() {
+            writeln!(m, "- {} ({}): {note}", r.scene, r.version)?;
+        }
+    }
+    if results.iter().any(|r| r.json["note"].is_string()) {
+        writeln!(m)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latency_results_render_before_then_after() {
+        let dir = std::env::temp_dir().join(format!("hrtao-latency-report-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let result = |lat: f64, conv: f64| {
+            serde_json::json!({
+                "schema": LATENCY_SCHEMA, "scene": "bundled", "load_avg_start": [0.5, 0.4, 0.3],
+                "latency_ms": {"median": lat, "p95": lat * 2.0, "max": lat * 3.0},
+                "still_frames": {"wall_ms": {"median": 90.0, "p95": 120.0, "max": 200.0}},
+                "converge_after_last_drag_ms": {"median": conv}, "missed_drags": 0,
+                "orbit": {"moving_wall_ms": {"median": 80.0}, "still_wall_ms": {"median": 400.0, "p95": 450.0, "max": 460.0},
+                          "still_frames_until_converged": 66, "converge_ms": conv, "max_frame_after_first_ms": 460.0},
+                "roughness": {"first_frame_roughness": 0.0179, "max_still_roughness": 0.0159,
+                              "converged_roughness": 0.0071, "max_ratio": 2.25}
+            })
+            .to_string()
+        };
+        std::fs::write(dir.join("after_bundled.json"), result(120.0, 30_000.0)).unwrap();
+        std::fs::write(dir.join("before_bundled.json"), result(450.0, 27_000.0)).unwrap();
+        std::fs::write(dir.join("notes.json"), r#"{"schema": "other"}"#).unwrap();
+        let mut noted: serde_json::Value = serde_json::from_str(&result(120.0, 30_000.0)).unwrap();
+        noted["note"] = "measured with the old smoothing".into();
+        std::fs::write(dir.join("after_bundled.json"), noted.to_string()).unwrap();
+        let results = load(&dir).unwrap();
+        assert_eq!(results.len(), 2);
+        let mut m = String::new();
+        section(&mut m, &results).unwrap();
+        let before = m.find("| bundled | before | 450 / 900 / 1350 |").expect(&m);
+        let after = m.find("| bundled | after | 120 / 240 / 360 |").expect(&m);
+        assert!(before < after, "{m}");
+        assert!(m.contains("| 27.0 s | 460 ms |"), "{m}");
+        assert!(m.contains("| 0.0179 | 0.0159 | 0.0071 | 2.25 |"), "{m}");
+        assert!(
+            m.contains("- bundled (after): measured with the old smoothing"),
+            "{m}"
+        );
+        let mut empty = String::new();
+        section(&mut empty, &[]).unwrap();
+        assert!(empty.is_empty());
+    }
+}
