@@ -2,23 +2,11 @@
 //! `--stats` stamps each frame's presentation and the input it answers on CLOCK_MONOTONIC, `--exit-after` ends a
 //! user-like run once it rests, `--ao-out` writes the view's AO per frame with its roughness.
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
-fn display_available() -> bool {
-    let ok = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
-    if !ok {
-        eprintln!("skipping: no DISPLAY (run the tests under `xvfb-run -a`)");
-    }
-    ok
-}
-
-fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hrtao-latency-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
+use common::*;
 
 /// CLOCK_MONOTONIC in milliseconds: the clock the viewer stamps frames with (and Python's time.monotonic()).
 fn monotonic_ms() -> f64 {
@@ -28,16 +16,6 @@ fn monotonic_ms() -> f64 {
     };
     assert_eq!(unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) }, 0);
     ts.tv_sec as f64 * 1e3 + ts.tv_nsec as f64 * 1e-6
-}
-
-fn xdotool(args: &[&str]) -> String {
-    let out = Command::new("xdotool").args(args).output().expect("xdotool");
-    assert!(
-        out.status.success(),
-        "xdotool {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 fn read_stats(path: &Path) -> serde_json::Value {
@@ -52,56 +30,27 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     if !display_available() {
         return;
     }
+    let _x = x_input_lock();
     let dir = out_dir("drag");
     let stats = dir.join("stats.json");
     let start = monotonic_ms();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args([
+    let mut v = Running::launch(
+        &[
             "view",
             "--size",
             "400x260",
             "--no-panel",
-            "--no-config",
             "--exit-after",
             "4",
-        ])
-        .arg("--stats")
-        .arg(&stats)
-        .env("HRTAO_VALIDATION", "1")
-        .env("RUST_LOG", "info")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start hrtao view");
-    let log = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
-    let sink = log.clone();
-    let stderr = child.stderr.take().unwrap();
-    std::thread::spawn(move || {
-        use std::io::BufRead;
-        for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
-            let mut l = sink.lock().unwrap();
-            l.push_str(&line);
-            l.push('\n');
-        }
-    });
-    let t0 = Instant::now();
-    while !log.lock().unwrap().contains("] opened ") {
-        assert!(
-            t0.elapsed() < Duration::from_secs(60) && child.try_wait().unwrap().is_none(),
-            "the scene did not open:\n{}",
-            log.lock().unwrap()
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let pid = child.id().to_string();
-    let window = xdotool(&["search", "--sync", "--onlyvisible", "--pid", &pid])
-        .lines()
-        .next()
-        .expect("the viewer's window")
-        .trim()
-        .to_string();
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+        &dir,
+        &[],
+    );
+    v.wait_for("] opened ", 1, Duration::from_secs(60));
     // Raw input (device events) reaches the viewer while its window has the focus.
-    xdotool(&["windowfocus", "--sync", &window]);
+    let window = v.focus_window();
     // A moment into the still refinement, then one left drag (orbit) in the view.
     std::thread::sleep(Duration::from_millis(300));
     // A hover, then the button held over several frames as a hand does it (pressed and released within one or two
@@ -132,19 +81,10 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     }
     drag.extend(["mouseup".into(), "1".into()]);
     xdotool(&drag.iter().map(String::as_str).collect::<Vec<_>>());
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if t0.elapsed() > Duration::from_secs(120) {
-            let _ = child.kill();
-            panic!("no exit at rest within 120 s:\n{}", log.lock().unwrap());
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    };
-    let log = log.lock().unwrap().clone();
+    let status = v.wait_exit(Duration::from_secs(120));
+    let log = v.log_text();
     assert!(status.success(), "hrtao view failed ({status}):\n{log}");
-    assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
+    v.validation_clean();
     assert!(log.contains("at rest"), "{log}");
 
     let s = read_stats(&stats);

@@ -1,0 +1,245 @@
+//! What the window tests share: the display check, output folders, xdotool, the X input lock and a viewer
+//! running in the background with its log collected.
+#![allow(dead_code)]
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+pub fn display_available() -> bool {
+    let ok = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
+    if !ok {
+        eprintln!("skipping: no DISPLAY (run the tests under `xvfb-run -a`)");
+    }
+    ok
+}
+
+pub fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("hrtao-view-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+pub fn xdotool(args: &[&str]) -> String {
+    let out = Command::new("xdotool").args(args).output().expect("xdotool");
+    assert!(
+        out.status.success(),
+        "xdotool {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// A viewer started in the background (interactive, not scripted), its log collected line by line; killed when
+/// dropped.
+/// Tests that send X input (focus, keys) or measure an idle viewer share one display: they run one at a time,
+/// so one test's focus changes and key events never reach another test's window.
+pub static X_INPUT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+pub fn x_input_lock() -> std::sync::MutexGuard<'static, ()> {
+    X_INPUT.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+pub struct Running {
+    pub child: std::process::Child,
+    pub log: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+}
+
+impl Running {
+    pub fn start(args: &[&str], cwd: &Path) -> Running {
+        Self::start_with(args, cwd, &[])
+    }
+
+    /// `start` with environment variables set (Some) or removed (None). F12 saves into `cwd/screenshots` (the
+    /// pictures directory) unless `env` names another.
+    pub fn start_with(args: &[&str], cwd: &Path, env: &[(&str, Option<&str>)]) -> Running {
+        let pictures = cwd.join("screenshots");
+        let mut env = env.to_vec();
+        if !env.iter().any(|(k, _)| *k == "XDG_PICTURES_DIR") {
+            env.push(("XDG_PICTURES_DIR", pictures.to_str()));
+        }
+        Self::launch(&[&["view"], args].concat(), cwd, &env)
+    }
+
+    /// `hrtao ARGS --no-config` in `cwd` with `env` changed, its log captured.
+    pub fn launch(args: &[&str], cwd: &Path, env: &[(&str, Option<&str>)]) -> Running {
+        use std::io::BufRead;
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_hrtao"));
+        cmd.args(args)
+            .arg("--no-config")
+            .current_dir(cwd)
+            .env("HRTAO_VALIDATION", "1")
+            .env("RUST_LOG", "info")
+            .stderr(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::null());
+        for (k, v) in env {
+            match v {
+                Some(v) => cmd.env(k, v),
+                None => cmd.env_remove(k),
+            };
+        }
+        let mut child = cmd.spawn().expect("start hrtao view");
+        let log = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let stderr = child.stderr.take().unwrap();
+        let sink = log.clone();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+                sink.lock().unwrap().push(line);
+            }
+        });
+        Running { child, log }
+    }
+
+    pub fn log_text(&self) -> String {
+        self.log.lock().unwrap().join("\n")
+    }
+
+    /// Waits until `count` log lines contain `needle`.
+    pub fn wait_for(&mut self, needle: &str, count: usize, timeout: std::time::Duration) {
+        let t0 = std::time::Instant::now();
+        loop {
+            let n = self
+                .log
+                .lock()
+                .unwrap()
+                .iter()
+                .filter(|l| l.contains(needle))
+                .count();
+            if n >= count {
+                return;
+            }
+            if let Ok(Some(status)) = self.child.try_wait() {
+                panic!(
+                    "the viewer exited ({status}) before `{needle}`:\n{}",
+                    self.log_text()
+                );
+            }
+            assert!(
+                t0.elapsed() < timeout,
+                "no `{needle}` (×{count}) within {timeout:?}:\n{}",
+                self.log_text()
+            );
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+    }
+
+    /// Log lines containing `needle` so far.
+    pub fn seen(&self, needle: &str) -> usize {
+        self.log
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|l| l.contains(needle))
+            .count()
+    }
+
+    /// Clicks at window pixel (x, y) until `count` log lines contain `needle`: at most 3 clicks, 20 s each.
+    /// (Under heavy load a click on the busy viewer is sometimes not registered; see the issue notes.)
+    pub fn click_until(&mut self, window: &str, at: (i32, i32), needle: &str, count: usize) {
+        self.click_with_until(window, at, None, needle, count)
+    }
+
+    /// `click_until` with a modifier key (xdotool's name, e.g. "shift") held during the click.
+    pub fn click_with_until(
+        &mut self,
+        window: &str,
+        (x, y): (i32, i32),
+        modifier: Option<&str>,
+        needle: &str,
+        count: usize,
+    ) {
+        for attempt in 0..3 {
+            xdotool(&[
+                "mousemove",
+                "--window",
+                window,
+                "--sync",
+                &x.to_string(),
+                &y.to_string(),
+            ]);
+            std::thread::sleep(std::time::Duration::from_millis(200));
+            if let Some(m) = modifier {
+                // Held over a frame or two of the viewer, as a hand would.
+                xdotool(&["keydown", m]);
+                std::thread::sleep(std::time::Duration::from_millis(150));
+            }
+            xdotool(&["click", "1"]);
+            if let Some(m) = modifier {
+                std::thread::sleep(std::time::Duration::from_millis(150));
+                xdotool(&["keyup", m]);
+            }
+            let t0 = std::time::Instant::now();
+            while t0.elapsed() < std::time::Duration::from_secs(20) {
+                if self.seen(needle) >= count {
+                    if attempt > 0 {
+                        eprintln!("`{needle}` after {} clicks", attempt + 1);
+                    }
+                    // Apart enough from the next click not to make a double click (which sets the pivot).
+                    std::thread::sleep(std::time::Duration::from_millis(700));
+                    return;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+        }
+        panic!("no `{needle}` (×{count}) after 3 clicks:\n{}", self.log_text());
+    }
+
+    /// Finds the viewer's window (by its pid), gives it the keyboard focus and returns its id.
+    pub fn focus_window(&self) -> String {
+        let pid = self.child.id().to_string();
+        let window = xdotool(&["search", "--sync", "--onlyvisible", "--pid", &pid])
+            .lines()
+            .next()
+            .expect("the viewer's window")
+            .trim()
+            .to_string();
+        xdotool(&["windowfocus", "--sync", &window]);
+        window
+    }
+
+    /// User + system CPU time of the process so far, in seconds (/proc/PID/stat fields 14 and 15).
+    pub fn cpu_seconds(&self) -> f64 {
+        let stat = std::fs::read_to_string(format!("/proc/{}/stat", self.child.id())).unwrap();
+        // The command name (field 2) is in parentheses and may contain spaces: split after it.
+        let rest = &stat[stat.rfind(')').unwrap() + 2..];
+        let f: Vec<&str> = rest.split_whitespace().collect();
+        let ticks: u64 = f[11].parse::<u64>().unwrap() + f[12].parse::<u64>().unwrap();
+        ticks as f64 / clock_ticks_per_second()
+    }
+
+    /// Waits for the viewer to exit by itself (killed after `timeout`).
+    pub fn wait_exit(&mut self, timeout: std::time::Duration) -> std::process::ExitStatus {
+        let t0 = std::time::Instant::now();
+        loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                return status;
+            }
+            if t0.elapsed() > timeout {
+                let _ = self.child.kill();
+                panic!("no exit within {timeout:?}:\n{}", self.log_text());
+            }
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+    }
+
+    pub fn validation_clean(&self) {
+        let log = self.log_text();
+        assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
+        assert!(!log.contains("panicked"), "panic:\n{log}");
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub fn clock_ticks_per_second() -> f64 {
+    Command::new("getconf")
+        .arg("CLK_TCK")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8_lossy(&o.stdout).trim().parse().ok())
+        .unwrap_or(100.0)
+}
