@@ -3,7 +3,6 @@
 mod common;
 
 use common::*;
-use glam::Vec3;
 use hrtao_core::{AoSettings, Camera, SceneGpu};
 use hrtao_scene::Scene;
 
@@ -201,26 +200,6 @@ fn the_papers_mode_never_reports_convergence_with_young_cells_on_screen() {
         "never converged: {reported:?}"
     );
     assert_clean(&gpu);
-}
-
-/// Surface pixels of the floor (instance 0) next to where block `part` stood: within `ring` of its old box,
-/// outside it (its contact shadow).
-fn ring_pixels(r: &Headless, bounds: hrtao_scene::Aabb, ring: f32) -> Vec<usize> {
-    let gbuf = r.read_gbuffer().unwrap();
-    (0..gbuf.len())
-        .filter(|&i| {
-            let p = &gbuf[i];
-            let d = (bounds.min - Vec3::from(p.position))
-                .max(Vec3::from(p.position) - bounds.max)
-                .max(Vec3::ZERO)
-                .length();
-            p.t >= 0.0 && p.instance == 0 && d > 0.0 && d <= ring
-        })
-        .collect()
-}
-
-fn mean_at(img: &[f32], px: &[usize]) -> f32 {
-    px.iter().map(|&i| img[i]).sum::<f32>() / px.len().max(1) as f32
 }
 
 /// Pre-edit AO never comes back. A block is deleted (a local edit: the regions around it get new epochs), then

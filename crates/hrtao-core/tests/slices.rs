@@ -158,23 +158,8 @@ fn a_local_edit_mid_round_reaches_every_slice() {
     }
     let part = 2;
     let bounds = scene.instance_bounds(part);
-    let gb = r.read_gbuffer().unwrap();
-    // Floor pixels around the block, within 0.6 of its footprint.
-    let ring: Vec<usize> = gb
-        .iter()
-        .enumerate()
-        .filter(|(_, p)| {
-            let q = Vec3::from(p.position);
-            let near = q.x > bounds.min.x - 0.6
-                && q.x < bounds.max.x + 0.6
-                && q.y > bounds.min.y - 0.6
-                && q.y < bounds.max.y + 0.6;
-            let inside = q.x > bounds.min.x && q.x < bounds.max.x && q.y > bounds.min.y && q.y < bounds.max.y;
-            p.t >= 0.0 && p.normal[2] > 0.99 && q.z < 0.01 && near && !inside
-        })
-        .map(|(i, _)| i)
-        .collect();
-    let mean = |ao: &[f32]| ring.iter().map(|&i| ao[i]).sum::<f32>() / ring.len() as f32;
+    let ring = ring_pixels(&r, bounds, 0.6);
+    let mean = |ao: &[f32]| mean_at(ao, &ring);
     let with_part = mean(&r.read_ao().unwrap());
     scene.set_visible(part, false).unwrap();
     sg.update_instances(&scene, u32::MAX).unwrap();

@@ -540,3 +540,26 @@ pub fn bundled(w: u32, h: u32) -> (Scene, Camera) {
     };
     (scene, cam)
 }
+
+/// Surface pixels of the floor (instance 0) next to where block `part` stood: within `ring` of its old box,
+/// outside it (its contact shadow).
+#[allow(dead_code)]
+pub fn ring_pixels(r: &Headless, bounds: hrtao_scene::Aabb, ring: f32) -> Vec<usize> {
+    let gbuf = r.read_gbuffer().unwrap();
+    (0..gbuf.len())
+        .filter(|&i| {
+            let p = &gbuf[i];
+            let d = (bounds.min - Vec3::from(p.position))
+                .max(Vec3::from(p.position) - bounds.max)
+                .max(Vec3::ZERO)
+                .length();
+            p.t >= 0.0 && p.instance == 0 && d > 0.0 && d <= ring
+        })
+        .collect()
+}
+
+/// The mean of `img` over the pixels `px`.
+#[allow(dead_code)]
+pub fn mean_at(img: &[f32], px: &[usize]) -> f32 {
+    px.iter().map(|&i| img[i]).sum::<f32>() / px.len().max(1) as f32
+}
