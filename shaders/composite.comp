@@ -173,23 +173,60 @@ float smoothed(uint index, float ao, bool continued) {
     return ao;
 }
 
+// Ours: the weight of the pooled residual (evidence `es` rays, `own` of them the pixel's) on the way to the final
+// image of `still_samples` own rays. The shrinkage es / (k + es) alone shows the residual's noise v at w^2 v,
+// largest when es nears k: the first refinement frames were 2-4x grainier than the final image. Capped at
+// w_f own / still_samples (w_f: the final weight, the evidence scaled to the final rays), w^2 v rises at most
+// linearly to the final image's w_f^2 v_f as long as v falls no faster than 1 / own^2: an average of own rays
+// falls as 1 / own, and pooled with the neighbours that agree (sharper as rays come in) we measured
+// own^-1.6. The grain never exceeds the final image's while the residual's bias comes in.
+float monotone_weight(float es, float own, float k) {
+    float w = es / (k + es);
+    float final_rays = max(g.still_samples, 1.0);
+    if (own <= 0.0 || own >= final_rays) return w;
+    float es_final = es * final_rays / own;
+    float w_final = es_final / (k + es_final);
+    return min(w, w_final * own / final_rays);
+}
+
 const vec3 EDGE_COLOR = vec3(0.06, 0.07, 0.08);
 
-// Slices (ours): in the first round of a still image, a pixel also stands for the pixels of its lattice block
-// that later slices of the round draw (slice order: row by row within the block), so every presented frame
-// shows the whole view, at the lattice's resolution first.
-void fill_block(uvec2 pix, float ao, uint rgba) {
-    uint a = lattice();
-    if (a == 1u || g.still_index != 0u) return;
-    uvec2 anchor = pix - uvec2(g.lattice_x, g.lattice_y);
-    uint rank = g.lattice_y * a + g.lattice_x;
-    for (uint oy = 0u; oy < a; ++oy) {
-        for (uint ox = 0u; ox < a; ++ox) {
-            uvec2 q = anchor + uvec2(ox, oy);
-            if (oy * a + ox <= rank || q.x >= g.width || q.y >= g.height) continue;
-            uint qi = q.y * g.width + q.x;
-            FloatRef(g.ao).v[qi] = ao;
-            UintRef(g.output_rgba).v[qi] = rgba;
+// Slices (ours): in the first round of a still image, a pixel also shows in the pixels of later slices it is the
+// nearest drawn pixel to (`fill_mask`, slice_order.rs), so every presented frame shows the whole view as the
+// nearest-neighbour image of the pixels drawn so far: blocks that shrink as the slices come.
+bool in_image(ivec2 q) {
+    return q.x >= 0 && q.y >= 0 && q.x < int(g.width) && q.y < int(g.height);
+}
+
+void fill_pixel(ivec2 q, float ao, uint rgba) {
+    uint qi = uint(q.y) * g.width + uint(q.x);
+    FloatRef(g.ao).v[qi] = ao;
+    UintRef(g.output_rgba).v[qi] = rgba;
+}
+
+void fill_later(uvec2 pix, float ao, uint rgba) {
+    int a = int(lattice());
+    if (a == 1 || g.still_index != 0u) return;
+    ivec2 own = ivec2(g.lattice_x, g.lattice_y);
+    int half_a = a / 2;
+    for (int o = 0; o < a * a; ++o) {
+        uint word = o < 32 ? g.fill_mask_lo : g.fill_mask_hi;
+        if (((word >> uint(o & 31)) & 1u) == 0u) continue;
+        // The offset's pixel nearest to this one on the block's torus: the difference wrapped into
+        // [-a/2, a - a/2) (d0 > -a: the operands of % stay positive).
+        ivec2 d0 = ivec2(o % a, o / a) - own;
+        ivec2 d = (d0 + half_a + a) % a - half_a;
+        // At the right and bottom edges the nearest drawn pixel may lie outside the image: on that axis the
+        // pixel of the same block fills it instead (k: which axes take the block's).
+        for (int k = 0; k < 4; ++k) {
+            bvec2 unwrapped = bvec2((k & 1) != 0, (k & 2) != 0);
+            if ((unwrapped.x && d0.x == d.x) || (unwrapped.y && d0.y == d.y)) continue;
+            ivec2 q = ivec2(pix) + ivec2(unwrapped.x ? d0.x : d.x, unwrapped.y ? d0.y : d.y);
+            ivec2 nearest = q - d;
+            bool x_inside = nearest.x >= 0 && nearest.x < int(g.width);
+            bool y_inside = nearest.y >= 0 && nearest.y < int(g.height);
+            if (!in_image(q) || (unwrapped.x && x_inside) || (unwrapped.y && y_inside)) continue;
+            fill_pixel(q, ao, rgba);
         }
     }
 }
@@ -263,7 +300,7 @@ void main() {
             float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);
             // A miss (mean(c) = 1, all rays open) has no residual.
             Evidence e = pooled_evidence(pix, px, r, px.t >= 0.0 ? a.rays : 0.0, p);
-            ao = mean_c + e.s / (k + e.s) * e.r;
+            ao = mean_c + monotone_weight(e.s, a.rays, k) * e.r;
             ao = smoothed(index, ao, a.frames > 1.0);
             // The colour: each sample's shade weighed as above, moved with the pooled AO.
             float own_ao = (k * mean_c + a.open) / (k + a.rays);
@@ -280,5 +317,5 @@ void main() {
     if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c8 = c8.bgr;
     uint rgba = c8.r | (c8.g << 8) | (c8.b << 16) | (255u << 24);
     UintRef(g.output_rgba).v[index] = rgba;
-    fill_block(pix, FloatRef(g.ao).v[index], rgba);
+    fill_later(pix, FloatRef(g.ao).v[index], rgba);
 }

@@ -231,8 +231,9 @@ gpu_structs! {
         normal_offset: f32,
         /// Contact detail (ours, docs/algorithm.md): the weight of the fitted detail gain (0 = off).
         contact_detail: f32,
-        /// Unused: keeps the next address at an 8-byte offset (scalar layout aligns it to its u64).
-        _pad0: u32,
+        /// Still-camera refinement (ours): the own rays per pixel of a final still image (`still_samples`), which
+        /// cap the own-ray residual's weight on the way there (composite.comp `monotone_weight`).
+        still_samples: f32,
         /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the
         /// pixel takes and the rays of the cell its AO came from.
         filter_plan: u64,
@@ -250,6 +251,10 @@ gpu_structs! {
         /// Frames, counted from a local edit's, in which a pixel drawn sees that edit (hash_map.glsl
         /// `edited_near`): 1, or a round of slices, so each pixel sees it once.
         edit_window: u32,
+        /// Slices (ours): the offsets of the lattice block (bit y lattice + x; low word, high word) this
+        /// frame's pixels also fill in the first round of a still image (`slice_order::fill_mask`).
+        fill_mask_lo: u32,
+        fill_mask_hi: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

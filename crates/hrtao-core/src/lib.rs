@@ -28,6 +28,7 @@ pub mod regions;
 pub mod renderer;
 pub mod section;
 pub mod settings;
+pub mod slice_order;
 pub mod tile;
 pub mod timer;
 

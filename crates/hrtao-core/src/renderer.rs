@@ -397,6 +397,8 @@ impl Renderer {
         };
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
+        let slice_offset = crate::slice_order::offset(self.slice, self.lattice);
+        let fill_mask = crate::slice_order::fill_mask(self.slice, self.lattice);
         let mut g = FrameGlobals {
             eye: v4(f.eye),
             cam_u: v4(f.u),
@@ -440,8 +442,10 @@ impl Renderer {
             view_height,
             edge_width: EDGE_WIDTH,
             lattice: self.lattice,
-            lattice_x: self.slice % self.lattice,
-            lattice_y: self.slice / self.lattice,
+            lattice_x: slice_offset.0,
+            lattice_y: slice_offset.1,
+            fill_mask_lo: fill_mask as u32,
+            fill_mask_hi: (fill_mask >> 32) as u32,
             edit_window: self.lattice * self.lattice,
             ..bytemuck::Zeroable::zeroed()
         };
@@ -630,7 +634,7 @@ impl Renderer {
     fn slice_grid(&self) -> (u32, u32) {
         let (w, h) = self.size();
         let a = self.lattice.max(1);
-        let (x, y) = (self.slice % a, self.slice / a);
+        let (x, y) = crate::slice_order::offset(self.slice, a);
         (w.saturating_sub(x).div_ceil(a), h.saturating_sub(y).div_ceil(a))
     }
 

@@ -38,5 +38,6 @@ impl StillSettings {
         g.prior_rays = PRIOR_RAYS;
         g.residual_sigma = RESIDUAL_SIGMA;
         g.still_smoothing = STILL_SMOOTHING;
+        g.still_samples = self.still_samples as f32;
     }
 }

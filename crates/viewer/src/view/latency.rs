@@ -75,6 +75,9 @@ pub struct Latency {
     /// `--ao-out DIR` and the number of the next frame written there.
     ao_out: Option<PathBuf>,
     ao_frames: u32,
+    /// `--ao-out`: the still frames of the current still image written so far (their index in the stats and
+    /// their PFM), measured once the image converges.
+    still_frames: Vec<(usize, PathBuf)>,
     /// `--exit-after SECONDS`: the run ends at the first rest this long after the last input (or the start).
     exit_after: Option<Duration>,
     last_input: Instant,
@@ -98,6 +101,7 @@ impl Latency {
             wake_ms: None,
             ao_out,
             ao_frames: 0,
+            still_frames: Vec::new(),
             exit_after: exit_after.map(|s| Duration::from_secs_f64(s.clamp(0.0, 1e6))),
             last_input: Instant::now(),
         }
@@ -156,24 +160,57 @@ impl Latency {
         }
     }
 
-    /// `--ao-out`: writes the renderer's AO of the frame just completed as `DIR/frame_NNNN.pfm` and returns its
-    /// roughness (`hrtao_core::metrics::roughness`: occluded flat pixels by the frame's own AO < 0.95; None when no
-    /// pixel qualifies). Nothing without `--ao-out`.
-    pub fn dump_ao(&mut self, renderer: &Renderer) -> Result<Option<f32>> {
+    /// `--ao-out`: writes the renderer's AO of the frame just completed (number `index` in the stats) as
+    /// `DIR/frame_NNNN.pfm` and returns the roughness of the frames it can measure now (their stats index and
+    /// `hrtao_core::metrics::roughness`: occluded flat pixels by the frame's own AO < 0.95; None when no pixel
+    /// qualifies). A moving frame is measured on its own G-buffer. A still image's frames are measured when it
+    /// converges, all on the converged frame's G-buffer: a frame in slices holds only its slice's samples, and
+    /// in the first round the other pixels show the blocks the slices fill. A still image abandoned before it
+    /// converges leaves its frames unmeasured. Nothing without `--ao-out`.
+    pub fn dump_ao(
+        &mut self,
+        renderer: &Renderer,
+        index: usize,
+        still: bool,
+        converged: bool,
+    ) -> Result<Vec<(usize, Option<f32>)>> {
         let Some(dir) = &self.ao_out else {
-            return Ok(None);
+            return Ok(Vec::new());
         };
         let (w, h) = renderer.size();
         let ao = renderer.read_ao()?;
-        let gbuffer = renderer.read_gbuffer()?;
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         let path = dir.join(format!("frame_{:04}.pfm", self.ao_frames));
         hrtao_core::imageio::write_pfm(&path, w, h, &ao)
             .with_context(|| format!("cannot write {}", path.display()))?;
         self.ao_frames += 1;
-        Ok(hrtao_core::metrics::roughness(
-            &ao, &gbuffer, w as usize, h as usize,
-        ))
+        let rough = |ao: &[f32], gbuffer: &[hrtao_core::gpu::GPixel]| {
+            hrtao_core::metrics::roughness(ao, gbuffer, w as usize, h as usize)
+        };
+        if !still {
+            self.still_frames.clear();
+            return Ok(vec![(index, rough(&ao, &renderer.read_gbuffer()?))]);
+        }
+        self.still_frames.push((index, path));
+        if !converged {
+            return Ok(Vec::new());
+        }
+        let gbuffer = renderer.read_gbuffer()?;
+        let mut out = Vec::new();
+        for (i, path) in self.still_frames.drain(..) {
+            let (fw, fh, ao) = hrtao_core::imageio::read_pfm(&path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            // A frame of another render size (the still image restarted at full size) is not comparable.
+            out.push((
+                i,
+                if (fw, fh) == (w, h) {
+                    rough(&ao, &gbuffer)
+                } else {
+                    None
+                },
+            ));
+        }
+        Ok(out)
     }
 
     /// `--exit-after`: whether the run ends now (`resting`: the image converged and the viewer waits for input).

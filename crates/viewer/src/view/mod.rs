@@ -1339,7 +1339,8 @@ impl Viewer {
             let report = r.finish_frame(gpu_wall)?;
             let converged = motion::image_converged(&report) && r.size() == full;
             let input_ms = self.latency.take_input(changed);
-            let roughness = self.latency.dump_ao(r)?;
+            let stats_index = self.script.stats.as_ref().map_or(0, |log| log.frames.len());
+            let roughness = self.latency.dump_ao(r, stats_index, !moving, converged)?;
             self.last_drawn_cam = Some(cam);
             split.finish = laps.lap();
             let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;
@@ -1358,14 +1359,21 @@ impl Viewer {
                     still: !moving,
                     refining: !moving && !converged,
                     converged,
+                    slice: report.slice,
+                    slices: report.slices,
                     presented_ms,
                     input: input_ms.is_some(),
                     input_ms,
-                    roughness,
+                    roughness: None,
                     rays: report.rays,
                     cpu_ms: split,
                     interval_ms,
                 });
+                for (i, value) in roughness {
+                    if let Some(f) = log.frames.get_mut(i) {
+                        f.roughness = value;
+                    }
+                }
             }
             self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
             self.last_report = Some(report);

@@ -28,6 +28,9 @@ pub struct FrameStat {
     pub refining: bool,
     /// After this frame the image has converged at full size: the viewer rests (the log's "at rest").
     pub converged: bool,
+    /// Slices (`FrameReport::slice`): the frame drew slice `slice` of `slices` (0 of 1: a whole frame).
+    pub slice: u32,
+    pub slices: u32,
     /// When the frame was presented (right after vkQueuePresentKHR), in milliseconds on CLOCK_MONOTONIC (the
     /// clock of Python's `time.monotonic()` on Linux).
     pub presented_ms: f64,
@@ -38,8 +41,9 @@ pub struct FrameStat {
     /// milliseconds; a drag's press counts from the frame its motion moves the camera).
     pub input_ms: Option<f64>,
     /// With `--ao-out`: the roughness of the frame's AO (`hrtao_core::metrics::roughness`: mean |AO − median of
-    /// the 8 neighbours| over flat pixels whose own AO is below 0.95); None without `--ao-out` or when no pixel
-    /// qualifies.
+    /// the 8 neighbours| over flat pixels whose own AO is below 0.95; a still image's frames over its converged
+    /// frame's G-buffer, `Latency::dump_ao`); None without `--ao-out`, when no pixel qualifies, or for the
+    /// frames of a still image abandoned before it converged.
     pub roughness: Option<f32>,
     /// Rays traced this frame.
     pub rays: u64,
@@ -240,6 +244,8 @@ mod tests {
                 still: !moving,
                 refining: !moving,
                 converged: false,
+                slice: 0,
+                slices: 1,
                 presented_ms: 0.0,
                 input: false,
                 input_ms: None,
