@@ -138,9 +138,9 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
                 GPixel o = GBufferRef(g.gbuffer).px[qi];
                 if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) continue;
                 if (abs(dot(o.position - px.position, px.normal)) > 2.0 * pixel_size) continue;
-                // A neighbour a local edit restarted this frame holds the residual of its pre-edit cells (the
-                // removed part's contact shadow): not evidence any more. Unedited neighbours' still is.
-                if (edited_near(o.position, g.ao_radius + exp2(float(pixel_lod(o.t))))) continue;
+                // A neighbour a local edit restarted may still hold in its slots the residual of its pre-edit
+                // cells (the removed part's contact shadow): not evidence any more. Unedited neighbours' still is.
+                if (neighbour_slots_stale(o.position, g.ao_radius + exp2(float(pixel_lod(o.t))))) continue;
                 vec2 rs = slots.v[read_slot + qi].xy;
                 if (rs.y <= 0.0) continue;
                 float vq = own_noise(p, rs.y);
@@ -156,6 +156,39 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
     }
     e.r = e.s > 0.0 ? e.r / e.s : 0.0;
     return e;
+}
+
+// Ours: the cell estimate as a still image's prior. Each still frame samples it at a jittered position; the mean
+// of n samples converges to the pixel's footprint average, but for the first few it still shows the noise of
+// full-resolution cells (on the bundled scene 1.4x rougher than the final image). Their mean leans on the
+// pixel's 3x3 neighbours' on its surface (their previous frame's mean, in the parity slots as pooled_evidence),
+// with weight 1/n: the prior's noise falls from the first still frame, and the final image keeps a 1/n share.
+float smooth_prior(uvec2 pix, GPixel px, float mean_c, float n) {
+    Vec4Ref slots = Vec4Ref(g.bias_evidence);
+    uint count = g.width * g.height;
+    uint index = pix.y * g.width + pix.x;
+    uint write_slot = (g.still_index & 1u) * count;
+    slots.v[write_slot + index].w = mean_c;
+    if (g.still_index == 0u || px.t < 0.0) return mean_c;
+    uint read_slot = count - write_slot;
+    float pixel_size = pixel_world_size(px.t);
+    float sum = 0.0;
+    float weight = 0.0;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            ivec2 q = ivec2(pix) + ivec2(dx, dy);
+            if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+            uint qi = uint(q.y) * g.width + uint(q.x);
+            GPixel o = GBufferRef(g.gbuffer).px[qi];
+            if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) continue;
+            if (abs(dot(o.position - px.position, px.normal)) > 2.0 * pixel_size) continue;
+            if (neighbour_slots_stale(o.position, g.ao_radius + exp2(float(pixel_lod(o.t))))) continue;
+            sum += slots.v[read_slot + qi].w;
+            weight += 1.0;
+        }
+    }
+    if (weight == 0.0) return mean_c;
+    return mix(mean_c, sum / weight, 1.0 / max(n, 1.0));
 }
 
 // Ours: the shown AO moves `still_smoothing` of the way to the new estimate each still frame (an exponential
@@ -191,52 +224,77 @@ float monotone_weight(float es, float own, float k) {
 
 const vec3 EDGE_COLOR = vec3(0.06, 0.07, 0.08);
 
-// Slices (ours): in the first round of a still image, a pixel also shows in the pixels of later slices it is the
-// nearest drawn pixel to (`fill_mask`, slice_order.rs), so every presented frame shows the whole view as the
-// nearest-neighbour image of the pixels drawn so far: blocks that shrink as the slices come.
-bool in_image(ivec2 q) {
-    return q.x >= 0 && q.y >= 0 && q.x < int(g.width) && q.y < int(g.height);
+// Slices (ours): in the first two rounds of a still image (`held_round`) each drawn pixel keeps its AO and
+// colour aside (the third slot of `bias_evidence`), and the view shows the bilinear interpolation of a square
+// grid of pixels (`level_spacing`, slice_order.rs, Renderer::level_spacing): round 0 each finer grid as it
+// completes, round 1 round 0's finest until it ends, then all its pixels. Every presented frame shows the whole
+// new view, smooth and sharper at each grid, never single pixels that differ from the image around them.
+// Push constant 1 (a frame that completes a grid): the grid interpolated over every pixel.
+uint kept_slot(uint index) {
+    return 2u * g.width * g.height + index;
 }
 
-void fill_pixel(ivec2 q, float ao, uint rgba) {
-    uint qi = uint(q.y) * g.width + uint(q.x);
-    FloatRef(g.ao).v[qi] = ao;
-    UintRef(g.output_rgba).v[qi] = rgba;
+vec4 kept_aside(ivec2 q) {
+    return Vec4Ref(g.bias_evidence).v[kept_slot(uint(q.y) * g.width + uint(q.x))];
 }
 
-void fill_later(uvec2 pix, float ao, uint rgba) {
-    int a = int(lattice());
-    if (a == 1 || g.still_index != 0u) return;
-    ivec2 own = ivec2(g.lattice_x, g.lattice_y);
-    int half_a = a / 2;
-    for (int o = 0; o < a * a; ++o) {
-        uint word = o < 32 ? g.fill_mask_lo : g.fill_mask_hi;
-        if (((word >> uint(o & 31)) & 1u) == 0u) continue;
-        // The offset's pixel nearest to this one on the block's torus: the difference wrapped into
-        // [-a/2, a - a/2) (d0 > -a: the operands of % stay positive).
-        ivec2 d0 = ivec2(o % a, o / a) - own;
-        ivec2 d = (d0 + half_a + a) % a - half_a;
-        // At the right and bottom edges the nearest drawn pixel may lie outside the image: on that axis the
-        // pixel of the same block fills it instead (k: which axes take the block's).
-        for (int k = 0; k < 4; ++k) {
-            bvec2 unwrapped = bvec2((k & 1) != 0, (k & 2) != 0);
-            if ((unwrapped.x && d0.x == d.x) || (unwrapped.y && d0.y == d.y)) continue;
-            ivec2 q = ivec2(pix) + ivec2(unwrapped.x ? d0.x : d.x, unwrapped.y ? d0.y : d.y);
-            ivec2 nearest = q - d;
-            bool x_inside = nearest.x >= 0 && nearest.x < int(g.width);
-            bool y_inside = nearest.y >= 0 && nearest.y < int(g.height);
-            if (!in_image(q) || (unwrapped.x && x_inside) || (unwrapped.y && y_inside)) continue;
-            fill_pixel(q, ao, rgba);
-        }
+void keep_aside(uint index, float ao, uint rgba) {
+    Vec4Ref(g.bias_evidence).v[kept_slot(index)].xy = vec2(ao, uintBitsToFloat(rgba));
+}
+
+bool held_round() {
+    return g.level_spacing > 0u;
+}
+
+// The bilinear interpolation at `pix` of the grid of spacing `level_spacing`, from the AO and colour its pixels
+// kept aside.
+void level_value(uvec2 pix, out float ao, out uint rgba) {
+    int s = int(g.level_spacing);
+    ivec2 base = (ivec2(pix) / s) * s;
+    vec2 f = vec2(ivec2(pix) - base) / float(s);
+    vec4 color = vec4(0.0);
+    float wsum = 0.0;
+    ao = 0.0;
+    for (int corner = 0; corner < 4; ++corner) {
+        ivec2 o = ivec2(corner & 1, corner >> 1);
+        ivec2 q = base + s * o;
+        vec2 wv = mix(1.0 - f, f, vec2(o));
+        float w = wv.x * wv.y;
+        // Past the right and bottom edges the grid's last pixels stand alone (the weights renormalise).
+        if (w <= 0.0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+        vec4 kept = kept_aside(q);
+        ao += w * kept.x;
+        color += w * unpackUnorm4x8(floatBitsToUint(kept.y));
+        wsum += w;
     }
+    ao /= wsum;
+    rgba = packUnorm4x8(color / wsum);
+}
+
+// Push constant 1, in a frame that completes a grid: the grid interpolated over every pixel.
+void show_level() {
+    uvec2 pix = gl_GlobalInvocationID.xy;
+    if (pix.x >= g.width || pix.y >= g.height) return;
+    uint index = pix.y * g.width + pix.x;
+    float ao;
+    uint rgba;
+    level_value(pix, ao, rgba);
+    FloatRef(g.ao).v[index] = ao;
+    UintRef(g.output_rgba).v[index] = rgba;
+    Vec4Ref(g.bias_evidence).v[kept_slot(index)].z = ao;
 }
 
 void main() {
+    if (push.x == 1u) {
+        show_level();
+        return;
+    }
     uvec2 pix;
     uint index;
     if (!pixel_coords(pix, index)) return;
     GPixel px = GBufferRef(g.gbuffer).px[index];
     vec3 color;
+    float final_ao = FloatRef(g.ao).v[index];
     if (px.t >= 0.0 && (g.mode == MODE_DEBUG_CELLS || g.mode == MODE_DEBUG_LOD || g.mode == MODE_DEBUG_SAMPLES)) {
         color = debug_color(index);
     } else {
@@ -293,9 +351,10 @@ void main() {
         if (hashed && accumulates && g.still_index == 0u) {
             // A moving frame: no own rays, so the AO is this frame's cell estimate; the still frames' smoothing
             // starts from it.
+            smooth_prior(pix, px, ao, 1.0);
             ao = smoothed(index, ao, false);
         } else if (hashed && accumulates) {
-            float mean_c = a.cell / a.frames;
+            float mean_c = smooth_prior(pix, px, a.cell / a.frames, wc);
             float r = a.rays > 0.0 ? a.open / a.rays - mean_c : 0.0;
             float p = (g.prior_rays * mean_c + a.open) / (g.prior_rays + a.rays);
             // A miss (mean(c) = 1, all rays open) has no residual.
@@ -311,11 +370,23 @@ void main() {
             ao = 1.0;
             color = a.shade_cell / a.frames;
         }
-        FloatRef(g.ao).v[index] = clamp(ao, 0.0, 1.0);
+        ao = clamp(ao, 0.0, 1.0);
+        if (held_round()) {
+            final_ao = ao;
+        } else {
+            FloatRef(g.ao).v[index] = ao;
+        }
     }
     uvec3 c8 = uvec3(linear_to_srgb(color) * 255.0 + 0.5);
     if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c8 = c8.bgr;
     uint rgba = c8.r | (c8.g << 8) | (c8.b << 16) | (255u << 24);
-    UintRef(g.output_rgba).v[index] = rgba;
-    fill_later(pix, FloatRef(g.ao).v[index], rgba);
+    if (held_round()) {
+        // Kept aside; the pixel goes on showing the grid's interpolation, whose AO `ao` holds again (the
+        // frame's resolve wrote the cell estimate there). In a frame that completes a grid, show_level runs
+        // next and writes every pixel.
+        keep_aside(index, final_ao, rgba);
+        FloatRef(g.ao).v[index] = Vec4Ref(g.bias_evidence).v[kept_slot(index)].z;
+    } else {
+        UintRef(g.output_rgba).v[index] = rgba;
+    }
 }

@@ -46,8 +46,12 @@ CellKey region_cell_key(ivec3 c, int lod, ivec3 nq) {
 }
 // Whether the last local edit is new to the pixels this frame draws: made this frame, or, when frames draw
 // slices, within the round of slices since (`edit_window` frames: each pixel is drawn once in them).
+bool edit_within(RegionRef t, uint frames) {
+    return g.frame_index - t.v[REGION_COUNT] < max(frames, 1u);
+}
+
 bool edit_is_new(RegionRef t) {
-    return g.frame_index - t.v[REGION_COUNT] < max(g.edit_window, 1u);
+    return edit_within(t, g.edit_window);
 }
 
 // Whether a local edit changed anything that the pixels of this frame have not seen.
@@ -56,11 +60,11 @@ bool edited_this_frame() {
     return edit_is_new(t) && t.v[REGION_COUNT + 1u] > 0u;
 }
 
-// True when a local edit these pixels have not seen changed geometry within `reach` of `p` (its boxes follow
-// the epochs).
-bool edited_near(vec3 p, float reach) {
+// True when the last local edit, made less than `frames` frames ago, changed geometry within `reach` of `p`
+// (its boxes follow the epochs).
+bool edited_within(vec3 p, float reach, uint frames) {
     RegionRef t = RegionRef(g.regions);
-    if (!edit_is_new(t)) return false;
+    if (!edit_within(t, frames)) return false;
     uint n = min(t.v[REGION_COUNT + 1u], MAX_EDIT_BOXES);
     for (uint i = 0u; i < n; ++i) {
         uint w = REGION_COUNT + 4u + 8u * i;
@@ -69,6 +73,19 @@ bool edited_near(vec3 p, float reach) {
         if (length(max(max(lo - p, p - hi), vec3(0.0))) <= reach) return true;
     }
     return false;
+}
+
+// True when a local edit these pixels have not seen changed geometry within `reach` of `p`.
+bool edited_near(vec3 p, float reach) {
+    return edited_within(p, reach, g.edit_window);
+}
+
+// True while a neighbour at `p` may still hold, in the slot of either parity (composite.comp's evidence and
+// prior), what it found before a local edit within `reach`: until it has drawn twice since, two edit windows
+// (in slices, a neighbour drawn before the edit in its round rewrites the other parity's slot only in the
+// round after).
+bool neighbour_slots_stale(vec3 p, float reach) {
+    return edited_within(p, reach, 2u * max(g.edit_window, 1u));
 }
 
 // The longest probe run: most probes end at their first slot, so look before the atomic (which every pixel of

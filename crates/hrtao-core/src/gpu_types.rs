@@ -215,9 +215,10 @@ gpu_structs! {
         /// Pooled residual control variate (ours, docs/algorithm.md): the Wiener factor λ of the correction by
         /// the own rays of the pixel and its same-surface 3x3 neighbours (0 = off).
         pooled_residual: f32,
-        /// Per pixel, two slots (by still-frame parity) of (residual, rays, shown AO, 0): the pixel's own mean
-        /// minus its mean cell estimate over its own rays, written by the composite each frame and pooled
-        /// over neighbours in the next, and the AO it showed (composite.comp).
+        /// Per pixel, two slots (by still-frame parity) of (residual, rays, shown AO, prior): the pixel's own
+        /// mean minus its mean cell estimate over its own rays, written by the composite each frame and pooled
+        /// over neighbours in the next, the AO it showed and its mean cell estimate (composite.comp); then a
+        /// third slot, the first two rounds of slices' (AO, RGBA8, AO shown, 0) (`held_round`).
         bias_evidence: u64,
         /// Near-field control variate (ours, docs/algorithm.md): the weight β of the pixel's own near-open
         /// fraction minus its cells' (0 = the paper's cell estimate alone).
@@ -251,10 +252,12 @@ gpu_structs! {
         /// Frames, counted from a local edit's, in which a pixel drawn sees that edit (hash_map.glsl
         /// `edited_near`): 1, or a round of slices, so each pixel sees it once.
         edit_window: u32,
-        /// Slices (ours): the offsets of the lattice block (bit y lattice + x; low word, high word) this
-        /// frame's pixels also fill in the first round of a still image (`slice_order::fill_mask`).
-        fill_mask_lo: u32,
-        fill_mask_hi: u32,
+        /// Slices (ours): in the first two rounds of a still image, the spacing of the square grid of pixels
+        /// the view shows interpolated (`slice_order::level`, `Renderer::level_spacing`); 0: the view shows the
+        /// pixels as they are drawn.
+        level_spacing: u32,
+        /// Unused: keeps the struct a multiple of its 8-byte alignment.
+        _pad1: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

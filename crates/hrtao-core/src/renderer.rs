@@ -66,7 +66,7 @@ impl Targets {
             filter_tmp: b("filter ping-pong", n * 4)?,
             pixel_rays: b("pixel rays", n * std::mem::size_of::<PixelRays>() as u64)?,
             accum: b("still accumulation", n * std::mem::size_of::<PixelAccum>() as u64)?,
-            bias_evidence: b("own-ray residuals", 2 * n * 16)?,
+            bias_evidence: b("still refinement slots", 3 * n * 16)?,
             output: b("output RGBA8", n * 4)?,
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
             ray_queue: b("ray queue", n * 4)?,
@@ -398,7 +398,7 @@ impl Renderer {
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
         let slice_offset = crate::slice_order::offset(self.slice, self.lattice);
-        let fill_mask = crate::slice_order::fill_mask(self.slice, self.lattice);
+        let (level_spacing, _) = self.level_spacing();
         let mut g = FrameGlobals {
             eye: v4(f.eye),
             cam_u: v4(f.u),
@@ -444,8 +444,7 @@ impl Renderer {
             lattice: self.lattice,
             lattice_x: slice_offset.0,
             lattice_y: slice_offset.1,
-            fill_mask_lo: fill_mask as u32,
-            fill_mask_hi: (fill_mask >> 32) as u32,
+            level_spacing,
             edit_window: self.lattice * self.lattice,
             ..bytemuck::Zeroable::zeroed()
         };
@@ -519,6 +518,7 @@ impl Renderer {
         let (w, h) = self.size();
         // Passes over the image run over this frame's slice: every lattice-th pixel (common.glsl).
         let (gw, gh) = self.slice_grid();
+        let (_, new_level) = self.level_spacing();
         let primary = self.primary;
         if primary == Primary::Raster {
             let raster = match &mut self.raster {
@@ -626,8 +626,34 @@ impl Renderer {
             );
         });
         rec.dispatch(Pass::Composite, gw, gh, [0; 4]);
+        if new_level {
+            // The first round of slices shows the finest grid of pixels drawn so far, interpolated over the
+            // whole image (composite.comp `show_level`).
+            rec.dispatch(Pass::Composite, w, h, [1, 0, 0, 0]);
+        }
         self.last_events = rec.finish();
         Ok(())
+    }
+
+    /// The first two rounds of a still image in slices hold what the view shows (composite.comp `held_round`):
+    /// the spacing of the grid of pixels shown interpolated (`slice_order::level`; 0: not held), and whether this
+    /// frame completes it. Round 0 shows each grid as it completes (for L = 8 the spacings 8, 4 and 2); round 1
+    /// keeps round 0's finest until it ends and shows all its pixels (spacing 1): its pixels come in beside
+    /// round 0's cell estimates, and one at a time they would speckle.
+    fn level_spacing(&self) -> (u32, bool) {
+        let l = self.lattice;
+        if self.still_index > 1 || l == 1 {
+            return (0, false);
+        }
+        let level = |slice| crate::slice_order::level(slice, l).filter(|&s| s > 1);
+        if self.still_index == 1 {
+            if self.slice + 1 == l * l {
+                return (1, true);
+            }
+            return ((0..l * l).filter_map(level).min().unwrap_or(l), false);
+        }
+        let shown = (0..=self.slice).filter_map(level).min().unwrap_or(0);
+        (shown, level(self.slice).is_some())
     }
 
     /// The invocations of a pass over the image this frame: the pixels of its slice's lattice.

@@ -2,10 +2,10 @@
 //!
 //! A round of L² slices draws each pixel offset of the L×L lattice block once. The slices go coarse to fine
 //! (each next offset is the one farthest from those drawn, on the torus of the block), so the pixels drawn so far
-//! stay spread evenly. In the first round of a still image, a slice's pixel also shows in the pixels of later
-//! slices it is the nearest drawn pixel to (ties to the latest): every presented frame is the nearest-neighbour
-//! image of the pixels drawn so far, blocks that shrink as slices come, never single pixels that differ from a
-//! block around them (composite.comp `fill_later`).
+//! stay spread evenly and complete square grids on the way: for L = 8 the grids of spacing 8, 4 and 2 after 1, 4
+//! and 16 slices (`level`). In the first round of a still image the view shows the bilinear interpolation of the
+//! finest grid completed (composite.comp `show_level`): smooth at every frame, no single pixels that differ from
+//! the blocks around them, and sharper at each level.
 
 /// Squared distance between two offsets of the `lattice`-periodic block (the torus).
 fn torus_distance2(a: (u32, u32), b: (u32, u32), lattice: u32) -> u32 {
@@ -44,21 +44,20 @@ pub fn offset(slice: u32, lattice: u32) -> (u32, u32) {
     order(lattice)[slice as usize]
 }
 
-/// The offsets slice `slice` fills in the first round (bit y L + x): those drawn later whose nearest drawn offset
-/// (on the torus, among slices 0..=slice) is this slice's. Ties go to this slice, which is drawn last.
-pub fn fill_mask(slice: u32, lattice: u32) -> u64 {
+/// The spacing s of the square grid {(i s, j s)} the slices 0..=`slice` draw, when they draw exactly one (s
+/// divides the lattice; 1 once the round is complete), else None.
+pub fn level(slice: u32, lattice: u32) -> Option<u32> {
     let l = lattice.max(1);
+    let drawn = slice as usize + 1;
     let order = order(l);
-    let drawn = &order[..=slice as usize];
-    let own = order[slice as usize];
-    let mut mask = 0u64;
-    for &o in &order[slice as usize + 1..] {
-        let d = torus_distance2(o, own, l);
-        if drawn.iter().all(|&c| torus_distance2(o, c, l) >= d) {
-            mask |= 1 << (o.1 * l + o.0);
-        }
-    }
-    mask
+    let order = order.get(..drawn)?;
+    (1..=l).find(|&s| {
+        l.is_multiple_of(s)
+            && ((l / s) * (l / s)) as usize == drawn
+            && order
+                .iter()
+                .all(|&(x, y)| x.is_multiple_of(s) && y.is_multiple_of(s))
+    })
 }
 
 #[cfg(test)]
@@ -80,37 +79,14 @@ mod tests {
         assert_eq!(&order(2)[..], &[(0, 0), (1, 1), (1, 0), (0, 1)]);
     }
 
-    /// Replays the first round: each slice writes its offset and fills its mask's offsets. After every slice,
-    /// each offset shows a nearest drawn offset (on the torus), and a drawn offset shows itself.
     #[test]
-    fn every_first_round_frame_is_the_nearest_neighbour_image() {
-        for l in 1..=MAX_LATTICE {
-            let order = order(l);
-            let mut shown: Vec<Option<(u32, u32)>> = vec![None; (l * l) as usize];
-            for (s, &own) in order.iter().enumerate() {
-                shown[(own.1 * l + own.0) as usize] = Some(own);
-                let mask = fill_mask(s as u32, l);
-                for bit in 0..l * l {
-                    if mask >> bit & 1 == 1 {
-                        assert!(
-                            shown[bit as usize] != Some((bit % l, bit / l)),
-                            "filled a drawn offset"
-                        );
-                        shown[bit as usize] = Some(own);
-                    }
-                }
-                let drawn = &order[..=s];
-                for bit in 0..l * l {
-                    let o = (bit % l, bit / l);
-                    let from = shown[bit as usize].expect("every offset shows a drawn one");
-                    let nearest = drawn.iter().map(|&c| torus_distance2(o, c, l)).min().unwrap();
-                    assert_eq!(
-                        torus_distance2(o, from, l),
-                        nearest,
-                        "lattice {l}, slice {s}, offset {o:?}"
-                    );
-                }
-            }
-        }
+    fn the_first_round_completes_square_grids_on_the_way() {
+        let levels =
+            |l: u32| -> Vec<(u32, u32)> { (0..l * l).filter_map(|s| level(s, l).map(|g| (s, g))).collect() };
+        assert_eq!(levels(8), vec![(0, 8), (3, 4), (15, 2), (63, 1)]);
+        assert_eq!(levels(6), vec![(0, 6), (3, 3), (35, 1)]);
+        assert_eq!(levels(4), vec![(0, 4), (3, 2), (15, 1)]);
+        assert_eq!(levels(3), vec![(0, 3), (8, 1)]);
+        assert_eq!(levels(1), vec![(0, 1)]);
     }
 }
