@@ -71,6 +71,10 @@ bool navigation_frame() { return g.still_index == 0u && (g.flags & FLAG_YOUNG_MA
 // Still-camera refinement frame (ours): every pixel traces its own rays.
 bool refine_frame() { return (g.flags & FLAG_REFINE) != 0u && g.still_index > 0u; }
 
+// A frame of a still image that refines (ours): refinement frames, and the first round of slices (the view
+// rests). Its cell estimate is the prior of the pixels' own rays.
+bool still_prior_frame() { return (g.flags & FLAG_REFINE) != 0u && (g.still_index > 0u || lattice() > 1u); }
+
 bool camera_orthographic() { return g.projection == PROJECTION_ORTHOGRAPHIC; }
 
 // The camera ray through the pixel centre moved by this frame's jitter (Camera::ray): perspective, from the eye

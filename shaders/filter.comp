@@ -8,7 +8,9 @@
 // neighbour also stops the filter when its AO differs from the pixel's by more than filter_sigma standard
 // deviations of the cell's binomial noise (SVGF's luminance edge-stopping with the variance the sample count
 // gives), so young, noisy cells are smoothed over several cells while real AO gradients (contact shadows) stay.
-// Pixels of full cells are left as they are. Which iterations a pixel takes is its plan (filter_plan.glsl).
+// Pixels of full cells are left as they are, except in a still image's frames, where the cell estimate is the
+// prior of the pixels' own rays and is filtered down to the noise of the final image's own rays
+// (`still_prior_frame`). Which iterations a pixel takes is its plan (filter_plan.glsl).
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
@@ -74,6 +76,14 @@ void main() {
         float footprint = cell / max(pixel_size, 1e-30);
         float cells_spanned = 4.0 * float(step) / max(footprint, 1.0);
         float variance = p * (1.0 - p) / n / max(cells_spanned, 1.0);
+        // A still image's prior (ours): differences within the noise the final image keeps from its own rays
+        // (S_f = still_samples of them at the weight S_f / (k + S_f), composite.comp) are noise the final image
+        // will not show; smoothing them keeps the refinement's first frames as smooth.
+        if (still_prior_frame()) {
+            float final_rays = max(g.still_samples, 1.0);
+            float final_weight = final_rays / (g.prior_rays + final_rays);
+            variance = max(variance, p * (1.0 - p) * final_weight * final_weight / final_rays);
+        }
         stop = 1.0 / (g.filter_sigma * sqrt(2.0 * variance));
     }
     float sum = 0.0;

@@ -13,17 +13,21 @@ uint plan_samples(uint plan) { return plan >> FILTER_PLAN_BITS; }
 // cell of n rays also runs the iterations that bring its noise down to a full cell's (its binomial variance
 // p(1-p)/n halves per iteration: log2(max_samples / n) of them), so young cells are smoothed over several
 // cells. A navigation frame (`navigation_frame`: few young cells, scattered) takes the paper's iterations,
-// full cells none, so it filters fewer pixels than the paper's filter.
+// full cells none, so it filters fewer pixels than the paper's filter. A still image's frames
+// (`still_prior_frame`) take at least 2, full cells too (filter.comp).
 uint planned_iterations(float footprint, uint samples, uint iterations) {
     uint paper = 0u;
     while (paper < iterations && float(2u << paper) <= footprint) paper++;
     if (g.filter_sigma <= 0.0) return paper;
     uint full = max(g.max_samples, 1u);
-    if (samples >= full) return 0u;
-    if (navigation_frame()) return paper;
+    // A still image's prior (ours): full cells too take at least 2 iterations, filtered to the noise of the
+    // final image's own rays (filter.comp).
+    bool prior = still_prior_frame();
+    if (samples >= full && !prior) return 0u;
+    if (navigation_frame() && !prior) return paper;
     uint noisy = 0u;
     while (noisy < iterations && (max(samples, 1u) << noisy) < full) noisy++;
-    return max(paper, noisy);
+    return max(max(paper, noisy), prior ? min(iterations, 2u) : 0u);
 }
 
 // The filter's guide of a pixel (FilterGuide): a pixel without AO (a miss, or no cell) stops every tap.

@@ -163,16 +163,17 @@ impl Latency {
     /// `--ao-out`: writes the renderer's AO of the frame just completed (number `index` in the stats) as
     /// `DIR/frame_NNNN.pfm` and returns the roughness of the frames it can measure now (their stats index and
     /// `hrtao_core::metrics::roughness`: occluded flat pixels by the frame's own AO < 0.95; None when no pixel
-    /// qualifies). A moving frame is measured on its own G-buffer. A still image's frames are measured when it
-    /// converges, all on the converged frame's G-buffer: a frame in slices holds only its slice's samples, and
-    /// in the first round the other pixels show the blocks the slices fill. A still image abandoned before it
-    /// converges leaves its frames unmeasured. Nothing without `--ao-out`.
+    /// qualifies). A frame in slices holds only its slice's samples in the G-buffer, so a still image's frames
+    /// are measured at the end of the round that completes them (`round_end`: the last slice, or any whole
+    /// frame), all on that round's G-buffer, which then holds the view's samples at every pixel. A moving frame
+    /// is measured on its own; a still image abandoned mid-round leaves the frames of that round unmeasured.
+    /// Nothing without `--ao-out`.
     pub fn dump_ao(
         &mut self,
         renderer: &Renderer,
         index: usize,
         still: bool,
-        converged: bool,
+        round_end: bool,
     ) -> Result<Vec<(usize, Option<f32>)>> {
         let Some(dir) = &self.ao_out else {
             return Ok(Vec::new());
@@ -192,7 +193,7 @@ impl Latency {
             return Ok(vec![(index, rough(&ao, &renderer.read_gbuffer()?))]);
         }
         self.still_frames.push((index, path));
-        if !converged {
+        if !round_end {
             return Ok(Vec::new());
         }
         let gbuffer = renderer.read_gbuffer()?;

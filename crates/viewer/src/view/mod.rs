@@ -1340,7 +1340,8 @@ impl Viewer {
             let converged = motion::image_converged(&report) && r.size() == full;
             let input_ms = self.latency.take_input(changed);
             let stats_index = self.script.stats.as_ref().map_or(0, |log| log.frames.len());
-            let roughness = self.latency.dump_ao(r, stats_index, !moving, converged)?;
+            let round_end = report.slice + 1 >= report.slices;
+            let roughness = self.latency.dump_ao(r, stats_index, !moving, round_end)?;
             self.last_drawn_cam = Some(cam);
             split.finish = laps.lap();
             let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;

@@ -41,9 +41,9 @@ pub struct FrameStat {
     /// milliseconds; a drag's press counts from the frame its motion moves the camera).
     pub input_ms: Option<f64>,
     /// With `--ao-out`: the roughness of the frame's AO (`hrtao_core::metrics::roughness`: mean |AO − median of
-    /// the 8 neighbours| over flat pixels whose own AO is below 0.95; a still image's frames over its converged
-    /// frame's G-buffer, `Latency::dump_ao`); None without `--ao-out`, when no pixel qualifies, or for the
-    /// frames of a still image abandoned before it converged.
+    /// the 8 neighbours| over flat pixels whose own AO is below 0.95; a still image's frames over the G-buffer
+    /// of the round of slices that completes them, `Latency::dump_ao`); None without `--ao-out`, when no pixel
+    /// qualifies, or for the frames of a round of slices abandoned before it ended.
     pub roughness: Option<f32>,
     /// Rays traced this frame.
     pub rays: u64,
