@@ -112,6 +112,21 @@ float own_noise(float p, float s) {
     return max(p * (1.0 - p), 1.0 / (1.0 + s)) / s;
 }
 
+// Whether the pixel at `pix` + `d` (index `qi`) is a neighbour whose parity slots speak for the pixel `px`
+// (pooled_evidence, smooth_prior): another pixel of the image on the same surface (normals within 25°, within 2
+// pixels of its plane), and not one a local edit restarted, which may still hold in its slots what its pre-edit
+// cells gave (the removed part's contact shadow); unedited neighbours' slots still hold.
+bool slot_neighbour(uvec2 pix, ivec2 d, GPixel px, float pixel_size, out uint qi) {
+    ivec2 q = ivec2(pix) + d;
+    qi = 0u;
+    if ((d.x == 0 && d.y == 0) || q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) return false;
+    qi = uint(q.y) * g.width + uint(q.x);
+    GPixel o = GBufferRef(g.gbuffer).px[qi];
+    if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) return false;
+    if (abs(dot(o.position - px.position, px.normal)) > 2.0 * pixel_size) return false;
+    return !neighbour_slots_stale(o.position, g.ao_radius + exp2(float(pixel_lod(o.t))));
+}
+
 // Residual pooling (`residual_sigma` z_r > 0): a neighbour's residual joins, weighted by its rays and by
 // exp(-d^2 / (2 z_r^2 var(d))), d its difference from the pixel's own and var(d) the two own means' noise.
 // Residuals are the cells' bias seen through each pixel's own rays: neighbours sharing a cell share most of
@@ -132,15 +147,8 @@ Evidence pooled_evidence(uvec2 pix, GPixel px, float r, float s, float p) {
         float pixel_size = pixel_world_size(px.t);
         for (int dy = -1; dy <= 1; ++dy) {
             for (int dx = -1; dx <= 1; ++dx) {
-                ivec2 q = ivec2(pix) + ivec2(dx, dy);
-                if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
-                uint qi = uint(q.y) * g.width + uint(q.x);
-                GPixel o = GBufferRef(g.gbuffer).px[qi];
-                if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) continue;
-                if (abs(dot(o.position - px.position, px.normal)) > 2.0 * pixel_size) continue;
-                // A neighbour a local edit restarted may still hold in its slots the residual of its pre-edit
-                // cells (the removed part's contact shadow): not evidence any more. Unedited neighbours' still is.
-                if (neighbour_slots_stale(o.position, g.ao_radius + exp2(float(pixel_lod(o.t))))) continue;
+                uint qi;
+                if (!slot_neighbour(pix, ivec2(dx, dy), px, pixel_size, qi)) continue;
                 vec2 rs = slots.v[read_slot + qi].xy;
                 if (rs.y <= 0.0) continue;
                 float vq = own_noise(p, rs.y);
@@ -176,13 +184,8 @@ float smooth_prior(uvec2 pix, GPixel px, float mean_c, float n) {
     float weight = 0.0;
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
-            ivec2 q = ivec2(pix) + ivec2(dx, dy);
-            if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
-            uint qi = uint(q.y) * g.width + uint(q.x);
-            GPixel o = GBufferRef(g.gbuffer).px[qi];
-            if (o.t < 0.0 || dot(o.normal, px.normal) < 0.9) continue;
-            if (abs(dot(o.position - px.position, px.normal)) > 2.0 * pixel_size) continue;
-            if (neighbour_slots_stale(o.position, g.ao_radius + exp2(float(pixel_lod(o.t))))) continue;
+            uint qi;
+            if (!slot_neighbour(pix, ivec2(dx, dy), px, pixel_size, qi)) continue;
             sum += slots.v[read_slot + qi].w;
             weight += 1.0;
         }

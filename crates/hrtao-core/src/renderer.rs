@@ -21,6 +21,7 @@ use crate::hash_map::WorldHashMap;
 use crate::pass::{Pass, PassSet, Recorder, Resource};
 use crate::raster::{Primary, Rasterizer};
 use crate::settings::{AoSettings, Mode};
+use crate::slice_order;
 use crate::timer::GpuTimer;
 
 /// Buffers whose size follows the image resolution.
@@ -397,7 +398,7 @@ impl Renderer {
         };
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
-        let slice_offset = crate::slice_order::offset(self.slice, self.lattice);
+        let slice_offset = slice_order::offset(self.slice, self.lattice);
         let (level_spacing, _) = self.level_spacing();
         let mut g = FrameGlobals {
             eye: v4(f.eye),
@@ -641,26 +642,25 @@ impl Renderer {
     /// keeps round 0's finest until it ends and shows all its pixels (spacing 1): its pixels come in beside
     /// round 0's cell estimates, and one at a time they would speckle.
     fn level_spacing(&self) -> (u32, bool) {
-        let l = self.lattice;
+        let (l, slice) = (self.lattice, self.slice);
         if self.still_index > 1 || l == 1 {
             return (0, false);
         }
-        let level = |slice| crate::slice_order::level(slice, l).filter(|&s| s > 1);
         if self.still_index == 1 {
-            if self.slice + 1 == l * l {
+            if slice + 1 == l * l {
                 return (1, true);
             }
-            return ((0..l * l).filter_map(level).min().unwrap_or(l), false);
+            return (slice_order::finest_grid(l * l - 1, l).unwrap_or(l), false);
         }
-        let shown = (0..=self.slice).filter_map(level).min().unwrap_or(0);
-        (shown, level(self.slice).is_some())
+        let completes = slice_order::level(slice, l).is_some_and(|s| s > 1);
+        (slice_order::finest_grid(slice, l).unwrap_or(0), completes)
     }
 
     /// The invocations of a pass over the image this frame: the pixels of its slice's lattice.
     fn slice_grid(&self) -> (u32, u32) {
         let (w, h) = self.size();
         let a = self.lattice.max(1);
-        let (x, y) = crate::slice_order::offset(self.slice, a);
+        let (x, y) = slice_order::offset(self.slice, a);
         (w.saturating_sub(x).div_ceil(a), h.saturating_sub(y).div_ceil(a))
     }
 

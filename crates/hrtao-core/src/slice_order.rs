@@ -19,8 +19,7 @@ fn torus_distance2(a: (u32, u32), b: (u32, u32), lattice: u32) -> u32 {
 
 /// The offsets of a round's slices in drawing order: (0, 0) first, then each time the offset farthest from the
 /// ones before it (ties: the first in row-major order).
-pub fn order(lattice: u32) -> Vec<(u32, u32)> {
-    let l = lattice.max(1);
+fn drawing_order(l: u32) -> Vec<(u32, u32)> {
     let all: Vec<(u32, u32)> = (0..l * l).map(|i| (i % l, i / l)).collect();
     let mut chosen = vec![(0, 0)];
     while chosen.len() < all.len() {
@@ -39,25 +38,66 @@ pub fn order(lattice: u32) -> Vec<(u32, u32)> {
     chosen
 }
 
+/// The spacing s of the square grid {(i s, j s)} the first `drawn` offsets of `order` form, when they form
+/// exactly one (s divides the lattice), else None.
+fn grid_of(order: &[(u32, u32)], drawn: usize, l: u32) -> Option<u32> {
+    (1..=l).find(|&s| {
+        l.is_multiple_of(s)
+            && ((l / s) * (l / s)) as usize == drawn
+            && order[..drawn]
+                .iter()
+                .all(|&(x, y)| x.is_multiple_of(s) && y.is_multiple_of(s))
+    })
+}
+
+/// A lattice's round, computed once: the offsets in drawing order and the grids they complete.
+struct Round {
+    offsets: Vec<(u32, u32)>,
+    /// Per slice, the spacing of the grid the slices up to it form (`level`).
+    levels: Vec<Option<u32>>,
+}
+
+fn round(lattice: u32) -> &'static Round {
+    static ROUNDS: std::sync::OnceLock<Vec<Round>> = std::sync::OnceLock::new();
+    let rounds = ROUNDS.get_or_init(|| {
+        (0..=crate::MAX_LATTICE)
+            .map(|l| {
+                let l = l.max(1);
+                let offsets = drawing_order(l);
+                let levels = (1..=offsets.len()).map(|n| grid_of(&offsets, n, l)).collect();
+                Round { offsets, levels }
+            })
+            .collect()
+    });
+    &rounds[lattice.clamp(1, crate::MAX_LATTICE) as usize]
+}
+
+/// The offsets of a round's slices in drawing order.
+pub fn order(lattice: u32) -> &'static [(u32, u32)] {
+    &round(lattice).offsets
+}
+
 /// The offset slice `slice` draws (`slice` < lattice²).
 pub fn offset(slice: u32, lattice: u32) -> (u32, u32) {
-    order(lattice)[slice as usize]
+    round(lattice).offsets[slice as usize]
 }
 
 /// The spacing s of the square grid {(i s, j s)} the slices 0..=`slice` draw, when they draw exactly one (s
 /// divides the lattice; 1 once the round is complete), else None.
 pub fn level(slice: u32, lattice: u32) -> Option<u32> {
-    let l = lattice.max(1);
-    let drawn = slice as usize + 1;
-    let order = order(l);
-    let order = order.get(..drawn)?;
-    (1..=l).find(|&s| {
-        l.is_multiple_of(s)
-            && ((l / s) * (l / s)) as usize == drawn
-            && order
-                .iter()
-                .all(|&(x, y)| x.is_multiple_of(s) && y.is_multiple_of(s))
-    })
+    round(lattice).levels.get(slice as usize).copied().flatten()
+}
+
+/// The finest grid coarser than single pixels (spacing > 1) the slices 0..=`slice` have completed (None before
+/// the first).
+pub fn finest_grid(slice: u32, lattice: u32) -> Option<u32> {
+    let levels = &round(lattice).levels;
+    levels[..=(slice as usize).min(levels.len() - 1)]
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|&s| s > 1)
+        .min()
 }
 
 #[cfg(test)]
@@ -69,14 +109,14 @@ mod tests {
     fn a_round_draws_every_offset_once_coarse_to_fine() {
         for l in 1..=MAX_LATTICE {
             let o = order(l);
-            let mut sorted = o.clone();
+            let mut sorted = o.to_vec();
             sorted.sort_by_key(|&(x, y)| (y, x));
             sorted.dedup();
             assert_eq!(sorted.len(), (l * l) as usize, "lattice {l}: {o:?}");
         }
         // Coarse to fine: after (0, 0) the block's centre, then the two half-way offsets.
         assert_eq!(&order(4)[..4], &[(0, 0), (2, 2), (2, 0), (0, 2)]);
-        assert_eq!(&order(2)[..], &[(0, 0), (1, 1), (1, 0), (0, 1)]);
+        assert_eq!(order(2), &[(0, 0), (1, 1), (1, 0), (0, 1)]);
     }
 
     #[test]
