@@ -4,9 +4,11 @@
 Each run opens the scene in the viewer (the window at --size with the panel, `--stats`, `--exit-after`: the viewer
 behaves as for a user and exits once it has rested a while after the last input). Its first drag is sent right after
 the scene opened (during the first frames), the others during still refinement: a random 0.3-3 s after the previous
-drag ended. Each drag is stamped with CLOCK_MONOTONIC (time.monotonic) just before its xdotool command; the viewer's
---stats stamps each frame's presentation and the input it answers on the same clock. A drag's latency is the
-presentation of the first frame whose input arrived after the stamp, minus the stamp.
+drag ended. A drag is a hover and a press (one xdotool command), then its motion (a second one); it is stamped with
+CLOCK_MONOTONIC (time.monotonic) just before the motion's command, since the first motion with the button held is
+the input that moves the view (the hover and the press move nothing). The viewer's --stats stamps each frame's
+presentation and the latest input it answers on the same clock. A drag's latency is the presentation of the first
+frame that moved the camera with input received after the stamp, minus the stamp.
 
 With --orbit N, also the scripted `--orbit N --stats` run of the viewer (moving and still frames, convergence).
 Prints a JSON summary and a Markdown table row; --out writes the JSON.
@@ -46,8 +48,8 @@ def summary(values):
 
 
 def drag_latencies(frames, stamps):
-    """Per stamp (sorted, monotonic ms): the first frame with input received at or after the stamp (and before the
-    next stamp); its latency = presented_ms - stamp."""
+    """Per stamp (sorted, monotonic ms): the first frame that answers input whose latest event was received at or
+    after the stamp (and before the next stamp); its latency = presented_ms - stamp."""
     out = []
     for k, stamp in enumerate(stamps):
         nxt = stamps[k + 1] if k + 1 < len(stamps) else float("inf")
@@ -55,7 +57,7 @@ def drag_latencies(frames, stamps):
             (
                 (i, f)
                 for i, f in enumerate(frames)
-                if f.get("input") and f.get("input_ms") is not None and stamp <= f["input_ms"] < nxt
+                if f.get("input") and f.get("input_last_ms") is not None and stamp <= f["input_last_ms"] < nxt
             ),
             None,
         )
@@ -64,7 +66,7 @@ def drag_latencies(frames, stamps):
         else:
             i, f = hit
             out.append({"stamp_ms": stamp, "frame": i, "latency_ms": f["presented_ms"] - stamp,
-                        "input_delay_ms": f["input_ms"] - stamp})
+                        "input_delay_ms": f["input_last_ms"] - stamp})
     return out
 
 
@@ -128,16 +130,21 @@ def find_window(pid, timeout=120):
 
 
 def drag(window, rng, view_w, view_h):
-    """One left drag (orbit) in the 3D view as a hand makes it: a hover at the start, the button pressed, 20 moves of
-    4-8 px 75 ms apart (held over several frames: pressed and released within one or two frames of a busy viewer,
-    egui would see a click, or a drag without motion), released. Returns the monotonic stamp (ms) taken just
-    before the xdotool command (the hover is its first event)."""
+    """One left drag (orbit) in the 3D view as a hand makes it: a hover at the start, the button pressed (one
+    xdotool command, which returns 75 ms after the press), then 20 moves of 4-8 px 75 ms apart (held over several
+    frames: pressed and released within one or two frames of a busy viewer, egui would see a click, or a drag
+    without motion) and the release. Returns the monotonic stamp (ms) taken just before the motion's command: its
+    first move is sent at once, and it is the input that moves the view."""
     x = int(view_w * rng.uniform(0.3, 0.6))
     y = int(view_h * rng.uniform(0.3, 0.7))
     dx, dy = rng.choice([-1, 1]) * rng.randint(4, 8), rng.choice([-1, 0, 1])
-    cmd = ["xdotool", "mousemove", "--window", window, x, y, "sleep", "0.05", "mousedown", "1"]
+    press = ["xdotool", "mousemove", "--window", window, x, y, "sleep", "0.05", "mousedown", "1", "sleep", "0.075"]
+    subprocess.run([str(c) for c in press], check=True, capture_output=True)
+    cmd = ["xdotool"]
     for k in range(1, 21):
-        cmd += ["sleep", "0.075", "mousemove", "--window", window, x + k * dx, y + k * dy]
+        if k > 1:
+            cmd += ["sleep", "0.075"]
+        cmd += ["mousemove", "--window", window, x + k * dx, y + k * dy]
     cmd += ["mouseup", "1"]
     stamp = time.monotonic() * 1e3
     subprocess.run([str(c) for c in cmd], check=True, capture_output=True)
@@ -295,6 +302,7 @@ def main():
         "size": a.size,
         "panel": not a.no_panel,
         "seed": a.seed,
+        "stamp": "motion",
         "load_avg_start": load,
         "load_avg_end": os.getloadavg(),
         "latency_ms": summary(lat),

@@ -22,8 +22,9 @@ fn read_stats(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).expect("stats JSON")).expect("valid JSON")
 }
 
-/// A drag sent with xdotool while the view refines is answered by a frame that says so: `input` with `input_ms`
-/// after the drag's monotonic stamp and `presented_ms` after `input_ms`; the frames before it answer no input.
+/// A drag sent with xdotool while the view refines is answered by a frame that says so: `input` with
+/// `input_last_ms` after the monotonic stamp of the drag's motion (its `input_ms` may be the press before it) and
+/// `presented_ms` after that; the frames before it answer no input.
 /// `--exit-after` then ends the run at its rest, with the converged frame marked and the stats written.
 #[test]
 fn a_drag_is_answered_by_a_frame_stamped_after_it() {
@@ -54,9 +55,10 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     // A moment into the still refinement, then one left drag (orbit) in the view.
     std::thread::sleep(Duration::from_millis(300));
     // A hover, then the button held over several frames as a hand does it (pressed and released within one or two
-    // frames of the busy viewer, egui sees a click or a drag without motion): 20 moves 75 ms apart.
-    let stamp = monotonic_ms();
-    let mut drag: Vec<String> = [
+    // frames of the busy viewer, egui sees a click or a drag without motion): 20 moves 75 ms apart. The hover and
+    // the press move nothing; the motion (stamped just before its command) is the input that moves the view.
+    let hover = monotonic_ms();
+    xdotool(&[
         "mousemove",
         "--window",
         &window,
@@ -66,20 +68,19 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
         "0.05",
         "mousedown",
         "1",
-    ]
-    .map(String::from)
-    .to_vec();
+        "sleep",
+        "0.075",
+    ]);
+    let mut drag: Vec<String> = Vec::new();
     for k in 1..=20 {
-        drag.extend([
-            "sleep".into(),
-            "0.075".into(),
-            "mousemove".into(),
-            "--window".into(),
-            window.clone(),
-        ]);
+        if k > 1 {
+            drag.extend(["sleep".into(), "0.075".into()]);
+        }
+        drag.extend(["mousemove".into(), "--window".into(), window.clone()]);
         drag.extend([(150 + 5 * k).to_string(), (130 + k / 4).to_string()]);
     }
     drag.extend(["mouseup".into(), "1".into()]);
+    let stamp = monotonic_ms();
     xdotool(&drag.iter().map(String::as_str).collect::<Vec<_>>());
     let status = v.wait_exit(Duration::from_secs(120));
     let log = v.log_text();
@@ -110,13 +111,14 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     });
     let f = &frames[first];
     let input_ms = f["input_ms"].as_f64().unwrap();
+    let input_last_ms = f["input_last_ms"].as_f64().unwrap();
     assert!(
-        input_ms >= stamp && presented[first] > input_ms,
-        "stamp {stamp}, input {input_ms}, presented {}",
+        input_ms >= hover && input_last_ms >= stamp && presented[first] > input_last_ms,
+        "hover {hover}, motion {stamp}, input {input_ms} .. {input_last_ms}, presented {}",
         presented[first]
     );
     assert_eq!(f["moving"], true, "the answering frame moved the camera");
-    // Frames presented before the stamp answer no input (nothing was sent).
+    // Frames presented before the motion answer no input (the hover and the press move nothing).
     assert!(frames
         .iter()
         .filter(|f| f["presented_ms"].as_f64().unwrap() < stamp)

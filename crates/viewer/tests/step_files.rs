@@ -1,6 +1,8 @@
 //! STEP and IGES through the OpenCASCADE worker (`hrtao occt-worker`, started from the built binary): AS1 from
 //! Debian's gmsh-doc (scripts/fetch-step-data.sh) with its tree, names and shared meshes; models OCCT writes in the
-//! test; `hrtao render` of each; killing the worker and Cancel; the STEP/IGES hostile corpus.
+//! test; `hrtao render` of each; killing the worker and Cancel; the STEP/IGES hostile corpus; the panel's load
+//! options driven with real X input.
+mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -9,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use hrtao_occt::{write_test_model, Format, TestModel};
 use hrtao_scene::hostile::{write_cad_corpus, Expect};
-use hrtao_scene::{LoadOptions, Scene, SceneError};
+use hrtao_scene::{CadTessellation, LoadOptions, Scene, SceneError};
 
 fn opts() -> LoadOptions {
     let mut o = LoadOptions::default();
@@ -499,5 +501,112 @@ fn viewer_keeps_its_scene_when_the_worker_is_killed() {
         "the error is reported\n{err}"
     );
     assert!(covered_pixels(&shot) > 500, "gen:box is still on screen");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Where the viewer logged the centre of the panel control `name` (`HRTAO_UI_PROBE`: `ui probe: NAME at X,Y WxH`),
+/// its latest position.
+fn probed(v: &common::Running, name: &str) -> Option<(i32, i32)> {
+    let needle = format!("ui probe: {name} at ");
+    let log = v.log_text();
+    let line = log.lines().rev().find(|l| l.contains(&needle))?;
+    let at = line.split(&needle).nth(1)?.split_whitespace().next()?;
+    let (x, y) = at.split_once(',')?;
+    Some((x.parse().ok()?, y.parse().ok()?))
+}
+
+/// Unique triangles of each STEP/IGES file opened so far, from the loader's log line.
+fn loaded_triangles(log: &str) -> Vec<usize> {
+    log.lines()
+        .filter(|l| l.contains("read and tessellated"))
+        .filter_map(|l| {
+            let before = l.split(" unique / ").next()?;
+            before.rsplit(", ").next()?.trim().parse().ok()
+        })
+        .collect()
+}
+
+/// The panel's load options with real X input (xdotool under Xvfb): "Load options" opened, "in millimetres"
+/// chosen, 2 mm and 45° typed into the two fields, "Reopen with these options" clicked. The file opens again with
+/// exactly the triangles the loader makes at that tessellation (fewer than the default's), and the view shows it.
+#[test]
+fn load_options_typed_in_the_panel_reopen_the_file_with_them() {
+    use common::{display_available, out_dir, x_input_lock, xdotool, Running};
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("load-options");
+    let p = dir.join("bolts.step");
+    write_test_model(&p, Format::Step, TestModel::BoltPattern(4)).unwrap();
+    let expected = |t: CadTessellation| {
+        let mut o = opts();
+        o.cad.tessellation = t;
+        let s = hrtao_scene::load_with(p.to_str().unwrap(), &o, &mut |_| {}).unwrap();
+        s.unique_triangle_count() as usize
+    };
+    let typed = CadTessellation {
+        relative: 0.0,
+        absolute: 2.0,
+        angular_deg: 45.0,
+    };
+    let (default_count, typed_count) = (expected(CadTessellation::default()), expected(typed));
+    assert!(typed_count < default_count, "{typed_count} vs {default_count}");
+
+    let mut v = Running::start_with(
+        &[p.to_str().unwrap(), "--size", "1280x800"],
+        &dir,
+        &[("HRTAO_UI_PROBE", Some("1"))],
+    );
+    v.wait_for("] opened ", 1, Duration::from_secs(120));
+    assert_eq!(loaded_triangles(&v.log_text()), [default_count]);
+    let window = v.focus_window();
+    let at = |v: &mut Running, name: &str| {
+        v.wait_for(&format!("ui probe: {name} at "), 1, Duration::from_secs(30));
+        probed(v, name).unwrap()
+    };
+    let header = at(&mut v, "Load options");
+    v.click_until(&window, header, "ui probe: in millimetres at ", 1);
+    let mm = at(&mut v, "in millimetres");
+    v.click_until(&window, mm, "ui probe: linear deflection mm at ", 1);
+    // A click on a number field edits it as text: select all, type, Enter.
+    for (name, value) in [("linear deflection mm", "2"), ("angular deflection", "45")] {
+        let (x, y) = at(&mut v, name);
+        xdotool(&[
+            "mousemove",
+            "--window",
+            &window,
+            "--sync",
+            &x.to_string(),
+            &y.to_string(),
+        ]);
+        std::thread::sleep(Duration::from_millis(300));
+        xdotool(&["click", "1"]);
+        std::thread::sleep(Duration::from_millis(500));
+        xdotool(&["key", "ctrl+a"]);
+        xdotool(&["type", "--delay", "50", value]);
+        xdotool(&["key", "Return"]);
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    let reopen = at(&mut v, "Reopen with these options");
+    v.click_until(&window, reopen, "] opened ", 2);
+    assert_eq!(
+        loaded_triangles(&v.log_text()),
+        [default_count, typed_count],
+        "{}",
+        v.log_text()
+    );
+    // The view shows the reopened model: F12 saves the view, and the model covers part of it.
+    xdotool(&["key", "--window", &window, "F12"]);
+    v.wait_for("screenshot saved", 1, Duration::from_secs(60));
+    let shots: Vec<PathBuf> = std::fs::read_dir(dir.join("screenshots"))
+        .unwrap()
+        .filter_map(|e| Some(e.ok()?.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+        .collect();
+    assert_eq!(shots.len(), 1, "{shots:?}");
+    let covered = covered_pixels(&shots[0]);
+    assert!(covered > 2000, "{covered} pixels show the model");
+    v.validation_clean();
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -83,10 +83,13 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
         m,
         "`scripts/bench-latency.sh [--scene PATH] --orbit 20 --roughness --out JSON` runs `hrtao view` under Xvfb at \
          1280×800 with the panel and sends 20 left drags with xdotool: in each of 2 launches one right after the \
-         scene opened, the others 0.3–3 s after the previous drag ended, during still refinement. Each drag is \
-         stamped with CLOCK_MONOTONIC just before it is sent; the viewer's `--stats` stamps each frame's \
-         presentation and the input it answers on the same clock. A drag's latency is the presentation of the \
-         first frame answering it minus its stamp. The orbit rows are `hrtao view --orbit 20 --stats` (20 frames \
+         scene opened, the others 0.3–3 s after the previous drag ended, during still refinement. A drag is a \
+         hover and a press, then its motion; it is stamped with CLOCK_MONOTONIC just before the motion is sent \
+         (the input that moves the view), and the viewer's `--stats` stamps each frame's presentation and the \
+         latest input it answers on the same clock. A drag's latency is the presentation of the first frame that \
+         moved with input received after the stamp, minus the stamp. Rows whose JSON says `\"stamp\": \"hover\"` \
+         (every row before the version `motion-stamp`) were stamped before the hover, 125 ms of the script's \
+         pauses before the motion, and count them. The orbit rows are `hrtao view --orbit 20 --stats` (20 frames \
          of 2°, then still until converged). Roughness is mean |AO − median of the 8 neighbours| over occluded \
          (AO < 0.95) flat pixels, per frame of `--orbit 1 --ao-out` at the view's size. The frame-time target is \
          100 ms. Versions of one scene ran back to back (`load` is the load average at the start).\n"
@@ -101,9 +104,14 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
         let j = &r.json;
         writeln!(
             m,
-            "| {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {}{} | {} | {} | {} | {} | {} |",
             r.scene,
             r.version,
+            if j["stamp"] == "hover" {
+                " (stamped at the hover)"
+            } else {
+                ""
+            },
             spread(&j["latency_ms"]),
             spread(&j["still_frames"]["wall_ms"]),
             seconds(&j["converge_after_last_drag_ms"]["median"]),

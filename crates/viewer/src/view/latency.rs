@@ -68,8 +68,8 @@ pub fn egui_has_input(ctx: &egui::Context) -> bool {
 
 /// The scripted instruments of one viewer.
 pub struct Latency {
-    /// The monotonic time of the earliest input event received since the last rendered frame.
-    pending_input_ms: Option<f64>,
+    /// The monotonic times of the earliest and the latest input event received since the last rendered frame.
+    pending_input_ms: Option<(f64, f64)>,
     /// The start of the first event-loop iteration since the last UI pass: events arrive right after it.
     wake_ms: Option<f64>,
     /// `--ao-out DIR` and the number of the next frame written there.
@@ -127,7 +127,10 @@ impl Latency {
 
     fn input_at(&mut self, ms: f64) {
         self.last_input = Instant::now();
-        self.pending_input_ms = Some(self.pending_input_ms.map_or(ms, |p| p.min(ms)));
+        self.pending_input_ms = Some(
+            self.pending_input_ms
+                .map_or((ms, ms), |(first, last)| (first.min(ms), last.max(ms))),
+        );
     }
 
     /// An event-loop iteration starts (winit's NewEvents): the events it delivers come right after.
@@ -149,10 +152,11 @@ impl Latency {
         }
     }
 
-    /// A frame was rendered: the stamp of the input it answers when its camera changed (`moved`). Input that has
-    /// not moved the camera yet stays pending while input goes on: a drag's press (egui moves nothing before the
-    /// pointer moves with the button down) is credited to the first frame the drag moves.
-    pub fn take_input(&mut self, moved: bool) -> Option<f64> {
+    /// A frame was rendered: the stamps of the earliest and the latest input it answers when its camera changed
+    /// (`moved`). Input that has not moved the camera yet stays pending while input goes on: a drag's press (egui
+    /// moves nothing before the pointer moves with the button down) is credited to the first frame the drag
+    /// moves, and that frame's latest input is the motion that moved it.
+    pub fn take_input(&mut self, moved: bool) -> Option<(f64, f64)> {
         if moved {
             self.pending_input_ms.take()
         } else {
@@ -259,17 +263,21 @@ mod tests {
             phase: egui_ash::winit::event::TouchPhase::Moved,
         };
         l.event(&press);
-        let t = l.pending_input_ms.unwrap();
+        let (t, _) = l.pending_input_ms.unwrap();
+        std::thread::sleep(Duration::from_millis(2));
         l.event(&press);
-        assert_eq!(l.pending_input_ms, Some(t), "the earliest event is kept");
+        let (first, last) = l.pending_input_ms.unwrap();
+        assert_eq!(first, t, "the earliest event is kept");
+        assert!(last >= t + 2.0, "and the latest: {t} {last}");
         assert!(t >= before);
-        // A frame that did not move keeps it for the first frame that moves; then the next input is stamped afresh.
+        // A frame that did not move keeps them for the first frame that moves; then the next input is stamped
+        // afresh.
         assert_eq!(l.take_input(false), None);
-        assert_eq!(l.take_input(true), Some(t));
+        assert_eq!(l.take_input(true), Some((t, last)));
         assert_eq!(l.take_input(true), None);
         l.event(&press);
-        let t2 = l.take_input(true).unwrap();
-        assert!(t2 >= t);
+        let (t2, t2_last) = l.take_input(true).unwrap();
+        assert!(t2 >= last && t2_last == t2);
     }
 
     #[test]
@@ -286,7 +294,7 @@ mod tests {
         let w2 = l.wake_ms.unwrap();
         assert!(w2 >= w + 3.0);
         l.ui_pass(true);
-        assert_eq!(l.take_input(true), Some(w2));
+        assert_eq!(l.take_input(true), Some((w2, w2)));
         // Input that moved nothing (a release) is dropped by the next pass without input.
         l.ui_pass(true);
         assert_eq!(l.take_input(false), None);

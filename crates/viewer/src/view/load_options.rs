@@ -92,13 +92,19 @@ pub fn is_cad_file(spec: &str) -> bool {
 impl Viewer {
     /// The "Load options" section: the tessellation of STEP/IGES files, and reopening the current one with it.
     pub(crate) fn load_options_section(&mut self, ui: &mut egui::Ui) {
+        let ppp = ui.ctx().pixels_per_point();
+        let probe = &mut self.ui_probe;
         let o = &mut self.prefs.cad_load;
         ui.label("STEP / IGES tessellation (OpenCASCADE)");
         ui.horizontal(|ui| {
-            ui.radio_value(&mut o.relative, true, "relative to each part")
+            let r = ui
+                .radio_value(&mut o.relative, true, "relative to each part")
                 .on_hover_text("Linear deflection as a fraction of each part's size (--deflection)");
-            ui.radio_value(&mut o.relative, false, "in millimetres")
+            probe.note("relative to each part", r.rect, ppp);
+            let r = ui
+                .radio_value(&mut o.relative, false, "in millimetres")
                 .on_hover_text("One linear deflection for every part (--deflection-mm)");
+            probe.note("in millimetres", r.rect, ppp);
         });
         egui::Grid::new("cad_load_options").show(ui, |ui| {
             ui.label("linear deflection");
@@ -115,17 +121,18 @@ impl Viewer {
                     o.relative_fraction = pct / 100.0;
                 }
             } else {
-                ui.add(
+                let r = ui.add(
                     egui::DragValue::new(&mut o.absolute_mm)
                         .clamp_range(ABSOLUTE_RANGE_MM.0..=ABSOLUTE_RANGE_MM.1)
                         .speed(0.01)
                         .max_decimals(4)
                         .suffix(" mm"),
                 );
+                probe.note("linear deflection mm", r.rect, ppp);
             }
             ui.end_row();
             ui.label("angular deflection");
-            ui.add(
+            let r = ui.add(
                 egui::DragValue::new(&mut o.angular_deg)
                     .clamp_range(ANGULAR_RANGE_DEG.0..=ANGULAR_RANGE_DEG.1)
                     .speed(0.1)
@@ -136,6 +143,7 @@ impl Viewer {
                 "At most this angle between neighbouring triangles of a curved face (--angular-deflection); \
                  keep it at most the crease angle so that curved faces do not read as facets",
             );
+            probe.note("angular deflection", r.rect, ppp);
             ui.end_row();
         });
         if ui.button("Defaults").clicked() {
@@ -143,11 +151,11 @@ impl Viewer {
         }
         let current = self.scene_spec.clone();
         let reopen = is_cad_file(&current) && self.loading.is_none();
-        if ui
+        let r = ui
             .add_enabled(reopen, egui::Button::new("Reopen with these options"))
-            .on_hover_text("Opens the current STEP/IGES file again; new files open with them too")
-            .clicked()
-        {
+            .on_hover_text("Opens the current STEP/IGES file again; new files open with them too");
+        self.ui_probe.note("Reopen with these options", r.rect, ppp);
+        if r.clicked() {
             self.start_loading(current);
         }
     }

@@ -24,6 +24,7 @@ pub mod slices;
 pub mod stats;
 pub mod tree;
 mod ui;
+mod ui_probe;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -436,6 +437,8 @@ pub(crate) struct Viewer {
     pending_ui_readback: Option<(PathBuf, Buffer, u32, u32, bool)>,
     /// Presentation and input stamps, `--ao-out`, `--exit-after`.
     latency: latency::Latency,
+    /// Window tests' hook: where the panel's controls are (`HRTAO_UI_PROBE`).
+    ui_probe: ui_probe::UiProbe,
     shut_down: bool,
 }
 
@@ -576,6 +579,7 @@ impl Viewer {
             },
             pending_ui_readback: None,
             latency: latency::Latency::new(args.ao_out.clone(), args.exit_after),
+            ui_probe: ui_probe::UiProbe::from_env(),
             shut_down: false,
         };
         if let Some(m) = prefs_msg {
@@ -1364,7 +1368,8 @@ impl Viewer {
                     slices: report.slices,
                     presented_ms,
                     input: input_ms.is_some(),
-                    input_ms,
+                    input_ms: input_ms.map(|i| i.0),
+                    input_last_ms: input_ms.map(|i| i.1),
                     roughness: None,
                     rays: report.rays,
                     cpu_ms: split,

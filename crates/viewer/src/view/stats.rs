@@ -40,6 +40,9 @@ pub struct FrameStat {
     /// With `input`: when the earliest input event not answered yet reached the viewer (CLOCK_MONOTONIC
     /// milliseconds; a drag's press counts from the frame its motion moves the camera).
     pub input_ms: Option<f64>,
+    /// With `input`: when the latest input event the frame answers reached the viewer (a drag's motion, where
+    /// `input_ms` may be its press). A benchmark that stamps the motion it sends matches it against this one.
+    pub input_last_ms: Option<f64>,
     /// With `--ao-out`: the roughness of the frame's AO (`hrtao_core::metrics::roughness`: mean |AO − median of
     /// the 8 neighbours| over flat pixels whose own AO is below 0.95; a still image's frames over the G-buffer
     /// of the round of slices that completes them, `Latency::dump_ao`); None without `--ao-out`, when no pixel
@@ -249,6 +252,7 @@ mod tests {
                 presented_ms: 0.0,
                 input: false,
                 input_ms: None,
+                input_last_ms: None,
                 roughness: None,
                 rays: 0,
                 cpu_ms: CpuSplit::default(),

@@ -210,9 +210,14 @@ impl Viewer {
         egui::CollapsingHeader::new("Scene")
             .default_open(true)
             .show(ui, |ui| self.scene_section(ui));
-        egui::CollapsingHeader::new("Load options")
+        let load_options = egui::CollapsingHeader::new("Load options")
             .default_open(false)
             .show(ui, |ui| self.load_options_section(ui));
+        self.ui_probe.note(
+            "Load options",
+            load_options.header_response.rect,
+            ui.ctx().pixels_per_point(),
+        );
         egui::CollapsingHeader::new("Ambient occlusion")
             .default_open(true)
             .show(ui, |ui| self.ao_section(ui));
