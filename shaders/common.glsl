@@ -103,6 +103,16 @@ float pixel_world_size(float t) {
 // World size of one step between the neighbours of `neighbour` (a pixel, or the lattice's spacing).
 float step_world_size(float t) { return pixel_world_size(t) * float(lattice()); }
 
+// Slices of a still image (ours): the filter taps at full resolution, where the pixels of the other slices
+// hold the cell estimate they resolved when last drawn (`SlicePrior`), so every slice filters the field a whole
+// frame would (a slice's own sub-grid alone gave each slice's pixels a differently smoothed field: a pattern
+// of the lattice's period). Whole frames and moving frames tap their own pixels as before.
+bool filter_full_taps() { return still_prior_frame() && lattice() > 1u; }
+// Whether `q` is one of the pixels this frame draws.
+bool in_slice(uvec2 q) { return q % lattice() == uvec2(g.lattice_x, g.lattice_y); }
+// The world size of the filter's step: a pixel with full taps, else the spacing of the frame's lattice.
+float filter_step_size(float t) { return filter_full_taps() ? pixel_world_size(t) : step_world_size(t); }
+
 // Offsets a ray origin off the surface along the normal, robust at any scale
 // (Waechter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems, ch. 6).
 vec3 offset_ray(vec3 p, vec3 n) {

@@ -50,8 +50,9 @@ void main() {
     // World size of the cell the AO came from, and of one (internal) pixel at this distance.
     int lod = pixel_lod(px.t) + int(used);
     float cell = exp2(float(lod));
-    // A step between taps: a pixel, or the spacing of the frame's lattice (slices).
-    float pixel_size = step_world_size(px.t);
+    // A step between taps: a pixel, or the spacing of the frame's lattice (slices), except with full taps.
+    bool full_taps = filter_full_taps();
+    float pixel_size = filter_step_size(px.t);
     int step = 1 << iteration;
     bool guided = g.filter_sigma > 0.0;
     // World scale of the position weights: the cell, or in the guided filter the reach of this iteration.
@@ -90,20 +91,39 @@ void main() {
     float wsum = 0.0;
     for (int dy = -2; dy <= 2; ++dy) {
         for (int dx = -2; dx <= 2; ++dx) {
-            ivec2 q = neighbour(pix, ivec2(dx, dy) * step);
+            ivec2 q = full_taps ? ivec2(pix) + ivec2(dx, dy) * step : neighbour(pix, ivec2(dx, dy) * step);
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             uint qi = uint(q.y) * g.width + uint(q.x);
+            float value;
+            if (!full_taps || in_slice(uvec2(q))) {
+                value = src.v[qi];
+            } else {
+                // A pixel of another slice: what it resolved when last drawn in this still image (none yet in
+                // the first round's later slices: the tap is skipped).
+                SlicePrior sp = SlicePriorRef(g.slice_prior).v[qi];
+                if (g.frame_index - sp.frame > g.frame_index - g.still_start_frame || !(sp.ao >= 0.0 && sp.ao <= 1.0)) {
+                    continue;
+                }
+                value = sp.ao;
+            }
             FilterGuide guide = GuideRef(g.filter_guide).v[qi];
             if (guide.normal == GUIDE_NONE) continue;
+            // A prior drawn before a local edit that changed geometry within its AO reach is stale (the
+            // pixel sees the edit only when its slice is drawn again): no ghost of a removed part.
+            if (full_taps && !in_slice(uvec2(q))
+                && edited_within(guide.position, g.ao_radius + cell,
+                                 g.frame_index - SlicePriorRef(g.slice_prior).v[qi].frame)) {
+                continue;
+            }
             vec3 q_normal = unpack_normal(guide.normal);
             float k = KERNEL[abs(dx)] * KERNEL[abs(dy)];
             vec3 delta = guide.position - px.position;
             float w_pos = exp(-dot(delta, delta) / (pos_scale * pos_scale));
             float w_plane = exp(-abs(dot(delta, px.normal)) / plane_scale);
             float w_n = pow(max(dot(q_normal, px.normal), 0.0), 2.0 * g.s_nd);
-            float w_ao = guided ? exp(-abs(src.v[qi] - center) * stop) : 1.0;
+            float w_ao = guided ? exp(-abs(value - center) * stop) : 1.0;
             float w = k * w_pos * w_plane * w_n * w_ao;
-            sum += w * src.v[qi];
+            sum += w * value;
             wsum += w;
         }
     }

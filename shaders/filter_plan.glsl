@@ -32,6 +32,8 @@ uint planned_iterations(float footprint, uint samples, uint iterations) {
 
 // The filter's guide of a pixel (FilterGuide): a pixel without AO (a miss, or no cell) stops every tap.
 layout(buffer_reference, scalar) buffer GuideRef { FilterGuide v[]; };
+// What each pixel resolved when last drawn (SlicePrior, `filter_full_taps`).
+layout(buffer_reference, scalar) buffer SlicePriorRef { SlicePrior v[]; };
 
 vec2 oct_wrap(vec2 v) { return (1.0 - abs(v.yx)) * mix(vec2(-1.0), vec2(1.0), greaterThanEqual(v, vec2(0.0))); }
 uint pack_normal(vec3 n) {

@@ -115,13 +115,16 @@ void resolve_pixel() {
                 float power = max(rq * rq, r * rq);
                 ao += g.near_weight * r * power / (power + v);
             }
-            float footprint = exp2(float(lod)) / max(step_world_size(px.t), 1e-30);   // cell width in steps
+            float footprint = exp2(float(lod)) / max(filter_step_size(px.t), 1e-30);   // cell width in steps
             uint own_rays = uint(own_samples);
             plan = make_plan(planned_iterations(footprint, own_rays, iterations), own_rays);
         }
     }
     GuideRef(g.filter_guide).v[index] = make_guide(px, used < LOD_COUNT);
     store_resolved(index, plan, clamp(ao, 0.0, 1.0), iterations);
+    if (filter_full_taps()) {
+        SlicePriorRef(g.slice_prior).v[index] = SlicePrior(clamp(ao, 0.0, 1.0), g.frame_index);
+    }
     UintRef(g.lod_used).v[index] = used;
 }
 

@@ -256,8 +256,11 @@ gpu_structs! {
         /// the view shows interpolated (`slice_order::level`, `Renderer::level_spacing`); 0: the view shows the
         /// pixels as they are drawn.
         level_spacing: u32,
-        /// Unused: keeps the struct a multiple of its 8-byte alignment.
-        _pad1: u32,
+        /// The `frame_index` of the still image's first frame: a pixel resolved since then holds this still
+        /// image's `SlicePrior`.
+        still_start_frame: u32,
+        /// Per pixel `SlicePrior`: the cell estimate it resolved when last drawn (slices' filter taps).
+        slice_prior: u64,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
@@ -374,6 +377,14 @@ gpu_structs! {
     struct FilterGuide {
         position: [f32; 3],
         normal: u32,
+    }
+
+    /// Per pixel, the cell estimate resolve.comp found for it when it was last drawn, and that frame's
+    /// `frame_index`: in a still image's slices the filter taps the pixels of the other slices through it
+    /// (filter.comp, `filter_full_taps`).
+    struct SlicePrior {
+        ao: f32,
+        frame: u32,
     }
 
     /// Per pixel, the rays it traced itself this frame (per-pixel RTAO, still-camera refinement).

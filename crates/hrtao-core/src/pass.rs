@@ -126,6 +126,8 @@ pub enum Resource {
     LodUsed,
     /// Contact detail's per-pixel obscurance.
     Obscurance,
+    /// Per pixel, the cell estimate it resolved when last drawn (`SlicePrior`).
+    SlicePrior,
     /// Still refinement's own-ray residuals.
     BiasEvidence,
     /// Still refinement's accumulation (`PixelAccum`).
@@ -137,7 +139,7 @@ pub enum Resource {
 }
 
 impl Resource {
-    pub const ALL: [Resource; 23] = [
+    pub const ALL: [Resource; 24] = [
         Resource::Instances,
         Resource::Geometries,
         Resource::Visibility,
@@ -157,6 +159,7 @@ impl Resource {
         Resource::FilterGuide,
         Resource::LodUsed,
         Resource::Obscurance,
+        Resource::SlicePrior,
         Resource::BiasEvidence,
         Resource::Accum,
         Resource::Output,
@@ -184,6 +187,7 @@ impl Resource {
             Resource::FilterGuide => "filter_guide",
             Resource::LodUsed => "lod_used",
             Resource::Obscurance => "obscurance",
+            Resource::SlicePrior => "slice_prior",
             Resource::BiasEvidence => "bias_evidence",
             Resource::Accum => "accum",
             Resource::Output => "output_rgba",
@@ -232,6 +236,8 @@ impl Pass {
                 FilterGuide,
                 Ao,
                 FilterTmp,
+                SlicePrior,
+                Regions,
             ],
             Pass::Obscurance => &[GBuffer],
             Pass::Detail => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Obscurance, Ao],
@@ -262,6 +268,7 @@ impl Pass {
             Pass::AoUpdate => &[HashCells, FilterTmp, PixelRays, Stats],
             Pass::Resolve => &[
                 FilterGuide,
+                SlicePrior,
                 LodUsed,
                 FilterPlan,
                 Ao,

@@ -42,6 +42,7 @@ struct Targets {
     ray_queue: Buffer,
     filter_queue: Buffer,
     obscurance: Buffer,
+    slice_prior: Buffer,
 }
 
 impl Targets {
@@ -73,6 +74,7 @@ impl Targets {
             ray_queue: b("ray queue", n * 4)?,
             filter_queue: b("filter queue", n * 4)?,
             obscurance: b("obscurance", n * 4)?,
+            slice_prior: b("slice prior", n * std::mem::size_of::<gpu::SlicePrior>() as u64)?,
         })
     }
 }
@@ -149,6 +151,8 @@ pub struct Renderer {
     prev: Option<FrameKey>,
     /// Monotonic count of rendered frames (a hash cell's "last used" stamp).
     frame_index: u32,
+    /// `frame_index` of the current still image's first frame (`FrameGlobals::still_start_frame`).
+    still_start_frame: u32,
     /// Rounds of slices (whole frames without slices) since the view last changed (0 = new view).
     still_index: u32,
     /// The slice this frame draws of the round's `lattice`² (`FrameDesc::lattice`, taken at a round's start).
@@ -218,6 +222,7 @@ impl Renderer {
             map: WorldHashMap::new(gpu)?,
             prev: None,
             frame_index: 0,
+            still_start_frame: 0,
             still_index: 0,
             slice: 0,
             lattice: 1,
@@ -339,6 +344,7 @@ impl Renderer {
         }
         if self.still_index == 0 && self.slice == 0 {
             self.edit_still_index = 0;
+            self.still_start_frame = self.frame_index;
         }
         if matches!(map, MapChange::Regions(_)) {
             self.edit_frame = Some(self.frame_index);
@@ -435,6 +441,7 @@ impl Renderer {
             dispatch_args: self.dispatch_args.address,
             regions: self.map.regions.address(),
             obscurance: t.obscurance.address,
+            slice_prior: t.slice_prior.address,
             bias_evidence: t.bias_evidence.address,
             projection: match cam.projection {
                 Projection::Perspective => gpu::PROJECTION_PERSPECTIVE,
@@ -446,6 +453,7 @@ impl Renderer {
             lattice_x: slice_offset.0,
             lattice_y: slice_offset.1,
             level_spacing,
+            still_start_frame: self.still_start_frame,
             edit_window: self.lattice * self.lattice,
             ..bytemuck::Zeroable::zeroed()
         };
