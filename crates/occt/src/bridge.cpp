@@ -1,5 +1,6 @@
-// The only C++ in hrtao: reads STEP/IGES through OpenCASCADE's XCAF readers, walks the product structure,
-// tessellates each unique part once and hands everything to Rust through the callbacks of bridge.h.
+// The only C++ in hrtao: reads STEP/IGES through OpenCASCADE's XCAF readers (IGES with its subfigures put into the
+// document by IgesDoc, below), walks the product structure, tessellates each unique part once and hands everything
+// to Rust through the callbacks of bridge.h.
 // Every entry point catches all C++ exceptions and turns them into an error message.
 #include "bridge.h"
 
@@ -7,14 +8,24 @@
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepToIGES_BREntity.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
+#include <IGESBasic_Group.hxx>
+#include <IGESBasic_Name.hxx>
+#include <IGESBasic_SingularSubfigure.hxx>
+#include <IGESBasic_SubfigureDef.hxx>
+#include <IGESCAFControl.hxx>
 #include <IGESCAFControl_Reader.hxx>
 #include <IGESCAFControl_Writer.hxx>
 #include <IGESControl_Controller.hxx>
+#include <IGESData_ColorEntity.hxx>
 #include <IGESData_GlobalSection.hxx>
+#include <IGESData_HArray1OfIGESEntity.hxx>
 #include <IGESData_IGESModel.hxx>
+#include <IGESGeom_TransformationMatrix.hxx>
+#include <IGESGraph_Color.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -23,14 +34,15 @@
 #include <Message_ProgressScope.hxx>
 #include <NCollection_DataMap.hxx>
 #include <NCollection_Map.hxx>
-#include <TDF_LabelMapHasher.hxx>
 #include <Poly_Triangulation.hxx>
 #include <Quantity_Color.hxx>
 #include <STEPCAFControl_Reader.hxx>
 #include <STEPCAFControl_Writer.hxx>
 #include <STEPControl_Reader.hxx>
 #include <Standard_Failure.hxx>
+#include <TColStd_HArray2OfReal.hxx>
 #include <TColStd_SequenceOfAsciiString.hxx>
+#include <TDF_LabelMapHasher.hxx>
 #include <TDF_LabelSequence.hxx>
 #include <TDataStd_Name.hxx>
 #include <TDocStd_Document.hxx>
@@ -39,10 +51,19 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Iterator.hxx>
+#include <TransferBRep.hxx>
+#include <TransferBRep_ShapeMapper.hxx>
+#include <Transfer_FinderProcess.hxx>
+#include <Transfer_TransientProcess.hxx>
+#include <UnitsMethods.hxx>
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <XSAlgo.hxx>
+#include <XSAlgo_AlgoContainer.hxx>
+#include <XSControl_TransferReader.hxx>
 #include <XSControl_WorkSession.hxx>
 #include <gp_Trsf.hxx>
 
@@ -254,9 +275,346 @@ struct Walker {
   }
 };
 
+// Closes an XCAF document however the function holding it ends.
+struct Closer {
+  Handle(XCAFApp_Application) app;
+  Handle(TDocStd_Document) doc;
+  ~Closer() {
+    if (!doc.IsNull() && doc->IsOpened()) app->Close(doc);
+  }
+};
+
 // OCCT's messages (transfer statistics) go to stdout by default: keep them out of the caller's output.
 void quiet() {
   Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
+}
+
+// ---- IGES into the XCAF document ---------------------------------------------------------------------------------
+//
+// IGES states that a shape is placed several times with subfigures: a definition (308) holds geometry and/or
+// instances (408) of other definitions; an instance places a definition (translation, scale, a 124 matrix). OCCT's
+// transfer keeps that sharing: every instance of one definition is the same TShape under its own location. What
+// IGESCAFControl_Reader::Transfer (7.6.3) then does with it loses part of it:
+// - AddCompositeShape splits a definition holding both geometry and instances into a part and an unnamed
+//   sub-assembly under a new compound, and builds both anew each time the definition is met from another root: that
+//   geometry becomes one part per root placing it. Placed inside another definition, the new compound is left as an
+//   extra free shape (drawn once more, unplaced) while the parent refers to the original compound, which XCAF then
+//   makes an assembly of its raw sub-shapes (a plate becomes 6 parts named "FACE").
+// - Names and colours are found by looking each entity's shape up in the document. Shape healing rebuilds each root
+//   after its transfer, and XSAlgo_AlgoContainer::MergeTransferInfo leaves the binder of a nested 408 with the healed
+//   shape without its location, so the lookup misses: instance names land on the part (the last instance's name
+//   wins) and components keep XCAF's automatic names ("=>[0:1:1:2]").
+// So IGES follows IGESCAFControl_Reader::Transfer's steps (units, TransferRoots, the colour and name pass over the
+// entities) except two: the document is built from the root shapes with one label per TShape (IgesDoc::define), and
+// the names, colours and blank status of subfigures and groups are read by walking each root entity alongside the
+// shape it became (IgesDoc::walk). A file without subfigures (OCCT's IGES writer writes none: every occurrence is a
+// copy) gets the same document as before: nothing in it is shared, so nothing is instanced.
+
+bool iges_color(const Handle(IGESData_IGESEntity)& e, Quantity_Color& col) {
+  if (e->DefColor() == IGESData_DefValue) {
+    col = IGESCAFControl::DecodeColor(e->RankColor());
+    return true;
+  }
+  if (e->DefColor() != IGESData_DefReference) return false;
+  Handle(IGESGraph_Color) c = Handle(IGESGraph_Color)::DownCast(e->Color());
+  if (c.IsNull()) return false;
+  Standard_Real rgb[3];
+  c->RGBIntensity(rgb[0], rgb[1], rgb[2]);
+  for (Standard_Real& v : rgb) v = v < 0 ? 0 : (v > 100 ? 100 : v);
+  col.SetValues(0.01 * rgb[0], 0.01 * rgb[1], 0.01 * rgb[2], Quantity_TOC_sRGB);
+  return true;
+}
+
+std::string iges_name(const Handle(IGESData_IGESEntity)& e) {
+  Handle(TCollection_HAsciiString) n;
+  if (Handle(IGESBasic_SubfigureDef) d = Handle(IGESBasic_SubfigureDef)::DownCast(e)) n = d->Name();
+  if ((n.IsNull() || n->IsEmpty()) && e->HasName()) n = e->NameValue();
+  if (n.IsNull()) return std::string();
+  TCollection_AsciiString s = n->String();
+  s.LeftAdjust();
+  s.RightAdjust();
+  return std::string(s.ToCString());
+}
+
+// The entities a subfigure definition or group turned into the children of its compound, in order
+// (IGESToBRep_CurveAndSurface::TransferGeometry skips items without a shape, and blanked ones when only visible
+// entities are read); empty for other entities.
+std::vector<Handle(IGESData_IGESEntity)> iges_items(const Handle(IGESData_IGESEntity)& e,
+                                                    const Handle(Transfer_TransientProcess)& tp) {
+  std::vector<Handle(IGESData_IGESEntity)> all;
+  if (Handle(IGESBasic_SubfigureDef) d = Handle(IGESBasic_SubfigureDef)::DownCast(e)) {
+    for (Standard_Integer i = 1; i <= d->NbEntities(); i++) all.push_back(d->AssociatedEntity(i));
+  } else if (Handle(IGESBasic_Group) g = Handle(IGESBasic_Group)::DownCast(e)) {
+    for (Standard_Integer i = 1; i <= g->NbEntities(); i++) all.push_back(g->Entity(i));
+  }
+  bool only_visible = Interface_Static::IVal("read.iges.onlyvisible") != 0;
+  std::vector<Handle(IGESData_IGESEntity)> out;
+  for (const Handle(IGESData_IGESEntity)& item : all) {
+    if (item.IsNull() || (only_visible && item->BlankStatus() == 1)) continue;
+    if (TransferBRep::ShapeResult(tp, item).IsNull()) continue;
+    out.push_back(item);
+  }
+  return out;
+}
+
+std::vector<TopoDS_Shape> children(const TopoDS_Shape& s, bool cumulative) {
+  std::vector<TopoDS_Shape> out;
+  for (TopoDS_Iterator it(s, cumulative, cumulative); it.More(); it.Next()) out.push_back(it.Value());
+  return out;
+}
+
+struct IgesDoc {
+  // One definition: a compound placed by instances (or holding them), as a label of the document.
+  struct Def {
+    TDF_Label label;     // its part or assembly
+    TopoDS_Shape shape;  // its shape in the document
+    TDF_Label part;      // the part holding the compound's own geometry (null without any)
+    bool lone = false;   // that geometry is one child of the compound, the part its shape (else their compound)
+    std::vector<TDF_Label> components;  // per child of the compound: its component (null for geometry)
+  };
+  Handle(XCAFDoc_ShapeTool) st;
+  Handle(XCAFDoc_ColorTool) ct;
+  Handle(Transfer_TransientProcess) tp;
+  NCollection_DataMap<TopoDS_Shape, bool, TopTools_ShapeMapHasher> composite_;
+  NCollection_DataMap<TopoDS_Shape, size_t, TopTools_ShapeMapHasher> def_of;  // compound (unlocated) -> defs
+  std::vector<Def> defs;
+  std::vector<bool> walked;  // per definition: its entity's names and colours are set
+
+  // A compound placed somewhere or holding one that is (IGESCAFControl_Reader's IsComposite): an instance of a
+  // subfigure, a group with a transformation, or something holding them.
+  bool composite(const TopoDS_Shape& s, int depth) {
+    if (s.ShapeType() != TopAbs_COMPOUND) return false;
+    if (!s.Location().IsIdentity()) return true;
+    if (const bool* known = composite_.Seek(s)) return *known;
+    if (depth > kMaxDepth) throw Failure{"the IGES subfigures nest deeper than 256 levels"};
+    bool c = false;
+    for (TopoDS_Iterator it(s, false, false); it.More() && !c; it.Next()) c = composite(it.Value(), depth + 1);
+    composite_.Bind(s, c);
+    return c;
+  }
+
+  static void forget_auto_name(const TDF_Label& l) { l.ForgetAttribute(TDataStd_Name::GetID()); }
+
+  // The label for compound `s` (without location, placed somewhere), added once however often it is placed: a part
+  // when it holds geometry only, else an assembly of its geometry children as one part (the child itself when there
+  // is one) and its composite children as components.
+  size_t define(const TopoDS_Shape& s, int depth) {
+    if (const size_t* known = def_of.Seek(s)) return *known;
+    if (depth > kMaxDepth) throw Failure{"the IGES subfigures nest deeper than 256 levels"};
+    std::vector<TopoDS_Shape> kids = children(s, false);
+    if (!composite(s, depth)) {
+      // Geometry only (a subfigure of no instances, placed): one part.
+      Def d;
+      d.label = d.part = st->AddShape(s, Standard_False, Standard_False);
+      d.shape = s;
+      d.components.resize(kids.size());
+      defs.push_back(d);
+      def_of.Bind(s, defs.size() - 1);
+      return defs.size() - 1;
+    }
+    std::vector<long> kid_def(kids.size(), -1);
+    BRep_Builder b;
+    TopoDS_Compound geometry, assembly;
+    b.MakeCompound(geometry);
+    b.MakeCompound(assembly);
+    size_t n_geometry = 0, lone = 0;
+    for (size_t i = 0; i < kids.size(); i++) {
+      if (composite(kids[i], depth + 1)) {
+        kid_def[i] = (long)define(kids[i].Located(TopLoc_Location()), depth + 1);
+      } else {
+        b.Add(geometry, kids[i]);
+        n_geometry++;
+        lone = i;
+      }
+    }
+    Def d;
+    if (n_geometry > 0) {
+      // The part is placed where the lone child is (its shape without location), or is the compound of them all.
+      TopoDS_Shape placed = n_geometry == 1 ? kids[lone] : TopoDS_Shape(geometry);
+      d.part = st->AddShape(placed.Located(TopLoc_Location()), Standard_False, Standard_False);
+      d.lone = n_geometry == 1;
+      b.Add(assembly, placed);
+    }
+    for (size_t i = 0; i < kids.size(); i++) {
+      if (kid_def[i] < 0) continue;
+      TopoDS_Shape inst = defs[(size_t)kid_def[i]].shape.Located(kids[i].Location());
+      inst.Orientation(kids[i].Orientation());
+      b.Add(assembly, inst);
+    }
+    // Components come in the order of the compound's children (XCAFDoc_ShapeTool::addShape).
+    d.label = st->AddShape(assembly, Standard_True, Standard_False);
+    d.shape = assembly;
+    TDF_LabelSequence comps;
+    XCAFDoc_ShapeTool::GetComponents(d.label, comps, Standard_False);
+    for (Standard_Integer i = 1; i <= comps.Length(); i++) forget_auto_name(comps.Value(i));
+    Standard_Integer next = n_geometry > 0 ? 2 : 1;
+    for (size_t i = 0; i < kids.size(); i++)
+      d.components.push_back(kid_def[i] >= 0 && next <= comps.Length() ? comps.Value(next++) : TDF_Label());
+    defs.push_back(d);
+    def_of.Bind(s, defs.size() - 1);
+    return defs.size() - 1;
+  }
+
+  // Adds one root shape; returns its label when it is composite (the placed definition), else a null label.
+  TDF_Label add_root(const TopoDS_Shape& r) {
+    if (!composite(r, 0)) {
+      st->AddShape(r, Standard_False);
+      return TDF_Label();
+    }
+    const Def& d = defs[define(r.Located(TopLoc_Location()), 0)];
+    if (r.Location().IsIdentity()) return d.label;
+    TopoDS_Shape placed = d.shape.Located(r.Location());
+    placed.Orientation(r.Orientation());
+    TDF_Label l = st->AddShape(placed, Standard_False, Standard_False);  // a reference to d.label
+    if (l != d.label) forget_auto_name(l);
+    return l;
+  }
+
+  void set_color(const TDF_Label& l, const Handle(IGESData_IGESEntity)& e) {
+    Quantity_Color c;
+    if (!l.IsNull() && iges_color(e, c)) ct->SetColor(l, c, XCAFDoc_ColorGen);
+  }
+  void set_name(const TDF_Label& l, const std::string& name) {
+    if (!l.IsNull() && !name.empty()) TDataStd_Name::Set(l, TCollection_ExtendedString(name.c_str(), Standard_True));
+  }
+
+  // Entity `e` became shape `s` (as placed in its parent), placed by `occurrence` (a component or a root's
+  // reference; null when the root is the definition itself). Sets the names, colours and blank status the subfigure
+  // entities carry. Where the entities and shapes stop matching (shape healing dropped a child), it stops.
+  void walk(const Handle(IGESData_IGESEntity)& e, const TopoDS_Shape& s, const TDF_Label& occurrence, int depth) {
+    if (depth > kMaxDepth) throw Failure{"the IGES subfigures nest deeper than 256 levels"};
+    const size_t* di = def_of.Seek(s.Located(TopLoc_Location()));
+    if (!di) return;
+    size_t index = *di;
+    Handle(IGESData_IGESEntity) def_entity = e;
+    if (Handle(IGESBasic_SingularSubfigure) inst = Handle(IGESBasic_SingularSubfigure)::DownCast(e)) {
+      // The instance: its name, colour and blank status are the occurrence's.
+      set_name(occurrence, iges_name(e));
+      set_color(occurrence, e);
+      if (!occurrence.IsNull() && e->BlankStatus() == 1) ct->SetVisibility(occurrence, Standard_False);
+      def_entity = inst->Subfigure();
+      if (def_entity.IsNull()) return;
+    }
+    if (!def_entity->IsKind(STANDARD_TYPE(IGESBasic_SubfigureDef)) &&
+        !def_entity->IsKind(STANDARD_TYPE(IGESBasic_Group)))
+      return;
+    // The definition (once, however often it is placed): its name and colour, then what it holds.
+    walked.resize(defs.size());
+    if (walked[index]) return;
+    walked[index] = true;
+    const Def& d = defs[index];  // (walk adds no definitions: the reference stays valid)
+    std::string name = iges_name(def_entity);
+    set_name(d.label, name);
+    set_color(d.label, def_entity);
+    if (!d.lone) set_name(d.part, name);  // the definition's own geometry
+    std::vector<Handle(IGESData_IGESEntity)> items = iges_items(def_entity, tp);
+    std::vector<TopoDS_Shape> kids = children(s.Located(TopLoc_Location()), false);
+    if (items.size() != kids.size() || kids.size() != d.components.size()) return;
+    for (size_t i = 0; i < kids.size(); i++) {
+      if (!d.components[i].IsNull()) {
+        walk(items[i], kids[i], d.components[i], depth + 1);
+      } else if (d.lone) {
+        geometry(items[i], kids[i].Located(TopLoc_Location()), d.part, true, depth + 1);
+      } else {
+        geometry(items[i], kids[i], d.part, false, depth + 1);
+      }
+    }
+  }
+
+  // Geometry entity `e` became `s` in part `part` (in the part's coordinates): the whole part, or a piece of it.
+  // Its name and colour go to the part, or (colour only) to the piece as a sub-shape, as IGESCAFControl_Reader does.
+  void geometry(const Handle(IGESData_IGESEntity)& e, const TopoDS_Shape& s, const TDF_Label& part, bool whole,
+                int depth) {
+    if (part.IsNull() || depth > kMaxDepth) return;
+    if (whole) {
+      set_name(part, iges_name(e));
+      set_color(part, e);
+    } else {
+      Quantity_Color c;
+      if (iges_color(e, c)) {
+        TDF_Label sub = st->AddSubShape(part, s);
+        if (!sub.IsNull()) ct->SetColor(sub, c, XCAFDoc_ColorGen);
+      }
+    }
+    if (!e->IsKind(STANDARD_TYPE(IGESBasic_Group))) return;
+    std::vector<Handle(IGESData_IGESEntity)> items = iges_items(e, tp);
+    std::vector<TopoDS_Shape> kids = children(s, true);
+    if (items.size() != kids.size()) return;
+    for (size_t i = 0; i < kids.size(); i++) geometry(items[i], kids[i], part, false, depth + 1);
+  }
+};
+
+// IGESCAFControl_Reader::Transfer, with the document built by IgesDoc (see above).
+bool iges_transfer(IGESCAFControl_Reader& reader, const Handle(TDocStd_Document)& doc,
+                   const Message_ProgressRange& range) {
+  Handle(IGESData_IGESModel) model = reader.IGESModel();
+  if (model.IsNull()) return false;
+  Standard_Real mm = 1.;
+  if (!XCAFDoc_DocumentTool::GetLengthUnit(doc, mm, UnitsMethods_LengthUnit_Millimeter)) {
+    XSAlgo::AlgoContainer()->PrepareForTransfer();
+    mm = UnitsMethods::GetCasCadeLengthUnit();
+    XCAFDoc_DocumentTool::SetLengthUnit(doc, mm, UnitsMethods_LengthUnit_Millimeter);
+  }
+  model->ChangeGlobalSection().SetCascadeUnit(mm);
+  reader.TransferRoots(range);
+  if (reader.NbShapes() <= 0) return false;
+
+  IgesDoc d;
+  d.st = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+  d.ct = XCAFDoc_DocumentTool::ColorTool(doc->Main());
+  const Handle(XSControl_TransferReader)& tr = reader.WS()->TransferReader();
+  d.tp = tr->TransientProcess();
+  // The roots' shapes, in TransferRoots's order, each with the entity it came from.
+  NCollection_Map<TopoDS_Shape, TopTools_ShapeMapHasher> transferred;
+  for (Standard_Integer i = 1; i <= reader.NbShapes(); i++) transferred.Add(reader.Shape(i));
+  std::vector<std::pair<Handle(IGESData_IGESEntity), TopoDS_Shape>> roots;
+  NCollection_Map<TopoDS_Shape, TopTools_ShapeMapHasher> added;
+  for (Standard_Integer i = 1; i <= reader.NbRootsForTransfer(); i++) {
+    Handle(IGESData_IGESEntity) e = Handle(IGESData_IGESEntity)::DownCast(reader.RootForTransfer(i));
+    if (e.IsNull()) continue;
+    TopoDS_Shape s = tr->ShapeResult(e);
+    if (s.IsNull() || !transferred.Contains(s)) continue;
+    roots.emplace_back(e, s);
+    added.Add(s);
+  }
+  std::vector<TDF_Label> root_labels;
+  for (auto& r : roots) root_labels.push_back(d.add_root(r.second));
+  // Shapes TransferRoots kept that no root entity gives back (none expected): added as they are.
+  for (Standard_Integer i = 1; i <= reader.NbShapes(); i++)
+    if (!added.Contains(reader.Shape(i))) d.add_root(reader.Shape(i));
+
+  // IGESCAFControl_Reader's pass over the entities (without layers), except subfigures: their shapes may not be the
+  // document's (see above), and the walk below does them.
+  for (Standard_Integer i = 1; i <= model->NbEntities(); i++) {
+    Handle(IGESData_IGESEntity) e = model->Entity(i);
+    if (e.IsNull() || e->IsKind(STANDARD_TYPE(IGESBasic_SubfigureDef)) ||
+        e->IsKind(STANDARD_TYPE(IGESBasic_SingularSubfigure)))
+      continue;
+    Handle(Transfer_Binder) binder = d.tp->Find(e);
+    if (binder.IsNull()) continue;
+    TopoDS_Shape s = TransferBRep::ShapeResult(binder);
+    if (s.IsNull()) continue;
+    Quantity_Color col;
+    bool has_color = iges_color(e, col);
+    if (has_color) d.ct->AddColor(col);
+    TDF_Label l;
+    if (d.st->SearchUsingMap(s, l, Standard_False, has_color)) {
+      if (has_color) d.ct->SetColor(l, col, XCAFDoc_ColorGen);
+      d.set_name(l, iges_name(e));
+    } else if (has_color) {
+      for (TopoDS_Iterator it(s); it.More(); it.Next())
+        if (d.st->SearchUsingMap(it.Value(), l, Standard_False, Standard_True))
+          d.ct->SetColor(l, col, XCAFDoc_ColorGen);
+    }
+  }
+  for (size_t i = 0; i < roots.size(); i++) {
+    if (root_labels[i].IsNull()) continue;
+    const IgesDoc::Def& def = d.defs[*d.def_of.Seek(roots[i].second.Located(TopLoc_Location()))];
+    d.walk(roots[i].first, roots[i].second, root_labels[i] == def.label ? TDF_Label() : root_labels[i], 0);
+  }
+  d.ct->ReverseChainsOfTreeNodes();
+  d.st->UpdateAssemblies();
+  return true;
 }
 
 int read_impl(const char* path, int32_t format, const hr_tessellation* tess, const hr_callbacks* cb,
@@ -266,13 +624,7 @@ int read_impl(const char* path, int32_t format, const hr_tessellation* tess, con
   Handle(XCAFApp_Application) app = XCAFApp_Application::GetApplication();
   Handle(TDocStd_Document) doc;
   app->NewDocument("MDTV-XCAF", doc);
-  struct Closer {
-    Handle(XCAFApp_Application) app;
-    Handle(TDocStd_Document) doc;
-    ~Closer() {
-      if (!doc.IsNull() && doc->IsOpened()) app->Close(doc);
-    }
-  } closer{app, doc};
+  Closer closer{app, doc};
   units->file_m = 0;
   // Each stage announces its start (fraction 0): the loader logs where the time goes.
   progress->set_stage("read");
@@ -322,7 +674,7 @@ int read_impl(const char* path, int32_t format, const hr_tessellation* tess, con
     }
     progress->set_stage("transfer");
     progress->report(0);
-    if (!reader.Transfer(doc, progress->Start())) {
+    if (!iges_transfer(reader, doc, progress->Start())) {
       if (progress->stopped()) throw Stopped{};
       throw Failure{"OpenCASCADE found no shape to transfer in the IGES file"};
     }
@@ -361,6 +713,173 @@ TopoDS_Shape bolt() {
   return c;
 }
 
+// IGES with subfigures, for tests (OCCT's IGES writer writes none: every occurrence of a part is a copy). Every part
+// is a subfigure definition (308) of its geometry and every assembly a 308 of instances (408) of its components, with
+// names (406 form 15 on instances, the 308's own name), colours (an occurrence's on its 408, a part's on its 308, a
+// face's on its face entity) and hidden occurrences (blank status). A part placed once, where its assembly is, with
+// no name, colour or visibility of its own on the occurrence nor a colour of its own, is written inline in the
+// assembly's 308: geometry beside instances, as CAD systems also write it.
+struct SubfigureWriter {
+  IGESControl_Writer w{"MM", 0};
+  Handle(XCAFDoc_ShapeTool) st;
+  Handle(XCAFDoc_ColorTool) ct;
+  Handle(Transfer_FinderProcess) fp = new Transfer_FinderProcess;
+  BRepToIGES_BREntity brep;
+  NCollection_DataMap<TDF_Label, Handle(IGESBasic_SubfigureDef), TDF_LabelMapHasher> defs;
+  NCollection_DataMap<TDF_Label, int, TDF_LabelMapHasher> uses;  // components referring to a label
+
+  SubfigureWriter(const Handle(XCAFDoc_ShapeTool)& st_, const Handle(XCAFDoc_ColorTool)& ct_) : st(st_), ct(ct_) {
+    brep.SetModel(w.Model());
+    brep.SetTransferProcess(fp);
+    TDF_LabelSequence all;
+    st->GetShapes(all);
+    for (Standard_Integer i = 1; i <= all.Length(); i++) {
+      TDF_LabelSequence comps;
+      XCAFDoc_ShapeTool::GetComponents(all.Value(i), comps, Standard_False);
+      for (Standard_Integer k = 1; k <= comps.Length(); k++) {
+        TDF_Label ref;
+        if (!XCAFDoc_ShapeTool::GetReferredShape(comps.Value(k), ref)) continue;
+        if (int* n = uses.ChangeSeek(ref)) (*n)++;
+        else uses.Bind(ref, 1);
+      }
+    }
+  }
+
+  void name(const Handle(IGESData_IGESEntity)& e, const std::string& n) {
+    if (n.empty()) return;
+    Handle(IGESBasic_Name) p = new IGESBasic_Name;
+    p->Init(1, new TCollection_HAsciiString(n.c_str()));
+    e->AddProperty(p);
+    w.AddEntity(p);
+  }
+
+  void color(const Handle(IGESData_IGESEntity)& e, const TDF_Label& l) {
+    Quantity_Color c;
+    if (!ct->GetColor(l, XCAFDoc_ColorSurf, c) && !ct->GetColor(l, XCAFDoc_ColorGen, c)) return;
+    if (Standard_Integer rank = IGESCAFControl::EncodeColor(c)) {
+      e->InitColor(Handle(IGESData_ColorEntity)(), rank);
+      return;
+    }
+    Standard_Real r, g, b;
+    c.Values(r, g, b, Quantity_TOC_sRGB);
+    Handle(IGESGraph_Color) ce = new IGESGraph_Color;
+    ce->Init(100 * r, 100 * g, 100 * b, new TCollection_HAsciiString());
+    w.AddEntity(ce);
+    e->InitColor(ce);
+  }
+
+  // The geometry of part `l`, its faces' colours on their face entities.
+  Handle(IGESData_IGESEntity) geometry(const TDF_Label& l) {
+    Handle(IGESData_IGESEntity) e = brep.TransferShape(XCAFDoc_ShapeTool::GetShape(l));
+    if (e.IsNull()) throw Failure{"OpenCASCADE could not write a part as IGES"};
+    TDF_LabelSequence subs;
+    XCAFDoc_ShapeTool::GetSubShapes(l, subs);
+    for (Standard_Integer i = 1; i <= subs.Length(); i++) {
+      for (TopExp_Explorer f(XCAFDoc_ShapeTool::GetShape(subs.Value(i)), TopAbs_FACE); f.More(); f.Next()) {
+        Handle(IGESData_IGESEntity) fe;
+        if (fp->FindTypedTransient(TransferBRep::ShapeMapper(fp, f.Current()), STANDARD_TYPE(IGESData_IGESEntity), fe))
+          color(fe, subs.Value(i));
+      }
+    }
+    return e;
+  }
+
+  // A component's name, without XCAF's automatic one ("=>[0:1:1:2]", the label it refers to).
+  static std::string occurrence_name(const TDF_Label& c) {
+    std::string n = label_name(c);
+    return n.rfind("=>[", 0) == 0 ? std::string() : n;
+  }
+
+  static bool is_identity(const gp_Trsf& t) {
+    for (int r = 1; r <= 3; r++)
+      for (int c = 1; c <= 4; c++)
+        if (t.Value(r, c) != (r == c ? 1.0 : 0.0)) return false;
+    return true;
+  }
+
+  // The 308 of label `l` (a part or an assembly), `level` deep in the assembly.
+  Handle(IGESBasic_SubfigureDef) definition(const TDF_Label& l, int level) {
+    if (const Handle(IGESBasic_SubfigureDef)* known = defs.Seek(l)) return *known;
+    if (level > kMaxDepth) throw Failure{"the assembly is deeper than 256 levels"};
+    std::vector<Handle(IGESData_IGESEntity)> items;
+    Standard_Integer depth = 0;  // the 308's nesting of subfigures (0: no instances inside)
+    if (XCAFDoc_ShapeTool::IsAssembly(l)) {
+      TDF_LabelSequence comps;
+      XCAFDoc_ShapeTool::GetComponents(l, comps, Standard_False);
+      for (Standard_Integer i = 1; i <= comps.Length(); i++) {
+        TDF_Label c = comps.Value(i), ref;
+        if (!XCAFDoc_ShapeTool::GetReferredShape(c, ref)) continue;
+        std::array<float, 4> unused;
+        bool inline_ = !XCAFDoc_ShapeTool::IsAssembly(ref) && uses.Find(ref) == 1 &&
+                       is_identity(XCAFDoc_ShapeTool::GetLocation(c).Transformation()) && occurrence_name(c).empty() &&
+                       !label_color(ct, c, unused) && ct->IsVisible(c) && !label_color(ct, ref, unused);
+        if (inline_) {
+          Handle(IGESData_IGESEntity) g = geometry(ref);
+          name(g, label_name(ref));
+          items.push_back(g);
+        } else {
+          Handle(IGESBasic_SingularSubfigure) inst = instance(c, ref, level);
+          depth = std::max(depth, inst->Subfigure()->Depth() + 1);
+          items.push_back(inst);
+        }
+      }
+    } else {
+      items.push_back(geometry(l));
+    }
+    if (items.empty()) throw Failure{"an empty assembly"};
+    Handle(IGESData_HArray1OfIGESEntity) array = new IGESData_HArray1OfIGESEntity(1, (Standard_Integer)items.size());
+    for (size_t i = 0; i < items.size(); i++) array->SetValue((Standard_Integer)i + 1, items[i]);
+    Handle(IGESBasic_SubfigureDef) d = new IGESBasic_SubfigureDef;
+    d->Init(depth, new TCollection_HAsciiString(label_name(l).c_str()), array);
+    color(d, l);
+    defs.Bind(l, d);
+    return d;
+  }
+
+  // The 408 placing `ref` as component `c`: a translation, or a 124 matrix when it also turns.
+  Handle(IGESBasic_SingularSubfigure) instance(const TDF_Label& c, const TDF_Label& ref, int level) {
+    gp_Trsf t = XCAFDoc_ShapeTool::GetLocation(c).Transformation();
+    Handle(IGESBasic_SingularSubfigure) inst = new IGESBasic_SingularSubfigure;
+    bool turns = t.Form() != gp_Identity && t.Form() != gp_Translation;
+    inst->Init(definition(ref, level + 1), turns ? gp_XYZ() : t.TranslationPart(), Standard_False, 1.0);
+    if (turns) {
+      Handle(TColStd_HArray2OfReal) m = new TColStd_HArray2OfReal(1, 3, 1, 4);
+      for (int r = 1; r <= 3; r++)
+        for (int k = 1; k <= 4; k++) m->SetValue(r, k, t.Value(r, k));
+      Handle(IGESGeom_TransformationMatrix) tm = new IGESGeom_TransformationMatrix;
+      tm->Init(m);
+      w.AddEntity(tm);
+      inst->InitTransf(tm);
+    }
+    name(inst, occurrence_name(c));
+    color(inst, c);
+    if (!ct->IsVisible(c))
+      inst->InitStatus(1, inst->SubordinateStatus(), inst->UseFlag(), inst->HierarchyStatus());
+    return inst;
+  }
+
+  // Free assemblies and coloured free parts as instances of their 308, other free parts as their geometry.
+  bool write(const char* path) {
+    TDF_LabelSequence roots;
+    st->GetFreeShapes(roots);
+    for (Standard_Integer i = 1; i <= roots.Length(); i++) {
+      TDF_Label l = roots.Value(i);
+      std::array<float, 4> unused;
+      Handle(IGESData_IGESEntity) e;
+      if (XCAFDoc_ShapeTool::IsAssembly(l) || label_color(ct, l, unused)) {
+        Handle(IGESBasic_SingularSubfigure) inst = new IGESBasic_SingularSubfigure;
+        inst->Init(definition(l, 0), gp_XYZ(), Standard_False, 1.0);
+        e = inst;
+      } else {
+        e = geometry(l);
+      }
+      name(e, label_name(l));
+      w.AddEntity(e);
+    }
+    return w.Write(path);
+  }
+};
+
 int write_impl(const char* path, int32_t format, int32_t kind, int32_t count) {
   quiet();
   // Without p-curves a box takes about a third of the entities.
@@ -368,6 +887,7 @@ int write_impl(const char* path, int32_t format, int32_t kind, int32_t count) {
   Handle(XCAFApp_Application) app = XCAFApp_Application::GetApplication();
   Handle(TDocStd_Document) doc;
   app->NewDocument("MDTV-XCAF", doc);
+  Closer closer{app, doc};
   Handle(XCAFDoc_ShapeTool) st = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
   Handle(XCAFDoc_ColorTool) ct = XCAFDoc_DocumentTool::ColorTool(doc->Main());
   auto at = [](double x, double y, double z) {
@@ -380,7 +900,7 @@ int write_impl(const char* path, int32_t format, int32_t kind, int32_t count) {
       TDF_Label l = st->AddShape(BRepPrimAPI_MakeBox(gp_Pnt(30.0 * i, 0, 0), 10 + 5.0 * i, 10, 10).Shape(), false);
       TDataStd_Name::Set(l, TCollection_ExtendedString(("box" + std::to_string(i + 1)).c_str()));
     }
-  } else if (kind == 1) {
+  } else if (kind == 1 || kind == 4) {
     TDF_Label asm_ = st->NewShape();
     TDataStd_Name::Set(asm_, "bolt_pattern");
     TDF_Label plate = st->AddShape(BRepPrimAPI_MakeBox(gp_Pnt(-60, -60, -10), 120, 120, 10).Shape(), false);
@@ -392,6 +912,12 @@ int write_impl(const char* path, int32_t format, int32_t kind, int32_t count) {
       double a = 2 * M_PI * i / count;
       TDF_Label c = st->AddComponent(asm_, b, at(40 * std::cos(a), 40 * std::sin(a), 0));
       TDataStd_Name::Set(c, TCollection_ExtendedString(("bolt" + std::to_string(i + 1)).c_str()));
+    }
+    if (kind == 4) {
+      TDF_Label pair = st->NewShape();
+      TDataStd_Name::Set(pair, "two_patterns");
+      TDataStd_Name::Set(st->AddComponent(pair, asm_, at(0, 0, 0)), "left");
+      TDataStd_Name::Set(st->AddComponent(pair, asm_, at(200, 0, 0)), "right");
     }
     st->UpdateAssemblies();
   } else if (kind == 2) {
@@ -432,12 +958,16 @@ int write_impl(const char* path, int32_t format, int32_t kind, int32_t count) {
   if (format == 0) {
     STEPCAFControl_Writer w;
     ok = w.Transfer(doc, STEPControl_AsIs) && w.Write(path) == IFSelect_RetDone;
-  } else {
+  } else if (format == 1) {
     IGESControl_Controller::Init();
     IGESCAFControl_Writer w;
     ok = w.Transfer(doc) && w.Write(path);
+  } else if (format == 2) {
+    IGESControl_Controller::Init();
+    ok = SubfigureWriter(st, ct).write(path);
+  } else {
+    throw Failure{"unknown test file format"};
   }
-  app->Close(doc);
   if (!ok) throw Failure{std::string("OpenCASCADE could not write ") + path};
   return 0;
 }

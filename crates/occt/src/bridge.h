@@ -45,9 +45,11 @@ typedef struct hr_units {
 int hr_read(const char* path, int32_t format, const hr_tessellation* tess, const hr_callbacks* cb,
             hr_units* units, char* err, size_t err_len);
 
-// Writes a small test model: kind 0 three boxes, 1 a bolt pattern (one bolt shape placed `count` times on a
-// plate), 2 a coloured assembly (part, face and occurrence colours, one hidden occurrence), 3 `count`
-// separate box solids. Returns 0 on success, 1 on error (message in `err`).
+// Writes a small test model as STEP (format 0), IGES with OCCT's writer (1: every occurrence a copy) or IGES with
+// subfigures (2: parts as 308 definitions, occurrences as 408 instances): kind 0 three boxes, 1 a bolt pattern (one
+// bolt shape placed `count` times on a plate), 2 a coloured assembly (part, face and occurrence colours, one hidden
+// occurrence), 3 `count` separate box solids, 4 the bolt pattern placed twice as a sub-assembly. Returns 0 on
+// success, 1 on error (message in `err`).
 int hr_write_test(const char* path, int32_t format, int32_t kind, int32_t count, char* err, size_t err_len);
 
 #ifdef __cplusplus

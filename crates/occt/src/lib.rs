@@ -14,7 +14,9 @@
 //! endless loop inside OCCT must not take the viewer down.
 //!
 //! [`read`] returns each unique part tessellated once ([`Part`]) and the product structure in pre-order
-//! ([`Node`]): every occurrence of a part is a node referring to the same part.
+//! ([`Node`]): every occurrence of a part is a node referring to the same part. In IGES an occurrence is shared
+//! when the file says so with subfigures (a definition, entity 308, placed by instances, 408); a file without them
+//! (OCCT's own IGES writer and many exporters write every occurrence as a copy) has nothing to share.
 
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::Path;
@@ -289,16 +291,33 @@ pub enum TestModel {
     Coloured,
     /// `n` separate box solids in one shape.
     ManySolids(u32),
+    /// The bolt pattern of `n` bolts as a sub-assembly placed twice ("left" and "right", 200 mm apart) in an
+    /// assembly "two_patterns".
+    BoltPatternPair(u32),
 }
 
-/// Writes a [`TestModel`] as STEP or IGES (tests only).
+/// Writes a [`TestModel`] as STEP or IGES (tests only), with OCCT's writers. OCCT's IGES writer keeps no
+/// sharing: every occurrence of a part is written as a copy of its geometry (see [`write_test_model_subfigures`]).
 pub fn write_test_model(path: &Path, format: Format, model: TestModel) -> Result<(), Error> {
+    write_test(path, matches!(format, Format::Iges) as i32, model)
+}
+
+/// Writes a [`TestModel`] as IGES with subfigures (tests only), the way IGES states that a part is placed several
+/// times: every part is a subfigure definition (entity 308) of its geometry, every assembly a 308 of instances (408)
+/// of its components, with names, colours (occurrence, part, face) and hidden occurrences (blank status). A part
+/// placed once where its assembly is, with nothing of its own, is written inline in the assembly's 308.
+pub fn write_test_model_subfigures(path: &Path, model: TestModel) -> Result<(), Error> {
+    write_test(path, 2, model)
+}
+
+fn write_test(path: &Path, format: i32, model: TestModel) -> Result<(), Error> {
     let cpath = c_path(path)?;
     let (kind, count) = match model {
         TestModel::Boxes => (0, 0),
         TestModel::BoltPattern(n) => (1, n),
         TestModel::Coloured => (2, 0),
         TestModel::ManySolids(n) => (3, n),
+        TestModel::BoltPatternPair(n) => (4, n),
     };
     let mut err = vec![0 as c_char; 2048];
     let _kernel = kernel_lock();
@@ -306,7 +325,7 @@ pub fn write_test_model(path: &Path, format: Format, model: TestModel) -> Result
     let rc = unsafe {
         ffi::hr_write_test(
             cpath.as_ptr(),
-            matches!(format, Format::Iges) as i32,
+            format,
             kind,
             count.min(i32::MAX as u32) as i32,
             err.as_mut_ptr(),
