@@ -37,11 +37,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Some(s) => s.clone(),
         None => default_scene_path().display().to_string(),
     };
-    // The device opens while the scene loads (a STEP file loads in a worker process; on a CPU device both take a
-    // core).
+    // The device opens and the renderer makes its pipelines while the scene loads (a STEP file loads in a worker
+    // process; on a CPU device both take a core).
     let early = {
         let device = args.device.clone();
-        std::thread::spawn(move || open_gpu(&device))
+        std::thread::spawn(move || -> Result<_> {
+            let gpu = open_gpu(&device)?;
+            let renderer = Renderer::new(&gpu)?;
+            Ok((gpu, renderer))
+        })
     };
     // Everything that can fail before the device is needed; the device thread is joined whatever happens (no
     // exit while that thread is inside the driver).
@@ -73,7 +77,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     })();
     let device = early.join().map_err(|_| anyhow!("the device thread panicked"))?;
     let (scene, load_ms, camera, mut settings, sections) = prepared?;
-    let gpu = device?;
+    let (gpu, mut renderer) = device?;
     let mut scene_gpu = SceneGpu::new(&gpu, &scene)?;
     scene_gpu.set_sections(&scene, &sections, u32::MAX)?;
     log::info!(
@@ -83,7 +87,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene_gpu.stats.tlas_instances,
         scene_gpu.stats.tlas_ms
     );
-    let mut renderer = Renderer::new(&gpu)?;
     let t0 = Instant::now();
     let mut frames = Vec::new();
     let bar = progress(args.frames as u64, "rendering");
