@@ -249,26 +249,39 @@ bool held_round() {
     return g.level_spacing > 0u;
 }
 
-// The bilinear interpolation at `pix` of the grid of spacing `level_spacing`, from the AO and colour its pixels
-// kept aside.
+// Uniform cubic B-spline weights of the grid points at offsets -1, 0, 1 and 2 from the cell's corner, at the
+// fraction `f` of the cell: a convex combination, smooth (C2) across cells.
+vec4 bspline_weights(float f) {
+    float f2 = f * f;
+    float f3 = f2 * f;
+    float u = 1.0 - f;
+    return vec4(u * u * u, 3.0 * f3 - 6.0 * f2 + 4.0, -3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0, f3) / 6.0;
+}
+
+// The grid of spacing `level_spacing` seen at `pix`: the cubic B-spline of the AO and colour its pixels kept
+// aside (4 x 4 grid points). Each grid point holds one pixel's first estimate, noisy; the B-spline approximates
+// rather than interpolates, which halves that noise at the grid points where bilinear interpolation keeps all of
+// it, and leaves no creases along the grid lines.
 void level_value(uvec2 pix, out float ao, out uint rgba) {
     int s = int(g.level_spacing);
     ivec2 base = (ivec2(pix) / s) * s;
     vec2 f = vec2(ivec2(pix) - base) / float(s);
+    vec4 wx = bspline_weights(f.x);
+    vec4 wy = bspline_weights(f.y);
     vec4 color = vec4(0.0);
     float wsum = 0.0;
     ao = 0.0;
-    for (int corner = 0; corner < 4; ++corner) {
-        ivec2 o = ivec2(corner & 1, corner >> 1);
-        ivec2 q = base + s * o;
-        vec2 wv = mix(1.0 - f, f, vec2(o));
-        float w = wv.x * wv.y;
-        // Past the right and bottom edges the grid's last pixels stand alone (the weights renormalise).
-        if (w <= 0.0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
-        vec4 kept = kept_aside(q);
-        ao += w * kept.x;
-        color += w * unpackUnorm4x8(floatBitsToUint(kept.y));
-        wsum += w;
+    for (int j = 0; j < 4; ++j) {
+        for (int i = 0; i < 4; ++i) {
+            ivec2 q = base + s * ivec2(i - 1, j - 1);
+            // Past the image's edges the grid points near them stand for the rest (the weights renormalise).
+            if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
+            float w = wx[i] * wy[j];
+            vec4 kept = kept_aside(q);
+            ao += w * kept.x;
+            color += w * unpackUnorm4x8(floatBitsToUint(kept.y));
+            wsum += w;
+        }
     }
     ao /= wsum;
     rgba = packUnorm4x8(color / wsum);

@@ -855,6 +855,14 @@ impl Renderer {
         Ok(bytemuck::cast_slice(&px).to_vec())
     }
 
+    /// Per pixel, the AO it kept aside when drawn in the held rounds of a still image in slices (composite.comp
+    /// `keep_aside`): the grid values the view shows reconstructed (tests).
+    pub fn read_held_ao(&self) -> Result<Vec<f32>> {
+        let n = self.pixel_count();
+        let slots: Vec<[f32; 4]> = self.read_buffer(&self.targets.bias_evidence, 3 * n)?;
+        Ok(slots[2 * n..].iter().map(|v| v[0]).collect())
+    }
+
     /// The G-buffer of the last frame (tests, picking).
     pub fn read_gbuffer(&self) -> Result<Vec<GPixel>> {
         self.read_buffer(&self.targets.gbuffer, self.pixel_count())

@@ -85,11 +85,12 @@ fn a_round_of_slices_accumulates_as_a_whole_frame() {
     assert_clean(&gpu);
 }
 
-/// The first slice of a new view shows all of it: every pixel shows the bilinear interpolation of the slice's
-/// grid (`slice_order::level`), none the previous view; the first two rounds then hold what the view shows until
-/// round 1 ends, when the image is that of two whole frames of the view. Catches a first round that leaves the
-/// pixels of later slices with the previous view (a torn image), a block or nearest-neighbour fill (steps where
-/// the interpolation is linear), and pixels shown one slice at a time beside the grid's interpolation.
+/// The first slice of a new view shows all of it: every pixel shows the cubic B-spline of the slice's grid
+/// (`slice_order::level`, composite.comp `level_value`), none the previous view; the first two rounds then hold
+/// what the view shows until round 1 ends, when the image is that of two whole frames of the view. Catches a first
+/// round that leaves the pixels of later slices with the previous view (a torn image), a block, nearest-neighbour
+/// or bilinear fill (each differs from the B-spline between grid pixels that differ), and pixels shown one slice
+/// at a time beside the grid's reconstruction.
 #[test]
 fn the_first_slice_of_a_view_shows_all_of_it() {
     let gpu = gpu();
@@ -117,30 +118,48 @@ fn the_first_slice_of_a_view_shows_all_of_it() {
         changed > w * h / 2,
         "the new view replaced the old: {changed} pixels changed"
     );
-    // Along a grid row, between two grid pixels, the AO is their linear interpolation; every pixel lies within
-    // the range of its grid corners.
+    // Every pixel shows the cubic B-spline of the 4 x 4 grid values around it (renormalised at the image's
+    // edges): within their range, and equal to it.
+    let grid = r.read_held_ao().unwrap();
+    let bspline = |f: f32| {
+        let u = 1.0 - f;
+        [
+            u * u * u / 6.0,
+            (3.0 * f * f * f - 6.0 * f * f + 4.0) / 6.0,
+            (-3.0 * f * f * f + 3.0 * f * f + 3.0 * f + 1.0) / 6.0,
+            f * f * f / 6.0,
+        ]
+    };
     let mut between = 0;
     for y in 0..h {
         for x in 0..w {
             let (x0, y0) = (x / 3 * 3, y / 3 * 3);
-            let corners: Vec<f32> = [(x0, y0), (x0 + 3, y0), (x0, y0 + 3), (x0 + 3, y0 + 3)]
-                .iter()
-                .filter(|&&(cx, cy)| cx < w && cy < h)
-                .map(|&(cx, cy)| ao[cy * w + cx])
-                .collect();
-            let (lo, hi) = corners
-                .iter()
-                .fold((1.0f32, 0.0f32), |(l, u), &c| (l.min(c), u.max(c)));
+            let (wx, wy) = (bspline((x - x0) as f32 / 3.0), bspline((y - y0) as f32 / 3.0));
+            let (mut sum, mut wsum, mut lo, mut hi) = (0.0f32, 0.0f32, 1.0f32, 0.0f32);
+            for (j, wyj) in wy.iter().enumerate() {
+                for (i, wxi) in wx.iter().enumerate() {
+                    let (qx, qy) = (x0 as i64 + 3 * (i as i64 - 1), y0 as i64 + 3 * (j as i64 - 1));
+                    if qx < 0 || qy < 0 || qx >= w as i64 || qy >= h as i64 {
+                        continue;
+                    }
+                    let g = grid[qy as usize * w + qx as usize];
+                    sum += wxi * wyj * g;
+                    wsum += wxi * wyj;
+                    (lo, hi) = (lo.min(g), hi.max(g));
+                }
+            }
             let v = ao[y * w + x];
             assert!(
                 v >= lo - 1e-5 && v <= hi + 1e-5,
                 "({x}, {y}): {v} outside {lo}..{hi}"
             );
+            assert!(
+                (v - sum / wsum).abs() < 1e-4,
+                "({x}, {y}): {v} against the B-spline {}",
+                sum / wsum
+            );
             if y % 3 == 0 && x % 3 != 0 && x0 + 3 < w {
-                let f = (x - x0) as f32 / 3.0;
-                let linear = ao[y * w + x0] * (1.0 - f) + ao[y * w + x0 + 3] * f;
-                assert!((v - linear).abs() < 1e-4, "({x}, {y}): {v} against {linear}");
-                between += ((ao[y * w + x0] - ao[y * w + x0 + 3]).abs() > 0.05) as usize;
+                between += ((grid[y * w + x0] - grid[y * w + x0 + 3]).abs() > 0.05) as usize;
             }
         }
     }
