@@ -649,10 +649,17 @@ impl Renderer {
     /// frame completes it. Round 0 shows each grid as it completes (for L = 8 the spacings 8, 4 and 2); round 1
     /// keeps round 0's finest until it ends and shows all its pixels (spacing 1): its pixels come in beside
     /// round 0's cell estimates, and one at a time they would speckle.
+    /// A round whose end can make the image final is never held: the final image is its pixels as they are,
+    /// not the grid's reconstruction (a B-spline approximates, it does not interpolate).
     fn level_spacing(&self) -> (u32, bool) {
         let (l, slice) = (self.lattice, self.slice);
         if self.still_index > 1 || l == 1 {
             return (0, false);
+        }
+        if let Some(key) = &self.prev {
+            if self.converged(key, 0) {
+                return (0, false);
+            }
         }
         if self.still_index == 1 {
             if slice + 1 == l * l {

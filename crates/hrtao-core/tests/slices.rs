@@ -181,6 +181,44 @@ fn the_first_slice_of_a_view_shows_all_of_it() {
     assert_clean(&gpu);
 }
 
+/// A still image that is final at the end of round 1 (still_samples 4, no jitter) shows its pixels as they are,
+/// not the held rounds' reconstruction of them (the B-spline at spacing 1, a 3 x 3 blur of what the pixels kept
+/// aside): a round whose end can converge is never held. Catches a held final round (the final image is then
+/// exactly that blur).
+#[test]
+fn a_final_round_shows_its_pixels_not_the_held_reconstruction() {
+    let gpu = gpu();
+    let (scene, cam) = blocks_scene();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut s = settings();
+    s.still.still_samples = 4;
+    let mut r = Headless::new(&gpu, cam.width, cam.height, s).unwrap();
+    r.lattice = 2;
+    let (frames, _) = until_converged(&mut r, &sg, scene.f(), &cam, 16);
+    assert_eq!(frames, 8, "final at the end of round 1");
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let (ao, kept) = (r.read_ao().unwrap(), r.read_held_ao().unwrap());
+    let k = [1.0f32 / 6.0, 4.0 / 6.0, 1.0 / 6.0];
+    let mut largest = 0.0f32;
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let mut blur = 0.0;
+            for (j, kj) in k.iter().enumerate() {
+                for (i, ki) in k.iter().enumerate() {
+                    blur += ki * kj * kept[(y + j - 1) * w + x + i - 1];
+                }
+            }
+            largest = largest.max((ao[y * w + x] - blur).abs());
+        }
+    }
+    eprintln!("largest difference from the held reconstruction: {largest:.4}");
+    assert!(
+        largest > 0.05,
+        "the final image is the held rounds' blur ({largest})"
+    );
+    assert_clean(&gpu);
+}
+
 /// A still image's slices filter the field a whole frame filters (filter.comp `filter_full_taps`): the first
 /// image of all its pixels (after the two held rounds of lattice 4, each pixel drawn twice) is about as smooth
 /// as two whole frames' after the same moving frame (the bundled scene at the viewer's size: 1.04x). Each slice
