@@ -212,19 +212,25 @@ fn ao_out_writes_every_frame_and_its_roughness() {
         measured.iter().all(|r| r.is_finite() && *r > 0.0 && *r < 0.2),
         "{rough:?}"
     );
-    // The run ends on the converged image, smoother than the blocky first frame at the moving scale and than the
-    // roughest still frame of the first half of the refinement.
+    // The run ends on the converged image, smoother than the blocky first frame at the moving scale, and the path
+    // to it is monotone: no still frame is much rougher than the converged one (issue #28 asks 1.25x; measured
+    // 1.04x here, and 1.26x / 1.03x on the bundled scene / san_francisco at 1280x800 with the panel; before the
+    // held rounds' B-spline and the full-resolution filter of slices, 2.0x / 1.4-1.7x). The bound leaves room
+    // for the lattice the frame-time controller picks under load.
     let last = frames.len() - 1;
     assert_eq!(frames[last]["converged"], true);
     let still: Vec<usize> = (0..frames.len())
         .filter(|&i| frames[i]["still"] == true)
         .collect();
     assert!(still.len() >= 4, "{} still frames", still.len());
-    let first_half = &still[..still.len() / 2];
-    let peak = first_half.iter().map(|&i| rough[i]).fold(0.0, f64::max);
+    let peak = still
+        .iter()
+        .map(|&i| rough[i])
+        .filter(|r| !r.is_nan())
+        .fold(0.0, f64::max);
     assert!(
-        rough[last] < rough[0] && rough[last] <= peak,
-        "converged {} against the first frame {} and the early still frames' peak {peak}",
+        rough[last] < rough[0] && peak <= 1.5 * rough[last],
+        "converged {} against the first frame {} and the still frames' peak {peak}",
         rough[last],
         rough[0]
     );
