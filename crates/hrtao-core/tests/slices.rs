@@ -219,7 +219,7 @@ fn a_final_round_shows_its_pixels_not_the_held_reconstruction() {
     assert_clean(&gpu);
 }
 
-/// The path to a still image is monotone (issue #28): from one moving frame of a young map at 0.4 of the size,
+/// The path to a still image is monotone: from one moving frame of a young map at 0.4 of the size,
 /// as the viewer renders it, no frame of the still image in slices of lattice 4 is rougher than 1.25x the
 /// converged image's (roughness over the converged G-buffer, as `examples/still_path` measures it). Measured
 /// 1.18x (bundled scene, 403x400); 1.48x with the held rounds' bilinear interpolation (the round-1 image), 1.88x

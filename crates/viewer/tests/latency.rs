@@ -213,7 +213,7 @@ fn ao_out_writes_every_frame_and_its_roughness() {
         "{rough:?}"
     );
     // The run ends on the converged image, smoother than the blocky first frame at the moving scale, and the path
-    // to it is monotone: no still frame is much rougher than the converged one (issue #28 asks 1.25x; measured
+    // to it is monotone: no still frame is much rougher than the converged one (the goal is 1.25x; measured
     // 1.04x here, and 1.26x / 1.03x on the bundled scene / san_francisco at 1280x800 with the panel; before the
     // held rounds' B-spline and the full-resolution filter of slices, 2.0x / 1.4-1.7x). The bound leaves room
     // for the lattice the frame-time controller picks under load.
