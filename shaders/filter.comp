@@ -94,27 +94,22 @@ void main() {
             ivec2 q = full_taps ? ivec2(pix) + ivec2(dx, dy) * step : neighbour(pix, ivec2(dx, dy) * step);
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             uint qi = uint(q.y) * g.width + uint(q.x);
-            float value;
-            if (!full_taps || in_slice(uvec2(q))) {
-                value = src.v[qi];
-            } else {
-                // A pixel of another slice: what it resolved when last drawn in this still image (none yet in
-                // the first round's later slices: the tap is skipped).
-                SlicePrior sp = SlicePriorRef(g.slice_prior).v[qi];
+            // A pixel of another slice contributes what it resolved when last drawn in this still image (none
+            // yet in the first round's later slices: the tap is skipped).
+            bool prior = full_taps && !in_slice(uvec2(q));
+            SlicePrior sp = SlicePrior(src.v[qi], g.frame_index);
+            if (prior) {
+                sp = SlicePriorRef(g.slice_prior).v[qi];
                 if (g.frame_index - sp.frame > g.frame_index - g.still_start_frame || !(sp.ao >= 0.0 && sp.ao <= 1.0)) {
                     continue;
                 }
-                value = sp.ao;
             }
+            float value = sp.ao;
             FilterGuide guide = GuideRef(g.filter_guide).v[qi];
             if (guide.normal == GUIDE_NONE) continue;
             // A prior drawn before a local edit that changed geometry within its AO reach is stale (the
             // pixel sees the edit only when its slice is drawn again): no ghost of a removed part.
-            if (full_taps && !in_slice(uvec2(q))
-                && edited_within(guide.position, g.ao_radius + cell,
-                                 g.frame_index - SlicePriorRef(g.slice_prior).v[qi].frame)) {
-                continue;
-            }
+            if (prior && edited_within(guide.position, g.ao_radius + cell, g.frame_index - sp.frame)) continue;
             vec3 q_normal = unpack_normal(guide.normal);
             float k = KERNEL[abs(dx)] * KERNEL[abs(dy)];
             vec3 delta = guide.position - px.position;

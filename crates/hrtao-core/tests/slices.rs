@@ -286,9 +286,9 @@ fn orbited(c: &Camera, degrees: f32) -> Camera {
 
 /// A still image's slices filter the field a whole frame filters (filter.comp `filter_full_taps`): the first
 /// image of all its pixels (after the two held rounds of lattice 4, each pixel drawn twice) is about as smooth
-/// as two whole frames' after the same moving frame (the bundled scene at the viewer's size: 1.04x). Each slice
+/// as two whole frames' after the same moving frame (the bundled scene at the viewer's size: 1.06x). Each slice
 /// filtering only its own sub-grid smoothed each slice's pixels differently, a pattern of the lattice's period
-/// (1.20x).
+/// (1.17x).
 #[test]
 fn slices_filter_the_field_a_whole_frame_does() {
     let gpu = gpu();
@@ -329,22 +329,34 @@ fn slices_filter_the_field_a_whole_frame_does() {
 const LATTICE_TEST_W: u32 = 806;
 const LATTICE_TEST_H: u32 = 800;
 
+/// Frames of a still image of lattice 2 rendered before the local edits below: 12 rounds and 2 slices.
+const MID_ROUND_FRAMES: u32 = 4 * 12 + 2;
+
+/// The blocks scene's still image at lattice 2 and s_p 8 after `MID_ROUND_FRAMES` frames: the next frame draws
+/// slice 2 of 4.
+fn mid_round_still_image(
+    gpu: &std::sync::Arc<hrtao_core::Gpu>,
+) -> (hrtao_scene::Scene, Camera, SceneGpu, AoSettings, Headless) {
+    let (scene, cam) = blocks_scene();
+    let sg = SceneGpu::new(gpu, &scene).unwrap();
+    let mut s = settings();
+    s.map.s_p = 8.0;
+    let mut r = Headless::new(gpu, cam.width, cam.height, s.clone()).unwrap();
+    r.lattice = 2;
+    for _ in 0..MID_ROUND_FRAMES {
+        r.render(&sg, scene.f(), &cam).unwrap();
+    }
+    (scene, cam, sg, s, r)
+}
+
 /// A local edit in the middle of a round (slice 2 of 4): the slices drawn in the frames after it, before the
 /// round ends, see it too, so no pixel keeps the removed block's contact shadow. Catches an edit seen only by
 /// the slice of its own frame (`edit_window`).
 #[test]
 fn a_local_edit_mid_round_reaches_every_slice() {
     let gpu = gpu();
-    let (mut scene, cam) = blocks_scene();
-    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut s = settings();
-    s.map.s_p = 8.0;
+    let (mut scene, cam, mut sg, s, mut r) = mid_round_still_image(&gpu);
     assert!(s.edits.local_edits);
-    let mut r = Headless::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
-    r.lattice = 2;
-    for _ in 0..(4 * 12 + 2) {
-        r.render(&sg, scene.f(), &cam).unwrap();
-    }
     let part = 2;
     let bounds = scene.instance_bounds(part);
     let ring = ring_pixels(&r, bounds, 0.6);
@@ -382,22 +394,13 @@ fn a_local_edit_mid_round_reaches_every_slice() {
 #[test]
 fn the_slice_after_a_local_edit_taps_no_stale_prior() {
     let gpu = gpu();
-    let (mut scene, cam) = blocks_scene();
-    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
-    let mut s = settings();
-    s.map.s_p = 8.0;
-    let mut r = Headless::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
-    r.lattice = 2;
-    let frames = 4 * 12 + 2;
-    for _ in 0..frames {
-        r.render(&sg, scene.f(), &cam).unwrap();
-    }
+    let (mut scene, cam, mut sg, s, mut r) = mid_round_still_image(&gpu);
     let part = 2;
     let ring = ring_pixels(&r, scene.instance_bounds(part), 0.6);
     scene.set_visible(part, false).unwrap();
     sg.update_instances(&scene, u32::MAX).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
-    let (ox, oy) = hrtao_core::slice_order::offset(frames % 4, 2);
+    let (ox, oy) = hrtao_core::slice_order::offset(MID_ROUND_FRAMES % 4, 2);
     let w = cam.width as usize;
     let drawn: Vec<usize> = ring
         .iter()
