@@ -3,9 +3,10 @@
 //! A round of L² slices draws each pixel offset of the L×L lattice block once. The slices go coarse to fine
 //! (each next offset is the one farthest from those drawn, on the torus of the block), so the pixels drawn so far
 //! stay spread evenly and complete square grids on the way: for L = 8 the grids of spacing 8, 4 and 2 after 1, 4
-//! and 16 slices (`level`). In the first round of a still image the view shows the bilinear interpolation of the
-//! finest grid completed (composite.comp `show_level`): smooth at every frame, no single pixels that differ from
-//! the blocks around them, and sharper at each level.
+//! and 16 slices (`level`). In the first round of a still image the view shows the cubic B-spline of the finest
+//! grid completed (composite.comp `show_level`): smooth at every frame, no single pixels that differ from the
+//! blocks around them, and sharper at each level. Prime lattices (5, 7) complete no grid between L and 1: their
+//! held rounds show the coarse grid throughout.
 
 /// Squared distance between two offsets of the `lattice`-periodic block (the torus).
 fn torus_distance2(a: (u32, u32), b: (u32, u32), lattice: u32) -> u32 {
