@@ -756,7 +756,7 @@ impl Viewer {
         }
         let ppp = ctx.pixels_per_point();
         let (shift, ctrl) = ctx.input(|i| (i.modifiers.shift, i.modifiers.command));
-        let delta = resp.drag_delta() * ppp;
+        let delta = view_drag_delta(ctx, resp) * ppp;
         let world_up = self.nav.world_up.vector();
         let view_h = self.view_rect[3].max(1) as f32;
         if resp.dragged_by(PointerButton::Primary) && ctrl && shift {
@@ -1169,8 +1169,79 @@ fn fmt_count(n: u64) -> String {
     parts.join(",")
 }
 
+/// The pointer's motion that a drag of the view answers this frame, in points. egui's `drag_delta` is the
+/// pointer's whole motion since the previous frame, so on the frame a drag starts it also holds the motion before
+/// the press (a hover and a press that a busy frame delivers together): the view would jump by a motion made with
+/// no button down. A drag moves the view by the motion since its press, and from then on by each frame's.
+fn view_drag_delta(ctx: &egui::Context, resp: &egui::Response) -> egui::Vec2 {
+    if !resp.dragged() {
+        return egui::Vec2::ZERO;
+    }
+    if resp.drag_started() {
+        return ctx
+            .input(|i| Some(i.pointer.latest_pos()? - i.pointer.press_origin()?))
+            .unwrap_or_default();
+    }
+    resp.drag_delta()
+}
+
 #[cfg(test)]
 mod tests {
+    /// One frame of a bare egui context with a drag-sensing area over the whole screen, fed `events`: the drag
+    /// delta the view answers.
+    fn drag_frame(ctx: &egui::Context, events: Vec<egui::Event>) -> egui::Vec2 {
+        let input = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(
+                egui::Pos2::ZERO,
+                egui::vec2(400.0, 300.0),
+            )),
+            events,
+            ..Default::default()
+        };
+        let mut delta = egui::Vec2::ZERO;
+        let _ = ctx.run(input, |ctx| {
+            egui::CentralPanel::default().show(ctx, |ui| {
+                let rect = ui.max_rect();
+                let resp = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+                delta = super::view_drag_delta(ctx, &resp);
+            });
+        });
+        delta
+    }
+
+    /// A hover and a press that arrive in one frame do not move the view by the hover's motion (egui's own
+    /// `drag_delta` gives the hover's 40 points there); the motion after the press does, from the press on,
+    /// including the part of it that came in the press's frame.
+    #[test]
+    fn a_drag_moves_the_view_by_the_motion_after_its_press() {
+        use egui::{Event, PointerButton, Pos2};
+        let press = |p: Pos2, pressed| Event::PointerButton {
+            pos: p,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Default::default(),
+        };
+        let ctx = egui::Context::default();
+        let (a, b) = (Pos2::new(100.0, 100.0), Pos2::new(140.0, 100.0));
+        assert_eq!(drag_frame(&ctx, vec![Event::PointerMoved(a)]), egui::Vec2::ZERO);
+        let d = drag_frame(&ctx, vec![Event::PointerMoved(b), press(b, true)]);
+        assert_eq!(d, egui::Vec2::ZERO, "the hover's motion moved the view");
+        let d = drag_frame(&ctx, vec![Event::PointerMoved(Pos2::new(150.0, 104.0))]);
+        assert_eq!(d, egui::vec2(10.0, 4.0));
+        // A press and motion after it in one frame: the motion since the press.
+        let _ = drag_frame(&ctx, vec![press(Pos2::new(150.0, 104.0), false)]);
+        let c = Pos2::new(200.0, 200.0);
+        let d = drag_frame(
+            &ctx,
+            vec![
+                Event::PointerMoved(c),
+                press(c, true),
+                Event::PointerMoved(Pos2::new(207.0, 195.0)),
+            ],
+        );
+        assert_eq!(d, egui::vec2(7.0, -5.0));
+    }
+
     #[test]
     fn counts_and_axes() {
         assert_eq!(super::fmt_count(0), "0");
