@@ -17,9 +17,8 @@ void main() {
     if (!pixel_coords(pix, index)) return;
     vec3 origin, dir;
     camera_ray(pix, origin, dir);
-    // The visibility image has one pixel per pixel of the frame's lattice (raster.rs SliceProjection).
-    uint vis_width = (g.width + lattice() - 1u) / lattice();
-    uvec4 vis = VisRef(packUint2x32(push.xy)).v[gl_GlobalInvocationID.y * vis_width + gl_GlobalInvocationID.x];
+    // The visibility image is the whole frame's (raster.rs: a round of slices draws it once).
+    uvec4 vis = VisRef(packUint2x32(push.xy)).v[index];
     GPixel px = gpixel_miss();
     if (vis.x != NO_INSTANCE) {
         GeometryInfo geo = GeometryRef(g.geometries).v[vis.y];

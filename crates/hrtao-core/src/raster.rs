@@ -367,6 +367,19 @@ pub struct Rasterizer {
     /// One pipeline per `Faces` (indexed by `Faces as usize`).
     pipelines: [vk::Pipeline; 3],
     targets: Option<VisTargets>,
+    /// What the visibility image holds: the draw's push constants, section planes and scene generation (TLAS
+    /// build, instance tables). None once the targets change.
+    drawn: Option<DrawKey>,
+}
+
+/// Everything a visibility draw depends on: while it is unchanged (the frames of a round of slices share the
+/// camera and the round's jitter), the image drawn is still right and is not drawn again.
+#[derive(Clone, PartialEq)]
+struct DrawKey {
+    push: Vec<u8>,
+    sections: [[f32; 4]; 3],
+    section_count: u32,
+    generation: (u64, u64),
 }
 
 impl Rasterizer {
@@ -401,6 +414,7 @@ impl Rasterizer {
             layout: vk::PipelineLayout::null(),
             pipelines: [vk::Pipeline::null(); 3],
             targets: None,
+            drawn: None,
         };
         r.render_pass = create_render_pass(gpu)?;
         let push = [vk::PushConstantRange {
@@ -426,28 +440,38 @@ impl Rasterizer {
     pub fn prepare(&mut self, width: u32, height: u32) -> Result<()> {
         if self.targets.as_ref().map(|t| t.size) != Some((width, height)) {
             self.targets = None;
+            self.drawn = None;
             self.targets = Some(VisTargets::new(&self.gpu, self.render_pass, (width, height))?);
         }
         Ok(())
     }
 
-    /// Records the visibility draws, the copy of the visibility image and the G-buffer resolve, all timed as
-    /// primary visibility. `globals` are the frame's (camera and size), at device address `globals_address`
-    /// (the draws read the section planes there); `target_distance` is the camera's eye-target distance (it
-    /// sets the perspective near plane). Panics if `prepare` was not called for this size.
+    /// Records the visibility draws and the copy of the visibility image, unless the image already holds this
+    /// very draw (`DrawKey`), then the G-buffer resolve of the frame's pixels, all timed as primary
+    /// visibility. The image is always the whole frame's: a round of slices draws it at its first slice and
+    /// each slice resolves its own pixels from it, so a slice does not pay for every triangle again (on a
+    /// software device that is most of a small slice's cost). `globals` are the frame's (camera and size), at
+    /// device address `globals_address` (the draws read the section planes there); `target_distance` is the
+    /// camera's eye-target distance (it sets the perspective near plane); `generation` names the scene's
+    /// geometry (`SceneGpu::tlas_generation`, `version`). Panics if `prepare` was not called for this size.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
-        &self,
+        &mut self,
         rec: &mut Recorder,
         scene: &RasterScene,
         globals: &FrameGlobals,
         globals_address: u64,
         target_distance: f32,
         off_axis: Option<(glam::Vec3, [f32; 2])>,
+        generation: (u64, u64),
     ) {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
         let (w, h) = t.size;
-        let slice = SliceProjection::of(globals);
-        assert_eq!((w, h), slice.size, "visibility targets of another size");
+        assert_eq!(
+            (w, h),
+            (globals.width, globals.height),
+            "visibility targets of another size"
+        );
         let scaled = |v: [f32; 4]| {
             let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
             [v[0] / len2, v[1] / len2, v[2] / len2, 0.0]
@@ -459,8 +483,8 @@ impl Rasterizer {
         };
         let mut push = RasterPush {
             eye: [globals.eye[0], globals.eye[1], globals.eye[2], depth],
-            cam_u: slice.scale_axis(scaled(globals.cam_u), slice.scale[0]),
-            cam_v: slice.scale_axis(scaled(globals.cam_v), slice.scale[1]),
+            cam_u: scaled(globals.cam_u),
+            cam_v: scaled(globals.cam_v),
             cam_w: match off_axis {
                 Some((axis, _)) => [axis.x, axis.y, axis.z, 0.0],
                 None => globals.cam_w,
@@ -473,12 +497,39 @@ impl Rasterizer {
                 let [ox, oy] = off_axis.map_or([0.0; 2], |(_, o)| o);
                 let (fw, fh) = (globals.width as f32, globals.height as f32);
                 [
-                    (2.0 * globals.jitter[0] / fw + ox + slice.offset[0]) / slice.scale[0],
-                    (2.0 * globals.jitter[1] / fh + oy + slice.offset[1]) / slice.scale[1],
+                    2.0 * globals.jitter[0] / fw + ox,
+                    2.0 * globals.jitter[1] / fh + oy,
                 ]
             },
             globals: globals_address,
         };
+        let key = DrawKey {
+            push: bytemuck::bytes_of(&push).to_vec(),
+            sections: [globals.section0, globals.section1, globals.section2],
+            section_count: globals.section_count,
+            generation,
+        };
+        let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
+        // Over the frame's pixels (its slice): each reads its own pixel of the whole frame's visibility.
+        let resolve = |rec: &mut Recorder| {
+            rec.dispatch(
+                Pass::GbufferFromVis,
+                globals
+                    .width
+                    .saturating_sub(globals.lattice_x)
+                    .div_ceil(globals.lattice.max(1)),
+                globals
+                    .height
+                    .saturating_sub(globals.lattice_y)
+                    .div_ceil(globals.lattice.max(1)),
+                [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
+            )
+        };
+        if self.drawn.as_ref() == Some(&key) {
+            resolve(rec);
+            return;
+        }
+        self.drawn = Some(key);
         let extent = vk::Extent2D { width: w, height: h };
         // The draws read the scene's geometry table; the visibility image is copied to a buffer that
         // gbuffer_from_vis.comp reads.
@@ -582,14 +633,7 @@ impl Rasterizer {
                 );
             },
         );
-        let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
-        // Over the visibility image: pixel (i, j) is the frame's lattice pixel (L i + x, L j + y).
-        rec.dispatch(
-            Pass::GbufferFromVis,
-            w,
-            h,
-            [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
-        );
+        resolve(rec);
     }
 
     /// The far plane of an orthographic view (depth is linear there): just beyond the farthest corner of the
@@ -797,38 +841,4 @@ fn create_pipeline(
     result
         .map(|p| p[0])
         .map_err(|(_, e)| CoreError::from_vk("vkCreateGraphicsPipelines", e))
-}
-
-/// A frame's slice as a rasterised image (ours, `FrameDesc::lattice`): the visibility image has one pixel per
-/// lattice pixel, ⌈W / L⌉ × ⌈H / L⌉, and its pixel (i, j) samples the full image's pixel (L i + x, L j + y). In
-/// the full image's NDC its pixel centres lie at `scale` × its own NDC + `offset` (per axis; row 0 at the top):
-/// scale = L ⌈W / L⌉ / W, offset = (L ⌈W / L⌉ + 2 x − L + 1) / W − 1. The whole image: scale 1, offset 0.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SliceProjection {
-    pub size: (u32, u32),
-    pub scale: [f32; 2],
-    pub offset: [f32; 2],
-}
-
-impl SliceProjection {
-    pub fn of(globals: &FrameGlobals) -> SliceProjection {
-        let l = globals.lattice.max(1);
-        let axis = |full: u32, x: u32| {
-            let n = full.div_ceil(l);
-            let (full, l, n, x) = (full.max(1) as f32, l as f32, n as f32, x as f32);
-            (l * n / full, (l * n + 2.0 * x - l + 1.0) / full - 1.0)
-        };
-        let (sx, ox) = axis(globals.width, globals.lattice_x);
-        let (sy, oy) = axis(globals.height, globals.lattice_y);
-        SliceProjection {
-            size: (globals.width.div_ceil(l), globals.height.div_ceil(l)),
-            scale: [sx, sy],
-            offset: [ox, oy],
-        }
-    }
-
-    /// A camera axis (scaled by 1 / |axis|², as the draw takes it) for NDC `scale` times finer.
-    fn scale_axis(&self, v: [f32; 4], scale: f32) -> [f32; 4] {
-        [v[0] / scale, v[1] / scale, v[2] / scale, 0.0]
-    }
 }

@@ -89,7 +89,7 @@ pub const RASTER_TRIAL_TRIANGLES: u64 = 20_000_000;
 pub const EDGE_WIDTH: f32 = 1.0;
 
 /// Still frames with jitter before an image counts as anti-aliased.
-pub const AA_FRAMES: u32 = 16;
+pub const AA_FRAMES: u32 = 8;
 
 /// What one frame did.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -534,15 +534,15 @@ impl Renderer {
                 Some(r) => r,
                 None => self.raster.insert(Rasterizer::new(&self.gpu)?),
             };
-            // One visibility pixel per pixel of the frame's slice (`SliceProjection`).
-            raster.prepare(w.div_ceil(self.lattice), h.div_ceil(self.lattice))?;
+            // The whole frame's visibility, drawn once per round of slices.
+            raster.prepare(w, h)?;
         }
         let mode = settings.display.mode;
         let cell_levels = self.map.cell_levels(self.pixel_count() as u32, self.frame_index);
         let young = self.map.young(self.frame_index);
         let adaptive_split = settings.young.adaptive_rays && young;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
-        match (primary, &self.raster) {
+        match (primary, &mut self.raster) {
             (Primary::Raster, Some(raster)) => {
                 // A perspective tile is an off-axis part of the full image's frustum: the full image's axis,
                 // moved by the tile's centre (an orthographic tile moves its eye instead, as its rays do).
@@ -566,6 +566,7 @@ impl Renderer {
                     self.globals.address,
                     camera.distance(),
                     off_axis,
+                    (scene.tlas_generation(), scene.version()),
                 );
             }
             _ => rec.dispatch(Pass::Primary, gw, gh, [0; 4]),

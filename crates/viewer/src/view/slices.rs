@@ -5,7 +5,11 @@
 //! A frame costs a floor `a` that no slice shrinks (the UI, the blit, egui, the submission) plus its share of the
 //! whole image's work, `b / L²`. The lattice is the smallest whose slices meet the frame-time target, or, where
 //! the floor alone is above it, the smallest within `FLOOR_MARGIN` of the cheapest: beyond that a larger lattice
-//! only adds frames. `a` and `b` are fitted to the frames measured at each lattice. A still image traces
+//! only adds frames. `a` and `b` are fitted to the frames measured at each lattice in the last
+//! `FRESH_OBSERVATIONS` frames, leaving out each still image's first frame (it pays the switch from the moving
+//! size and, once, the pipelines' compilation): one slow frame must not keep the lattice large for the rest of
+//! the session. Only lattices whose rounds complete a grid on the way are chosen (`refines_on_the_way`): a prime
+//! lattice above 3 holds its coarsest preview for its whole first round. A still image traces
 //! `still_rays_per_pixel` rays per pixel and visit, set when it starts (a change would restart it): enough that
 //! its own rays are complete when its anti-aliasing is, so it converges in the fewest rounds.
 use hrtao_core::{RayBudget, MAX_LATTICE};
@@ -23,6 +27,29 @@ const FIRST_LATTICE_MAX: u32 = 4;
 const PROBE_BELOW: f64 = 0.8;
 /// Weight of a new measurement in a lattice's cost.
 const COST_EMA: f64 = 0.3;
+/// A lattice's cost measured more than this many still frames ago no longer counts: the device's load, the
+/// scene or the window may have changed since, and a stale cost at a small lattice would keep the lattice
+/// large (a round of L² frames at the floor's cost each: time to converge grows as L²).
+const FRESH_OBSERVATIONS: u64 = 160;
+
+/// Whether a round of lattice L completes a square grid between spacing L and 1 (L composite), or is short
+/// enough not to need one (L ≤ 3): the held preview of a prime lattice above 3 stays at spacing L for its whole
+/// first round (`hrtao_core::slice_order`).
+pub fn refines_on_the_way(l: u32) -> bool {
+    l <= 3 || (2..l).any(|d| l.is_multiple_of(d))
+}
+
+/// The smallest lattice from `l` up that `refines_on_the_way` (`MAX_LATTICE` is 8).
+fn allowed_at_least(l: u32) -> u32 {
+    (l.max(1)..=MAX_LATTICE)
+        .find(|&l| refines_on_the_way(l))
+        .unwrap_or(MAX_LATTICE)
+}
+
+/// The largest lattice below `l` that `refines_on_the_way`, if any.
+fn allowed_below(l: u32) -> Option<u32> {
+    (1..l).rev().find(|&l| refines_on_the_way(l))
+}
 
 /// Rays per pixel and visit of a still image: its `still_samples` own rays in the `aa_frames` rounds its
 /// anti-aliasing takes.
@@ -42,8 +69,12 @@ pub fn lattice_for(whole_ms: f64, target_ms: f64) -> u32 {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Slicing {
     lattice: u32,
-    /// Frame milliseconds measured at lattice L (index L), smoothed.
-    costs: [Option<f64>; MAX_LATTICE as usize + 1],
+    /// Frame milliseconds measured at lattice L (index L), smoothed, and the observation that last measured it.
+    costs: [Option<(f64, u64)>; MAX_LATTICE as usize + 1],
+    /// Still frames observed so far.
+    observations: u64,
+    /// The next observed frame is a still image's first: not measured.
+    warm_up: bool,
     /// Set when a still image starts, kept until the view moves again.
     still_budget: Option<RayBudget>,
 }
@@ -53,6 +84,8 @@ impl Default for Slicing {
         Slicing {
             lattice: 1,
             costs: [None; MAX_LATTICE as usize + 1],
+            observations: 0,
+            warm_up: false,
             still_budget: None,
         }
     }
@@ -85,9 +118,10 @@ impl Slicing {
         if self.costs.iter().all(Option::is_none) {
             if let Some((ms, moving_pixels)) = moving {
                 let whole = ms * pixels as f64 / moving_pixels.max(1) as f64;
-                self.lattice = lattice_for(whole, target_ms).min(FIRST_LATTICE_MAX);
+                self.lattice = allowed_at_least(lattice_for(whole, target_ms).min(FIRST_LATTICE_MAX));
             }
         }
+        self.warm_up = true;
         let b = RayBudget {
             rays_per_pixel: rays_per_pixel.clamp(1, MAX_RAYS_PER_PIXEL),
             trace_fraction: 1.0,
@@ -103,8 +137,18 @@ impl Slicing {
         if !frame_ms.is_finite() || !(1..=MAX_LATTICE as usize).contains(&l) || l * l != slices as usize {
             return;
         }
+        if std::mem::take(&mut self.warm_up) {
+            return;
+        }
+        self.observations += 1;
+        let now = self.observations;
+        for c in self.costs.iter_mut() {
+            if c.is_some_and(|(_, at)| now - at > FRESH_OBSERVATIONS) {
+                *c = None;
+            }
+        }
         let c = &mut self.costs[l];
-        *c = Some(c.map_or(frame_ms, |c| c + COST_EMA * (frame_ms - c)));
+        *c = Some((c.map_or(frame_ms, |(c, _)| c + COST_EMA * (frame_ms - c)), now));
         let next = self.choose(l as u32, target_ms);
         if next != self.lattice {
             log::debug!(
@@ -121,7 +165,7 @@ impl Slicing {
     /// so the next measurement corrects it).
     fn model(&self) -> Option<(f64, f64)> {
         let pts: Vec<(f64, f64)> = (1..=MAX_LATTICE as usize)
-            .filter_map(|l| self.costs[l].map(|c| (1.0 / (l * l) as f64, c)))
+            .filter_map(|l| self.costs[l].map(|(c, _)| (1.0 / (l * l) as f64, c)))
             .collect();
         match pts.len() {
             0 => None,
@@ -138,27 +182,32 @@ impl Slicing {
         }
     }
 
-    /// The smallest lattice predicted to meet the target, or to cost within `FLOOR_MARGIN` of the cheapest;
-    /// `drawn` is the lattice of the frame just measured.
+    /// The smallest lattice that refines on the way and is predicted to meet the target, or to cost within
+    /// `FLOOR_MARGIN` of the cheapest; `drawn` is the lattice of the frame just measured.
     fn choose(&self, drawn: u32, target_ms: f64) -> u32 {
         let Some((a, b)) = self.model() else {
             return drawn;
         };
         let cost = |l: u32| a + b / (l * l) as f64;
         let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE));
-        let best = (1..=MAX_LATTICE)
+        let fit = (1..=MAX_LATTICE)
+            .filter(|&l| refines_on_the_way(l))
             .find(|&l| cost(l) <= bound)
             .unwrap_or(MAX_LATTICE);
-        // The model overstates smaller lattices while only larger ones were measured: try one step smaller
+        // Down one step at a time: a fit of nearby lattices' noisy costs can put b near 0 and promise that
+        // even whole frames meet the target (a 1.6 s frame at 1280×800 on lavapipe).
+        let best = fit.max(allowed_below(drawn).unwrap_or(1));
+        // The model overstates smaller lattices while only larger ones were measured: try the next smaller
         // once when this one is well under the target (if it misses, the fit brings the lattice back).
         let l = drawn;
-        let measured = |l: u32| self.costs[l as usize];
-        if best >= l
-            && l > 1
-            && measured(l - 1).is_none()
-            && measured(l).is_some_and(|c| c <= PROBE_BELOW * target_ms)
-        {
-            return l - 1;
+        let measured = |l: u32| self.costs[l as usize].map(|(c, _)| c);
+        if let Some(smaller) = allowed_below(l) {
+            if best >= l
+                && measured(smaller).is_none()
+                && measured(l).is_some_and(|c| c <= PROBE_BELOW * target_ms)
+            {
+                return smaller;
+            }
         }
         best
     }
@@ -187,6 +236,9 @@ mod tests {
         // An 82 ms moving frame of 87k pixels: a 707k-pixel still frame would take about 666 ms.
         let b = s.still_budget(4, 707_200, Some((82.0, 87_000)), 100.0);
         assert_eq!((s.lattice(), b.rays_per_pixel), (3, 4));
+        // The still image's first frame pays the switch from the moving size: not measured.
+        s.observe(900.0, 9, 100.0);
+        assert_eq!(s.lattice(), 3, "the first frame of a still image is not measured");
         s.observe(150.0, 9, 100.0);
         assert_eq!(s.lattice(), 4, "a slice over the target grows the lattice");
         assert_eq!(s.still_budget(1, 707_200, None, 100.0), b, "kept");
@@ -227,5 +279,49 @@ mod tests {
         let l = settle(120.0, 400.0, 2);
         assert!(l <= 6, "{l}");
         assert!(120.0 + 400.0 / (l * l) as f64 <= FLOOR_MARGIN * (120.0 + 400.0 / 64.0));
+        // Lavapipe in the window at 1280×800: a 70 ms floor and 340 ms of work. 5 would meet the target, but
+        // it is prime: 6 (the least lattice over 4 that completes a grid on the way).
+        assert_eq!(settle(70.0, 340.0, 8), 4);
+        assert_eq!(settle(75.0, 600.0, 4), 6);
+        for l in 1..=MAX_LATTICE {
+            assert_eq!(refines_on_the_way(l), ![5, 7].contains(&l), "{l}");
+        }
+    }
+
+    /// One slow frame at a small lattice (a compilation, a load on the machine) does not keep the lattice large
+    /// for the rest of the session: its cost expires, and the controller comes back to the smallest lattice
+    /// that meets the target (with the cost kept for ever it stays at 6 or 8, and a still image takes 2–4×
+    /// as many frames).
+    #[test]
+    fn a_stale_slow_frame_does_not_keep_the_lattice_large() {
+        let mut s = Slicing {
+            lattice: 4,
+            ..Slicing::default()
+        };
+        let device = |l: u32| 70.0 + 340.0 / (l * l) as f64;
+        s.observe(226.0, 16, 100.0);
+        assert!(s.lattice() > 4, "the slow frame grows the lattice");
+        let mut largest = s.lattice();
+        for _ in 0..(FRESH_OBSERVATIONS + 40) {
+            let l = s.lattice();
+            s.observe(device(l), l * l, 100.0);
+            largest = largest.max(s.lattice());
+        }
+        assert!(largest >= 6);
+        assert_eq!(s.lattice(), 4);
+    }
+
+    /// Costs measured at 6 and 8 that differ by less than their noise fit a model with no work per pixel,
+    /// which promises whole frames within the target: the lattice steps down one allowed lattice at a time
+    /// (6 → 4), not to 1.
+    #[test]
+    fn a_flat_fit_steps_the_lattice_down_one_at_a_time() {
+        let mut s = Slicing {
+            lattice: 8,
+            ..Slicing::default()
+        };
+        s.observe(90.0, 64, 100.0);
+        s.observe(90.0, 36, 100.0);
+        assert_eq!(s.lattice(), 4);
     }
 }
