@@ -376,7 +376,8 @@ pub(crate) struct Viewer {
     ray_budget: RayBudget,
     /// Still frames in slices of the frame-time target (`slices.rs`).
     slicing: slices::Slicing,
-    /// The last moving frame's wall time and pixels: the first estimate of a still frame's cost.
+    /// The last moving frame's wall time and work (`slices::frame_work`): the first estimate of a still
+    /// frame's cost.
     last_moving: Option<(f64, u64)>,
     nav: Nav,
     home: Camera,
@@ -1204,7 +1205,6 @@ impl Viewer {
             1
         } else {
             let target = self.prefs.target_ms.max(1.0) as f64;
-            let pixels = iw as u64 * ih as u64;
             let s = &self.prefs.settings;
             // Refining: the rays that complete the own rays with the anti-aliasing; else the ray budget.
             let rays_per_pixel = if s.accumulates() {
@@ -1212,9 +1212,10 @@ impl Viewer {
             } else {
                 self.ray_budget.rays_per_pixel
             };
+            let work = slices::frame_work(iw, ih, rays_per_pixel as f64);
             self.ray_budget = self
                 .slicing
-                .still_budget(rays_per_pixel, pixels, self.last_moving, target);
+                .still_budget(rays_per_pixel, work, self.last_moving, target);
             self.slicing.lattice()
         };
         let bgra_direct = !self.presenter.blit_ok && self.presenter.is_bgra();
@@ -1393,7 +1394,9 @@ impl Viewer {
                     .as_ref()
                     .is_some_and(|r| r.frame_index() > FIRST_FRAMES_COMPILE)
                 {
-                    self.last_moving = Some((view_ms, iw as u64 * ih as u64));
+                    let b = self.ray_budget;
+                    let rays = b.rays_per_pixel as f64 * b.trace_fraction.clamp(0.0, 1.0) as f64;
+                    self.last_moving = Some((view_ms, slices::frame_work(iw, ih, rays)));
                 }
             } else if self.prefs.auto_budget && self.background_shot.is_none() {
                 // (A background screenshot's tiles share the frame: its cost is not the view's.)

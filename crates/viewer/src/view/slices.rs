@@ -20,9 +20,9 @@ use super::budget::MAX_RAYS_PER_PIXEL;
 /// cheapest are as good for latency, and the smallest converges fastest.
 const FLOOR_MARGIN: f64 = 1.15;
 /// The first still image's lattice, before any slice was measured, is at most this: a round of L² frames
-/// passes before the lattice can change, and a moving frame's cost, scaled by the pixels, overstates a still
+/// passes before the lattice can change, and a moving frame's cost, scaled by its work, overstates a still
 /// frame's where the floor dominates it.
-const FIRST_LATTICE_MAX: u32 = 4;
+const FIRST_LATTICE_MAX: u32 = 6;
 /// A lattice whose frames cost at most this fraction of the target tries the next smaller one once.
 const PROBE_BELOW: f64 = 0.8;
 /// Weight of a new measurement in a lattice's cost.
@@ -57,6 +57,14 @@ pub fn still_rays_per_pixel(still_samples: u32, aa_frames: u32) -> u32 {
     still_samples
         .div_ceil(aa_frames.max(1))
         .clamp(1, MAX_RAYS_PER_PIXEL)
+}
+
+/// A frame's work in units of a pixel's primary ray: its pixels, each with its primary ray and its `rays` AO
+/// rays. A moving frame's cost per unit estimates a still frame's before any slice was measured (a still
+/// frame traces several times a moving frame's rays per pixel: scaled by pixels alone, a first still image on
+/// lavapipe started at lattice 3 with 323 ms frames for its first 9).
+pub fn frame_work(width: u32, height: u32, rays: f64) -> u64 {
+    (width as f64 * height as f64 * (1.0 + rays.max(0.0))) as u64
 }
 
 /// The lattice whose slices of a frame costing `whole_ms` cost about `target_ms`: ⌈√(whole / target)⌉.
@@ -103,12 +111,12 @@ impl Slicing {
     }
 
     /// The budget of a still frame: the current still image's, or, when one starts, `rays_per_pixel` and its
-    /// lattice, from the slices measured so far or else from the last moving frame (`moving_ms` over
-    /// `moving_pixels`, scaled to the still frame's `pixels`).
+    /// lattice, from the slices measured so far or else from the last moving frame (its milliseconds over its
+    /// `frame_work`, scaled to the still frame's `work`).
     pub fn still_budget(
         &mut self,
         rays_per_pixel: u32,
-        pixels: u64,
+        work: u64,
         moving: Option<(f64, u64)>,
         target_ms: f64,
     ) -> RayBudget {
@@ -116,8 +124,8 @@ impl Slicing {
             return b;
         }
         if self.costs.iter().all(Option::is_none) {
-            if let Some((ms, moving_pixels)) = moving {
-                let whole = ms * pixels as f64 / moving_pixels.max(1) as f64;
+            if let Some((ms, moving_work)) = moving {
+                let whole = ms * work as f64 / moving_work.max(1) as f64;
                 self.lattice = allowed_at_least(lattice_for(whole, target_ms).min(FIRST_LATTICE_MAX));
             }
         }
@@ -228,6 +236,17 @@ mod tests {
         assert_eq!(still_rays_per_pixel(64, 16), 4);
         assert_eq!(still_rays_per_pixel(1, 16), 1);
         assert_eq!(still_rays_per_pixel(100_000, 1), MAX_RAYS_PER_PIXEL);
+    }
+
+    /// The first still image after a 90 ms moving frame at 0.35 scale and 2 rays per pixel: a still frame at
+    /// 8 rays costs about 2.2 s whole (lavapipe, bundled scene, 806×800: 9 slices of 323 ms at lattice 3), so
+    /// it starts at 6 (5 is prime). Scaled by pixels alone it would start at 3.
+    #[test]
+    fn the_first_still_image_scales_the_moving_frame_by_its_rays() {
+        let mut s = Slicing::default();
+        let moving = frame_work(283, 280, 2.0);
+        s.still_budget(8, frame_work(806, 800, 8.0), Some((90.0, moving)), 100.0);
+        assert_eq!(s.lattice(), 6);
     }
 
     #[test]
