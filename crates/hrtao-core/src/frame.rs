@@ -63,7 +63,7 @@ pub struct FrameDesc<'a> {
     /// Slices (ours): each frame draws every `lattice`-th pixel in x and y, one of lattice² interleaved
     /// slices in turn, so a frame costs about 1/lattice² of a whole one; a still image's round of slices
     /// accumulates as one whole frame would (1 = whole frames). Changing it changes nothing that was drawn:
-    /// it takes effect at the next round.
+    /// it takes effect at the next round, except that a larger one restarts a still image's first round.
     pub lattice: u32,
 }
 

@@ -295,6 +295,7 @@ fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange 
 /// The per-resolution visibility targets: images, their framebuffer and the visibility buffer.
 struct VisTargets {
     gpu: Arc<Gpu>,
+    /// The images' size: a frame draws its own size from the top-left corner (a smaller one reuses them).
     size: (u32, u32),
     vis: Image,
     _depth: Image,
@@ -376,6 +377,7 @@ pub struct Rasterizer {
 /// camera and the round's jitter), the image drawn is still right and is not drawn again.
 #[derive(Clone, PartialEq)]
 struct DrawKey {
+    size: (u32, u32),
     push: Vec<u8>,
     sections: [[f32; 4]; 3],
     section_count: u32,
@@ -436,12 +438,15 @@ impl Rasterizer {
         Ok(r)
     }
 
-    /// Makes the targets match the image size (call outside a frame in flight).
+    /// Makes the targets hold an image of this size (call outside a frame in flight): kept when they are at
+    /// least as large, else made as large as both.
     pub fn prepare(&mut self, width: u32, height: u32) -> Result<()> {
-        if self.targets.as_ref().map(|t| t.size) != Some((width, height)) {
+        let held = self.targets.as_ref().map_or((0, 0), |t| t.size);
+        if held.0 < width || held.1 < height {
             self.targets = None;
             self.drawn = None;
-            self.targets = Some(VisTargets::new(&self.gpu, self.render_pass, (width, height))?);
+            let size = (held.0.max(width), held.1.max(height));
+            self.targets = Some(VisTargets::new(&self.gpu, self.render_pass, size)?);
         }
         Ok(())
     }
@@ -466,11 +471,10 @@ impl Rasterizer {
         generation: (u64, u64),
     ) {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
-        let (w, h) = t.size;
-        assert_eq!(
-            (w, h),
-            (globals.width, globals.height),
-            "visibility targets of another size"
+        let (w, h) = (globals.width, globals.height);
+        assert!(
+            t.size.0 >= w && t.size.1 >= h,
+            "visibility targets smaller than the frame"
         );
         let scaled = |v: [f32; 4]| {
             let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
@@ -504,6 +508,7 @@ impl Rasterizer {
             globals: globals_address,
         };
         let key = DrawKey {
+            size: (w, h),
             push: bytemuck::bytes_of(&push).to_vec(),
             sections: [globals.section0, globals.section1, globals.section2],
             section_count: globals.section_count,

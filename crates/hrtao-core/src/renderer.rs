@@ -28,6 +28,9 @@ use crate::timer::GpuTimer;
 struct Targets {
     width: u32,
     height: u32,
+    /// Pixels the buffers hold: a smaller frame reuses them (indexed y · width + x from the start), so the
+    /// viewer's switches between the moving scale and the still image's full size allocate nothing.
+    capacity: u64,
     gbuffer: Buffer,
     ao: Buffer,
     lod_used: Buffer,
@@ -60,6 +63,7 @@ impl Targets {
         Ok(Targets {
             width,
             height,
+            capacity: n,
             gbuffer: b("G-buffer", n * std::mem::size_of::<GPixel>() as u64)?,
             ao: b("AO", n * 4)?,
             lod_used: b("LOD used", n * 4)?,
@@ -289,8 +293,12 @@ impl Renderer {
         frame.validate().map_err(CoreError::Invalid)?;
         let (w, h) = frame.size();
         if (w, h) != self.size() {
-            self.gpu.wait_idle();
-            self.targets = Targets::new(&self.gpu, w, h)?;
+            if w as u64 * h as u64 <= self.targets.capacity {
+                (self.targets.width, self.targets.height) = (w, h);
+            } else {
+                self.gpu.wait_idle();
+                self.targets = Targets::new(&self.gpu, w, h)?;
+            }
         }
         self.map.ensure(frame.settings.map.hash_capacity, &self.stats)?;
         let key = frame.key(self.primary);
@@ -328,7 +336,12 @@ impl Renderer {
         let edit_open = self
             .edit_frame
             .is_some_and(|e| self.frame_index.wrapping_sub(e) < slices);
-        if change.still_image || map == MapChange::Whole || restart {
+        // The first round may still grow its lattice: its slices are the still image's first visit of each
+        // pixel and hold nothing a restart loses, and a view much costlier than the last (a young map, closer
+        // geometry) would otherwise keep frames over the target for a whole round (16 frames of 550 ms at
+        // L = 4 on san_francisco after a drag).
+        let grow_first_round = self.still_index == 0 && frame.lattice > self.lattice && !edit_open;
+        if change.still_image || map == MapChange::Whole || restart || grow_first_round {
             self.still_index = 0;
             self.slice = 0;
             self.lattice = frame.lattice;

@@ -85,6 +85,48 @@ fn a_round_of_slices_accumulates_as_a_whole_frame() {
     assert_clean(&gpu);
 }
 
+/// A larger lattice asked in the first round of a still image restarts that round at once (its slices are the
+/// first visit of each pixel and hold nothing a restart loses); asked in a later round, it waits for the round's
+/// end (the round's pixels would otherwise miss a visit). The image converges to the one a still image at the
+/// larger lattice converges to. Catches a first round that keeps frames of the smaller lattice (over the
+/// frame-time target) for a whole round, and a later round cut short.
+#[test]
+fn a_larger_lattice_restarts_only_the_first_round() {
+    let gpu = gpu();
+    let (scene, cam) = blocks_scene();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    r.lattice = 2;
+    for i in 0..2 {
+        let rep = r.render(&sg, scene.f(), &cam).unwrap();
+        assert_eq!((rep.slice, rep.slices), (i, 4));
+    }
+    r.lattice = 3;
+    let rep = r.render(&sg, scene.f(), &cam).unwrap();
+    assert_eq!((rep.slice, rep.slices, rep.accumulated_frames), (0, 9, 1));
+    // Round 1 (slices 9..18), then a larger lattice asked mid-round: it holds until the round ends.
+    for _ in 1..9 + 3 {
+        r.render(&sg, scene.f(), &cam).unwrap();
+    }
+    r.lattice = 4;
+    for i in 3..9 {
+        let rep = r.render(&sg, scene.f(), &cam).unwrap();
+        assert_eq!((rep.slice, rep.slices, rep.accumulated_frames), (i, 9, 2));
+    }
+    let rep = r.render(&sg, scene.f(), &cam).unwrap();
+    assert_eq!((rep.slice, rep.slices, rep.accumulated_frames), (0, 16, 3));
+    let (_, reports) = until_converged(&mut r, &sg, scene.f(), &cam, 400);
+    assert!(reports.last().unwrap().converged);
+    let ao = r.read_ao().unwrap();
+    let mut fresh = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    fresh.lattice = 3;
+    until_converged(&mut fresh, &sg, scene.f(), &cam, 400);
+    let apart = mae(&ao, &fresh.read_ao().unwrap());
+    eprintln!("against a still image at lattice 3 throughout: MAE {apart:.4}");
+    assert!(apart < 0.01, "{apart}");
+    assert_clean(&gpu);
+}
+
 /// The first slice of a new view shows all of it: every pixel shows the cubic B-spline of the slice's grid
 /// (`slice_order::level`, composite.comp `level_value`), none the previous view; the first two rounds then hold
 /// what the view shows until round 1 ends, when the image is that of two whole frames of the view. Catches a first

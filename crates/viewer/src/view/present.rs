@@ -244,13 +244,15 @@ impl Presenter {
         }
     }
 
-    /// Makes sure the internal image has the renderer's size.
+    /// Makes sure the internal image holds the renderer's size.
     pub fn ensure_internal(&mut self, width: u32, height: u32) -> Result<()> {
-        if let Some(i) = &self.internal {
-            if i.width == width && i.height == height {
-                return Ok(());
-            }
-        }
+        // Kept while it holds the frame (copied to and blitted from its top-left corner): the switches between
+        // the moving scale and the still image's full size allocate nothing.
+        let (width, height) = match &self.internal {
+            Some(i) if i.width >= width && i.height >= height => return Ok(()),
+            Some(i) => (i.width.max(width), i.height.max(height)),
+            None => (width, height),
+        };
         self.destroy_internal();
         let gpu = self.gpu.clone();
         unsafe {

@@ -25,7 +25,7 @@ const FLOOR_MARGIN: f64 = 1.15;
 const FIRST_LATTICE_MAX: u32 = 6;
 /// A lattice whose frames cost at most this fraction of the target tries the next smaller one once.
 const PROBE_BELOW: f64 = 0.8;
-/// Weight of a new measurement in a lattice's cost.
+/// Weight of a new measurement below a lattice's cost (one above it replaces it).
 const COST_EMA: f64 = 0.3;
 /// A lattice's cost measured more than this many still frames ago no longer counts: the device's load, the
 /// scene or the window may have changed since, and a stale cost at a small lattice would keep the lattice
@@ -155,8 +155,17 @@ impl Slicing {
                 *c = None;
             }
         }
+        // A rise counts at once (latency wins: frames over the target must not wait for an average), a fall
+        // is smoothed.
         let c = &mut self.costs[l];
-        *c = Some((c.map_or(frame_ms, |(c, _)| c + COST_EMA * (frame_ms - c)), now));
+        let smoothed = c.map_or(frame_ms, |(c, _)| {
+            if frame_ms > c {
+                frame_ms
+            } else {
+                c + COST_EMA * (frame_ms - c)
+            }
+        });
+        *c = Some((smoothed, now));
         let next = self.choose(l as u32, target_ms);
         if next != self.lattice {
             log::debug!(
@@ -193,9 +202,14 @@ impl Slicing {
     /// The smallest lattice that refines on the way and is predicted to meet the target, or to cost within
     /// `FLOOR_MARGIN` of the cheapest; `drawn` is the lattice of the frame just measured.
     fn choose(&self, drawn: u32, target_ms: f64) -> u32 {
-        let Some((a, b)) = self.model() else {
+        let (Some((a, _)), Some((now, _))) = (self.model(), self.costs[drawn as usize]) else {
             return drawn;
         };
+        // The floor a from the fit over lattices; the work b from the lattice just drawn alone: the work
+        // follows the view and the map's age (a young map after a move traces many times a mature one's
+        // rays), so costs measured at other lattices in other views would mislead it.
+        let a = a.clamp(0.0, now);
+        let b = (now - a) * (drawn * drawn) as f64;
         let cost = |l: u32| a + b / (l * l) as f64;
         let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE));
         let fit = (1..=MAX_LATTICE)
@@ -305,6 +319,32 @@ mod tests {
         for l in 1..=MAX_LATTICE {
             assert_eq!(refines_on_the_way(l), ![5, 7].contains(&l), "{l}");
         }
+    }
+
+    /// The view turns to a part of the scene that costs 5 times as much (a young map, closer geometry): the
+    /// lattice follows the frames at the lattice drawn, not the costs measured at other lattices in the
+    /// cheaper view (with the fit over all of them it stays at 4, frames of 390 ms).
+    #[test]
+    fn the_lattice_follows_a_costlier_view_at_once() {
+        let mut s = Slicing {
+            lattice: 8,
+            ..Slicing::default()
+        };
+        let cheap = |l: u32| 30.0 + 600.0 / (l * l) as f64;
+        for _ in 0..40 {
+            let l = s.lattice();
+            s.observe(cheap(l), l * l, 100.0);
+        }
+        assert_eq!(s.lattice(), 3);
+        let costly = |l: u32| 30.0 + 3000.0 / (l * l) as f64;
+        let mut over = 0;
+        for _ in 0..40 {
+            let l = s.lattice();
+            over += (costly(l) > 100.0) as u32;
+            s.observe(costly(l), l * l, 100.0);
+        }
+        assert_eq!(s.lattice(), 8);
+        assert!(over <= 3, "{over} frames over the target");
     }
 
     /// One slow frame at a small lattice (a compilation, a load on the machine) does not keep the lattice large
