@@ -233,8 +233,11 @@ impl Slicing {
         let best = if fit >= drawn {
             fit
         } else {
+            // A fresh measurement of the step over the target outweighs the model (no oscillation between a
+            // lattice under the target and one measured over it).
             let step = allowed_below(drawn).unwrap_or(1).max(fit);
-            if cost(step) <= target_ms {
+            let measured_over = self.costs[step as usize].is_some_and(|(c, _)| c > target_ms);
+            if cost(step) <= target_ms && !measured_over {
                 step
             } else {
                 drawn
@@ -410,6 +413,24 @@ mod tests {
         for ms in [149.0, 120.0, 155.0, 117.0, 148.0, 128.0, 199.0, 110.0, 139.0] {
             s.observe(ms, 64, 100.0);
             assert_eq!(s.lattice(), 8, "after {ms} ms");
+        }
+    }
+
+    /// A lattice measured over the target is not stepped down to again while its cost is fresh, even where
+    /// the fit promises it (640×360 on lavapipe: 4 at 50 ms, 3 at 90–130 ms, a round of each in turn).
+    #[test]
+    fn a_lattice_measured_over_the_target_is_not_retried_at_once() {
+        let mut s = Slicing {
+            lattice: 4,
+            ..Slicing::default()
+        };
+        s.observe(50.0, 16, 100.0);
+        assert_eq!(s.lattice(), 3, "the fit promises 3");
+        s.observe(128.0, 9, 100.0);
+        assert_eq!(s.lattice(), 4);
+        for _ in 0..20 {
+            s.observe(49.0, 16, 100.0);
+            assert_eq!(s.lattice(), 4);
         }
     }
 
