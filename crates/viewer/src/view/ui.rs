@@ -179,7 +179,7 @@ impl Viewer {
     /// F12 takes a screenshot. egui moves the focus between widgets on Tab (and arrow keys); that focus made
     /// every later shortcut wait for a click elsewhere, so focus gained by keyboard navigation is dropped again.
     fn global_keys(&mut self, ctx: &egui::Context) {
-        let (tabs, shots) = ctx.input(|i| (i.num_presses(Key::Tab), i.num_presses(Key::F12)));
+        let (tabs, shots) = ctx.input(|i| (key_taps(&i.events, Key::Tab), key_taps(&i.events, Key::F12)));
         if tabs % 2 == 1 {
             self.show_panel = !self.show_panel;
         }
@@ -1169,6 +1169,16 @@ fn fmt_count(n: u64) -> String {
     parts.join(",")
 }
 
+/// How many times `key` went down this frame, repeats left out: a key held (or pressed as the window gains the
+/// focus, when X delivers it twice, the second as a repeat) acts once. egui's `num_presses` counts repeats, and
+/// a Tab tapped while the window took the focus toggled the panel twice.
+fn key_taps(events: &[egui::Event], key: Key) -> usize {
+    events
+        .iter()
+        .filter(|e| matches!(e, egui::Event::Key { key: k, pressed: true, repeat: false, .. } if *k == key))
+        .count()
+}
+
 /// The pointer's motion that a drag of the view answers this frame, in points. egui's `drag_delta` is the
 /// pointer's whole motion since the previous frame, so on the frame a drag starts it also holds the motion before
 /// the press (a hover and a press that a busy frame delivers together): the view would jump by a motion made with
@@ -1187,6 +1197,34 @@ fn view_drag_delta(ctx: &egui::Context, resp: &egui::Response) -> egui::Vec2 {
 
 #[cfg(test)]
 mod tests {
+    /// A Tab tapped as the window gains the focus comes as a press and a repeat: one tap. Two taps are two.
+    #[test]
+    fn a_key_repeat_is_not_a_tap() {
+        use egui::{Event, Key};
+        let key = |key, pressed, repeat| Event::Key {
+            key,
+            physical_key: Some(key),
+            pressed,
+            repeat,
+            modifiers: Default::default(),
+        };
+        let focus = [
+            Event::WindowFocused(true),
+            key(Key::Tab, true, false),
+            key(Key::Tab, true, true),
+            key(Key::Tab, false, false),
+            key(Key::F12, true, false),
+        ];
+        assert_eq!(super::key_taps(&focus, Key::Tab), 1);
+        assert_eq!(super::key_taps(&focus, Key::F12), 1);
+        let twice = [
+            key(Key::Tab, true, false),
+            key(Key::Tab, false, false),
+            key(Key::Tab, true, false),
+        ];
+        assert_eq!(super::key_taps(&twice, Key::Tab), 2);
+    }
+
     /// One frame of a bare egui context with a drag-sensing area over the whole screen, fed `events`: the drag
     /// delta the view answers.
     fn drag_frame(ctx: &egui::Context, events: Vec<egui::Event>) -> egui::Vec2 {
