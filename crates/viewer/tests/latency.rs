@@ -139,6 +139,7 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
 /// each (occluded flat pixels by the frame's own AO).
 #[test]
 fn ao_out_writes_every_frame_and_its_roughness() {
+    let _display = display_lock();
     if !display_available() {
         return;
     }

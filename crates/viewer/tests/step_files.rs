@@ -439,6 +439,7 @@ fn as1_ao_matches_gmsh_mesh() {
 /// runs: the viewer reports the error, keeps gen:box on screen (its screenshot shows it) and exits 0.
 #[test]
 fn viewer_keeps_its_scene_when_the_worker_is_killed() {
+    let _display = common::display_lock();
     if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
         eprintln!("skipped: no DISPLAY (the test command runs under xvfb-run)");
         return;

@@ -7,6 +7,7 @@ mod common;
 use common::*;
 
 fn run_viewer(args: &[&str]) {
+    let _display = display_lock();
     let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
         .arg("view")
         .args(args)
@@ -78,6 +79,7 @@ fn scripted_run_renders_and_saves_a_screenshot() {
 /// setting fails the scripted run.
 #[test]
 fn scripted_set_at_frame_applies_settings_as_the_panel_does() {
+    let _display = display_lock();
     if !display_available() {
         return;
     }
@@ -161,6 +163,7 @@ fn scripted_run_survives_a_resize() {
 
 #[test]
 fn a_bad_file_fails_cleanly_in_scripted_mode() {
+    let _display = display_lock();
     if !display_available() {
         return;
     }
@@ -185,6 +188,7 @@ fn a_bad_file_fails_cleanly_in_scripted_mode() {
 /// screen, nothing panics. Representative files of the hostile corpus (crates/scene/src/hostile.rs).
 #[test]
 fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
+    let _display = display_lock();
     if !display_available() {
         eprintln!("skipped: no DISPLAY (the test command runs under xvfb-run)");
         return;
@@ -240,6 +244,7 @@ fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
 /// only grows again in moving frames).
 #[test]
 fn a_saved_budget_cut_by_a_heavy_scene_restarts_at_the_default() {
+    let _display = display_lock();
     if !display_available() {
         return;
     }
@@ -283,6 +288,7 @@ fn a_saved_budget_cut_by_a_heavy_scene_restarts_at_the_default() {
 /// Screenshots to an unwritable place or a full disk give an error message and a clean exit status.
 #[test]
 fn screenshot_to_unwritable_or_full_destination_fails_cleanly() {
+    let _display = display_lock();
     if !display_available() {
         eprintln!("skipped: no DISPLAY (the test command runs under xvfb-run)");
         return;

@@ -31,17 +31,58 @@ pub fn xdotool(args: &[&str]) -> String {
 
 /// A viewer started in the background (interactive, not scripted), its log collected line by line; killed when
 /// dropped.
-/// Tests that send X input (focus, keys) or measure an idle viewer share one display: they run one at a time,
-/// so one test's focus changes and key events never reach another test's window.
-pub static X_INPUT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+/// The tests of a binary share one display. Tests that send X input (focus, keys, the pointer) or measure an
+/// idle viewer hold it alone (`x_input_lock`), so one test's focus changes and key events never reach another
+/// test's window; tests that only open windows hold it shared (`display_lock`, taken by `Running` itself), so no
+/// window of theirs maps over an input test's window while it takes the pointer (a drag that went to another
+/// test's window moved nothing in its own).
+pub static X_DISPLAY: std::sync::RwLock<()> = std::sync::RwLock::new(());
 
-pub fn x_input_lock() -> std::sync::MutexGuard<'static, ()> {
-    X_INPUT.lock().unwrap_or_else(|e| e.into_inner())
+thread_local! {
+    /// This test's thread holds the display, alone or shared (a test's helpers may ask again: a second shared
+    /// hold behind a waiting writer would deadlock).
+    static HOLDS_X_DISPLAY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// The display held by this thread (see `X_DISPLAY`); released when dropped.
+pub enum DisplayGuard {
+    Alone(#[allow(dead_code)] std::sync::RwLockWriteGuard<'static, ()>),
+    Shared(#[allow(dead_code)] std::sync::RwLockReadGuard<'static, ()>),
+}
+
+impl Drop for DisplayGuard {
+    fn drop(&mut self) {
+        HOLDS_X_DISPLAY.with(|h| h.set(false));
+    }
+}
+
+/// The display held alone, for X input (see `X_DISPLAY`).
+pub fn x_input_lock() -> DisplayGuard {
+    assert!(
+        !HOLDS_X_DISPLAY.with(|h| h.get()),
+        "x_input_lock while this test holds the display"
+    );
+    let guard = X_DISPLAY.write().unwrap_or_else(|e| e.into_inner());
+    HOLDS_X_DISPLAY.with(|h| h.set(true));
+    DisplayGuard::Alone(guard)
+}
+
+/// The display held shared, for a test that opens windows without input (None where this thread holds it
+/// already).
+pub fn display_lock() -> Option<DisplayGuard> {
+    if HOLDS_X_DISPLAY.with(|h| h.get()) {
+        return None;
+    }
+    let guard = X_DISPLAY.read().unwrap_or_else(|e| e.into_inner());
+    HOLDS_X_DISPLAY.with(|h| h.set(true));
+    Some(DisplayGuard::Shared(guard))
 }
 
 pub struct Running {
     pub child: std::process::Child,
     pub log: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+    /// Released after the viewer is killed (`Drop`).
+    _display: Option<DisplayGuard>,
 }
 
 impl Running {
@@ -63,6 +104,7 @@ impl Running {
     /// `hrtao ARGS --no-config` in `cwd` with `env` changed, its log captured.
     pub fn launch(args: &[&str], cwd: &Path, env: &[(&str, Option<&str>)]) -> Running {
         use std::io::BufRead;
+        let display = display_lock();
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_hrtao"));
         cmd.args(args)
             .arg("--no-config")
@@ -86,7 +128,11 @@ impl Running {
                 sink.lock().unwrap().push(line);
             }
         });
-        Running { child, log }
+        Running {
+            child,
+            log,
+            _display: display,
+        }
     }
 
     pub fn log_text(&self) -> String {
