@@ -458,7 +458,8 @@ impl Rasterizer {
     /// software device that is most of a small slice's cost). `globals` are the frame's (camera and size), at
     /// device address `globals_address` (the draws read the section planes there); `target_distance` is the
     /// camera's eye-target distance (it sets the perspective near plane); `generation` names the scene's
-    /// geometry (`SceneGpu::tlas_generation`, `version`). Panics if `prepare` was not called for this size.
+    /// geometry (`SceneGpu::tlas_generation`, `version`); `slice_grid` is the frame's invocations over the image
+    /// (`Renderer::slice_grid`). Panics if `prepare` was not called for this size.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
@@ -469,6 +470,7 @@ impl Rasterizer {
         target_distance: f32,
         off_axis: Option<(glam::Vec3, [f32; 2])>,
         generation: (u64, u64),
+        slice_grid: (u32, u32),
     ) {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
         let (w, h) = (globals.width, globals.height);
@@ -519,14 +521,8 @@ impl Rasterizer {
         let resolve = |rec: &mut Recorder| {
             rec.dispatch(
                 Pass::GbufferFromVis,
-                globals
-                    .width
-                    .saturating_sub(globals.lattice_x)
-                    .div_ceil(globals.lattice.max(1)),
-                globals
-                    .height
-                    .saturating_sub(globals.lattice_y)
-                    .div_ceil(globals.lattice.max(1)),
+                slice_grid.0,
+                slice_grid.1,
                 [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
             )
         };

@@ -580,6 +580,7 @@ impl Renderer {
                     camera.distance(),
                     off_axis,
                     (scene.tlas_generation(), scene.version()),
+                    (gw, gh),
                 );
             }
             _ => rec.dispatch(Pass::Primary, gw, gh, [0; 4]),
