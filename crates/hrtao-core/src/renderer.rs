@@ -88,6 +88,9 @@ impl Targets {
 /// instanced scenes), while ray queries scale with the pixels.
 pub const RASTER_TRIAL_TRIANGLES: u64 = 20_000_000;
 
+/// The side of `Renderer::warm_up`'s image (pixels).
+const WARM_UP_SIZE: u32 = 32;
+
 /// Feature-edge line width in view pixels: lines keep it at any internal resolution (render scale, screenshots
 /// larger than the view).
 pub const EDGE_WIDTH: f32 = 1.0;
@@ -809,6 +812,29 @@ impl Renderer {
             Primary::RayQuery
         };
         Ok((self.primary, ray_query, raster))
+    }
+
+    /// Runs the passes a view's frames use once, on a tiny image of `frame`'s scene and settings (a young map's
+    /// first frames, a still image's frames and a round of slices), then forgets what they cached. Lavapipe
+    /// compiles a pipeline at its first dispatch: without this, the first moving and still frames after a scene
+    /// opens pay the compilations (~0.1-0.3 s), and input that comes meanwhile waits for them. On a GPU it costs
+    /// a few tiny frames.
+    pub fn warm_up(&mut self, frame: &FrameDesc) -> Result<()> {
+        let camera = Camera {
+            width: WARM_UP_SIZE,
+            height: WARM_UP_SIZE,
+            ..frame.camera
+        };
+        for lattice in [1, 1, 2, 2, 2, 2] {
+            self.render(&FrameDesc {
+                camera,
+                lattice,
+                ..*frame
+            })?;
+        }
+        self.clear_cache()?;
+        self.prev = None;
+        Ok(())
     }
 
     /// Whether the frame just rendered (`key`, `still_index` frames into its view, `young_pixels` of it on

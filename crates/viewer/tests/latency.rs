@@ -135,6 +135,97 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A press on the view that has not moved yet changes nothing and holds the view: no frame is rendered while the
+/// button is held (the GPU is free for the motion that will come), and the press does not move the camera (no
+/// moving frame, as egui reports a drag from the press on). Refinement goes on after the release, to the rest.
+#[test]
+fn a_press_that_has_not_moved_holds_the_view() {
+    if !display_available() {
+        return;
+    }
+    let _x = x_input_lock();
+    let dir = out_dir("press");
+    let stats = dir.join("stats.json");
+    let mut v = Running::launch(
+        &[
+            "view",
+            "--size",
+            "400x260",
+            "--no-panel",
+            "--exit-after",
+            "3",
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+        &dir,
+        &[],
+    );
+    v.wait_for("] opened ", 1, Duration::from_secs(60));
+    let window = v.focus_window();
+    // An orbit first (a camera navigation has re-derived), then, into the still refinement, the button held
+    // 1.5 s without motion.
+    let press = |x: &str, y: &str| {
+        xdotool(&[
+            "mousemove",
+            "--window",
+            &window,
+            x,
+            y,
+            "sleep",
+            "0.05",
+            "mousedown",
+            "1",
+        ]);
+    };
+    press("150", "130");
+    for x in ["170", "190", "210"] {
+        std::thread::sleep(Duration::from_millis(100));
+        xdotool(&["mousemove", "--window", &window, x, "135"]);
+    }
+    xdotool(&["mouseup", "1"]);
+    std::thread::sleep(Duration::from_millis(1000));
+    let orbited = monotonic_ms();
+    press("150", "130");
+    let pressed = monotonic_ms();
+    std::thread::sleep(Duration::from_millis(1500));
+    let released = monotonic_ms();
+    xdotool(&["mouseup", "1"]);
+    let status = v.wait_exit(Duration::from_secs(120));
+    let log = v.log_text();
+    assert!(status.success(), "hrtao view failed ({status}):\n{log}");
+    v.validation_clean();
+    assert!(log.contains("at rest"), "{log}");
+
+    let s = read_stats(&stats);
+    let frames = s["frames"].as_array().unwrap();
+    let presented: Vec<f64> = frames
+        .iter()
+        .map(|f| f["presented_ms"].as_f64().unwrap())
+        .collect();
+    // The frame in flight at the press, and the one the press reached, end well within 0.5 s.
+    let during: Vec<f64> = presented
+        .iter()
+        .filter(|&&t| t > pressed + 500.0 && t < released)
+        .map(|t| t - pressed)
+        .collect();
+    assert!(
+        during.is_empty(),
+        "frames rendered while the button was held (ms after the press): {during:?}"
+    );
+    assert!(
+        presented.iter().any(|&t| t < pressed) && presented.iter().any(|&t| t > released),
+        "refinement before the press and after the release: {presented:?}"
+    );
+    let orbit = (1..frames.len()).filter(|&i| frames[i]["moving"] == true && presented[i] < orbited);
+    assert!(orbit.count() > 0, "the orbit moved the camera");
+    let moving: Vec<usize> = (1..frames.len())
+        .filter(|&i| frames[i]["moving"] == true && presented[i] > orbited)
+        .collect();
+    assert!(moving.is_empty(), "the press moved the camera: frames {moving:?}");
+    assert_eq!(frames[frames.len() - 1]["converged"], true);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--ao-out` writes the view's AO of every rendered frame at its internal size, and `--stats` the roughness of
 /// each (occluded flat pixels by the frame's own AO).
 #[test]

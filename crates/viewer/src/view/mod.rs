@@ -423,6 +423,8 @@ pub(crate) struct Viewer {
     drop_nav_focus: bool,
     /// The last frame left nothing to refine: the event loop waits for input.
     resting: bool,
+    /// This frame held the view's image for a press that has not moved anything (`Motion::holds`).
+    holding: bool,
     // Persistence.
     prefs: Prefs,
     prefs_path: Option<PathBuf>,
@@ -546,6 +548,7 @@ impl Viewer {
             show_panel: !args.no_panel,
             drop_nav_focus: false,
             resting: false,
+            holding: false,
             prefs,
             prefs_path,
             prefs_saved,
@@ -801,6 +804,13 @@ impl Viewer {
             log::info!(
                 "primary visibility: {primary:?} (ray queries {rq_ms:.0} ms, raster {raster_ms:.0} ms at {w}x{h})"
             );
+            // The first frames after opening answer input as soon as any other (no pipeline compiles in them).
+            let t = Instant::now();
+            r.warm_up(&FrameDesc {
+                jitter: true,
+                ..FrameDesc::new(&scene_gpu, scene.f(), probe, &settings)
+            })?;
+            log::info!("passes warmed up in {:.0} ms", t.elapsed().as_secs_f64() * 1e3);
         }
         if self.prefs.auto_budget {
             // The frame-time target found its budget for the old scene (rays cost 0.07–5 Mrays/s here, by mesh),
@@ -1195,16 +1205,34 @@ impl Viewer {
         self.view_rect = rect;
         let now = Instant::now();
         let changed = !self.last_drawn_cam.is_some_and(|c| same_view(&c, &self.nav.cam));
-        self.motion.frame(changed, now);
+        let script_running = self.script.frames.is_some() && !self.script.done;
+        // A press on the view that has not moved anything: present the image already in the output again.
+        let held = match &self.renderer {
+            Some(r) if self.motion.holds() && !changed && self.last_report.is_some() => {
+                (!script_running && self.background_shot.is_none()).then(|| r.size())
+            }
+            _ => None,
+        };
+        self.holding = held.is_some();
+        if !self.holding {
+            self.motion.frame(changed, now);
+        }
         let moving = self.motion.moving(now);
-        let (iw, ih) = self.internal_size_at(self.motion.scale(self.render_scale, now));
-        self.apply_ray_budget(iw, ih);
+        let (iw, ih) = match held {
+            Some(size) => size,
+            None => self.internal_size_at(self.motion.scale(self.render_scale, now)),
+        };
+        if !self.holding {
+            self.apply_ray_budget(iw, ih);
+        }
         // Still frames in slices of the frame-time target (with the target on): one budget per still image.
-        let lattice = if moving || !self.prefs.auto_budget {
+        let lattice = if self.holding {
+            1
+        } else if moving || !self.prefs.auto_budget {
             self.slicing.moving();
             1
         } else {
-            let target = self.prefs.target_ms.max(1.0) as f64;
+            let target = slices::slice_target_ms(self.prefs.target_ms);
             let s = &self.prefs.settings;
             // Refining: the rays that complete the own rays with the anti-aliasing; else the ray budget.
             let rays_per_pixel = if s.accumulates() {
@@ -1261,11 +1289,8 @@ impl Viewer {
             // A converged image of this very view is already in the output: present it again (expose events,
             // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render, except
             // during a background screenshot, where the view rests once converged as it would for a user.
-            let scripted = self.script.frames.is_some()
-                && !self.script.done
-                && self.background_shot.is_none()
-                && self.saving.is_none();
-            if scripted || !r.shows_final(&frame) {
+            let scripted = script_running && self.background_shot.is_none() && self.saving.is_none();
+            if !self.holding && (scripted || !r.shows_final(&frame)) {
                 r.record_frame(cmd, &frame)?;
                 rendered = true;
             }
@@ -1400,7 +1425,7 @@ impl Viewer {
                 }
             } else if self.prefs.auto_budget && self.background_shot.is_none() {
                 // (A background screenshot's tiles share the frame: its cost is not the view's.)
-                let target = self.prefs.target_ms.max(1.0) as f64;
+                let target = slices::slice_target_ms(self.prefs.target_ms);
                 let slices = self.last_report.as_ref().map_or(1, |r| r.slices);
                 self.slicing.observe(view_ms, slices, target);
             }
@@ -1445,19 +1470,19 @@ impl Viewer {
         let script_running = self.script.frames.is_some() && !self.script.done;
         let viewing = self.renderer.is_some() && self.scene.is_some();
         let converging = viewing && !self.converged_full();
+        // A held view waits for the press's motion or release (input wakes the loop).
         let busy = script_running
             || self.shot.is_some()
             || self.background_shot.is_some()
             || self.saving.is_some()
             || self.script.ui_capture_pending
-            || converging
-            || (viewing && self.motion.moving(now));
+            || (!self.holding && (converging || (viewing && self.motion.moving(now))));
         if busy {
             self.egui_ctx.request_repaint();
         } else if self.loading.is_some() {
             self.egui_ctx.request_repaint_after(Duration::from_millis(100));
         }
-        let resting = !busy && self.loading.is_none();
+        let resting = !busy && self.loading.is_none() && !self.holding;
         if resting && !self.resting {
             let frames = self.last_report.as_ref().map_or(0, |r| r.accumulated_frames);
             log::info!("at rest: the image has converged ({frames} frames); waiting for input");

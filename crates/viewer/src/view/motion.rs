@@ -40,7 +40,9 @@ pub struct Motion {
     /// Scale used while moving; adapted to the frame-time target within [MIN_MOVING_SCALE, cap].
     pub moving_scale: f32,
     /// A pointer drag on the view is in progress (moving even when a frame brings no new delta).
-    pub dragging: bool,
+    dragging: bool,
+    /// The drag in progress has moved something (the camera, a section plane, a part).
+    drag_acted: bool,
 }
 
 impl Motion {
@@ -50,7 +52,22 @@ impl Motion {
             frames_since_change: 0,
             moving_scale,
             dragging: false,
+            drag_acted: false,
         }
+    }
+
+    /// The view's drag state for this frame: `dragging` while a button is held on the view (or fly keys are
+    /// down), `acted` when this frame's drag moved something.
+    pub fn drag(&mut self, dragging: bool, acted: bool) {
+        self.dragging = dragging;
+        self.drag_acted = dragging && (self.drag_acted || acted);
+    }
+
+    /// A button is held on the view and its drag has not moved anything yet: the motion that follows is the
+    /// input to answer, so the view holds its image (renders nothing, asks for no frame) rather than start a
+    /// frame the motion would wait for. Latency wins over refinement: a still image pauses for the press.
+    pub fn holds(&self) -> bool {
+        self.dragging && !self.drag_acted
     }
 
     /// Records one frame: `changed` when its camera differs from the previous frame's.
@@ -111,8 +128,27 @@ mod tests {
         m.frame(false, later);
         assert!(!m.moving(later));
         assert_eq!(m.scale(1.0, later), 1.0);
-        m.dragging = true;
+        m.drag(true, false);
         assert!(m.moving(later));
+    }
+
+    #[test]
+    fn a_press_holds_the_view_until_its_drag_moves_something() {
+        let mut m = Motion::new(0.35);
+        assert!(!m.holds());
+        // Pressed: nothing moved yet.
+        m.drag(true, false);
+        assert!(m.holds());
+        // The first motion acts; a pause mid-drag renders on (the moving image improves).
+        m.drag(true, true);
+        assert!(!m.holds());
+        m.drag(true, false);
+        assert!(!m.holds());
+        // Released, then a new press holds again.
+        m.drag(false, false);
+        assert!(!m.holds());
+        m.drag(true, false);
+        assert!(m.holds());
     }
 
     #[test]

@@ -63,6 +63,10 @@ fn set(c: &Camera, eye: Vec3, target: Vec3, up: Vec3) -> Camera {
 /// Orbit by `yaw` radians around the world up axis through `pivot`, then `pitch` radians around the camera's
 /// right axis through `pivot`. Distances to the pivot are preserved.
 pub fn orbit(c: &Camera, pivot: Vec3, world_up: Vec3, yaw: f32, pitch: f32) -> Camera {
+    // Nothing to do: the same camera, not one re-derived to its last bits (a new view for the renderer).
+    if yaw == 0.0 && pitch == 0.0 {
+        return *c;
+    }
     let q = Quat::from_axis_angle(right(c), pitch);
     let q = Quat::from_axis_angle(world_up.normalize(), yaw) * q;
     let e = pivot + q * (eye(c) - pivot);
@@ -79,6 +83,9 @@ pub fn world_per_pixel(c: &Camera, height: f32) -> f32 {
 /// Pan so that content under the cursor follows a drag of (`dx`, `dy`) pixels (x right, y down) in a view
 /// `height` pixels tall.
 pub fn pan(c: &Camera, dx: f32, dy: f32, height: f32) -> Camera {
+    if dx == 0.0 && dy == 0.0 {
+        return *c;
+    }
     let s = world_per_pixel(c, height);
     let delta = (-dx * right(c) + dy * cam_up(c)) * s;
     set(c, eye(c) + delta, target(c) + delta, cam_up(c))
@@ -121,6 +128,9 @@ pub fn fly_move(c: &Camera, local: Vec3) -> Camera {
 
 /// Fly: turn the view direction around the eye (yaw around world up, pitch around the right axis).
 pub fn fly_look(c: &Camera, world_up: Vec3, yaw: f32, pitch: f32) -> Camera {
+    if yaw == 0.0 && pitch == 0.0 {
+        return *c;
+    }
     let q = Quat::from_axis_angle(world_up.normalize(), yaw) * Quat::from_axis_angle(right(c), pitch);
     let e = eye(c);
     set(c, e, e + q * (target(c) - e), q * cam_up(c))
@@ -215,6 +225,33 @@ pub fn up_axis_of(c: &Camera) -> UpAxis {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A drag that has not moved (a press: egui reports the drag from it) leaves the camera bit for bit: a camera
+    /// that differs in its last bits is a new view, which would start a frame the drag's motion waits for.
+    #[test]
+    fn a_drag_of_nothing_leaves_the_camera_bit_for_bit() {
+        let mut c = Camera {
+            eye: [102.04, -127.6, 128.04],
+            target: [3.1, 2.7, -0.4],
+            up: [0.0, 0.0, 1.0],
+            ..Camera::default()
+        };
+        let (pivot, up) = (Vec3::new(1.3, -0.7, 5.9), Vec3::Z);
+        let mut changed = 0;
+        for k in 0..50 {
+            // A camera that orbits and pans have re-derived, as the view has after any navigation.
+            c = pan(&orbit(&c, pivot, up, 0.013 * k as f32, -0.007), 3.0, -1.0, 800.0);
+            for (name, d) in [
+                ("orbit", orbit(&c, pivot, up, 0.0, 0.0)),
+                ("pan", pan(&c, 0.0, 0.0, 800.0)),
+                ("look", fly_look(&c, up, 0.0, 0.0)),
+            ] {
+                changed += (d != c) as u32;
+                assert_eq!(d, c, "{name} by nothing after {k} steps");
+            }
+        }
+        assert_eq!(changed, 0);
+    }
 
     #[test]
     fn opposite_views_look_back_through_the_pivot() {

@@ -22,7 +22,7 @@ const FLOOR_MARGIN: f64 = 1.15;
 /// The first still image's lattice, before any slice was measured, is at most this: a round of L² frames
 /// passes before the lattice can change, and a moving frame's cost, scaled by its work, overstates a still
 /// frame's where the floor dominates it.
-const FIRST_LATTICE_MAX: u32 = 6;
+const FIRST_LATTICE_MAX: u32 = 8;
 /// A lattice whose frames cost at most this fraction of the target tries the next smaller one once, at the next
 /// still image's start: a round cannot shrink or grow once started, except a first round, which grows at once
 /// if the probe misses (`hrtao_core::FrameDesc::lattice`).
@@ -41,7 +41,7 @@ pub fn refines_on_the_way(l: u32) -> bool {
     l <= 3 || (2..l).any(|d| l.is_multiple_of(d))
 }
 
-/// The smallest lattice from `l` up that `refines_on_the_way` (`MAX_LATTICE` is 8).
+/// The smallest lattice from `l` up that `refines_on_the_way` (up to `MAX_LATTICE`).
 fn allowed_at_least(l: u32) -> u32 {
     (l.max(1)..=MAX_LATTICE)
         .find(|&l| refines_on_the_way(l))
@@ -67,6 +67,18 @@ pub fn still_rays_per_pixel(still_samples: u32, aa_frames: u32) -> u32 {
 /// lavapipe started at lattice 3 with 323 ms frames for its first 9).
 pub fn frame_work(width: u32, height: u32, rays: f64) -> u64 {
     (width as f64 * height as f64 * (1.0 + rays.max(0.0))) as u64
+}
+
+/// A slice of a still image takes this fraction of the frame-time target. Input is read between frames, so
+/// input that comes during a slice waits for the rest of it; at half the target, a press is seen before the
+/// motion of its drag (a hand holds the button a few tenths of a second before it moves), the view holds for it
+/// (`Motion::holds`) and the drag is answered by its first moving frame alone: latency wins over the time to
+/// converge.
+pub const SLICE_TARGET_FRACTION: f64 = 0.5;
+
+/// The cost a still image's slice aims at for the user's frame-time target.
+pub fn slice_target_ms(frame_target_ms: f32) -> f64 {
+    frame_target_ms.max(1.0) as f64 * SLICE_TARGET_FRACTION
 }
 
 /// The lattice whose slices of a frame costing `whole_ms` cost about `target_ms`: ⌈√(whole / target)⌉.
@@ -343,13 +355,13 @@ mod tests {
         // A floor over the target: not a lattice that costs 64 frames per round for nothing.
         let l = settle(120.0, 400.0, 2);
         assert!(l <= 6, "{l}");
-        assert!(120.0 + 400.0 / (l * l) as f64 <= FLOOR_MARGIN * (120.0 + 400.0 / 64.0));
+        assert!(120.0 + 400.0 / (l * l) as f64 <= FLOOR_MARGIN * (120.0 + 400.0 / 256.0));
         // Lavapipe in the window at 1280×800: a 70 ms floor and 340 ms of work. 5 would meet the target, but
         // it is prime: 6 (the least lattice over 4 that completes a grid on the way).
         assert_eq!(settle(70.0, 340.0, 8), 4);
         assert_eq!(settle(75.0, 600.0, 4), 6);
         for l in 1..=MAX_LATTICE {
-            assert_eq!(refines_on_the_way(l), ![5, 7].contains(&l), "{l}");
+            assert_eq!(refines_on_the_way(l), ![5, 7, 11, 13].contains(&l), "{l}");
         }
     }
 

@@ -749,43 +749,50 @@ impl Viewer {
 
     /// Mouse input over the 3D view.
     fn view_input(&mut self, ctx: &egui::Context, resp: &egui::Response, rect: egui::Rect) {
-        // A drag in progress keeps the view "moving" (reduced resolution) even in frames without a new delta.
-        self.motion.dragging = resp.dragged();
+        let ppp = ctx.pixels_per_point();
+        let delta = view_drag_delta(ctx, resp) * ppp;
+        // A drag in progress keeps the view "moving" (reduced resolution) even in frames without a new delta;
+        // a press whose drag has not moved yet holds the view (`Motion::holds`).
+        let acted = delta != egui::Vec2::ZERO;
+        self.motion.drag(resp.dragged(), acted);
         if self.scene.is_none() {
             return;
         }
-        let ppp = ctx.pixels_per_point();
         let (shift, ctrl) = ctx.input(|i| (i.modifiers.shift, i.modifiers.command));
-        let delta = view_drag_delta(ctx, resp) * ppp;
         let world_up = self.nav.world_up.vector();
         let view_h = self.view_rect[3].max(1) as f32;
-        if resp.dragged_by(PointerButton::Primary) && ctrl && shift {
-            self.drag_section(delta);
-        } else if resp.dragged_by(PointerButton::Primary) && ctrl && !self.selection.instances.is_empty() {
-            self.drag_move(delta);
-        } else if resp.dragged_by(PointerButton::Middle) || (resp.dragged_by(PointerButton::Primary) && shift)
-        {
-            // Pan moves the pivot with the view.
-            let wpp = nav::world_per_pixel(&self.nav.cam, view_h);
-            let d = (-delta.x * nav::right(&self.nav.cam) + delta.y * nav::cam_up(&self.nav.cam)) * wpp;
-            self.nav.pivot += d;
-            self.nav.cam = nav::pan(&self.nav.cam, delta.x, delta.y, view_h);
-        } else if resp.dragged_by(PointerButton::Primary) {
-            self.nav.cam = nav::orbit(
-                &self.nav.cam,
-                self.nav.pivot,
-                world_up,
-                -delta.x * ORBIT_RAD_PER_PX,
-                -delta.y * ORBIT_RAD_PER_PX,
-            );
-        } else if resp.dragged_by(PointerButton::Secondary) {
-            self.nav.cam = nav::fly_look(
-                &self.nav.cam,
-                world_up,
-                -delta.x * LOOK_RAD_PER_PX,
-                -delta.y * LOOK_RAD_PER_PX,
-            );
-            self.nav.pivot = nav::target(&self.nav.cam);
+        // A press that has not moved changes nothing (no section plane or part moved, no camera re-derived).
+        if acted {
+            if resp.dragged_by(PointerButton::Primary) && ctrl && shift {
+                self.drag_section(delta);
+            } else if resp.dragged_by(PointerButton::Primary) && ctrl && !self.selection.instances.is_empty()
+            {
+                self.drag_move(delta);
+            } else if resp.dragged_by(PointerButton::Middle)
+                || (resp.dragged_by(PointerButton::Primary) && shift)
+            {
+                // Pan moves the pivot with the view.
+                let wpp = nav::world_per_pixel(&self.nav.cam, view_h);
+                let d = (-delta.x * nav::right(&self.nav.cam) + delta.y * nav::cam_up(&self.nav.cam)) * wpp;
+                self.nav.pivot += d;
+                self.nav.cam = nav::pan(&self.nav.cam, delta.x, delta.y, view_h);
+            } else if resp.dragged_by(PointerButton::Primary) {
+                self.nav.cam = nav::orbit(
+                    &self.nav.cam,
+                    self.nav.pivot,
+                    world_up,
+                    -delta.x * ORBIT_RAD_PER_PX,
+                    -delta.y * ORBIT_RAD_PER_PX,
+                );
+            } else if resp.dragged_by(PointerButton::Secondary) {
+                self.nav.cam = nav::fly_look(
+                    &self.nav.cam,
+                    world_up,
+                    -delta.x * LOOK_RAD_PER_PX,
+                    -delta.y * LOOK_RAD_PER_PX,
+                );
+                self.nav.pivot = nav::target(&self.nav.cam);
+            }
         }
         let scroll = ctx.input(|i| i.scroll_delta.y);
         if resp.hovered() && scroll != 0.0 {
@@ -1123,7 +1130,7 @@ impl Viewer {
             }
         }
         if !down.is_empty() && self.scene.is_some() {
-            self.motion.dragging = true;
+            self.motion.drag(true, true);
             let speed = self.move_step() * 25.0 * if mods.shift { 4.0 } else { 1.0 } * dt;
             let mut local = Vec3::ZERO;
             for k in down {
