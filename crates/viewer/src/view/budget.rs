@@ -24,6 +24,23 @@ pub fn per_pixel_budget(rays_per_frame: u32, width: u32, height: u32) -> (u32, f
     (rpp, fraction)
 }
 
+/// The share of the frame-time target a scene's first frame spends on AO rays, priced at the primary probe's
+/// rate: an AO ray costs about 1.5-2.5× a primary one here (bundled scene, san_francisco).
+pub const FIRST_FRAME_RAY_SHARE: f64 = 0.25;
+
+/// A scene's first ray budget: the rays its primary probe traced (`pixels` ray-query primary rays in `probe_ms`,
+/// `Renderer::pick_primary`) in `FIRST_FRAME_RAY_SHARE` of `target_ms`, within MIN..=DEFAULT; the default when
+/// the probe did not run (NaN). A young map's first frame traces for every pixel: at the default, san_francisco's
+/// took ~400 ms on lavapipe, and input that came meanwhile waited for it. The frame-time target adapts the
+/// budget from there in moving frames.
+pub fn first_rays_per_frame(probe_ms: f64, pixels: u64, target_ms: f64) -> u32 {
+    if !(probe_ms.is_finite() && probe_ms > 0.0) || pixels == 0 {
+        return DEFAULT_RAYS_PER_FRAME;
+    }
+    let rays = pixels as f64 / probe_ms * target_ms * FIRST_FRAME_RAY_SHARE;
+    (rays.round().min(u32::MAX as f64) as u32).clamp(MIN_RAYS_PER_FRAME, DEFAULT_RAYS_PER_FRAME)
+}
+
 /// One step of the frame-time controller (the paper, §6: "the ray budget can be adjusted to match a target
 /// rendering speed"): when a frame went over the target, a decrease in proportion to the excess (with a margin,
 /// as if the whole frame were rays: at most 0.9, at least 0.25 per frame), so a slow start settles within a few
@@ -54,6 +71,19 @@ mod tests {
         assert!((fraction - 0.435).abs() < 0.001, "{fraction}");
         assert_eq!(per_pixel_budget(u32::MAX, 1, 1), (MAX_RAYS_PER_PIXEL, 1.0));
         assert_eq!(per_pixel_budget(0, 0, 0), (1, MIN_TRACE_FRACTION));
+    }
+
+    /// The first budget follows the scene's ray cost: the bundled scene's probe (459 ms for 960×800 ray-query
+    /// primary rays on lavapipe) gives ~42k rays; a GPU's (2 ms) the default; no probe, the default.
+    #[test]
+    fn a_scene_starts_from_the_rays_its_probe_traced_in_the_target() {
+        let px = 960 * 800;
+        let lavapipe = first_rays_per_frame(459.0, px, 100.0);
+        assert!((41_000..43_000).contains(&lavapipe), "{lavapipe}");
+        assert!(first_rays_per_frame(1300.0, px, 100.0) < lavapipe / 2);
+        assert_eq!(first_rays_per_frame(2.0, px, 100.0), DEFAULT_RAYS_PER_FRAME);
+        assert_eq!(first_rays_per_frame(f64::NAN, px, 100.0), DEFAULT_RAYS_PER_FRAME);
+        assert_eq!(first_rays_per_frame(1e9, px, 100.0), MIN_RAYS_PER_FRAME);
     }
 
     #[test]

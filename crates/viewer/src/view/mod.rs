@@ -789,6 +789,7 @@ impl Viewer {
             self.renderer = Some(Renderer::new(&self.gpu)?);
         }
         let (w, h) = self.internal_size();
+        let mut probe_rq_ms = f64::NAN;
         if let Some(r) = &mut self.renderer {
             // A different scene: the cached AO belongs to the old geometry.
             r.clear_cache()?;
@@ -804,6 +805,7 @@ impl Viewer {
             log::info!(
                 "primary visibility: {primary:?} (ray queries {rq_ms:.0} ms, raster {raster_ms:.0} ms at {w}x{h})"
             );
+            probe_rq_ms = rq_ms;
             // The first frames after opening answer input as soon as any other (no pipeline compiles in them).
             let t = Instant::now();
             r.warm_up(&FrameDesc {
@@ -814,9 +816,14 @@ impl Viewer {
         }
         if self.prefs.auto_budget {
             // The frame-time target found its budget for the old scene (rays cost 0.07–5 Mrays/s here, by mesh),
-            // and it only moves in moving frames: a budget a heavy scene cut down would leave the next scene's
-            // first frames tracing almost nothing (a grainy first image). Each scene starts from the default.
-            self.prefs.rays_per_frame = budget::DEFAULT_RAYS_PER_FRAME;
+            // and it only moves in moving frames: each scene starts from its own, the rays its primary probe
+            // traced in the target's share for rays (a heavy scene's first frame answers input as soon as any).
+            self.prefs.rays_per_frame = budget::first_rays_per_frame(
+                probe_rq_ms,
+                w as u64 * h as u64,
+                self.prefs.target_ms.max(1.0) as f64,
+            );
+            log::info!("first ray budget: {} rays per frame", self.prefs.rays_per_frame);
         }
         self.prefs.settings.map.ao_radius = radius;
         self.section_state = section_state;
