@@ -19,10 +19,10 @@ pub struct RayBudget {
     pub trace_fraction: f32,
 }
 
-/// The largest slice lattice (`FrameDesc::lattice`): 256 slices of a whole frame (a heavy scene on a software
-/// device needs them to keep a slice within half the frame-time target: san_francisco's rays alone cost ~80 ms
-/// per slice at 8 on lavapipe at 844×800).
-pub const MAX_LATTICE: u32 = 16;
+/// The largest slice lattice (`FrameDesc::lattice`): 64 slices of a whole frame. (16 was tried: the first two
+/// rounds of a still image hold a preview of the lattice's coarsest grid, and at 16 on lavapipe that was a blocky
+/// image for ~17 s after every move.)
+pub const MAX_LATTICE: u32 = 8;
 
 /// How the composite writes its output.
 #[derive(Clone, Copy, Debug, PartialEq)]

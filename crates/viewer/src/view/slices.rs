@@ -355,7 +355,7 @@ mod tests {
         // A floor over the target: not a lattice that costs 64 frames per round for nothing.
         let l = settle(120.0, 400.0, 2);
         assert!(l <= 6, "{l}");
-        assert!(120.0 + 400.0 / (l * l) as f64 <= FLOOR_MARGIN * (120.0 + 400.0 / 256.0));
+        assert!(120.0 + 400.0 / (l * l) as f64 <= FLOOR_MARGIN * (120.0 + 400.0 / 64.0));
         // Lavapipe in the window at 1280×800: a 70 ms floor and 340 ms of work. 5 would meet the target, but
         // it is prime: 6 (the least lattice over 4 that completes a grid on the way).
         assert_eq!(settle(70.0, 340.0, 8), 4);
