@@ -410,6 +410,8 @@ pub(crate) struct Viewer {
     last_drawn_cam: Option<Camera>,
     /// When this frame's UI pass started (the frame's wall time runs from here to the present).
     frame_started: Instant,
+    /// The next rendered frame's wall time includes the scene's install: the frame-time target skips it.
+    installed: bool,
     /// When this frame's UI pass ended (egui's tessellation runs from here to `draw`).
     ui_done: Instant,
     /// When the previous rendered frame's UI pass started.
@@ -539,6 +541,7 @@ impl Viewer {
             last_report: None,
             last_drawn_cam: None,
             frame_started: Instant::now(),
+            installed: false,
             ui_done: Instant::now(),
             last_rendered_start: None,
             frame_ms_avg: 0.0,
@@ -825,6 +828,7 @@ impl Viewer {
             );
             log::info!("first ray budget: {} rays per frame", self.prefs.rays_per_frame);
         }
+        self.installed = true;
         self.prefs.settings.map.ao_radius = radius;
         self.section_state = section_state;
         self.scene_gpu = Some(scene_gpu);
@@ -1405,6 +1409,7 @@ impl Viewer {
                     input_last_ms: input_ms.map(|i| i.1),
                     roughness: None,
                     rays: report.rays,
+                    rays_per_frame: self.prefs.rays_per_frame,
                     cpu_ms: split,
                     interval_ms,
                 });
@@ -1418,7 +1423,10 @@ impl Viewer {
             self.last_report = Some(report);
             // The background screenshot's share of the frame is not the view's.
             let view_ms = (wall_ms - shot_ms).max(0.0);
-            if moving {
+            // The first frame after a scene's install counted the install in its wall time: no frame's cost.
+            let installed = std::mem::take(&mut self.installed);
+            if installed {
+            } else if moving {
                 self.frame_time_target(view_ms);
                 // The first frames pay the pipelines' compilation (lavapipe): not a moving frame's cost.
                 if self

@@ -50,6 +50,9 @@ pub struct FrameStat {
     pub roughness: Option<f32>,
     /// Rays traced this frame.
     pub rays: u64,
+    /// The ray budget the frame was rendered with (rays per frame, `budget.rs`): what the frame-time target
+    /// set; the rays traced may be fewer (a cell with all its samples takes none).
+    pub rays_per_frame: u32,
     /// Where `wall_ms` went on the CPU clock (consecutive spans: their sum is at most `wall_ms`).
     pub cpu_ms: CpuSplit,
     /// From the previous rendered frame's start to this one's (0 for the first): what a user sees as the frame
@@ -255,6 +258,7 @@ mod tests {
                 input_last_ms: None,
                 roughness: None,
                 rays: 0,
+                rays_per_frame: 0,
                 cpu_ms: CpuSplit::default(),
                 interval_ms: 0.0,
             });
