@@ -19,6 +19,11 @@ vec3 linear_to_srgb(vec3 c) {
     return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
 }
 
+vec3 srgb_to_linear(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(vec3(0.04045), c));
+}
+
 vec3 false_color(uint v) {
     uint h = h_check(v);
     return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
@@ -71,10 +76,9 @@ int edge_steps() {
 // Feature edges (CAD look): 1 where a neighbour along the 4 axes, up to edge_steps() pixels away, shows a miss,
 // another instance, a surface off this pixel's tangent plane (a silhouette within one part) or a normal beyond
 // the crease angle. Drawn on the nearer side, edge_width view pixels wide at any render scale.
-float edge(uvec2 pix, GPixel px) {
+// `spacing`: the pixels between the neighbours tested (the lattice while only its pixels show this view).
+float edge_spaced(uvec2 pix, GPixel px, int spacing) {
     if ((g.flags & FLAG_EDGES) == 0u || px.t < 0.0) return 0.0;
-    // In the first round of slices only the lattice's pixels show this view yet: step over the lattice.
-    int spacing = g.still_index == 0u ? int(lattice()) : 1;
     float pixel_size = pixel_world_size(px.t) * float(spacing);
     int steps = edge_steps();
     const ivec2 OFFSETS[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
@@ -94,6 +98,11 @@ float edge(uvec2 pix, GPixel px) {
         }
     }
     return 0.0;
+}
+
+float edge(uvec2 pix, GPixel px) {
+    // In the first round of slices only the lattice's pixels show this view yet: step over the lattice.
+    return edge_spaced(pix, px, g.still_index == 0u ? int(lattice()) : 1);
 }
 
 // Ours: the own rays' evidence about the cell estimate, pooled over the pixel's 3x3 neighbours on its surface.
@@ -232,7 +241,11 @@ const vec3 EDGE_COLOR = vec3(0.06, 0.07, 0.08);
 // grid of pixels (`level_spacing`, slice_order.rs, Renderer::level_spacing): round 0 each finer grid as it
 // completes, round 1 round 0's finest until it ends, then all its pixels. Every presented frame shows the whole
 // new view, smooth and sharper at each grid, never single pixels that differ from the image around them.
-// Push constant 1 (a frame that completes a grid): the grid interpolated over every pixel.
+// A pixel keeps its shade times its AO, without the feature edges: a line sampled on a grid would show as a row
+// of dots. The edges are drawn over the grid's interpolation per pixel once every pixel has this view's G-buffer
+// (the round 0's last slice on).
+// Push constant x = 1 (a frame that completes a grid, or round 0): the grid interpolated over every pixel;
+// y = 1: with the edges.
 uint kept_slot(uint index) {
     return 2u * g.width * g.height + index;
 }
@@ -295,6 +308,15 @@ void show_level() {
     float ao;
     uint rgba;
     level_value(pix, ao, rgba);
+    if (push.y == 1u) {
+        // Every pixel's G-buffer is this view's now: its edges, at full resolution.
+        float e = 0.85 * edge_spaced(pix, GBufferRef(g.gbuffer).px[index], 1);
+        vec4 c = unpackUnorm4x8(rgba);
+        vec3 edge_srgb = linear_to_srgb(EDGE_COLOR);
+        if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) edge_srgb = edge_srgb.bgr;
+        c.rgb = linear_to_srgb(mix(srgb_to_linear(c.rgb), srgb_to_linear(edge_srgb), e));
+        rgba = packUnorm4x8(c);
+    }
     FloatRef(g.ao).v[index] = ao;
     UintRef(g.output_rgba).v[index] = rgba;
     Vec4Ref(g.bias_evidence).v[kept_slot(index)].z = ao;
@@ -310,12 +332,15 @@ void main() {
     if (!pixel_coords(pix, index)) return;
     GPixel px = GBufferRef(g.gbuffer).px[index];
     vec3 color;
+    // The shade without the feature edges (the held rounds keep it aside); debug views keep their colour.
+    vec3 plain = vec3(-1.0);
     float final_ao = FloatRef(g.ao).v[index];
     if (px.t >= 0.0 && (g.mode == MODE_DEBUG_CELLS || g.mode == MODE_DEBUG_LOD || g.mode == MODE_DEBUG_SAMPLES)) {
         color = debug_color(index);
     } else {
         bool hashed = g.mode == MODE_HRTAO;
-        vec3 s = mix(shade(pix, px), EDGE_COLOR, 0.85 * edge(pix, px));
+        plain = shade(pix, px);
+        vec3 s = mix(plain, EDGE_COLOR, 0.85 * edge(pix, px));
         // This sample: its cell estimate and its own rays (a miss counts as rays_per_pixel open rays, so
         // partly covered pixels weigh background and surface by coverage).
         float c = hashed && px.t >= 0.0 ? clamp(FloatRef(g.ao).v[index], 0.0, 1.0) : 1.0;
@@ -400,7 +425,13 @@ void main() {
         // Kept aside; the pixel goes on showing the grid's interpolation, whose AO `ao` holds again (the
         // frame's resolve wrote the cell estimate there). In a frame that completes a grid, show_level runs
         // next and writes every pixel.
-        keep_aside(index, final_ao, rgba);
+        uint kept = rgba;
+        if (plain.x >= 0.0) {
+            uvec3 k8 = uvec3(linear_to_srgb(plain * final_ao) * 255.0 + 0.5);
+            if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) k8 = k8.bgr;
+            kept = k8.r | (k8.g << 8) | (k8.b << 16) | (255u << 24);
+        }
+        keep_aside(index, final_ao, kept);
         FloatRef(g.ao).v[index] = Vec4Ref(g.bias_evidence).v[kept_slot(index)].z;
     } else {
         UintRef(g.output_rgba).v[index] = rgba;

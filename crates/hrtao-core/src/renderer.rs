@@ -138,6 +138,13 @@ pub struct FrameReport {
     pub slices: u32,
 }
 
+/// A frame of the held rounds that shows the grid over the whole image (`Renderer::level_spacing`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct LevelShow {
+    /// Every pixel has this view's G-buffer: the feature edges are drawn over the grid.
+    edges: bool,
+}
+
 pub struct Renderer {
     gpu: Arc<Gpu>,
     passes: PassSet,
@@ -653,10 +660,10 @@ impl Renderer {
             );
         });
         rec.dispatch(Pass::Composite, gw, gh, [0; 4]);
-        if new_level {
+        if let Some(show) = new_level {
             // The first round of slices shows the finest grid of pixels drawn so far, interpolated over the
             // whole image (composite.comp `show_level`).
-            rec.dispatch(Pass::Composite, w, h, [1, 0, 0, 0]);
+            rec.dispatch(Pass::Composite, w, h, [1, show.edges as u32, 0, 0]);
         }
         self.last_events = rec.finish();
         Ok(())
@@ -669,24 +676,28 @@ impl Renderer {
     /// round 0's cell estimates, and one at a time they would speckle.
     /// A round whose end can make the image final is never held: the final image is its pixels as they are,
     /// not the grid's reconstruction (a B-spline approximates, it does not interpolate).
-    fn level_spacing(&self) -> (u32, bool) {
+    /// The grid shows no feature edges until every pixel has this view's G-buffer (a line sampled on a grid is a
+    /// row of dots): round 0's last slice shows its finest grid again, with the edges drawn per pixel.
+    fn level_spacing(&self) -> (u32, Option<LevelShow>) {
         let (l, slice) = (self.lattice, self.slice);
         if self.still_index > 1 || l == 1 {
-            return (0, false);
+            return (0, None);
         }
         if let Some(key) = &self.prev {
             if self.converged(key, 0) {
-                return (0, false);
+                return (0, None);
             }
         }
+        let last = slice + 1 == l * l;
         if self.still_index == 1 {
-            if slice + 1 == l * l {
-                return (1, true);
+            if last {
+                return (1, Some(LevelShow { edges: true }));
             }
-            return (slice_order::finest_grid(l * l - 1, l).unwrap_or(l), false);
+            return (slice_order::finest_grid(l * l - 1, l).unwrap_or(l), None);
         }
         let completes = slice_order::level(slice, l).is_some_and(|s| s > 1);
-        (slice_order::finest_grid(slice, l).unwrap_or(0), completes)
+        let show = (completes || last).then_some(LevelShow { edges: last });
+        (slice_order::finest_grid(slice, l).unwrap_or(0), show)
     }
 
     /// The invocations of a pass over the image this frame: the pixels of its slice's lattice.
