@@ -91,6 +91,16 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     let s = read_stats(&stats);
     let frames = s["frames"].as_array().unwrap();
     assert!(frames.len() >= 3, "{} frames", frames.len());
+    // The first still image after opening is drawn in slices on a software device: the first frame's wall time
+    // counts the scene's install, and the frame-time target skips it; its device time sets the first lattice
+    // (with no estimate, whole frames came first, ~2 s each at 800x800, whenever the install frame outlasted the
+    // moving window so that no moving frame followed it: timing-dependent, seen with the panel at 1280x800).
+    let software = s["device"].as_str().unwrap_or("").contains("llvmpipe");
+    let first_still = frames.iter().find(|f| f["still"] == true).expect("a still frame");
+    assert!(
+        !software || first_still["slices"].as_u64().unwrap() > 1,
+        "the first still image in whole frames: {first_still}"
+    );
     let presented: Vec<f64> = frames
         .iter()
         .map(|f| f["presented_ms"].as_f64().unwrap())

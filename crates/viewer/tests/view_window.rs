@@ -423,6 +423,39 @@ fn tab_and_quick_f12_taps_work_with_real_x_events() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Opening with the panel: the 3D view keeps one size from the first frame (the panel's width fits its content
+/// from the start: it grew over the first frames, 901 -> 852 -> 806 pixels at 1280x800, and each size restarted
+/// the still image).
+#[test]
+fn the_first_frames_after_opening_keep_the_view_size() {
+    if !display_available() {
+        return;
+    }
+    let dir = out_dir("opening");
+    let stats = dir.join("open.json");
+    run_viewer(&[
+        "--size",
+        "1280x800",
+        "--frames",
+        "4",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let frames = json["frames"].as_array().expect("frames");
+    assert!(frames.len() >= 4, "{json}");
+    let views: Vec<&serde_json::Value> = frames.iter().map(|f| &f["view"]).collect();
+    assert!(
+        views.iter().all(|v| *v == views[0]),
+        "the view changed size: {views:?}"
+    );
+    assert!(
+        views[0][0].as_u64().unwrap() < 1280,
+        "the panel takes a side: {views:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--orbit N --stats FILE`: N moving frames at the reduced scale (never below 0.35 of the view), then still frames
 /// until the image has converged, the last one at the full view size.
 #[test]

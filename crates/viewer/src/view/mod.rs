@@ -1423,22 +1423,21 @@ impl Viewer {
             self.last_report = Some(report);
             // The background screenshot's share of the frame is not the view's.
             let view_ms = (wall_ms - shot_ms).max(0.0);
-            // The first frame after a scene's install counted the install in its wall time: no frame's cost.
+            // The first frame after a scene's install counted the install in its wall time: the frame-time
+            // target skips it, and the first still image's lattice takes its device time alone (a young map's
+            // first frame: at least a moving frame's cost).
             let installed = std::mem::take(&mut self.installed);
-            if installed {
-            } else if moving {
-                self.frame_time_target(view_ms);
-                // The first frames pay the pipelines' compilation (lavapipe): not a moving frame's cost.
-                if self
-                    .renderer
-                    .as_ref()
-                    .is_some_and(|r| r.frame_index() > FIRST_FRAMES_COMPILE)
-                {
-                    let b = self.ray_budget;
-                    let rays = b.rays_per_pixel as f64 * b.trace_fraction.clamp(0.0, 1.0) as f64;
-                    self.last_moving = Some((view_ms, slices::frame_work(iw, ih, rays)));
+            if moving {
+                let b = self.ray_budget;
+                let rays = b.rays_per_pixel as f64 * b.trace_fraction.clamp(0.0, 1.0) as f64;
+                let work = slices::frame_work(iw, ih, rays);
+                if installed {
+                    self.last_moving = Some((split.gpu_wait, work));
+                } else {
+                    self.frame_time_target(view_ms);
+                    self.last_moving = Some((view_ms, work));
                 }
-            } else if self.prefs.auto_budget && self.background_shot.is_none() {
+            } else if !installed && self.prefs.auto_budget && self.background_shot.is_none() {
                 // (A background screenshot's tiles share the frame: its cost is not the view's.)
                 let target = slices::slice_target_ms(self.prefs.target_ms);
                 let slices = self.last_report.as_ref().map_or(1, |r| r.slices);
@@ -1742,9 +1741,6 @@ fn same_view(a: &Camera, b: &Camera) -> bool {
 }
 
 /// Milliseconds from `a` to `b` (0 when `b` is earlier).
-/// Frames after which a renderer's pipelines are compiled (lavapipe compiles each at its first dispatch).
-const FIRST_FRAMES_COMPILE: u32 = 2;
-
 fn ms_between(a: Instant, b: Instant) -> f64 {
     b.saturating_duration_since(a).as_secs_f64() * 1e3
 }

@@ -128,7 +128,7 @@ impl Viewer {
         if self.show_panel {
             egui::SidePanel::right("panel")
                 .resizable(true)
-                .default_width(320.0)
+                .default_width(480.0)
                 .show(ctx, |ui| {
                     egui::ScrollArea::vertical().show(ui, |ui| self.panel(ui));
                 });
