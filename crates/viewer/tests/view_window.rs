@@ -24,6 +24,12 @@ fn run_viewer(args: &[&str]) {
     assert!(!stderr.contains("[vulkan"), "validation messages:\n{stderr}");
 }
 
+/// A JSON file the viewer wrote (`--stats`).
+fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// Loads a PNG and checks it is not blank and has AO shading (grey-level variance).
 fn check_image(path: &Path, w: u32, h: u32) {
     let img = image::open(path).expect("screenshot PNG").to_luma8();
@@ -268,7 +274,7 @@ fn a_saved_budget_cut_by_a_heavy_scene_does_not_carry_over() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(!err.contains("[vulkan"), "validation messages:\n{err}");
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let json = read_json(&stats);
     let rays: Vec<u64> = json["frames"]
         .as_array()
         .unwrap()
@@ -441,7 +447,7 @@ fn the_first_frames_after_opening_keep_the_view_size() {
         "--stats",
         stats.to_str().unwrap(),
     ]);
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let json = read_json(&stats);
     let frames = json["frames"].as_array().expect("frames");
     assert!(frames.len() >= 4, "{json}");
     let views: Vec<&serde_json::Value> = frames.iter().map(|f| &f["view"]).collect();
@@ -474,7 +480,7 @@ fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
         "--stats",
         stats.to_str().unwrap(),
     ]);
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let json = read_json(&stats);
     let frames = json["frames"].as_array().expect("frames");
     let size = |f: &serde_json::Value, k: &str| -> (u64, u64) {
         (f[k][0].as_u64().unwrap(), f[k][1].as_u64().unwrap())
@@ -996,7 +1002,7 @@ fn a_big_screenshot_renders_in_the_background_while_the_window_draws() {
     ]);
     println!("background screenshot run: {:.1} s", t0.elapsed().as_secs_f64());
     check_image(&shot, 280, 180);
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let json = read_json(&stats);
     let s = &json["screenshot"];
     println!("{s}");
     let tiles = s["tiles"].as_u64().unwrap();
