@@ -2,7 +2,7 @@
 //! images recorded before the frame's barriers were derived from the passes' declared accesses (when every
 //! dispatch was followed by a full barrier): `tests/data/pass_images.bin` (the paper's frames re-recorded when
 //! `paper()` dropped our cell-size cap: bit-equal to the old ones with the cap kept; the defaults' frames when the
-//! level blend was deleted).
+//! level blend was deleted, and when the still refinement's monotone cap took the exponent 1.5).
 //!
 //! Re-record (only for a change meant to change images): `HRTAO_BLESS_PASS_IMAGES=1 cargo test -p hrtao-core
 //! --test pass_images`.

@@ -330,9 +330,10 @@ fn a_final_round_shows_its_pixels_not_the_held_reconstruction() {
 
 /// The path to a still image is monotone: from one moving frame of a young map at 0.4 of the size,
 /// as the viewer renders it, no frame of the still image in slices of lattice 4 is rougher than 1.25x the
-/// converged image's (roughness over the converged G-buffer, as `examples/still_path` measures it). Measured
-/// 1.18x (bundled scene, 403x400); 1.48x with the held rounds' bilinear interpolation (the round-1 image), 1.88x
-/// also with each slice filtered on its own sub-grid.
+/// converged image's (roughness over the converged G-buffer, as `examples/still_path` measures it); held here
+/// to 1.13x. Measured 1.07x (bundled scene, 403x400); 1.18x with the pooled residual's weight capped linearly
+/// in the own rays (composite.comp `MONOTONE_EXPONENT` 1), 1.48x with the held rounds' bilinear interpolation
+/// (the round-1 image), 1.88x also with each slice filtered on its own sub-grid.
 #[test]
 fn the_path_to_a_still_image_is_monotone() {
     let gpu = gpu();
@@ -378,7 +379,7 @@ fn the_path_to_a_still_image_is_monotone() {
         peak / last
     );
     assert!(
-        peak <= 1.25 * last,
+        peak <= 1.13 * last,
         "frame {at}: {peak:.4} against the converged {last:.4}"
     );
     assert_clean(&gpu);
