@@ -40,7 +40,8 @@ export MESA_SHADER_CACHE_DISABLE=${MESA_SHADER_CACHE_DISABLE:-true}
 cargo build --release -p hrtao-viewer
 BIN=${CARGO_TARGET_DIR:-target}/release/hrtao
 mkdir -p "$OUT"
-rm -f "$OUT"/*.json "$OUT"/*.png
+# Only this script's own results: the STEP benchmark (scripts/bench-step.sh) writes step_*.json beside them.
+rm -f "$OUT"/scene_*.json "$OUT"/scale_*.json "$OUT"/*.png
 start=$(date +%s)
 
 for key in $SCENES; do
