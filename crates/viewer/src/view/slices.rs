@@ -12,6 +12,14 @@
 //! lattice above 3 holds its coarsest preview for its whole first round. A still image traces
 //! `still_rays_per_pixel` rays per pixel and visit, set when it starts (a change would restart it): enough that
 //! its own rays are complete when its anti-aliasing is, so it converges in the fewest rounds.
+//!
+//! Where even the largest lattice's slices are over the target because of their rays (a scene whose rays are
+//! slow: san_francisco on lavapipe traces ~0.3 Mrays/s), the still image traces fewer rays per visit instead, in
+//! more rounds of the same size: latency wins over the time to converge, and the held preview keeps the largest
+//! lattice's short rounds. The work of a frame is modelled as `a + w (1 + r) / L²` (r rays per pixel and visit,
+//! one unit for the pixel's primary visibility and its other passes), fitted to the frames measured.
+use std::collections::BTreeMap;
+
 use hrtao_core::{RayBudget, MAX_LATTICE};
 
 use super::budget::MAX_RAYS_PER_PIXEL;
@@ -91,10 +99,13 @@ pub fn lattice_for(whole_ms: f64, target_ms: f64) -> u32 {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Slicing {
     lattice: u32,
-    /// Frame milliseconds measured at lattice L (index L), smoothed, and the observation that last measured it.
-    costs: [Option<(f64, u64)>; MAX_LATTICE as usize + 1],
+    /// Frame milliseconds measured at lattice L and r rays per pixel and visit (key (L, r)), smoothed, and the
+    /// observation that last measured it.
+    costs: BTreeMap<(u32, u32), (f64, u64)>,
     /// Still frames observed so far.
     observations: u64,
+    /// Frames of the current still image measured so far.
+    image_frames: u32,
     /// The next observed frame is a still image's first: not measured.
     warm_up: bool,
     /// A smaller lattice to try when the next still image starts (`PROBE_BELOW`).
@@ -107,8 +118,9 @@ impl Default for Slicing {
     fn default() -> Self {
         Slicing {
             lattice: 1,
-            costs: [None; MAX_LATTICE as usize + 1],
+            costs: BTreeMap::new(),
             observations: 0,
+            image_frames: 0,
             warm_up: false,
             probe: None,
             still_budget: None,
@@ -140,18 +152,39 @@ impl Slicing {
         if let Some(b) = self.still_budget {
             return b;
         }
-        if self.costs.iter().all(Option::is_none) {
+        let wanted = rays_per_pixel.clamp(1, MAX_RAYS_PER_PIXEL);
+        let mut rays = wanted;
+        if self.costs.is_empty() {
             if let Some((ms, moving_work)) = moving {
                 let whole = ms * work as f64 / moving_work.max(1) as f64;
                 self.lattice = allowed_at_least(lattice_for(whole, target_ms).min(FIRST_LATTICE_MAX));
             }
-        }
-        if let Some(p) = self.probe.take() {
+        } else if let Some(p) = self.probe.take() {
             self.lattice = self.lattice.min(p);
+        } else if let Some(cost) = self.predictor() {
+            // The last image may have traced fewer rays: the lattice its rays need first, then fewer rays.
+            // (As `choose`: where the floor is over the target, a lattice within the margin of the largest.)
+            let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE, wanted));
+            if cost(self.lattice, wanted) > bound {
+                self.lattice = (self.lattice..=MAX_LATTICE)
+                    .filter(|&l| refines_on_the_way(l))
+                    .find(|&l| cost(l, wanted) <= bound)
+                    .unwrap_or(MAX_LATTICE);
+            }
+            if self.lattice == MAX_LATTICE {
+                rays = rays_within(wanted, |r| cost(MAX_LATTICE, r), target_ms);
+            }
+        }
+        if rays < wanted {
+            log::debug!(
+                "slices: {rays} rays per pixel and visit (of {wanted}) at lattice {}",
+                self.lattice
+            );
         }
         self.warm_up = true;
+        self.image_frames = 0;
         let b = RayBudget {
-            rays_per_pixel: rays_per_pixel.clamp(1, MAX_RAYS_PER_PIXEL),
+            rays_per_pixel: rays,
             trace_fraction: 1.0,
         };
         self.still_budget = Some(b);
@@ -170,22 +203,18 @@ impl Slicing {
         }
         self.observations += 1;
         let now = self.observations;
-        for c in self.costs.iter_mut() {
-            if c.is_some_and(|(_, at)| now - at > FRESH_OBSERVATIONS) {
-                *c = None;
-            }
-        }
+        self.costs.retain(|_, (_, at)| now - *at <= FRESH_OBSERVATIONS);
         // A rise counts at once (latency wins: frames over the target must not wait for an average), a fall
         // is smoothed.
-        let c = &mut self.costs[l];
-        let smoothed = c.map_or(frame_ms, |(c, _)| {
+        let key = (l as u32, self.rays());
+        let smoothed = self.costs.get(&key).map_or(frame_ms, |&(c, _)| {
             if frame_ms > c {
                 frame_ms
             } else {
                 c + COST_EMA * (frame_ms - c)
             }
         });
-        *c = Some((smoothed, now));
+        self.costs.insert(key, (smoothed, now));
         let (next, probe) = self.choose(l as u32, target_ms);
         self.probe = probe;
         if next != self.lattice {
@@ -196,14 +225,41 @@ impl Slicing {
             );
         }
         self.lattice = next;
+        self.image_frames += 1;
+        // The first frame measured of an image whose slices are over the target at the largest lattice: fewer
+        // rays per visit, once per image (the renderer restarts the image for the new budget: a slice or two
+        // lost). A moving frame's cost cannot tell this before (its floor, the raster of the whole scene,
+        // outweighs its few rays).
+        if self.image_frames == 1 && l as u32 == MAX_LATTICE && frame_ms > target_ms {
+            let fewer = self.predictor_at(MAX_LATTICE).map(|cost| {
+                let wanted = self.rays();
+                rays_within(wanted, |r| cost(MAX_LATTICE, r), target_ms)
+            });
+            if let (Some(r), Some(b)) = (fewer, self.still_budget.as_mut()) {
+                if r < b.rays_per_pixel {
+                    log::debug!(
+                        "slices: {r} rays per pixel and visit (of {}): {frame_ms:.0} ms",
+                        b.rays_per_pixel
+                    );
+                    b.rays_per_pixel = r;
+                }
+            }
+        }
     }
 
-    /// The model a + b / L² fitted (least squares in 1 / L²) to the measured costs; with one lattice measured,
-    /// a frame all of whose cost shrinks with the slice (a = 0: larger lattices look cheaper than they are,
-    /// so the next measurement corrects it).
+    /// The rays per pixel and visit of the frames observed: the current still image's.
+    fn rays(&self) -> u32 {
+        self.still_budget.map_or(1, |b| b.rays_per_pixel)
+    }
+
+    /// The model a + w (1 + r) / L² fitted (least squares in x = (1 + r) / L²) to the measured costs; with one
+    /// lattice measured, a frame all of whose cost shrinks with the slice (a = 0: larger lattices look cheaper
+    /// than they are, so the next measurement corrects it).
     fn model(&self) -> Option<(f64, f64)> {
-        let pts: Vec<(f64, f64)> = (1..=MAX_LATTICE as usize)
-            .filter_map(|l| self.costs[l].map(|(c, _)| (1.0 / (l * l) as f64, c)))
+        let pts: Vec<(f64, f64)> = self
+            .costs
+            .iter()
+            .map(|(&(l, r), &(c, _))| ((1 + r) as f64 / (l * l) as f64, c))
             .collect();
         match pts.len() {
             0 => None,
@@ -224,15 +280,11 @@ impl Slicing {
     /// `FLOOR_MARGIN` of the cheapest, and a smaller one to probe at the next still image; `drawn` is the
     /// lattice of the frame just measured.
     fn choose(&self, drawn: u32, target_ms: f64) -> (u32, Option<u32>) {
-        let (Some((a, _)), Some((now, _))) = (self.model(), self.costs[drawn as usize]) else {
+        let rays = self.rays();
+        let Some(predict) = self.predictor_at(drawn) else {
             return (drawn, None);
         };
-        // The floor a from the fit over lattices; the work b from the lattice just drawn alone: the work
-        // follows the view and the map's age (a young map after a move traces many times a mature one's
-        // rays), so costs measured at other lattices in other views would mislead it.
-        let a = a.clamp(0.0, now);
-        let b = (now - a) * (drawn * drawn) as f64;
-        let cost = |l: u32| a + b / (l * l) as f64;
+        let cost = |l: u32| predict(l, rays);
         let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE));
         let fit = (1..=MAX_LATTICE)
             .filter(|&l| refines_on_the_way(l))
@@ -248,7 +300,7 @@ impl Slicing {
             // A fresh measurement of the step over the target outweighs the model (no oscillation between a
             // lattice under the target and one measured over it).
             let step = allowed_below(drawn).unwrap_or(1).max(fit);
-            let measured_over = self.costs[step as usize].is_some_and(|(c, _)| c > target_ms);
+            let measured_over = self.measured(step).is_some_and(|c| c > target_ms);
             if cost(step) <= target_ms && !measured_over {
                 step
             } else {
@@ -258,7 +310,7 @@ impl Slicing {
         // The model overstates smaller lattices while only larger ones were measured: try the next smaller
         // once when this one is well under the target (if it misses, the fit brings the lattice back).
         let l = drawn;
-        let measured = |l: u32| self.costs[l as usize].map(|(c, _)| c);
+        let measured = |l: u32| self.measured(l);
         let probe = allowed_below(l).filter(|&smaller| {
             best >= l
                 && measured(smaller).is_none()
@@ -266,6 +318,39 @@ impl Slicing {
         });
         (best, probe)
     }
+
+    /// The cost measured at lattice `l` with this image's rays per visit.
+    fn measured(&self, l: u32) -> Option<f64> {
+        self.costs.get(&(l, self.rays())).map(|&(c, _)| c)
+    }
+
+    /// A frame's predicted cost at lattice L and r rays per visit, from the current lattice's measurement.
+    fn predictor(&self) -> Option<impl Fn(u32, u32) -> f64> {
+        self.predictor_at(self.lattice)
+    }
+
+    /// A frame's predicted cost at lattice L and r rays per visit: the floor a from the fit over lattices, the
+    /// work w from lattice `drawn`'s measurement alone (the work follows the view and the map's age: a young
+    /// map after a move traces many times a mature one's rays, so costs measured at other lattices in other
+    /// views would mislead it).
+    fn predictor_at(&self, drawn: u32) -> Option<impl Fn(u32, u32) -> f64> {
+        let (a, _) = self.model()?;
+        // The latest measurement at `drawn`, with the rays it traced.
+        let (&(_, rays), &(now, _)) = self
+            .costs
+            .range((drawn, 0)..=(drawn, u32::MAX))
+            .max_by_key(|(_, &(_, at))| at)?;
+        let a = a.clamp(0.0, now);
+        let w = (now - a) * (drawn * drawn) as f64 / (1 + rays) as f64;
+        Some(move |l: u32, r: u32| a + w * (1 + r) as f64 / (l * l) as f64)
+    }
+}
+
+/// The most rays per visit, up to `wanted`, whose frames `cost(r)` meet the target, or cost within `FLOOR_MARGIN`
+/// of one ray's where the floor alone is over it (fewer rays there only add rounds).
+fn rays_within(wanted: u32, cost: impl Fn(u32) -> f64, target_ms: f64) -> u32 {
+    let bound = target_ms.max(FLOOR_MARGIN * cost(1));
+    (1..=wanted).rev().find(|&r| cost(r) <= bound).unwrap_or(1)
 }
 
 #[cfg(test)]
@@ -444,6 +529,82 @@ mod tests {
             s.observe(49.0, 16, 100.0);
             assert_eq!(s.lattice(), 4);
         }
+    }
+
+    /// A scene whose rays are slow (san_francisco on lavapipe: 17k rays per slice at lattice 8 and 8 rays per
+    /// visit, ~90 ms against a 50 ms slice target; a floor of ~20 ms): the first still image, once its first
+    /// slice is measured, and the images after it trace fewer rays per visit at the largest lattice so that
+    /// their slices meet the target. (Without it, every slice of every still image costs 90 ms.)
+    #[test]
+    fn slow_rays_thin_the_rays_per_visit_at_the_largest_lattice() {
+        let device = |l: u32, r: u32| 20.0 + 498.0 * (1 + r) as f64 / (l * l) as f64;
+        let mut s = Slicing::default();
+        // A 110 ms moving frame of 280×280 pixels at 0.2 rays: a still frame at 8 rays costs ~6.7 s whole. Its
+        // raster floor outweighs its rays: the rays stay until a slice is measured.
+        let moving = (110.0, frame_work(280, 280, 0.2));
+        let b = s.still_budget(8, frame_work(800, 800, 8.0), Some(moving), 50.0);
+        assert_eq!((s.lattice(), b.rays_per_pixel), (MAX_LATTICE, 8));
+        s.observe(device(8, 8), 64, 50.0);
+        assert_eq!(s.rays(), 8, "the image's first frame is not measured");
+        s.observe(device(8, 8), 64, 50.0);
+        // One lattice measured: no floor known (a = 0), 90.03 ms (1 + r) / 9 <= 50 ms: 3 rays.
+        assert_eq!(s.rays(), 3);
+        assert_eq!(
+            s.still_budget(8, 1, None, 50.0).rays_per_pixel,
+            3,
+            "the viewer's next frame"
+        );
+        let mut over = 0;
+        for image in 0..6 {
+            if image > 0 {
+                s.moving();
+                s.still_budget(8, 1, None, 50.0);
+            }
+            for _ in 0..70 {
+                let (l, r) = (s.lattice(), s.rays());
+                over += (device(l, r) > 50.0) as u32;
+                s.observe(device(l, r), l * l, 50.0);
+            }
+        }
+        assert_eq!(s.lattice(), MAX_LATTICE);
+        // Two rays per visit measured: the floor is known, 20 + 498 (1 + r) / 64 <= 50: r <= 2.86.
+        assert_eq!(s.rays(), 2);
+        assert!(
+            over <= 70,
+            "{over} frames over the target (the first image's 2: 90 ms at 8 rays)"
+        );
+        // A cheaper view (a mature map, fewer pixels covered): the next still image traces all its rays again.
+        let cheap = |l: u32, r: u32| 10.0 + 100.0 * (1 + r) as f64 / (l * l) as f64;
+        for _ in 0..3 {
+            s.moving();
+            s.still_budget(8, 1, None, 50.0);
+            for _ in 0..70 {
+                let (l, r) = (s.lattice(), s.rays());
+                s.observe(cheap(l, r), l * l, 50.0);
+            }
+        }
+        assert_eq!(s.rays(), 8);
+        assert!(s.lattice() < MAX_LATTICE, "{}", s.lattice());
+    }
+
+    /// A floor over the target: fewer rays would not bring the slices under it, so the image keeps its rays
+    /// (or as many as cost within the margin of one ray's).
+    #[test]
+    fn a_floor_over_the_target_keeps_the_rays() {
+        let device = |l: u32, r: u32| 120.0 + 40.0 * (1 + r) as f64 / (l * l) as f64;
+        let mut s = Slicing {
+            lattice: MAX_LATTICE,
+            ..Slicing::default()
+        };
+        for _ in 0..4 {
+            s.moving();
+            s.still_budget(8, 1, None, 100.0);
+            for _ in 0..70 {
+                let (l, r) = (s.lattice(), s.rays());
+                s.observe(device(l, r), l * l, 100.0);
+            }
+        }
+        assert_eq!(s.rays(), 8);
     }
 
     #[test]
