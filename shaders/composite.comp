@@ -24,6 +24,20 @@ vec3 srgb_to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(vec3(0.04045), c));
 }
 
+// A linear colour as the output's 8-bit sRGB texel (RGBA, or BGRA for a swapchain that takes it directly).
+uint pack_output(vec3 linear) {
+    uvec3 c8 = uvec3(linear_to_srgb(linear) * 255.0 + 0.5);
+    if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c8 = c8.bgr;
+    return c8.r | (c8.g << 8) | (c8.b << 16) | (255u << 24);
+}
+
+// The output texel as a linear colour (pack_output's inverse, to 8 bits).
+vec3 unpack_output(uint rgba) {
+    vec3 c = unpackUnorm4x8(rgba).rgb;
+    if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c = c.bgr;
+    return srgb_to_linear(c);
+}
+
 vec3 false_color(uint v) {
     uint h = h_check(v);
     return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
@@ -314,11 +328,7 @@ void show_level() {
     if (push.y == 1u) {
         // Every pixel's G-buffer is this view's now: its edges, at full resolution.
         float e = 0.85 * edge_spaced(pix, GBufferRef(g.gbuffer).px[index], 1);
-        vec4 c = unpackUnorm4x8(rgba);
-        vec3 edge_srgb = linear_to_srgb(EDGE_COLOR);
-        if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) edge_srgb = edge_srgb.bgr;
-        c.rgb = linear_to_srgb(mix(srgb_to_linear(c.rgb), srgb_to_linear(edge_srgb), e));
-        rgba = packUnorm4x8(c);
+        rgba = pack_output(mix(unpack_output(rgba), EDGE_COLOR, e));
     }
     FloatRef(g.ao).v[index] = ao;
     UintRef(g.output_rgba).v[index] = rgba;
@@ -336,13 +346,15 @@ void main() {
     GPixel px = GBufferRef(g.gbuffer).px[index];
     vec3 color;
     // The shade without the feature edges (the held rounds keep it aside); debug views keep their colour.
-    vec3 plain = vec3(-1.0);
+    vec3 plain = vec3(0.0);
+    bool has_plain = false;
     float final_ao = FloatRef(g.ao).v[index];
     if (px.t >= 0.0 && (g.mode == MODE_DEBUG_CELLS || g.mode == MODE_DEBUG_LOD || g.mode == MODE_DEBUG_SAMPLES)) {
         color = debug_color(index);
     } else {
         bool hashed = g.mode == MODE_HRTAO;
         plain = shade(pix, px);
+        has_plain = true;
         vec3 s = mix(plain, EDGE_COLOR, 0.85 * edge(pix, px));
         // This sample: its cell estimate and its own rays (a miss counts as rays_per_pixel open rays, so
         // partly covered pixels weigh background and surface by coverage).
@@ -421,20 +433,12 @@ void main() {
             FloatRef(g.ao).v[index] = ao;
         }
     }
-    uvec3 c8 = uvec3(linear_to_srgb(color) * 255.0 + 0.5);
-    if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) c8 = c8.bgr;
-    uint rgba = c8.r | (c8.g << 8) | (c8.b << 16) | (255u << 24);
+    uint rgba = pack_output(color);
     if (held_round()) {
         // Kept aside; the pixel goes on showing the grid's interpolation, whose AO `ao` holds again (the
         // frame's resolve wrote the cell estimate there). In a frame that completes a grid, show_level runs
         // next and writes every pixel.
-        uint kept = rgba;
-        if (plain.x >= 0.0) {
-            uvec3 k8 = uvec3(linear_to_srgb(plain * final_ao) * 255.0 + 0.5);
-            if ((g.flags & FLAG_OUTPUT_BGRA) != 0u) k8 = k8.bgr;
-            kept = k8.r | (k8.g << 8) | (k8.b << 16) | (255u << 24);
-        }
-        keep_aside(index, final_ao, kept);
+        keep_aside(index, final_ao, has_plain ? pack_output(plain * final_ao) : rgba);
         FloatRef(g.ao).v[index] = Vec4Ref(g.bias_evidence).v[kept_slot(index)].z;
     } else {
         UintRef(g.output_rgba).v[index] = rgba;
