@@ -166,17 +166,6 @@ impl Slicing {
             if let Some((ms, moving_work)) = moving {
                 let whole = ms * work as f64 / moving_work.max(1) as f64;
                 self.lattice = allowed_at_least(lattice_for(whole, target_ms).min(FIRST_LATTICE_MAX));
-                // No floor known: the whole frame's cost scales with its work, (1 + r) per pixel. (The
-                // moving frame's floor, a raster of the whole scene, makes this an overestimate: the cut is
-                // bounded by `MAX_RAYS_CUT`, and the image's first measured slice corrects it.)
-                if self.lattice == MAX_LATTICE {
-                    let slice = whole / (MAX_LATTICE * MAX_LATTICE) as f64;
-                    rays = rays_within(
-                        wanted,
-                        |r| slice * (1 + r) as f64 / (1 + wanted) as f64,
-                        target_ms,
-                    );
-                }
             }
         } else if let Some(p) = self.probe.take() {
             self.lattice = self.lattice.min(p);
@@ -556,28 +545,22 @@ mod tests {
     }
 
     /// A scene whose rays are slow (san_francisco on lavapipe: 17k rays per slice at lattice 8 and 8 rays per
-    /// visit, 80-130 ms against a 50 ms slice target): the first still image (from the moving frame's cost, or
-    /// once its first slice is measured) and the images after it trace fewer rays per visit at the largest
-    /// lattice so that their slices meet the target. (Without it, every slice of every still image costs
-    /// 80 ms.)
+    /// visit, 80-130 ms against a 50 ms slice target): the first still image, once its first slice is
+    /// measured, and the images after it trace fewer rays per visit at the largest lattice so that their
+    /// slices meet the target. (Without it, every slice of every still image costs 80 ms.)
     #[test]
     fn slow_rays_thin_the_rays_per_visit_at_the_largest_lattice() {
         let device = |l: u32, r: u32| 10.0 + 498.0 * (1 + r) as f64 / (l * l) as f64;
-        // A 110 ms moving frame of 280×280 pixels at 0.2 rays: a still frame at 8 rays costs ~6.7 s whole,
-        // 105 ms a slice at lattice 8: half the rays (3 would meet the target by this estimate, but a moving
-        // frame's floor overstates a still frame's, and a cut is at most by half).
+        let mut s = Slicing::default();
+        // A 110 ms moving frame of 280×280 pixels at 0.2 rays: a still frame at 8 rays costs ~6.7 s whole. Its
+        // raster floor outweighs its rays: the rays stay until a slice is measured.
         let moving = (110.0, frame_work(280, 280, 0.2));
-        let mut s = Slicing::default();
         let b = s.still_budget(8, frame_work(800, 800, 8.0), Some(moving), 50.0);
-        assert_eq!((s.lattice(), b.rays_per_pixel), (MAX_LATTICE, 4));
-        // A moving frame that understates it (30 ms): all the rays, until the first slice is measured.
-        let mut s = Slicing::default();
-        let b = s.still_budget(8, frame_work(800, 800, 8.0), Some((30.0, moving.1)), 50.0);
         assert_eq!((s.lattice(), b.rays_per_pixel), (MAX_LATTICE, 8));
         s.observe(device(8, 8), 64, 50.0);
         assert_eq!(s.rays(), 8, "the image's first frame is not measured");
         s.observe(device(8, 8), 64, 50.0);
-        // 80 ms (1 + r) / 9 <= 50 ms: 4 rays, and the image restarts with them.
+        // 80 ms (1 + r) / 9 <= 50 ms: 4 rays.
         assert_eq!(s.rays(), 4);
         assert_eq!(
             s.still_budget(8, 1, None, 50.0).rays_per_pixel,
