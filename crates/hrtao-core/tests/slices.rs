@@ -328,6 +328,54 @@ fn a_final_round_shows_its_pixels_not_the_held_reconstruction() {
     assert_clean(&gpu);
 }
 
+/// A still image that traces fewer rays per visit (a viewer cutting its slices' rays) holds its preview until
+/// its pixels have as many own rays as two rounds at the full rays per visit give (`held_own_rays`): at 32
+/// still samples and 2 rays per visit, four rounds (8 own rays). The view does not change from round 0's last
+/// slice until round 3's, which shows every pixel; from round 4 on each slice changes it. Catches held rounds
+/// counted without the rays per visit (two: round 2's slices change the view; in the viewer, the bundled
+/// scene's rounds after the held ones were 1.40x rougher than the final image at 4 rays per visit of 8).
+#[test]
+fn fewer_rays_per_visit_hold_the_preview_for_as_many_own_rays() {
+    let gpu = gpu();
+    let (scene, cam) = blocks_scene();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let s = settings();
+    assert_eq!(hrtao_core::renderer::held_own_rays(s.still.still_samples), 8);
+    let mut r = Headless::new(&gpu, cam.width, cam.height, s).unwrap();
+    r.lattice = 2;
+    r.budget = Some(hrtao_core::RayBudget {
+        rays_per_pixel: 2,
+        trace_fraction: 1.0,
+    });
+    // Frame 4 k + i draws slice i of round k.
+    let mut shown = Vec::new();
+    for _ in 0..18 {
+        let rep = r.render(&sg, scene.f(), &cam).unwrap();
+        assert!(!rep.converged);
+        shown.push(r.read_ao().unwrap());
+    }
+    let differs = |a: usize, b: usize| {
+        shown[a]
+            .iter()
+            .zip(&shown[b])
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max)
+    };
+    for f in 4..15 {
+        assert_eq!(
+            differs(f, f - 1),
+            0.0,
+            "frame {f} (round {}) changed the held view",
+            f / 4
+        );
+    }
+    assert!(differs(15, 14) > 0.01, "round 3's last slice shows every pixel");
+    for f in 16..18 {
+        assert!(differs(f, f - 1) > 0.01, "frame {f} (round 4) is not held");
+    }
+    assert_clean(&gpu);
+}
+
 /// The path to a still image is monotone: from one moving frame of a young map at 0.4 of the size,
 /// as the viewer renders it, no frame of the still image in slices of lattice 4 is rougher than 1.25x the
 /// converged image's (roughness over the converged G-buffer, as `examples/still_path` measures it); held here
