@@ -114,8 +114,8 @@ pub struct Slicing {
     costs: BTreeMap<(u32, u32), (f64, u64)>,
     /// Still frames observed so far.
     observations: u64,
-    /// Frames of the current still image measured so far.
-    image_frames: u32,
+    /// Whether a frame of the current still image was measured at the largest lattice (its rays were checked).
+    cut_checked: bool,
     /// The rays per pixel and visit the current still image asked for (it may trace fewer).
     wanted_rays: u32,
     /// The next observed frame is a still image's first: not measured.
@@ -132,7 +132,7 @@ impl Default for Slicing {
             lattice: 1,
             costs: BTreeMap::new(),
             observations: 0,
-            image_frames: 0,
+            cut_checked: false,
             wanted_rays: 1,
             warm_up: false,
             probe: None,
@@ -195,7 +195,7 @@ impl Slicing {
             );
         }
         self.warm_up = true;
-        self.image_frames = 0;
+        self.cut_checked = false;
         self.wanted_rays = wanted;
         let b = RayBudget {
             rays_per_pixel: rays,
@@ -239,14 +239,15 @@ impl Slicing {
             );
         }
         self.lattice = next;
-        self.image_frames += 1;
-        // The first frame measured of an image whose slices are over the target at the largest lattice: fewer
-        // rays per visit, once per image (the renderer restarts the image for the new budget: a slice or two
-        // lost). A moving frame's cost cannot tell this before (its floor, the raster of the whole scene,
-        // outweighs its few rays).
-        if self.image_frames == 1 && l as u32 == MAX_LATTICE && frame_ms > target_ms {
+        // The first frame measured at the largest lattice of an image whose slices are over the target there:
+        // fewer rays per visit, once per image (the renderer restarts the image for the new budget: a slice or
+        // two lost). A moving frame's cost cannot tell this before (its floor, the raster of the whole scene,
+        // outweighs its few rays); an image may also reach the largest lattice in its first round.
+        let check = l as u32 == MAX_LATTICE && !std::mem::replace(&mut self.cut_checked, true);
+        if check && frame_ms > target_ms {
+            // From this frame itself: the stored cost smooths a fall, and may still hold another view's.
             let fewer = self
-                .predictor_at(MAX_LATTICE)
+                .predictor_from(MAX_LATTICE, self.rays(), frame_ms)
                 .map(|cost| rays_within(self.wanted_rays, |r| cost(MAX_LATTICE, r), target_ms));
             if let (Some(r), Some(b)) = (fewer, self.still_budget.as_mut()) {
                 if r < b.rays_per_pixel {
@@ -324,8 +325,10 @@ impl Slicing {
         // once when this one is well under the target (if it misses, the fit brings the lattice back).
         let l = drawn;
         let measured = |l: u32| self.measured(l);
+        // (Not while the image traces fewer rays than it asked: the next image would probe with all of them.)
         let probe = allowed_below(l).filter(|&smaller| {
             best >= l
+                && self.rays() >= self.wanted_rays
                 && measured(smaller).is_none()
                 && measured(l).is_some_and(|c| c <= PROBE_BELOW * target_ms)
         });
@@ -347,12 +350,17 @@ impl Slicing {
     /// map after a move traces many times a mature one's rays, so costs measured at other lattices in other
     /// views would mislead it).
     fn predictor_at(&self, drawn: u32) -> Option<impl Fn(u32, u32) -> f64> {
-        let (a, _) = self.model()?;
         // The latest measurement at `drawn`, with the rays it traced.
         let (&(_, rays), &(now, _)) = self
             .costs
             .range((drawn, 0)..=(drawn, u32::MAX))
             .max_by_key(|(_, &(_, at))| at)?;
+        self.predictor_from(drawn, rays, now)
+    }
+
+    /// As `predictor_at`, with the work from a frame of `now` ms at lattice `drawn` and `rays` rays per visit.
+    fn predictor_from(&self, drawn: u32, rays: u32, now: f64) -> Option<impl Fn(u32, u32) -> f64> {
+        let (a, _) = self.model()?;
         let a = a.clamp(0.0, now);
         let w = (now - a) * (drawn * drawn) as f64 / (1 + rays) as f64;
         Some(move |l: u32, r: u32| a + w * (1 + r) as f64 / (l * l) as f64)
@@ -624,6 +632,42 @@ mod tests {
             }
         }
         assert_eq!((s.lattice(), s.rays()), (MAX_LATTICE, 8));
+    }
+
+    /// An image whose rays were cut and whose slices then cost under `PROBE_BELOW` of the target (the view
+    /// turned to a lighter part) does not make the next image probe a smaller lattice with all its rays: that
+    /// image's slices would cost 112 ms at lattice 6 and 8 rays for all its first round (san_francisco's drags
+    /// waited up to 250 ms for such slices). The next image takes lattice 8 and all its rays (65 ms: under
+    /// `CUT_ABOVE`).
+    #[test]
+    fn cut_rays_probe_no_smaller_lattice_with_all_of_them() {
+        let heavy = |l: u32, r: u32| 10.0 + 498.0 * (1 + r) as f64 / (l * l) as f64;
+        let light = |l: u32, r: u32| 5.0 + 430.0 * (1 + r) as f64 / (l * l) as f64;
+        let mut s = Slicing {
+            lattice: MAX_LATTICE,
+            ..Slicing::default()
+        };
+        s.still_budget(8, 1, None, 50.0);
+        for _ in 0..70 {
+            let (l, r) = (s.lattice(), s.rays());
+            s.observe(heavy(l, r), l * l, 50.0);
+        }
+        assert_eq!((s.lattice(), s.rays()), (MAX_LATTICE, 4));
+        s.moving();
+        s.still_budget(8, 1, None, 50.0);
+        for _ in 0..70 {
+            let (l, r) = (s.lattice(), s.rays());
+            s.observe(light(l, r), l * l, 50.0);
+        }
+        assert!(light(MAX_LATTICE, 4) <= PROBE_BELOW * 50.0);
+        s.moving();
+        s.still_budget(8, 1, None, 50.0);
+        let (l, r) = (s.lattice(), s.rays());
+        assert!(
+            light(l, r) <= CUT_ABOVE * 50.0,
+            "lattice {l}, {r} rays: {:.0} ms",
+            light(l, r)
+        );
     }
 
     /// A floor over the target: fewer rays would not bring the slices under it, so the image keeps its rays
