@@ -450,6 +450,29 @@ mod tests {
         over
     }
 
+    /// `frames` frames of the current still image on a device whose frame at lattice L and r rays per visit
+    /// costs `cost(L, r)` ms, against `target` ms; the frames over the target.
+    fn image_frames(s: &mut Slicing, frames: u32, target: f64, cost: impl Fn(u32, u32) -> f64) -> u32 {
+        let mut over = 0;
+        for _ in 0..frames {
+            let (l, r) = (s.lattice(), s.rays());
+            over += (cost(l, r) > target) as u32;
+            s.observe(cost(l, r), l * l, target);
+        }
+        over
+    }
+
+    /// `images` new still images asking 8 rays per visit, of 70 frames each (`image_frames`).
+    fn images_of_8_rays(s: &mut Slicing, images: u32, target: f64, cost: impl Fn(u32, u32) -> f64) -> u32 {
+        let mut over = 0;
+        for _ in 0..images {
+            s.moving();
+            s.still_budget(8, 1, None, target);
+            over += image_frames(s, 70, target, &cost);
+        }
+        over
+    }
+
     #[test]
     fn the_lattice_settles_where_the_slices_meet_the_target_or_stop_paying() {
         let settle = |a: f64, b: f64, first: u32| {
@@ -583,54 +606,22 @@ mod tests {
             4,
             "the viewer's next frame"
         );
-        let mut over = 0;
-        for image in 0..6 {
-            if image > 0 {
-                s.moving();
-                s.still_budget(8, 1, None, 50.0);
-            }
-            for _ in 0..70 {
-                let (l, r) = (s.lattice(), s.rays());
-                over += (device(l, r) > 50.0) as u32;
-                s.observe(device(l, r), l * l, 50.0);
-            }
-        }
+        let over = image_frames(&mut s, 70, 50.0, device) + images_of_8_rays(&mut s, 5, 50.0, device);
         assert_eq!((s.lattice(), s.rays()), (MAX_LATTICE, 4));
         assert_eq!(over, 0, "no frame over the target after the first measured one");
         // A cheaper view (a mature map, fewer pixels covered): the next still image traces all its rays again.
         let cheap = |l: u32, r: u32| 10.0 + 100.0 * (1 + r) as f64 / (l * l) as f64;
-        for _ in 0..3 {
-            s.moving();
-            s.still_budget(8, 1, None, 50.0);
-            for _ in 0..70 {
-                let (l, r) = (s.lattice(), s.rays());
-                s.observe(cheap(l, r), l * l, 50.0);
-            }
-        }
+        images_of_8_rays(&mut s, 3, 50.0, cheap);
         assert_eq!(s.rays(), 8);
         assert!(s.lattice() < MAX_LATTICE, "{}", s.lattice());
         // A costlier one: half the rays at most (`MAX_RAYS_CUT`), even where that is still over the target.
         let costly = |l: u32, r: u32| 10.0 + 2000.0 * (1 + r) as f64 / (l * l) as f64;
-        for _ in 0..3 {
-            s.moving();
-            s.still_budget(8, 1, None, 50.0);
-            for _ in 0..70 {
-                let (l, r) = (s.lattice(), s.rays());
-                s.observe(costly(l, r), l * l, 50.0);
-            }
-        }
+        images_of_8_rays(&mut s, 3, 50.0, costly);
         assert_eq!((s.lattice(), s.rays()), (MAX_LATTICE, 4));
         // Slices a little over the target (60 ms against 50: the bundled scene at 1280×800 on lavapipe) keep
         // their rays.
         let mild = |l: u32, r: u32| 10.0 + 355.6 * (1 + r) as f64 / (l * l) as f64;
-        for _ in 0..3 {
-            s.moving();
-            s.still_budget(8, 1, None, 50.0);
-            for _ in 0..70 {
-                let (l, r) = (s.lattice(), s.rays());
-                s.observe(mild(l, r), l * l, 50.0);
-            }
-        }
+        images_of_8_rays(&mut s, 3, 50.0, mild);
         assert_eq!((s.lattice(), s.rays()), (MAX_LATTICE, 8));
     }
 
@@ -647,18 +638,9 @@ mod tests {
             lattice: MAX_LATTICE,
             ..Slicing::default()
         };
-        s.still_budget(8, 1, None, 50.0);
-        for _ in 0..70 {
-            let (l, r) = (s.lattice(), s.rays());
-            s.observe(heavy(l, r), l * l, 50.0);
-        }
+        images_of_8_rays(&mut s, 1, 50.0, heavy);
         assert_eq!((s.lattice(), s.rays()), (MAX_LATTICE, 4));
-        s.moving();
-        s.still_budget(8, 1, None, 50.0);
-        for _ in 0..70 {
-            let (l, r) = (s.lattice(), s.rays());
-            s.observe(light(l, r), l * l, 50.0);
-        }
+        images_of_8_rays(&mut s, 1, 50.0, light);
         assert!(light(MAX_LATTICE, 4) <= PROBE_BELOW * 50.0);
         s.moving();
         s.still_budget(8, 1, None, 50.0);
@@ -679,14 +661,7 @@ mod tests {
             lattice: MAX_LATTICE,
             ..Slicing::default()
         };
-        for _ in 0..4 {
-            s.moving();
-            s.still_budget(8, 1, None, 100.0);
-            for _ in 0..70 {
-                let (l, r) = (s.lattice(), s.rays());
-                s.observe(device(l, r), l * l, 100.0);
-            }
-        }
+        images_of_8_rays(&mut s, 4, 100.0, device);
         assert_eq!(s.rays(), 8);
     }
 
