@@ -174,7 +174,7 @@ impl Slicing {
             }
         } else if let Some(p) = self.probe.take() {
             self.lattice = self.lattice.min(p);
-        } else if let Some(cost) = self.predictor() {
+        } else if let Some(cost) = self.predictor_at(self.lattice) {
             // The last image may have traced fewer rays: the lattice its rays need first, then fewer rays.
             // (As `choose`: where the floor is over the target, a lattice within the margin of the largest.)
             let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE, wanted));
@@ -338,11 +338,6 @@ impl Slicing {
     /// The cost measured at lattice `l` with this image's rays per visit.
     fn measured(&self, l: u32) -> Option<f64> {
         self.costs.get(&(l, self.rays())).map(|&(c, _)| c)
-    }
-
-    /// A frame's predicted cost at lattice L and r rays per visit, from the current lattice's measurement.
-    fn predictor(&self) -> Option<impl Fn(u32, u32) -> f64> {
-        self.predictor_at(self.lattice)
     }
 
     /// A frame's predicted cost at lattice L and r rays per visit: the floor a from the fit over lattices, the
