@@ -459,7 +459,8 @@ impl Rasterizer {
     /// device address `globals_address` (the draws read the section planes there); `target_distance` is the
     /// camera's eye-target distance (it sets the perspective near plane); `generation` names the scene's
     /// geometry (`SceneGpu::tlas_generation`, `version`); `slice_grid` is the frame's invocations over the image
-    /// (`Renderer::slice_grid`). Panics if `prepare` was not called for this size.
+    /// (`Renderer::slice_grid`), None to draw only (`Renderer::record_visibility`). Returns whether it drew (the
+    /// image did not hold this draw). Panics if `prepare` was not called for this size.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
@@ -470,8 +471,8 @@ impl Rasterizer {
         target_distance: f32,
         off_axis: Option<(glam::Vec3, [f32; 2])>,
         generation: (u64, u64),
-        slice_grid: (u32, u32),
-    ) {
+        slice_grid: Option<(u32, u32)>,
+    ) -> bool {
         let t = self.targets.as_ref().expect("Rasterizer::prepare before record");
         let (w, h) = (globals.width, globals.height);
         assert!(
@@ -519,16 +520,18 @@ impl Rasterizer {
         let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
         // Over the frame's pixels (its slice): each reads its own pixel of the whole frame's visibility.
         let resolve = |rec: &mut Recorder| {
-            rec.dispatch(
-                Pass::GbufferFromVis,
-                slice_grid.0,
-                slice_grid.1,
-                [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
-            )
+            if let Some((gw, gh)) = slice_grid {
+                rec.dispatch(
+                    Pass::GbufferFromVis,
+                    gw,
+                    gh,
+                    [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
+                )
+            }
         };
         if self.drawn.as_ref() == Some(&key) {
             resolve(rec);
-            return;
+            return false;
         }
         self.drawn = Some(key);
         let extent = vk::Extent2D { width: w, height: h };
@@ -635,6 +638,7 @@ impl Rasterizer {
             },
         );
         resolve(rec);
+        true
     }
 
     /// The far plane of an orthographic view (depth is linear there): just beyond the farthest corner of the

@@ -521,6 +521,12 @@ impl Renderer {
         self.last_converged && self.prev.as_ref() == Some(&frame.key(self.primary))
     }
 
+    /// True when the output buffer holds an image of `frame` (converged or not): nothing it depends on has
+    /// changed since the last frame; rendering it again would only refine it.
+    pub fn shows(&self, frame: &FrameDesc) -> bool {
+        self.prev.as_ref() == Some(&frame.key(self.primary))
+    }
+
     /// Records all passes of `frame` into `cmd` (the caller submits and then calls `finish_frame`). The output
     /// is left in `output_buffer()`.
     pub fn record_frame(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<()> {
@@ -533,25 +539,7 @@ impl Renderer {
     fn record_prepared(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<()> {
         let (scene, camera, settings) = (frame.scene, &frame.camera, frame.settings);
         self.map.regions.upload()?;
-        let mut globals = self.globals_for(frame, self.map.key_f());
-        if camera.is_orthographic() {
-            // Orthographic rays start in front of the whole scene: nothing is clipped by the eye plane.
-            let b = scene.raster.bounds();
-            let corners = if b.is_empty() {
-                Vec::new()
-            } else {
-                b.corners().to_vec()
-            };
-            // A tile's eye is moved across the image plane (`Tile::frame`): keep that offset.
-            let offset = glam::Vec3::from_slice(&globals.eye[..3]) - glam::Vec3::from(camera.eye);
-            let start = camera.ortho_ray_plane(&corners) + offset;
-            globals.eye = [start.x, start.y, start.z, 0.0];
-        }
-        globals.instances = scene.instance_info.address;
-        globals.geometries = scene.geometries.address;
-        let ([s0, s1, s2], count) = scene.sections().gpu();
-        (globals.section0, globals.section1, globals.section2) = (s0, s1, s2);
-        globals.section_count = count;
+        let globals = self.frame_globals(frame);
         self.globals.write(&[globals])?;
         self.passes.bind_tlas(scene.tlas.raw, scene.tlas_generation());
 
@@ -598,7 +586,7 @@ impl Renderer {
                     camera.distance(),
                     off_axis,
                     (scene.tlas_generation(), scene.version()),
-                    (gw, gh),
+                    Some((gw, gh)),
                 );
             }
             _ => rec.dispatch(Pass::Primary, gw, gh, [0; 4]),
@@ -675,6 +663,81 @@ impl Renderer {
         }
         self.last_events = rec.finish();
         Ok(())
+    }
+
+    /// Draws the whole view's visibility of `frame` ahead of its still image, in a command buffer of its own:
+    /// when `frame` starts a still image in slices (`lattice` > 1; a change from the last frame restarts the
+    /// image) and raster primary visibility draws it. The image's first slice then resolves its pixels from
+    /// that draw instead of drawing every triangle itself: on a software device the draw of a large scene is
+    /// most of that slice (san_francisco: 77 of ~250 ms at 800x800), and input that comes meanwhile waits for
+    /// the frame in flight. Nothing else changes: the output keeps the last frame's image (of `size()`), which a
+    /// viewer presents again, and no frame is counted (no `finish_frame`). Returns whether it recorded the
+    /// draw; false when the draw is not needed or already done (then `record_frame` as usual).
+    pub fn record_visibility(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<bool> {
+        if self.primary != Primary::Raster || frame.lattice <= 1 || frame.tile.is_some() {
+            return Ok(false);
+        }
+        frame.validate().map_err(CoreError::Invalid)?;
+        let restarts = match &self.prev {
+            None => true,
+            Some(prev) => {
+                let change = Change::between(prev, &frame.key(self.primary), |_, _| None);
+                change.still_image || change.map != MapChange::Keep
+            }
+        };
+        if !restarts {
+            return Ok(false);
+        }
+        let mut globals = self.frame_globals(frame);
+        // The still image's first frame is not jittered (`globals_for`: jitter from its second frame on).
+        globals.jitter = [0.0, 0.0];
+        let (w, h) = frame.size();
+        let raster = match &mut self.raster {
+            Some(r) => r,
+            None => self.raster.insert(Rasterizer::new(&self.gpu)?),
+        };
+        raster.prepare(w, h)?;
+        self.globals.write(&[globals])?;
+        let scene = frame.scene;
+        let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
+        let drew = raster.record(
+            &mut rec,
+            &scene.raster,
+            &globals,
+            self.globals.address,
+            frame.camera.distance(),
+            None,
+            (scene.tlas_generation(), scene.version()),
+            None,
+        );
+        rec.finish();
+        Ok(drew)
+    }
+
+    /// The frame's GPU parameters as `record_prepared` uploads them: `globals_for`, the orthographic ray start,
+    /// the scene's tables and section planes.
+    fn frame_globals(&self, frame: &FrameDesc) -> FrameGlobals {
+        let (scene, camera) = (frame.scene, &frame.camera);
+        let mut globals = self.globals_for(frame, self.map.key_f());
+        if camera.is_orthographic() {
+            // Orthographic rays start in front of the whole scene: nothing is clipped by the eye plane.
+            let b = scene.raster.bounds();
+            let corners = if b.is_empty() {
+                Vec::new()
+            } else {
+                b.corners().to_vec()
+            };
+            // A tile's eye is moved across the image plane (`Tile::frame`): keep that offset.
+            let offset = glam::Vec3::from_slice(&globals.eye[..3]) - glam::Vec3::from(camera.eye);
+            let start = camera.ortho_ray_plane(&corners) + offset;
+            globals.eye = [start.x, start.y, start.z, 0.0];
+        }
+        globals.instances = scene.instance_info.address;
+        globals.geometries = scene.geometries.address;
+        let ([s0, s1, s2], count) = scene.sections().gpu();
+        (globals.section0, globals.section1, globals.section2) = (s0, s1, s2);
+        globals.section_count = count;
+        globals
     }
 
     /// The first rounds of a still image in slices hold what the view shows (composite.comp `held_round`): the

@@ -128,6 +128,13 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
         presented[first]
     );
     assert_eq!(f["moving"], true, "the answering frame moved the camera");
+    // The view renders no frame that neither moves nor refines the still image: between the drag's motions and
+    // in the moments after its release (`Motion::settling`) it keeps the moving image, which such a frame would
+    // only refine at the moving scale, to be replaced by the still image (and input would wait for it).
+    let idle: Vec<usize> = (0..frames.len())
+        .filter(|&i| frames[i]["moving"] == false && frames[i]["still"] == false)
+        .collect();
+    assert!(idle.is_empty(), "frames refining the moving image: {idle:?}");
     // Frames presented before the motion answer no input (the hover and the press move nothing).
     assert!(frames
         .iter()

@@ -427,6 +427,11 @@ pub(crate) struct Viewer {
     resting: bool,
     /// This frame held the view's image for a press that has not moved anything (`Motion::holds`).
     holding: bool,
+    /// This frame held the view's image while the view settles (`Motion::settling`): the camera has not moved
+    /// since the moving image in the output, which stays until the view counts as still.
+    settling: bool,
+    /// The image in the renderer's output is a moving frame's (reduced scale, not refined).
+    shows_moving: bool,
     // Persistence.
     prefs: Prefs,
     prefs_path: Option<PathBuf>,
@@ -552,6 +557,8 @@ impl Viewer {
             drop_nav_focus: false,
             resting: false,
             holding: false,
+            settling: false,
+            shows_moving: false,
             prefs,
             prefs_path,
             prefs_saved,
@@ -1229,11 +1236,21 @@ impl Viewer {
             self.motion.frame(changed, now);
         }
         let moving = self.motion.moving(now);
-        let (iw, ih) = match held {
-            Some(size) => size,
-            None => self.internal_size_at(self.motion.scale(self.render_scale, now)),
+        // The camera stopped (or a drag pauses) less than STILL_AFTER ago: a frame now would only refine the
+        // moving image at its reduced scale, which the still image replaces a moment later, and input that
+        // comes meanwhile would wait for it. The output keeps the moving image instead (unless something else
+        // changed: the renderer is asked below), and the loop wakes at the still deadline or on input.
+        let settle = !self.holding
+            && self.motion.settling(changed, now)
+            && self.shows_moving
+            && self.background_shot.is_none()
+            && self.last_report.is_some();
+        let (iw, ih) = match (held, &self.renderer) {
+            (Some(size), _) => size,
+            (None, Some(r)) if settle => r.size(),
+            _ => self.internal_size_at(self.motion.scale(self.render_scale, now)),
         };
-        if !self.holding {
+        if !self.holding && !settle {
             self.apply_ray_budget(iw, ih);
         }
         // Still frames in slices of the frame-time target (with the target on): one budget per still image.
@@ -1301,14 +1318,24 @@ impl Viewer {
             // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render, except
             // during a background screenshot, where the view rests once converged as it would for a user.
             let scripted = script_running && self.background_shot.is_none() && self.saving.is_none();
-            if !self.holding && (scripted || !r.shows_final(&frame)) {
-                r.record_frame(cmd, &frame)?;
-                rendered = true;
+            self.settling = settle && r.shows(&frame);
+            let render = !self.holding && !self.settling && (scripted || !r.shows_final(&frame));
+            // A still image in slices starts with the view's visibility drawn in a frame of its own
+            // (`Renderer::record_visibility`): input that comes meanwhile waits for the draw alone, and the view
+            // shows the last image until the first slice.
+            if render && !moving && r.record_visibility(cmd, &frame)? {
+                let (w, h) = r.size();
+                src = Some((r.output_buffer().raw, w, h));
+            } else {
+                if render {
+                    r.record_frame(cmd, &frame)?;
+                    rendered = true;
+                }
+                src = Some((r.output_buffer().raw, iw, ih));
             }
-            src = Some((r.output_buffer().raw, iw, ih));
         }
-        if self.presenter.blit_ok && src.is_some() {
-            self.presenter.ensure_internal(iw, ih)?;
+        if let (true, Some((_, w, h))) = (self.presenter.blit_ok, src) {
+            self.presenter.ensure_internal(w, h)?;
         }
         let bg = if self.egui_ctx.style().visuals.dark_mode {
             [0.11, 0.11, 0.12, 1.0]
@@ -1375,6 +1402,7 @@ impl Viewer {
                 self.interval_ms_avg = ema(self.interval_ms_avg, dt);
             }
             self.last_frame_at = Some(now);
+            self.shows_moving = moving;
             let full = self.internal_size();
             let r = self.renderer.as_mut().unwrap();
             let report = r.finish_frame(gpu_wall)?;
@@ -1490,13 +1518,18 @@ impl Viewer {
             || self.background_shot.is_some()
             || self.saving.is_some()
             || self.script.ui_capture_pending
-            || (!self.holding && (converging || (viewing && self.motion.moving(now))));
+            || (!self.holding && !self.settling && (converging || (viewing && self.motion.moving(now))));
         if busy {
             self.egui_ctx.request_repaint();
+        } else if self.settling {
+            // Input wakes the loop sooner.
+            if let Some(wait) = self.motion.still_in(now) {
+                self.egui_ctx.request_repaint_after(wait);
+            }
         } else if self.loading.is_some() {
             self.egui_ctx.request_repaint_after(Duration::from_millis(100));
         }
-        let resting = !busy && self.loading.is_none() && !self.holding;
+        let resting = !busy && self.loading.is_none() && !self.holding && !self.settling;
         if resting && !self.resting {
             let frames = self.last_report.as_ref().map_or(0, |r| r.accumulated_frames);
             log::info!("at rest: the image has converged ({frames} frames); waiting for input");

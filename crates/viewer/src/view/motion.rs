@@ -87,6 +87,23 @@ impl Motion {
             || now.duration_since(self.last_change) < STILL_AFTER
     }
 
+    /// The view has not moved this frame (`changed` false) but does not count as still yet: within STILL_AFTER
+    /// of its last change, or a drag that has acted pauses. A frame rendered now would refine the moving image
+    /// at the moving scale, to be replaced by the still image once the view counts as still.
+    pub fn settling(&self, changed: bool, now: Instant) -> bool {
+        !changed && self.moving(now)
+    }
+
+    /// How long until the view counts as still if nothing moves it meanwhile; None during a drag (its motion
+    /// or release, input both, end the wait).
+    pub fn still_in(&self, now: Instant) -> Option<Duration> {
+        (!self.dragging).then(|| {
+            (self.last_change + STILL_AFTER)
+                .saturating_duration_since(now)
+                .max(Duration::from_millis(1))
+        })
+    }
+
     /// The render scale for the next frame; `cap` is the user's render-scale setting.
     pub fn scale(&self, cap: f32, now: Instant) -> f32 {
         if self.moving(now) {
@@ -139,7 +156,7 @@ mod tests {
         // Pressed: nothing moved yet.
         m.drag(true, false);
         assert!(m.holds());
-        // The first motion acts; a pause mid-drag renders on (the moving image improves).
+        // The first motion acts; a pause mid-drag does not hold (it settles: `settling`).
         m.drag(true, true);
         assert!(!m.holds());
         m.drag(true, false);
@@ -149,6 +166,29 @@ mod tests {
         assert!(!m.holds());
         m.drag(true, false);
         assert!(m.holds());
+    }
+
+    #[test]
+    fn a_view_that_stopped_settles_until_the_still_deadline() {
+        let t0 = Instant::now();
+        let mut m = Motion::new(0.35);
+        m.frame(true, t0);
+        assert!(!m.settling(true, t0), "a frame that moves the camera renders");
+        // No change 40 ms later: settling, woken at the still deadline.
+        let t1 = t0 + Duration::from_millis(40);
+        m.frame(false, t1);
+        assert!(m.settling(false, t1));
+        assert_eq!(m.still_in(t1), Some(STILL_AFTER - Duration::from_millis(40)));
+        // At the deadline the view is still: its still image starts.
+        let t2 = t0 + STILL_AFTER;
+        m.frame(false, t2);
+        assert!(!m.moving(t2) && !m.settling(false, t2));
+        // A drag that has moved the view and pauses settles with no deadline: its motion or release wakes it.
+        m.drag(true, true);
+        assert!(m.settling(false, t2));
+        assert_eq!(m.still_in(t2), None);
+        m.drag(false, false);
+        assert!(!m.settling(false, t2));
     }
 
     #[test]
