@@ -423,16 +423,7 @@ impl Renderer {
             view_height
         };
         let feature_size = crate::hash::FeatureSize::for_camera(&cam, view_height, s.map.s_p);
-        let jitter = if frame.jitter && s.accumulates() && self.still_index > 0 {
-            // R2 points in the pixel, frame after frame (the centre first).
-            let i = self.still_index as f64;
-            [
-                ((0.7548776662466927 * i).fract() - 0.5) as f32,
-                ((0.5698402909980532 * i).fract() - 0.5) as f32,
-            ]
-        } else {
-            [0.0, 0.0]
-        };
+        let jitter = Self::jitter(frame, self.still_index);
         let v4 = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
         let slice_offset = slice_order::offset(self.slice, self.lattice);
@@ -512,6 +503,20 @@ impl Renderer {
             }
         }
         g
+    }
+
+    /// The sub-pixel offset of a still image's frame `still_index` (a round of slices: all its slices): R2 points
+    /// in the pixel, frame after frame, the centre first (none when `frame` does not accumulate).
+    fn jitter(frame: &FrameDesc, still_index: u32) -> [f32; 2] {
+        if frame.jitter && frame.settings.accumulates() && still_index > 0 {
+            let i = still_index as f64;
+            [
+                ((0.7548776662466927 * i).fract() - 0.5) as f32,
+                ((0.5698402909980532 * i).fract() - 0.5) as f32,
+            ]
+        } else {
+            [0.0, 0.0]
+        }
     }
 
     /// True when the output buffer already holds the final image of `frame`: the last frame converged and
@@ -665,32 +670,40 @@ impl Renderer {
         Ok(())
     }
 
-    /// Draws the whole view's visibility of `frame` ahead of its still image, in a command buffer of its own:
-    /// when `frame` starts a still image in slices (`lattice` > 1; a change from the last frame restarts the
-    /// image) and raster primary visibility draws it. The image's first slice then resolves its pixels from
-    /// that draw instead of drawing every triangle itself: on a software device the draw of a large scene is
-    /// most of that slice (san_francisco: 77 of ~250 ms at 800x800), and input that comes meanwhile waits for
-    /// the frame in flight. Nothing else changes: the output keeps the last frame's image (of `size()`), which a
-    /// viewer presents again, and no frame is counted (no `finish_frame`). Returns whether it recorded the
-    /// draw; false when the draw is not needed or already done (then `record_frame` as usual).
+    /// Draws the whole view's visibility of `frame` ahead of a round of slices, in a command buffer of its own:
+    /// when `frame` would start a round of a still image in slices (`lattice` > 1: a change from the last frame
+    /// restarts the image, or the last frame ended a round; each round has its own jitter) and raster primary
+    /// visibility draws it. The round's first slice then resolves its pixels from that draw instead of drawing
+    /// every triangle itself: on a software device the draw of a large scene is most of that slice
+    /// (san_francisco: 77 of 110-160 ms at 800x800), and input that comes meanwhile waits for the frame in
+    /// flight. Nothing else changes: the output keeps the last frame's image (of `size()`), which a viewer
+    /// presents again, and no frame is counted (no `finish_frame`). Returns whether it recorded the draw; false
+    /// when the draw is not needed or already done (then `record_frame` as usual).
     pub fn record_visibility(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<bool> {
         if self.primary != Primary::Raster || frame.lattice <= 1 || frame.tile.is_some() {
             return Ok(false);
         }
         frame.validate().map_err(CoreError::Invalid)?;
-        let restarts = match &self.prev {
-            None => true,
-            Some(prev) => {
-                let change = Change::between(prev, &frame.key(self.primary), |_, _| None);
-                change.still_image || change.map != MapChange::Keep
-            }
-        };
-        if !restarts {
+        // The still image's frame the next `record_frame` draws (`prepare`): a new image's first, or the next
+        // round's. In the middle of a round its draw is done (a change that needs another is drawn by the slice).
+        let restarts = self.restart
+            || (self.still_index == 0 && frame.lattice > self.lattice)
+            || match &self.prev {
+                None => true,
+                Some(prev) => {
+                    let change = Change::between(prev, &frame.key(self.primary), |_, _| None);
+                    change.still_image || change.map != MapChange::Keep
+                }
+            };
+        let still_index = if restarts {
+            0
+        } else if self.slice + 1 < self.lattice * self.lattice {
             return Ok(false);
-        }
+        } else {
+            self.still_index.saturating_add(1)
+        };
         let mut globals = self.frame_globals(frame);
-        // The still image's first frame is not jittered (`globals_for`: jitter from its second frame on).
-        globals.jitter = [0.0, 0.0];
+        globals.jitter = Self::jitter(frame, still_index);
         let (w, h) = frame.size();
         let raster = match &mut self.raster {
             Some(r) => r,

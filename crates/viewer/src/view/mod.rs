@@ -1320,9 +1320,9 @@ impl Viewer {
             let scripted = script_running && self.background_shot.is_none() && self.saving.is_none();
             self.settling = settle && r.shows(&frame);
             let render = !self.holding && !self.settling && (scripted || !r.shows_final(&frame));
-            // A still image in slices starts with the view's visibility drawn in a frame of its own
-            // (`Renderer::record_visibility`): input that comes meanwhile waits for the draw alone, and the view
-            // shows the last image until the first slice.
+            // Each round of a still image in slices starts with the view's visibility drawn in a frame of its
+            // own (`Renderer::record_visibility`): input that comes meanwhile waits for the draw alone, and the
+            // view shows the last image until the round's first slice.
             if render && !moving && r.record_visibility(cmd, &frame)? {
                 let (w, h) = r.size();
                 src = Some((r.output_buffer().raw, w, h));
