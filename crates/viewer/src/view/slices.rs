@@ -175,15 +175,9 @@ impl Slicing {
         } else if let Some(p) = self.probe.take() {
             self.lattice = self.lattice.min(p);
         } else if let Some(cost) = self.predictor_at(self.lattice) {
-            // The last image may have traced fewer rays: the lattice its rays need first, then fewer rays.
-            // (As `choose`: where the floor is over the target, a lattice within the margin of the largest.)
-            let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE, wanted));
-            if cost(self.lattice, wanted) > bound {
-                self.lattice = (self.lattice..=MAX_LATTICE)
-                    .filter(|&l| refines_on_the_way(l))
-                    .find(|&l| cost(l, wanted) <= bound)
-                    .unwrap_or(MAX_LATTICE);
-            }
+            // The last image may have traced fewer rays: the lattice its rays need first (no smaller than the
+            // last), then fewer rays.
+            self.lattice = fit_lattice(|l| cost(l, wanted), self.lattice, target_ms);
             if self.lattice == MAX_LATTICE {
                 rays = rays_within(wanted, |r| cost(MAX_LATTICE, r), target_ms);
             }
@@ -299,11 +293,7 @@ impl Slicing {
             return (drawn, None);
         };
         let cost = |l: u32| predict(l, rays);
-        let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE));
-        let fit = (1..=MAX_LATTICE)
-            .filter(|&l| refines_on_the_way(l))
-            .find(|&l| cost(l) <= bound)
-            .unwrap_or(MAX_LATTICE);
+        let fit = fit_lattice(cost, 1, target_ms);
         // Down one step at a time, and only to a lattice predicted to meet the target: a fit of nearby
         // lattices' noisy costs can put b near 0 and promise that even whole frames meet it (a 1.6 s frame
         // at 1280×800 on lavapipe), or put the floor over the target and take the margin below the largest
@@ -360,6 +350,17 @@ impl Slicing {
         let w = (now - a) * (drawn * drawn) as f64 / (1 + rays) as f64;
         Some(move |l: u32, r: u32| a + w * (1 + r) as f64 / (l * l) as f64)
     }
+}
+
+/// The smallest lattice from `from` up that completes grids on the way (`refines_on_the_way`) and whose frames,
+/// costing `cost(l)`, meet the target, or, where the floor alone is over it, cost within `FLOOR_MARGIN` of the
+/// largest lattice's (beyond that a larger lattice only adds slices).
+fn fit_lattice(cost: impl Fn(u32) -> f64, from: u32, target_ms: f64) -> u32 {
+    let bound = target_ms.max(FLOOR_MARGIN * cost(MAX_LATTICE));
+    (from..=MAX_LATTICE)
+        .filter(|&l| refines_on_the_way(l))
+        .find(|&l| cost(l) <= bound)
+        .unwrap_or(MAX_LATTICE)
 }
 
 /// The rays per visit of frames that cost `cost(r)`: `wanted` where they cost at most `CUT_ABOVE` times the
@@ -425,6 +426,26 @@ mod tests {
             4,
             "measured slices decide the next still image's lattice"
         );
+    }
+
+    /// A new still image starts at the last one's lattice when that meets the target (it grows if its rays need
+    /// more): a smaller lattice is taken by a measured probe (`choose`), not from the model when the image
+    /// starts. Costs at lattices 6 and 8 (60 and 50 ms at 4 rays) fit a + b/L² with lattice 4 at 88 ms.
+    #[test]
+    fn a_new_still_image_takes_no_smaller_lattice_from_the_model_alone() {
+        let mut s = Slicing {
+            lattice: 6,
+            ..Slicing::default()
+        };
+        s.costs.insert((8, 4), (50.0, 1));
+        s.costs.insert((6, 4), (60.0, 2));
+        s.observations = 2;
+        s.still_budget(4, 1, None, 100.0);
+        assert_eq!(s.lattice(), 6);
+        // Rays the lattice cannot carry (32 per visit: 188 ms at 6, 122 ms at 8) grow it.
+        s.moving();
+        s.still_budget(32, 1, None, 100.0);
+        assert_eq!(s.lattice(), 8);
     }
 
     /// Frames of a device whose frame costs `a + b / L²`: the controller settles on the smallest lattice that
