@@ -1,6 +1,6 @@
 #version 460
-// Rasterised primary visibility, vertex stage: pulls vertex gl_VertexIndex of the draw's geometry (an indexed
-// draw over the geometry's own index buffer; the fragment stage reads the primitive index, as a ray query
+// Rasterised primary visibility, vertex stage: pulls vertex gl_VertexIndex of the instance row's geometry (an
+// indexed draw over the geometry's own indices; the fragment stage reads the primitive index, as a ray query
 // reports it, from gl_PrimitiveID) for the visible instance gl_InstanceIndex, and projects it with the
 // ray-traced camera.
 #extension GL_EXT_buffer_reference : require
@@ -23,8 +23,8 @@ out float gl_ClipDistance[MAX_SECTIONS];
 layout(location = 0) flat out uvec3 vis;
 
 void main() {
-    GeometryInfo geo = GeometryRef(pc.geometries).v[pc.geometry];
     RasterInstance inst = RasterInstanceRef(pc.instances).v[gl_InstanceIndex];
+    GeometryInfo geo = GeometryRef(pc.geometries).v[inst.geometry];
     vec3 p = raster_to_world(inst, VertexRef(geo.vertices).v[gl_VertexIndex]);
     GlobalsRef globals = GlobalsRef(pc.globals);
     vec4 planes[MAX_SECTIONS] = vec4[MAX_SECTIONS](globals.g.section0, globals.g.section1, globals.g.section2);
@@ -41,5 +41,5 @@ void main() {
     float w = ortho ? 1.0 : dist;
     vec2 xy = vec2(dot(d, pc.cam_u.xyz), -dot(d, pc.cam_v.xyz)) - pc.jitter_ndc * w;
     gl_Position = vec4(xy, ortho ? 1.0 - dist * pc.eye.w : pc.eye.w, w);
-    vis = uvec3(inst.instance, pc.geometry, uint(gl_InstanceIndex));
+    vis = uvec3(inst.instance, inst.geometry, uint(gl_InstanceIndex));
 }

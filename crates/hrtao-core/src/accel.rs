@@ -279,7 +279,7 @@ impl SceneGpu {
                         .map(|(k, g)| RasterGeometry {
                             geometry: base + k as u32,
                             triangles: g.triangles,
-                            index_offset: g.index_offset,
+                            first_index: g.index_offset / 4,
                             double_sided: g.double_sided,
                         })
                         .collect()

@@ -26,6 +26,9 @@ pub struct ContextOptions {
     /// Refuse allocations past this many bytes of device memory (simulates a small GPU; also
     /// `HRTAO_DEVICE_MEMORY_LIMIT=<MiB>`). None: no limit but the device's own.
     pub memory_limit: Option<u64>,
+    /// Leave `multiDrawIndirect` off even where the device has it: the visibility draw then issues one call per
+    /// draw, the path of devices without it (for tests).
+    pub single_draws: bool,
 }
 
 impl ContextOptions {
@@ -81,6 +84,9 @@ pub struct DeviceInfo {
     /// The device has `geometryShader` (enabled): fragment shaders may read `gl_PrimitiveID`, which the
     /// rasterised primary visibility needs for its indexed draws.
     pub primitive_id_in_fragment: bool,
+    /// The device has `multiDrawIndirect` and `drawIndirectFirstInstance` (enabled): the visibility draw issues
+    /// one indirect command per pipeline instead of one draw per mesh geometry.
+    pub multi_draw_indirect: bool,
 }
 
 pub struct Gpu {
@@ -477,10 +483,15 @@ impl Gpu {
             .host_query_reset(supported_v12.host_query_reset == vk::TRUE)
             .shader_buffer_int64_atomics(true);
         let primitive_id_in_fragment = supported.features.geometry_shader == vk::TRUE;
+        let multi_draw_indirect = !options.single_draws
+            && supported.features.multi_draw_indirect == vk::TRUE
+            && supported.features.draw_indirect_first_instance == vk::TRUE;
         let base = vk::PhysicalDeviceFeatures::builder()
             .shader_int64(true)
             .shader_clip_distance(true)
             .geometry_shader(primitive_id_in_fragment)
+            .multi_draw_indirect(multi_draw_indirect)
+            .draw_indirect_first_instance(multi_draw_indirect)
             .build();
         let mut features2 = vk::PhysicalDeviceFeatures2::builder()
             .features(base)
@@ -545,6 +556,7 @@ impl Gpu {
             timestamps,
             validation,
             primitive_id_in_fragment,
+            multi_draw_indirect,
         };
         log::info!(
             "Vulkan device: {} ({}, {}), validation {}",

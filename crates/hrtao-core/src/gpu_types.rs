@@ -293,13 +293,15 @@ gpu_structs! {
     }
 
     /// One visible instance drawn by the rasterised primary visibility (raster.rs): its object-to-world
-    /// transform as three rows (`world = row_i · (p, 1)`) and its scene instance id.
+    /// transform as three rows (`world = row_i · (p, 1)`), its scene instance id and the geometry its draw
+    /// covers (a mesh of several geometries has one row per geometry, so that no state changes between draws).
     struct RasterInstance {
         row0: [f32; 4],
         row1: [f32; 4],
         row2: [f32; 4],
         instance: u32,
-        _pad: [u32; 3],
+        geometry: u32,
+        _pad: [u32; 2],
     }
 
     /// Push constants of the visibility draw (visibility.vert): the camera, in clip form, and the tables.
@@ -314,11 +316,10 @@ gpu_structs! {
         cam_w: [f32; 4],
         geometries: u64,
         instances: u64,
-        /// The geometry of this draw (index into the geometry table).
-        geometry: u32,
         /// `PROJECTION_*`. Orthographic: clip w = 1 and depth = 1 - dot(p - eye, cam_w) * eye.w (eye.w is then
         /// 1 / the far plane distance, depth stays linear and reversed).
         projection: u32,
+        _pad: u32,
         /// This frame's sub-pixel jitter (`FrameGlobals::jitter`) in normalised device coordinates, so the
         /// rasteriser samples where the jittered camera rays go, plus a perspective tile's centre
         /// (`Tile::ndc_offset`): the image moves by minus this.

@@ -164,6 +164,66 @@ fn culled_back_faces_keep_the_bundled_scene_identical() {
     assert_clean(&gpu);
 }
 
+/// Devices with `multiDrawIndirect` draw the visibility with one indirect call per pipeline, the others with
+/// one call per draw: both give the same G-buffer, bit for bit, with back faces culled (two handedness runs)
+/// and with a section plane (one run over every draw).
+#[test]
+fn indirect_and_single_draws_give_the_same_visibility() {
+    let indirect = gpu();
+    let single = Gpu::new(&hrtao_core::ContextOptions {
+        validation: true,
+        device: std::env::var("HRTAO_DEVICE").ok(),
+        single_draws: true,
+        ..Default::default()
+    })
+    .unwrap();
+    assert!(!single.info.multi_draw_indirect);
+    println!("multiDrawIndirect: {}", indirect.info.multi_draw_indirect);
+    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let mut scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
+    // Half the instances mirrored: fronts of those wind clockwise, a second culling pipeline.
+    for inst in scene.instances.iter_mut().step_by(2) {
+        let c = inst.transform.w_axis.x;
+        inst.transform = glam::Mat4::from_translation(glam::Vec3::X * c)
+            * glam::Mat4::from_scale(glam::Vec3::new(-1.0, 1.0, 1.0))
+            * glam::Mat4::from_translation(-glam::Vec3::X * c)
+            * inst.transform;
+    }
+    let cam = Camera {
+        width: 160,
+        height: 100,
+        ..Camera::load(&assets.join("default.camera.json")).unwrap()
+    };
+    let b = scene.bounds();
+    let cut = Sections::new(vec![SectionPlane::new(
+        [1.0, 0.0, 0.0],
+        0.5 * (b.min.x + b.max.x),
+    )
+    .unwrap()])
+    .unwrap();
+    let settings = rtao(1, 0.05 * (b.max - b.min).length());
+    for sections in [None, Some(&cut)] {
+        let gbuffer = |gpu: &Arc<Gpu>| {
+            let mut sg = SceneGpu::new(gpu, &scene).unwrap();
+            if let Some(s) = sections {
+                sg.set_sections(&scene, s, u32::MAX).unwrap();
+            }
+            render_with(gpu, &sg, &scene, &cam, &settings, Primary::Raster, 1).0
+        };
+        let (a, b) = (gbuffer(&indirect), gbuffer(&single));
+        let hits = a.iter().filter(|p| p.instance != NO_INSTANCE).count();
+        assert!(hits > a.len() / 10, "the camera sees the scene");
+        let differ = a
+            .iter()
+            .zip(&b)
+            .filter(|(p, q)| bytemuck::bytes_of(*p) != bytemuck::bytes_of(*q))
+            .count();
+        assert_eq!(differ, 0, "sections {}: pixels that differ", sections.is_some());
+    }
+    assert_clean(&indirect);
+    assert_clean(&single);
+}
+
 #[test]
 fn hidden_instances_vanish_from_both_primaries() {
     let gpu = gpu();
