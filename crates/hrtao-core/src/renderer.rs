@@ -106,6 +106,14 @@ pub fn held_own_rays(still_samples: u32) -> u32 {
     2 * still_samples.div_ceil(AA_FRAMES).max(1)
 }
 
+/// A still image's frame: its round (`still_index`), slice within the round and lattice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SlicePosition {
+    still_index: u32,
+    slice: u32,
+    lattice: u32,
+}
+
 /// What one frame did.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct FrameReport {
@@ -320,19 +328,7 @@ impl Renderer {
         }
         self.map.ensure(frame.settings.map.hash_capacity, &self.stats)?;
         let key = frame.key(self.primary);
-        let change = match &self.prev {
-            None => Change::first(),
-            Some(prev) => Change::between(prev, &key, |p, n| {
-                // Located edits and plane moves: only the regions within reach of them.
-                let mut boxes = frame.scene.changes_between(p.scene_f, n.scene_f)?;
-                boxes.extend(
-                    frame
-                        .scene
-                        .section_changes_between(p.section_changes, n.section_changes)?,
-                );
-                Some(boxes)
-            }),
-        };
+        let change = self.change_to(frame, &key);
         let mut map = change.map;
         if let MapChange::Regions(boxes) = &map {
             let reach = frame.settings.map.ao_radius;
@@ -349,30 +345,11 @@ impl Renderer {
             );
         }
         let restart = std::mem::take(&mut self.restart);
-        let slices = self.lattice * self.lattice;
-        // A local edit's pixels see it within a round of slices from it: the lattice holds until then.
-        let edit_open = self
-            .edit_frame
-            .is_some_and(|e| self.frame_index.wrapping_sub(e) < slices);
-        // The first round may still grow its lattice: its slices are the still image's first visit of each
-        // pixel and hold nothing a restart loses, and a view much costlier than the last (a young map, closer
-        // geometry) would otherwise keep frames over the target for a whole round (16 frames of 550 ms at
-        // L = 4 on san_francisco after a drag).
-        let grow_first_round = self.still_index == 0 && frame.lattice > self.lattice && !edit_open;
-        if change.still_image || map == MapChange::Whole || restart || grow_first_round {
-            self.still_index = 0;
-            self.slice = 0;
-            self.lattice = frame.lattice;
-        } else if self.slice + 1 < slices {
-            self.slice += 1;
-        } else {
-            // A new round: every pixel has been drawn once more.
-            self.still_index = self.still_index.saturating_add(1);
-            self.slice = 0;
-            if !edit_open {
-                self.lattice = frame.lattice;
-            }
-        }
+        let next = self.next_position(
+            change.still_image || map == MapChange::Whole || restart,
+            frame.lattice,
+        );
+        (self.still_index, self.slice, self.lattice) = (next.still_index, next.slice, next.lattice);
         if self.still_index == 0 && self.slice == 0 {
             self.edit_still_index = 0;
             self.still_start_frame = self.frame_index;
@@ -384,6 +361,59 @@ impl Renderer {
         }
         self.prev = Some(key);
         Ok(())
+    }
+
+    /// What the change from the last frame to `frame` (of key `key`) invalidates (`Change::between`), with the
+    /// located edits and plane moves between them.
+    fn change_to(&self, frame: &FrameDesc, key: &FrameKey) -> Change {
+        match &self.prev {
+            None => Change::first(),
+            Some(prev) => Change::between(prev, key, |p, n| {
+                // Located edits and plane moves: only the regions within reach of them.
+                let mut boxes = frame.scene.changes_between(p.scene_f, n.scene_f)?;
+                boxes.extend(
+                    frame
+                        .scene
+                        .section_changes_between(p.section_changes, n.section_changes)?,
+                );
+                Some(boxes)
+            }),
+        }
+    }
+
+    /// Where the next frame of the still image falls (`prepare` moves there; `record_visibility` predicts it):
+    /// a new image's first slice when `restarts`, else the next slice of the round, or the next round's first.
+    /// The first round may still grow its lattice to `frame_lattice`: its slices are the still image's first
+    /// visit of each pixel and hold nothing a restart loses, and a view much costlier than the last (a young
+    /// map, closer geometry) would otherwise keep frames over the target for a whole round (16 frames of 550 ms
+    /// at L = 4 on san_francisco after a drag). A local edit's pixels see it within a round of slices from it:
+    /// the lattice holds until then.
+    fn next_position(&self, restarts: bool, frame_lattice: u32) -> SlicePosition {
+        let slices = self.lattice * self.lattice;
+        let edit_open = self
+            .edit_frame
+            .is_some_and(|e| self.frame_index.wrapping_sub(e) < slices);
+        let grow_first_round = self.still_index == 0 && frame_lattice > self.lattice && !edit_open;
+        if restarts || grow_first_round {
+            SlicePosition {
+                still_index: 0,
+                slice: 0,
+                lattice: frame_lattice,
+            }
+        } else if self.slice + 1 < slices {
+            SlicePosition {
+                still_index: self.still_index,
+                slice: self.slice + 1,
+                lattice: self.lattice,
+            }
+        } else {
+            // A new round: every pixel has been drawn once more.
+            SlicePosition {
+                still_index: self.still_index.saturating_add(1),
+                slice: 0,
+                lattice: if edit_open { self.lattice } else { frame_lattice },
+            }
+        }
     }
 
     /// The frame's GPU parameters: its camera, tile and output, each settings group's share
@@ -684,24 +714,17 @@ impl Renderer {
             return Ok(false);
         }
         frame.validate().map_err(CoreError::Invalid)?;
-        // The still image's frame the next `record_frame` draws (`prepare`): a new image's first, or the next
-        // round's. In the middle of a round its draw is done (a change that needs another is drawn by the slice).
-        let restarts = self.restart
-            || (self.still_index == 0 && frame.lattice > self.lattice)
-            || match &self.prev {
-                None => true,
-                Some(prev) => {
-                    let change = Change::between(prev, &frame.key(self.primary), |_, _| None);
-                    change.still_image || change.map != MapChange::Keep
-                }
-            };
-        let still_index = if restarts {
-            0
-        } else if self.slice + 1 < self.lattice * self.lattice {
+        // The still image's frame the next `record_frame` draws (`prepare`'s `next_position`): drawn ahead when
+        // it starts a round. A located edit is taken to keep the image, as `prepare` keeps it unless the regions
+        // overflow (then its slice draws again: the draw's key differs).
+        let key = frame.key(self.primary);
+        let change = self.change_to(frame, &key);
+        let restarts = self.restart || change.still_image || change.map == MapChange::Whole;
+        let next = self.next_position(restarts, frame.lattice);
+        if next.slice != 0 {
             return Ok(false);
-        } else {
-            self.still_index.saturating_add(1)
-        };
+        }
+        let still_index = next.still_index;
         let mut globals = self.frame_globals(frame);
         globals.jitter = Self::jitter(frame, still_index);
         let (w, h) = frame.size();

@@ -672,26 +672,29 @@ fn rasterised_slices_redraw_after_an_edit_mid_round() {
 /// a round needs none), and the slices that follow resolve the G-buffer drawn without it, drawing no
 /// triangles. Catches a draw with the wrong camera or round's jitter (the slice would draw again), a frame that
 /// advances the slices or touches the output, and a draw for frames that start no round.
+/// The visibility draws the renderer's last frame recorded.
+fn raster_draws(r: &Headless) -> usize {
+    r.last_frame_events()
+        .iter()
+        .filter(|e| {
+            matches!(
+                e,
+                hrtao_core::barrier::Event::Command {
+                    label: "raster visibility",
+                    ..
+                }
+            )
+        })
+        .count()
+}
+
 #[test]
 fn a_round_of_slices_can_start_with_its_visibility_drawn_ahead() {
     let gpu = gpu();
     let (scene, cam) = blocks_scene();
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     let still = orbited(&cam, 20.0);
-    let draws = |r: &Headless| {
-        r.last_frame_events()
-            .iter()
-            .filter(|e| {
-                matches!(
-                    e,
-                    hrtao_core::barrier::Event::Command {
-                        label: "raster visibility",
-                        ..
-                    }
-                )
-            })
-            .count()
-    };
+    let draws = raster_draws;
     let rounds = 3;
     let mut gbuffers = Vec::new();
     for ahead in [false, true] {
@@ -761,5 +764,47 @@ fn a_round_of_slices_can_start_with_its_visibility_drawn_ahead() {
         bytes(&gbuffers[0]) == bytes(&gbuffers[1]),
         "the G-buffer differs when the visibility was drawn ahead"
     );
+    assert_clean(&gpu);
+}
+
+/// A located edit in the middle of a round keeps the still image (composite.comp restarts only the edited
+/// regions), so its round goes on: the next slice draws the edited scene's visibility itself, at its round's
+/// jitter, and nothing is drawn ahead for it. `record_visibility` predicts the next frame with `prepare`'s own
+/// rule (`next_position`); with its former rule of its own, which took any map change for a new image, it drew
+/// the visibility ahead at a new image's jitter, which the slice then drew again.
+#[test]
+fn a_located_edit_mid_round_draws_nothing_ahead() {
+    let gpu = gpu();
+    let (mut scene, cam) = blocks_scene();
+    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
+    assert!(r.settings.edits.local_edits && r.settings.map.cell_cap);
+    r.set_primary(hrtao_core::Primary::Raster);
+    r.jitter = true;
+    r.lattice = 3;
+    // Round 1 (the second), up to its slice 3.
+    for _ in 0..9 + 4 {
+        r.render(&sg, scene.f(), &cam).unwrap();
+    }
+    scene.set_visible(2, false).unwrap();
+    sg.update_instances(&scene, u32::MAX).unwrap();
+    let settings = r.settings.clone();
+    let mut frame = r.frame_with(&sg, scene.f(), &cam, &settings);
+    frame.lattice = 3;
+    let drew = gpu
+        .run_commands(|cmd| r.r.record_visibility(cmd, &frame))
+        .unwrap()
+        .unwrap();
+    assert!(
+        !drew,
+        "a visibility drawn ahead for a slice in the middle of a round"
+    );
+    let rep = r.render(&sg, scene.f(), &cam).unwrap();
+    assert_eq!(
+        (rep.slice, rep.accumulated_frames),
+        (4, 2),
+        "the located edit keeps the still image"
+    );
+    assert_eq!(raster_draws(&r), 1, "the slice draws the edited scene");
     assert_clean(&gpu);
 }
