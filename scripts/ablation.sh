@@ -18,34 +18,14 @@ export HRTAO_SHARED
 export MESA_SHADER_CACHE_DISABLE=false MESA_SHADER_CACHE_DIR=$PWD/target/mesa-shader-cache
 unset HRTAO_VALIDATION
 
-# name | base | AoSettings overrides. "Off" rows turn one addition off on the default settings, "paper+" rows
-# turn one on alone on the paper's mode. (Rows of additions since deleted, measured before their deletion:
-# no-level-blend, with-linear-cells, with-adaptive-prior; their JSON records the commit they ran on.)
-CONFIGS=$(cat <<'EOF'
-default|default|{}
-default-rerun|default|{}
-paper|paper|{}
-no-contact-detail|default|{"contact_detail":false}
-no-pooled-residual|default|{"pooled_residual":false}
-no-near-field|default|{"near_field":false}
-no-adaptive-rays|default|{"adaptive_rays":false}
-no-variance-filter|default|{"variance_filter":false}
-no-cell-cap|default|{"cell_cap":false}
-no-offset-bins|default|{"offset_bins":false}
-no-refine|default|{"refine":false}
-paper+contact-detail|paper|{"contact_detail":true}
-paper+pooled-residual|paper|{"pooled_residual":true}
-paper+near-field|paper|{"near_field":true}
-paper+adaptive-rays|paper|{"adaptive_rays":true}
-paper+variance-filter|paper|{"variance_filter":true}
-paper+cell-cap|paper|{"cell_cap":true}
-paper+offset-bins|paper|{"offset_bins":true}
-paper+refine|paper|{"refine":true}
-EOF
-)
-
 cargo build --release -q -p hrtao-core --example ablation
 BIN=target/release/examples/ablation
+
+# name | base | AoSettings overrides, from the settings (`ablation --configs`): the baselines, then every
+# addition of ours off on the default settings ("no-" rows) and alone on the paper's mode ("paper+" rows). (Rows
+# of additions since deleted, measured before their deletion: no-level-blend, with-linear-cells,
+# with-adaptive-prior; their JSON records the commit they ran on.)
+CONFIGS=$("$BIN" --configs)
 
 case "${1:-}" in
 --report)

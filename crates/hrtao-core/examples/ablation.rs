@@ -7,6 +7,8 @@
 //! [--set '{"near_weight": 0}'] [--out docs/bench/ablation] [--size 640x360] [--rays 8] [--frames 32] [--nav 8]
 //! [--nav-deg 0.25] [KEY...]` (keys default to every view of the index).
 //!
+//! `... --example ablation -- --configs` lists the configurations (`scripts/ablation.sh` runs them).
+//!
 //! `... --example ablation -- --report docs/bench/ablation` prints the Markdown table of the configurations
 //! found there, each metric's change against its reference (`default`, or `paper` for configurations on the
 //! paper's base) and the verdict of the rule in `verdict`.
@@ -545,8 +547,28 @@ fn report(runs: &[Run]) -> String {
     out
 }
 
+/// The configurations, one `name|base|overrides` line each: the baselines, then every addition of ours
+/// (`AoSettings::additions_mut`) off on the default settings and alone on the paper's mode. Derived from the
+/// settings, so adding or deleting an addition does not touch the ablation's script.
+fn configs() -> String {
+    let mut out = String::from("default|default|{}\ndefault-rerun|default|{}\npaper|paper|{}\n");
+    let mut s = AoSettings::default();
+    let names: Vec<&str> = s.additions_mut().iter().map(|a| a.name).collect();
+    for (prefix, base, on) in [("no-", "default", false), ("paper+", "paper", true)] {
+        for name in &names {
+            let row = name.replace('_', "-");
+            out += &format!("{prefix}{row}|{base}|{}\n", serde_json::json!({ *name: on }));
+        }
+    }
+    out
+}
+
 fn main() -> anyhow::Result<()> {
     let mut args = cli_args::Args::from_env();
+    if std::env::args().any(|a| a == "--configs") {
+        print!("{}", configs());
+        return Ok(());
+    }
     let dir = args.take("--report", "");
     if !dir.is_empty() {
         let runs = load_runs(Path::new(&dir))?;

@@ -174,6 +174,18 @@ pub struct AoSettings {
 }
 
 impl AoSettings {
+    /// Every addition of ours, group by group: the switches the paper's mode turns off (the panel's checkboxes,
+    /// the ablation's rows).
+    pub fn additions_mut(&mut self) -> Vec<Addition<'_>> {
+        let mut list = self.map.additions_mut();
+        list.extend(self.filter.additions_mut());
+        list.extend(self.still.additions_mut());
+        list.extend(self.young.additions_mut());
+        list.extend(self.edits.additions_mut());
+        list.extend(self.display.additions_mut());
+        list
+    }
+
     /// The published technique with these parameters: every group's `paper()` (our additions off, eq. (5)'s
     /// bins as published), so `hrtao bench` can run both side by side.
     pub fn paper(&self) -> AoSettings {
@@ -367,20 +379,11 @@ mod tests {
         let mut s = AoSettings::default();
         let mut names = Vec::new();
         let mut count = 0;
-        for list in [
-            s.map.additions_mut(),
-            s.filter.additions_mut(),
-            s.still.additions_mut(),
-            s.young.additions_mut(),
-            s.edits.additions_mut(),
-            s.display.additions_mut(),
-        ] {
-            for a in list {
-                assert!(a.text().len() > 40, "{}: no doc", a.name);
-                names.push(a.name);
-                *a.on = !*a.on;
-                count += 1;
-            }
+        for a in s.additions_mut() {
+            assert!(a.text().len() > 40, "{}: no doc", a.name);
+            names.push(a.name);
+            *a.on = !*a.on;
+            count += 1;
         }
         names.sort();
         let flipped = serde_json::to_value(&s).unwrap();
