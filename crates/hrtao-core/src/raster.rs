@@ -74,6 +74,10 @@ struct Draw {
     instance_count: u32,
 }
 
+/// The names of `RasterScene`'s host-written tables.
+const INSTANCES: &str = "raster instances";
+const COMMANDS: &str = "raster draw commands";
+
 /// `VkDrawIndexedIndirectCommand`: index count, instance count, first index, vertex offset, first instance.
 type DrawCommand = [u32; 5];
 
@@ -127,31 +131,31 @@ impl RasterScene {
         Ok(RasterScene {
             mesh_geometries,
             index_buffer,
-            instances: Self::instance_buffer(gpu, 1)?,
+            instances: Self::table::<RasterInstance>(gpu, INSTANCES, 1, vk::BufferUsageFlags::empty())?,
             draws: Vec::new(),
-            commands: Self::command_buffer(gpu, 1)?,
+            commands: Self::table::<DrawCommand>(gpu, COMMANDS, 1, vk::BufferUsageFlags::INDIRECT_BUFFER)?,
             bounds: hrtao_scene::Aabb::empty(),
         })
     }
 
-    fn instance_buffer(gpu: &Arc<Gpu>, count: usize) -> Result<Buffer> {
-        Buffer::new(
-            gpu,
-            "raster instances",
-            (count.max(1) * std::mem::size_of::<RasterInstance>()) as u64,
-            MemoryLocation::CpuToGpu,
-            vk::BufferUsageFlags::empty(),
-        )
+    /// A host-written table of `count` values of `T` (at least one).
+    fn table<T>(gpu: &Arc<Gpu>, name: &str, count: usize, usage: vk::BufferUsageFlags) -> Result<Buffer> {
+        let bytes = count.max(1) * std::mem::size_of::<T>();
+        Buffer::new(gpu, name, bytes as u64, MemoryLocation::CpuToGpu, usage)
     }
 
-    fn command_buffer(gpu: &Arc<Gpu>, count: usize) -> Result<Buffer> {
-        Buffer::new(
-            gpu,
-            "raster draw commands",
-            (count.max(1) * std::mem::size_of::<DrawCommand>()) as u64,
-            MemoryLocation::CpuToGpu,
-            vk::BufferUsageFlags::INDIRECT_BUFFER,
-        )
+    /// Writes `values` into `buffer`, replaced by a larger one first if they do not fit.
+    fn write_table<T: bytemuck::Pod>(
+        gpu: &Arc<Gpu>,
+        buffer: &mut Buffer,
+        name: &str,
+        values: &[T],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<()> {
+        if buffer.size < std::mem::size_of_val(values) as u64 {
+            *buffer = Self::table::<T>(gpu, name, values.len(), usage)?;
+        }
+        buffer.write(values)
     }
 
     /// Collects the visible instances of meshes with triangles (those the TLAS holds), grouped by mesh.
@@ -206,15 +210,10 @@ impl RasterScene {
         self.draws.sort_by_key(|d| d.faces as u8);
         let commands: Vec<DrawCommand> = self.draws.iter().map(Draw::command).collect();
         self.bounds = scene.bounds_conservative();
-        let bytes = (table.len() * std::mem::size_of::<RasterInstance>()) as u64;
-        if self.instances.size < bytes {
-            self.instances = Self::instance_buffer(gpu, table.len())?;
-        }
-        self.instances.write(&table)?;
-        if self.commands.size < std::mem::size_of_val(commands.as_slice()) as u64 {
-            self.commands = Self::command_buffer(gpu, commands.len())?;
-        }
-        self.commands.write(&commands)
+        let none = vk::BufferUsageFlags::empty();
+        Self::write_table(gpu, &mut self.instances, INSTANCES, &table, none)?;
+        let indirect = vk::BufferUsageFlags::INDIRECT_BUFFER;
+        Self::write_table(gpu, &mut self.commands, COMMANDS, &commands, indirect)
     }
 
     /// The runs of `draws` that share a pipeline: by handedness when back faces are culled, else all of them.
