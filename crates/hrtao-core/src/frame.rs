@@ -22,9 +22,9 @@ pub struct RayBudget {
 /// The largest slice lattice (`FrameDesc::lattice`): 144 slices of a whole frame. 8 left san_francisco's slices
 /// on lavapipe at 80-115 ms even at half the rays per visit (a drag waited for them: input latency p95 179-216
 /// ms); at 12 they meet the 50 ms slice target (p95 143 ms) and the time to converge stayed (72 s). A viewer
-/// takes a lattice this large only where its slices need it. (16 was tried when the held rounds showed the
-/// lattice's coarsest grid: a blocky image for ~17 s after every move; the first round now shows each finer grid
-/// as it completes.)
+/// takes a lattice this large only where its slices need it; its held rounds show the spacing-3 grid
+/// (`slice_order`). (16 was tried when the held rounds showed the lattice's coarsest grid: a blocky image for
+/// ~17 s after every move; the first round now shows each finer grid as it completes.)
 pub const MAX_LATTICE: u32 = 12;
 
 /// How the composite writes its output.

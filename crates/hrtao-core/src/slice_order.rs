@@ -5,8 +5,9 @@
 //! stay spread evenly and complete square grids on the way: for L = 8 the grids of spacing 8, 4 and 2 after 1, 4
 //! and 16 slices (`level`). In the first round of a still image the view shows the cubic B-spline of the finest
 //! grid completed (composite.comp `show_level`): smooth at every frame, no single pixels that differ from the
-//! blocks around them, and sharper at each level. Prime lattices (5, 7) complete no grid between L and 1: their
-//! held rounds show the coarse grid throughout.
+//! blocks around them, and sharper at each level. The grids come by halving: odd lattices (5, 7, 9, 11) complete
+//! no grid between L and 1, their held rounds would show the coarse grid throughout, and 10 completes only 5
+//! (the viewer takes none of them, `view/slices.rs` `refines_on_the_way`).
 
 /// Squared distance between two offsets of the `lattice`-periodic block (the torus).
 fn torus_distance2(a: (u32, u32), b: (u32, u32), lattice: u32) -> u32 {
@@ -124,6 +125,9 @@ mod tests {
     fn the_first_round_completes_square_grids_on_the_way() {
         let levels =
             |l: u32| -> Vec<(u32, u32)> { (0..l * l).filter_map(|s| level(s, l).map(|g| (s, g))).collect() };
+        assert_eq!(levels(12), vec![(0, 12), (3, 6), (15, 3), (143, 1)]);
+        assert_eq!(levels(10), vec![(0, 10), (3, 5), (99, 1)]);
+        assert_eq!(levels(9), vec![(0, 9), (80, 1)]);
         assert_eq!(levels(8), vec![(0, 8), (3, 4), (15, 2), (63, 1)]);
         assert_eq!(levels(6), vec![(0, 6), (3, 3), (35, 1)]);
         assert_eq!(levels(4), vec![(0, 4), (3, 2), (15, 1)]);
