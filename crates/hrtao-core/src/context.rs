@@ -87,6 +87,8 @@ pub struct DeviceInfo {
     /// The device has `multiDrawIndirect` and `drawIndirectFirstInstance` (enabled): the visibility draw issues
     /// one indirect command per pipeline instead of one draw per mesh geometry.
     pub multi_draw_indirect: bool,
+    /// The device has `shaderDrawParameters` (enabled): the visibility draw's vertex stage reads gl_DrawID.
+    pub draw_parameters: bool,
 }
 
 pub struct Gpu {
@@ -469,8 +471,10 @@ impl Gpu {
         let timestamps = families[queue_family as usize].timestamp_valid_bits > 0;
 
         // Features: ray queries, acceleration structures, buffer device address, scalar layout, int64 (+ atomics).
+        let mut supported_v11 = vk::PhysicalDeviceVulkan11Features::default();
         let mut supported_v12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut supported = vk::PhysicalDeviceFeatures2::builder()
+            .push_next(&mut supported_v11)
             .push_next(&mut supported_v12)
             .build();
         instance.get_physical_device_features2(physical, &mut supported);
@@ -483,6 +487,8 @@ impl Gpu {
             .host_query_reset(supported_v12.host_query_reset == vk::TRUE)
             .shader_buffer_int64_atomics(true);
         let primitive_id_in_fragment = supported.features.geometry_shader == vk::TRUE;
+        let draw_parameters = supported_v11.shader_draw_parameters == vk::TRUE;
+        let mut v11 = vk::PhysicalDeviceVulkan11Features::builder().shader_draw_parameters(draw_parameters);
         let multi_draw_indirect = !options.single_draws
             && supported.features.multi_draw_indirect == vk::TRUE
             && supported.features.draw_indirect_first_instance == vk::TRUE;
@@ -497,7 +503,8 @@ impl Gpu {
             .features(base)
             .push_next(&mut rq)
             .push_next(&mut asf)
-            .push_next(&mut v12);
+            .push_next(&mut v12)
+            .push_next(&mut v11);
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::builder()
             .queue_family_index(queue_family)
@@ -557,6 +564,7 @@ impl Gpu {
             validation,
             primitive_id_in_fragment,
             multi_draw_indirect,
+            draw_parameters,
         };
         log::info!(
             "Vulkan device: {} ({}, {}), validation {}",

@@ -293,15 +293,13 @@ gpu_structs! {
     }
 
     /// One visible instance drawn by the rasterised primary visibility (raster.rs): its object-to-world
-    /// transform as three rows (`world = row_i · (p, 1)`), its scene instance id and the geometry its draw
-    /// covers (a mesh of several geometries has one row per geometry, so that no state changes between draws).
+    /// transform as three rows (`world = row_i · (p, 1)`) and its scene instance id.
     struct RasterInstance {
         row0: [f32; 4],
         row1: [f32; 4],
         row2: [f32; 4],
         instance: u32,
-        geometry: u32,
-        _pad: [u32; 2],
+        _pad: [u32; 3],
     }
 
     /// Push constants of the visibility draw (visibility.vert): the camera, in clip form, and the tables.
@@ -326,6 +324,12 @@ gpu_structs! {
         jitter_ndc: [f32; 2],
         /// Address of the frame's `FrameGlobals` (the section planes clip the draws).
         globals: u64,
+        /// Address of the draws' geometries (u32 per draw, in draw order): a draw's is
+        /// `draw_geometries[first_draw + gl_DrawID]` (gl_DrawID counts the draws of one indirect call).
+        draw_geometries: u64,
+        /// The first draw of the call.
+        first_draw: u32,
+        _pad1: u32,
     }
 
     /// One cell of the world-space hash map (paper §1).

@@ -77,6 +77,7 @@ struct Draw {
 /// The names of `RasterScene`'s host-written tables.
 const INSTANCES: &str = "raster instances";
 const COMMANDS: &str = "raster draw commands";
+const GEOMETRIES: &str = "raster draw geometries";
 
 /// `VkDrawIndexedIndirectCommand`: index count, instance count, first index, vertex offset, first instance.
 type DrawCommand = [u32; 5];
@@ -106,6 +107,9 @@ pub struct RasterScene {
     /// `draws` as `VkDrawIndexedIndirectCommand`s (one indirect call per run on devices with
     /// `multiDrawIndirect`: llvmpipe spends ~6.5 µs on each separate draw call, 31 ms of san_francisco's 4,735).
     commands: Buffer,
+    /// Per draw, its geometry (u32), which the vertex stage finds by `first_draw + gl_DrawID`: the instance
+    /// rows stay one per visible instance whatever its mesh's geometry count.
+    draw_geometries: Buffer,
     /// Conservative world bounds of the drawn instances: the far plane of orthographic views.
     bounds: hrtao_scene::Aabb,
 }
@@ -134,6 +138,7 @@ impl RasterScene {
             instances: Self::table::<RasterInstance>(gpu, INSTANCES, 1, vk::BufferUsageFlags::empty())?,
             draws: Vec::new(),
             commands: Self::table::<DrawCommand>(gpu, COMMANDS, 1, vk::BufferUsageFlags::INDIRECT_BUFFER)?,
+            draw_geometries: Self::table::<u32>(gpu, GEOMETRIES, 1, vk::BufferUsageFlags::empty())?,
             bounds: hrtao_scene::Aabb::empty(),
         })
     }
@@ -179,22 +184,19 @@ impl RasterScene {
                 continue;
             }
             let (m, mirrored) = (k % meshes, k >= meshes);
-            // One run of rows per geometry: the row names its geometry, so the draws differ only in their
-            // ranges (no push constants or index-buffer binding between them).
+            let first_instance = table.len() as u32;
+            for &i in ids {
+                let t = scene.instances[i as usize].transform;
+                let row = |r: usize| [t.col(0)[r], t.col(1)[r], t.col(2)[r], t.col(3)[r]];
+                table.push(RasterInstance {
+                    row0: row(0),
+                    row1: row(1),
+                    row2: row(2),
+                    instance: i,
+                    _pad: [0; 3],
+                });
+            }
             for &geometry in &self.mesh_geometries[m] {
-                let first_instance = table.len() as u32;
-                for &i in ids {
-                    let t = scene.instances[i as usize].transform;
-                    let row = |r: usize| [t.col(0)[r], t.col(1)[r], t.col(2)[r], t.col(3)[r]];
-                    table.push(RasterInstance {
-                        row0: row(0),
-                        row1: row(1),
-                        row2: row(2),
-                        instance: i,
-                        geometry: geometry.geometry,
-                        _pad: [0; 2],
-                    });
-                }
                 self.draws.push(Draw {
                     geometry,
                     faces: match (geometry.double_sided, mirrored) {
@@ -209,9 +211,11 @@ impl RasterScene {
         }
         self.draws.sort_by_key(|d| d.faces as u8);
         let commands: Vec<DrawCommand> = self.draws.iter().map(Draw::command).collect();
+        let geometries: Vec<u32> = self.draws.iter().map(|d| d.geometry.geometry).collect();
         self.bounds = scene.bounds_conservative();
         let none = vk::BufferUsageFlags::empty();
         Self::write_table(gpu, &mut self.instances, INSTANCES, &table, none)?;
+        Self::write_table(gpu, &mut self.draw_geometries, GEOMETRIES, &geometries, none)?;
         let indirect = vk::BufferUsageFlags::INDIRECT_BUFFER;
         Self::write_table(gpu, &mut self.commands, COMMANDS, &commands, indirect)
     }
@@ -456,6 +460,12 @@ impl Rasterizer {
                 gpu.info.name
             )));
         }
+        if !gpu.info.draw_parameters {
+            return Err(CoreError::Invalid(format!(
+                "{}: no shaderDrawParameters feature (gl_DrawID), rasterised primary visibility is unavailable",
+                gpu.info.name
+            )));
+        }
         if !depth_features.contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT) {
             return Err(CoreError::Invalid(format!(
                 "{}: no {DEPTH_FORMAT:?} depth attachment, rasterised primary visibility is unavailable",
@@ -567,6 +577,9 @@ impl Rasterizer {
                 ]
             },
             globals: globals_address,
+            draw_geometries: scene.draw_geometries.address,
+            first_draw: 0,
+            _pad1: 0,
         };
         let key = DrawKey {
             size: (w, h),
@@ -661,6 +674,17 @@ impl Rasterizer {
                 );
                 d.cmd_bind_index_buffer(cmd, scene.index_buffer, 0, vk::IndexType::UINT32);
                 let stride = std::mem::size_of::<DrawCommand>();
+                // Each call names its first draw: the vertex stage finds a draw's geometry at first_draw +
+                // gl_DrawID (which counts the draws of one indirect call, and is 0 for a direct draw).
+                let first_draw = |draw: usize| {
+                    d.cmd_push_constants(
+                        cmd,
+                        self.layout,
+                        vk::ShaderStageFlags::VERTEX,
+                        std::mem::offset_of!(RasterPush, first_draw) as u32,
+                        bytemuck::bytes_of(&(draw as u32)),
+                    )
+                };
                 for (faces, run) in scene.runs(cull) {
                     d.cmd_bind_pipeline(
                         cmd,
@@ -671,6 +695,7 @@ impl Rasterizer {
                         // maxDrawIndirectCount is at least 2^16 - 1 where multiDrawIndirect is supported.
                         for start in run.clone().step_by(0xffff) {
                             let count = (run.end - start).min(0xffff);
+                            first_draw(start);
                             d.cmd_draw_indexed_indirect(
                                 cmd,
                                 scene.commands.raw,
@@ -680,8 +705,9 @@ impl Rasterizer {
                             );
                         }
                     } else {
-                        for c in &scene.draws[run] {
+                        for (k, c) in scene.draws[run.clone()].iter().enumerate() {
                             let [count, instances, first_index, _, first_instance] = c.command();
+                            first_draw(run.start + k);
                             d.cmd_draw_indexed(cmd, count, instances, first_index, 0, first_instance);
                         }
                     }

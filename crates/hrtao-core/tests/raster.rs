@@ -165,8 +165,9 @@ fn culled_back_faces_keep_the_bundled_scene_identical() {
 }
 
 /// Devices with `multiDrawIndirect` draw the visibility with one indirect call per pipeline, the others with
-/// one call per draw: both give the same G-buffer, bit for bit, with back faces culled (two handedness runs)
-/// and with a section plane (one run over every draw).
+/// one call per draw: both give the same G-buffer, bit for bit, with back faces culled (three runs: each
+/// handedness, and double-sided geometry) and with a section plane (one run over every draw). Each draw finds
+/// its geometry by gl_DrawID in either.
 #[test]
 fn indirect_and_single_draws_give_the_same_visibility() {
     let indirect = gpu();
@@ -178,9 +179,21 @@ fn indirect_and_single_draws_give_the_same_visibility() {
     })
     .unwrap();
     assert!(!single.info.multi_draw_indirect);
-    println!("multiDrawIndirect: {}", indirect.info.multi_draw_indirect);
+    assert!(
+        indirect.info.multi_draw_indirect,
+        "the device has no multiDrawIndirect: nothing to compare"
+    );
     let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let mut scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
+    // A mesh of several geometries, one of them double-sided: draws of one mesh in two runs, each finding its
+    // own geometry (the bundled meshes have one primitive each).
+    let extra = scene.meshes[1].primitives.clone();
+    scene.meshes[0]
+        .primitives
+        .extend(extra.into_iter().map(|p| hrtao_scene::Primitive {
+            double_sided: true,
+            ..p
+        }));
     // Half the instances mirrored: fronts of those wind clockwise, a second culling pipeline.
     for inst in scene.instances.iter_mut().step_by(2) {
         let c = inst.transform.w_axis.x;
