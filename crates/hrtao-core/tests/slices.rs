@@ -666,12 +666,6 @@ fn rasterised_slices_redraw_after_an_edit_mid_round() {
     assert_clean(&gpu);
 }
 
-/// The viewer draws a round of rasterised slices' visibility in a frame of its own before the round's first
-/// slice (`Renderer::record_visibility`), so that input waits for the draw or the slice, not both. The frame
-/// leaves the output with the last image, is needed once a round (each round has its own jitter; the middle of
-/// a round needs none), and the slices that follow resolve the G-buffer drawn without it, drawing no
-/// triangles. Catches a draw with the wrong camera or round's jitter (the slice would draw again), a frame that
-/// advances the slices or touches the output, and a draw for frames that start no round.
 /// The visibility draws the renderer's last frame recorded.
 fn raster_draws(r: &Headless) -> usize {
     r.last_frame_events()
@@ -688,6 +682,12 @@ fn raster_draws(r: &Headless) -> usize {
         .count()
 }
 
+/// The viewer draws a round of rasterised slices' visibility in a frame of its own before the round's first
+/// slice (`Renderer::record_visibility`), so that input waits for the draw or the slice, not both. The frame
+/// leaves the output with the last image, is needed once a round (each round has its own jitter; the middle of
+/// a round needs none), and the slices that follow resolve the G-buffer drawn without it, drawing no
+/// triangles. Catches a draw with the wrong camera or round's jitter (the slice would draw again), a frame that
+/// advances the slices or touches the output, and a draw for frames that start no round.
 #[test]
 fn a_round_of_slices_can_start_with_its_visibility_drawn_ahead() {
     let gpu = gpu();
