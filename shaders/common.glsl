@@ -181,23 +181,4 @@ bool ray_unoccluded(vec3 p, vec3 dir, float tmax) {
     return segment_first_hit(p, dir, tmin, tmax) < 0.0;
 }
 
-// `ray_escape` results: the ray hits within the near radius, hits beyond it (within tmax), or hits nothing.
-const uint RAY_NEAR_HIT = 0u;
-const uint RAY_FAR_HIT = 1u;
-const uint RAY_OPEN = 2u;
-
-// As ray_unoccluded, telling also whether the ray hits within r_near (near-field control variate, ours): the
-// paper's first-hit query over [0, tmax]; only when the hit it found lies beyond r_near, a second first-hit
-// query over [0, r_near]. An open ray and a ray whose first found hit is near cost what they cost the paper.
-// (On lavapipe a closest-hit query instead cost rod's navigation frames 2.6x the paper's ray update, a
-// near-then-far pair of first-hit queries 1.6x, with the same rays.)
-uint ray_escape(vec3 p, vec3 dir, float r_near, float tmax) {
-    float tmin = 0.0;
-    if (!section_clip(p, dir, tmin, tmax)) return RAY_OPEN;
-    float t = segment_first_hit(p, dir, tmin, tmax);
-    if (t < 0.0) return RAY_OPEN;
-    if (t <= r_near) return RAY_NEAR_HIT;
-    return segment_first_hit(p, dir, tmin, min(r_near, tmax)) >= 0.0 ? RAY_NEAR_HIT : RAY_FAR_HIT;
-}
-
 #endif

@@ -4,13 +4,14 @@
 // At that LOD the value is reconstructed by trilinear interpolation of the 8 cells around the pixel (cells
 // absent or empty drop out and the weights renormalise), so the cell grid does not show as blocks and the
 // AO is centred on the pixel rather than on its cell.
-// Ours (near_weight > 0): the near-field control variate corrects the cell estimate with the pixel's own rays.
+// Ours (near_field.glsl): the near-field control variate corrects the cell estimate with the pixel's own rays.
 // Writes into the buffer the filter's ping-pong starts from, and queues the pixels the filter runs on
 // (filter_plan.glsl, `store_resolved`).
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
 #include "pool.glsl"
+#include "near_field.glsl"
 #include "queue_args.glsl"
 
 // Trilinear interpolation at level `lod` of the 8 cells around `position` (cells absent or empty drop out):
@@ -92,29 +93,13 @@ void resolve_pixel() {
             uint own = pc.cells[best];
             float own_samples = float(cells.v[own].samples);
             ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
-            // Near-field control variate (ours, docs/algorithm.md): the pixel's own near-open fraction minus
-            // its cells' moves the estimate toward the pixel's contact shadow, which the cells average away.
-            // The residual r is shrunk against the binomial noise v of the pixel's few rays (Wiener:
-            // P/(P+v)), with the power P of the contact estimated from the residual r_q of the rays pooled
-            // over the pixel's same-surface 3x3 neighbours (pool.glsl), or from r r_q where the pixel and its
-            // neighbours agree: a contact shadow spans several pixels, a pixel whose few rays were unlucky
-            // does not (P = r^2, the pixel's own, speckled the first frames of a view).
-            // Not in still-camera refinement frames: there the pixel's own rays enter the composite directly,
-            // and a correction from each frame's few rays would only add flicker.
+            // Near-field control variate (ours, near_field.glsl): the pixel's own rays against its cells'.
             PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
-            // The pixel classified rays this frame (FLAG_NEAR_FIELD) and so did its cells.
             uint own_near = cells.v[own].near_traced;
             bool cells_near = wsum > 0.0 ? near_sum >= 0.0 : own_near > 0u;
-            if (g.near_weight > 0.0 && pr.near_traced > 0u && cells_near && !refine_frame()) {
-                float n = float(pr.near_traced);
-                float cell_near = wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / float(own_near);
-                float r = float(pr.near_open) / n - cell_near;
-                float v = max(cell_near * (1.0 - cell_near), 0.5 / n) / n;
-                vec3 pool = pooled_rays(pix, px);   // holds the pixel's own rays: pool.z >= n
-                float rq = pool.y / pool.z - cell_near;
-                float power = max(rq * rq, r * rq);
-                ao += g.near_weight * r * power / (power + v);
-            }
+            float cell_near = !cells_near ? 0.0
+                : wsum > 0.0 ? near_sum / wsum : float(cells.v[own].near_open) / float(own_near);
+            ao += near_field_correction(pix, px, pr, cells_near, cell_near);
             float footprint = exp2(float(lod)) / max(filter_step_size(px.t), 1e-30);   // cell width in steps
             uint own_rays = uint(own_samples);
             plan = make_plan(planned_iterations(footprint, own_rays, iterations), own_rays);

@@ -32,8 +32,9 @@ gpu_consts! {
     /// Some region epoch is not 0 (local edits, ours): cell keys read the region table (hash_map.glsl); without
     /// it every epoch is 0 and the keys are the paper's.
     FLAG_REGION_EPOCHS: u32 = 64;
-    /// The ray-tracing update classifies its rays for the near-field control variate (ours: `near_weight` > 0,
-    /// in frames of a young map, `Renderer::young_map`); other frames trace the paper's first-hit queries.
+    /// The near-field control variate runs (ours, near_field.glsl: `near_field` on, in frames of a young map,
+    /// `Renderer::young_map`): the update classifies its rays and the resolve corrects by them; other frames
+    /// trace the paper's first-hit queries.
     FLAG_NEAR_FIELD: u32 = 128;
     /// The map is young this frame (`Renderer::young_map`). A moving frame without it is a navigation frame
     /// (`navigation_frame` in common.glsl), which resolves and filters as the paper does.
@@ -87,8 +88,8 @@ gpu_consts! {
     /// Pixels whose target cell still takes rays but that a fractional budget (`trace_fraction`) left out of
     /// this frame's ray queue: with the queued ones, the pixels on young cells.
     STAT_UNPICKED_PIXELS: u32 = 9;
-    /// Contact detail (ours, detail.comp): four words holding two i64 sums over the pixels it corrects, in
-    /// 1/DETAIL_SUM_SCALE units: Σ t (y - a) d and Σ t d², t the pixel's rays, y their open fraction, a its AO
+    /// Contact detail (ours, contact_detail.glsl): four words holding two i64 sums over the pixels it corrects,
+    /// in 1/DETAIL_SUM_SCALE units: Σ t (y - a) d and Σ t d², t the pixel's rays, y their open fraction, a its AO
     /// and d its obscurance detail; their ratio is the frame's fitted detail gain.
     STAT_DETAIL_SUMS: u32 = 10;
     DETAIL_SUM_SCALE: u32 = 0x0010_0000;
@@ -212,36 +213,26 @@ gpu_structs! {
         /// Still-camera refinement (ours): the shown AO moves this fraction of the way to the new estimate
         /// each still frame (1 = no smoothing).
         still_smoothing: f32,
-        /// Pooled residual control variate (ours, docs/algorithm.md): the Wiener factor λ of the correction by
-        /// the own rays of the pixel and its same-surface 3x3 neighbours (0 = off).
-        pooled_residual: f32,
+        /// Still-camera refinement (ours): the own rays per pixel of a final still image (`still_samples`), which
+        /// cap the own-ray residual's weight on the way there (composite.comp `monotone_weight`).
+        still_samples: f32,
         /// Per pixel, two slots (by still-frame parity) of (residual, rays, shown AO, prior): the pixel's own
         /// mean minus its mean cell estimate over its own rays, written by the composite each frame and pooled
         /// over neighbours in the next, the AO it showed and its mean cell estimate (composite.comp); then a
         /// third slot, the first two rounds of slices' (AO, RGBA8, AO shown, 0) (`held_round`).
         bias_evidence: u64,
-        /// Near-field control variate (ours, docs/algorithm.md): the weight β of the pixel's own near-open
-        /// fraction minus its cells' (0 = the paper's cell estimate alone).
-        near_weight: f32,
-        /// The near radius r_n as a fraction of the AO radius.
-        near_fraction: f32,
         /// Fractional ray budget (ours): outside refinement frames, a pixel whose cell takes rays traces this
         /// frame with this probability (1 = every such pixel, as the paper), see ray_target.glsl.
         trace_fraction: f32,
         /// eq. (5): the offset of the normal bins in bins, floor(n s_nd + offset) (`MapSettings::offset_bins`).
         normal_offset: f32,
-        /// Contact detail (ours, docs/algorithm.md): the weight of the fitted detail gain (0 = off).
-        contact_detail: f32,
-        /// Still-camera refinement (ours): the own rays per pixel of a final still image (`still_samples`), which
-        /// cap the own-ray residual's weight on the way there (composite.comp `monotone_weight`).
-        still_samples: f32,
         /// Per pixel, from the resolve to the filter and composite (filter_plan.glsl): the à-trous iterations the
         /// pixel takes and the rays of the cell its AO came from.
         filter_plan: u64,
         /// Per pixel, from the resolve to the filter's taps (filter_plan.glsl): position and packed normal in
         /// 16 bytes (a tap then reads a quarter of a cache line, not a 48-byte G-buffer sample).
         filter_guide: u64,
-        /// Per pixel, the screen-space obscurance of its G-buffer neighbourhood (detail.comp).
+        /// Per pixel, the screen-space obscurance of its G-buffer neighbourhood (contact_detail.glsl).
         obscurance: u64,
         /// Slices (ours, `FrameDesc::slices`): this frame draws every `lattice`-th pixel in x and y from
         /// (`lattice_x`, `lattice_y`) (1, 0, 0: the whole image); passes that read this frame's neighbours step

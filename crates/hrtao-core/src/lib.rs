@@ -10,6 +10,7 @@
 //! - `tile`: a window of a larger image (large screenshots rendered tile by tile).
 //! - `camera`, `settings`, `imageio`, `headless`: inputs and outputs.
 pub mod accel;
+pub mod additions;
 pub mod barrier;
 pub mod buffer;
 pub mod camera;

@@ -7,6 +7,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::SceneGpu;
+use crate::additions;
 use crate::barrier::{Event, Stage, Use};
 use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::{Camera, Projection};
@@ -528,11 +529,17 @@ impl Renderer {
         }
         if self.map.young(self.frame_index) {
             g.flags |= gpu::FLAG_YOUNG_MAP;
-            if s.young.near_field {
-                g.flags |= gpu::FLAG_NEAR_FIELD;
-            }
         }
+        g.flags |= additions::near_field::flags(&self.young_frame(frame));
         g
+    }
+
+    /// What the young map's additions (`crate::additions`) need to know of `frame`.
+    fn young_frame<'a>(&self, frame: &FrameDesc<'a>) -> additions::YoungFrame<'a> {
+        additions::YoungFrame {
+            settings: frame.settings,
+            young: frame.settings.display.mode.uses_hash() && self.map.young(self.frame_index),
+        }
     }
 
     /// The sub-pixel offset of a still image's frame `still_index` (a round of slices: all its slices): R2 points
@@ -593,8 +600,7 @@ impl Renderer {
         }
         let mode = settings.display.mode;
         let cell_levels = self.map.cell_levels(self.pixel_count() as u32, self.frame_index);
-        let young = self.map.young(self.frame_index);
-        let adaptive_split = settings.young.adaptive_rays && young;
+        let young_frame = self.young_frame(frame);
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         match (primary, &mut self.raster) {
             (Primary::Raster, Some(raster)) => {
@@ -626,11 +632,7 @@ impl Renderer {
             }
             _ => rec.dispatch(Pass::Primary, gw, gh, [0; 4]),
         }
-        let contact_detail = mode.uses_hash() && settings.young.contact_detail && young;
-        if contact_detail {
-            // Contact detail's obscurance reads only the G-buffer: beside the cell finder, after one barrier.
-            rec.dispatch(Pass::Obscurance, gw, gh, [0; 4]);
-        }
+        additions::contact_detail::record_obscurance(&mut rec, &young_frame, gw, gh);
         if mode == Mode::Rtao {
             rec.dispatch(Pass::Rtao, gw, gh, [0; 4]);
         } else if mode.uses_hash() {
@@ -641,13 +643,9 @@ impl Renderer {
             }
             let rays = gpu::RAY_ARGS_OFFSET;
             let args = self.dispatch_args.raw;
-            if adaptive_split {
-                // Adaptive sampling (ours): a quarter of the budget, the weights, the rest shared by them.
-                for phase in 1..=3 {
-                    rec.dispatch_indirect(Pass::AoUpdate, args, rays, [phase, 0, 0, 0]);
-                }
-            } else {
-                rec.dispatch_indirect(Pass::AoUpdate, args, rays, [0; 4]);
+            // One dispatch, or three with adaptive sampling (ours) in a young map.
+            for &phase in additions::adaptive_rays::update_phases(&young_frame) {
+                rec.dispatch_indirect(Pass::AoUpdate, args, rays, [phase, 0, 0, 0]);
             }
             rec.dispatch(Pass::Resolve, gw, gh, [0; 4]);
             let iterations = settings.filter.filter_iterations;
@@ -660,15 +658,8 @@ impl Renderer {
                     rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
                 }
             }
-            // A young map's corrections (ours, detail.comp) over the pixels that traced into their cells (the
-            // ray queue): the pooled residual, then the contact detail's gain fitted to this frame's rays (from
-            // the obscurance found after primary visibility) in phase 1, and its correction in phase 2.
-            let residual = settings.young.pooled_residual && young;
-            let corrections = residual as u32 | (contact_detail as u32) << 1;
-            let phases = if contact_detail { 2 } else { residual as u32 };
-            for phase in 1..=phases {
-                rec.dispatch_indirect(Pass::Detail, args, rays, [phase, corrections, 0, 0]);
-            }
+            // A young map's corrections (ours): the pooled residual, the contact detail.
+            additions::record_corrections(&mut rec, &young_frame, args);
         }
         // The frame's counters, once, for `finish_frame`: composite.comp counts nothing (its declaration
         // writes no `Stats`), so the copy is recorded before it and shares its barrier.

@@ -80,9 +80,9 @@ fn defaults() -> AoSettings {
 
 #[test]
 fn every_hazard_has_a_barrier_and_independent_passes_share_one() {
-    // With our additions, obscurance.comp shares the cell finder's barrier and the statistics copy composite's:
-    // fewer barriers than dispatches, the end-of-frame one included (a full barrier followed every dispatch
-    // before, and the host-read barrier the frame).
+    // With our additions, contact_detail.comp (its obscurance) shares the cell finder's barrier and the
+    // statistics copy composite's: fewer barriers than dispatches, the end-of-frame one included (a full barrier
+    // followed every dispatch before, and the host-read barrier the frame).
     for (dispatches, barriers) in young_and_navigation(defaults(), Primary::RayQuery) {
         assert!(
             barriers < dispatches,

@@ -1,4 +1,4 @@
-//! The pooled residual control variate (ours, `AoSettings::pooled_residual`, shaders/residual.glsl): after the
+//! The pooled residual control variate (ours, `AoSettings::pooled_residual`, shaders/pooled_residual.glsl): after the
 //! filter, a young cell's pixel is corrected by the rays its 3x3 same-plane neighbours traced this frame.
 mod common;
 use common::*;

@@ -25,7 +25,7 @@ pub use filter::{FilterSettings, FILTER_SIGMA};
 pub use map::{MapSettings, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};
 pub use mode::Mode;
 pub use still::{frame_smoothing, StillSettings, PRIOR_RAYS, RESIDUAL_SIGMA, STILL_SMOOTHING};
-pub use young::{YoungMapSettings, CONTACT_DETAIL_GAIN, NEAR_FRACTION, NEAR_WEIGHT, POOLED_RESIDUAL_LAMBDA};
+pub use young::YoungMapSettings;
 
 /// What a change of a setting invalidates (`AoSettings::invalidates`), from least to most. A frame's change as a
 /// whole (camera, scene, settings) is decided in `frame::Change`.
@@ -291,12 +291,12 @@ impl AoSettings {
         self.display.validate()
     }
 
-    /// Writes the settings' share of the frame's GPU parameters, group by group.
+    /// Writes the settings' share of the frame's GPU parameters, group by group (the young map's additions have
+    /// their flag and push constants from `crate::additions`, their constants in their shaders).
     pub fn write_gpu(&self, g: &mut FrameGlobals) {
         self.map.write_gpu(g);
         self.filter.write_gpu(g);
         self.still.write_gpu(g);
-        self.young.write_gpu(g);
         self.display.write_gpu(g);
     }
 }

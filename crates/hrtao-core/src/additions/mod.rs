@@ -1,0 +1,89 @@
+//! Our additions that run in the frames of a young map (docs/algorithm.md, `settings::YoungMapSettings`): while
+//! cells hold few rays they bring back the detail finer than the cells and cut their noise. Each is one file
+//! here (when it runs and what the frame records for it) and one shader file (its GPU code and constants):
+//!
+//! - `adaptive_rays` (adaptive_rays.glsl): the ray-tracing update's budget in three dispatches;
+//! - `near_field` (near_field.glsl): the update classifies its rays, the resolve corrects by them;
+//! - `pooled_residual` (pooled_residual.glsl) and `contact_detail` (contact_detail.glsl, contact_detail.comp):
+//!   corrections after the filter, in the young map's corrections pass (corrections.comp), which
+//!   `record_corrections` records for the corrections on.
+//!
+//! Each one's switch is a `bool` of `YoungMapSettings` (off = the paper). docs/architecture.md "Where an
+//! addition goes" lists what adding or deleting one touches.
+use ash::vk;
+
+use crate::gpu;
+use crate::pass::{Pass, Recorder};
+use crate::settings::AoSettings;
+
+pub mod adaptive_rays;
+pub mod contact_detail;
+pub mod near_field;
+pub mod pooled_residual;
+
+/// What the young map's additions need to know of a frame.
+#[derive(Clone, Copy)]
+pub struct YoungFrame<'a> {
+    pub settings: &'a AoSettings,
+    /// The frame renders the hash map's AO (not per-pixel RTAO, nor no AO) and the map is young
+    /// (`WorldHashMap::young`).
+    pub young: bool,
+}
+
+/// A correction of the corrections pass (corrections.comp): its bit of the pass's `push.y` and the phases it
+/// needs (1 to 2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Correction {
+    pub bit: u32,
+    pub phases: u32,
+}
+
+/// The corrections on in `frame`, folded into the pass's push constants: (bits, phases).
+fn corrections(frame: &YoungFrame) -> (u32, u32) {
+    [
+        pooled_residual::correction(frame),
+        contact_detail::correction(frame),
+    ]
+    .into_iter()
+    .flatten()
+    .fold((0, 0), |(bits, phases), c| (bits | c.bit, phases.max(c.phases)))
+}
+
+/// Records the corrections pass over the pixels that traced rays into their cells this frame (the ray queue,
+/// an indirect dispatch sized at `RAY_ARGS_OFFSET` of `args`), once per phase the corrections on need.
+pub fn record_corrections(rec: &mut Recorder, frame: &YoungFrame, args: vk::Buffer) {
+    let (bits, phases) = corrections(frame);
+    for phase in 1..=phases {
+        rec.dispatch_indirect(Pass::Corrections, args, gpu::RAY_ARGS_OFFSET, [phase, bits, 0, 0]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame_of(settings: &AoSettings, young: bool) -> (u32, u32) {
+        corrections(&YoungFrame { settings, young })
+    }
+
+    #[test]
+    fn the_corrections_pass_runs_the_phases_of_the_corrections_on() {
+        let mut s = AoSettings::default();
+        assert_eq!(
+            frame_of(&s, true),
+            (0b11, 2),
+            "both: the pooled residual, then the detail's two phases"
+        );
+        assert_eq!(
+            frame_of(&s, false),
+            (0, 0),
+            "a map that is not young corrects nothing"
+        );
+        s.young.contact_detail = false;
+        assert_eq!(frame_of(&s, true), (0b01, 1));
+        s.young.pooled_residual = false;
+        s.young.contact_detail = true;
+        assert_eq!(frame_of(&s, true), (0b10, 2));
+        assert_eq!(frame_of(&s.paper(), true), (0, 0), "none in the paper's mode");
+    }
+}
