@@ -17,69 +17,174 @@ use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::WORKGROUP_SIZE;
 use crate::timer::GpuTimer;
+use Resource::*;
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 
-/// Every compute pass of the renderer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Pass {
-    Primary,
-    GbufferFromVis,
-    Rtao,
-    CellFinder,
-    AoUpdate,
-    Resolve,
-    Filter,
-    ContactDetail,
-    Corrections,
-    Composite,
-    HashTest,
+/// A compute pass, declared once where it belongs (the paper's passes below, each addition's in its own file of
+/// `crate::additions`): its shader, the timing section it belongs to (the paper's Table 2 columns, plus ours)
+/// and the buffers its shader reads and writes (`tests/pass_declarations.rs` checks them against the shader;
+/// atomics count as reads and writes, and an indirect dispatch also reads `DispatchArgs`, which the recorder
+/// adds). The barriers of a frame and the pass table of docs/architecture.md follow from these declarations.
+#[derive(Clone, Copy, Debug)]
+pub struct Pass {
+    shader: &'static str,
+    section: &'static str,
+    reads: &'static [Resource],
+    writes: &'static [Resource],
+}
+
+impl PartialEq for Pass {
+    fn eq(&self, other: &Pass) -> bool {
+        self.shader == other.shader
+    }
+}
+
+impl Eq for Pass {}
+
+impl std::hash::Hash for Pass {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.shader.hash(state)
+    }
 }
 
 impl Pass {
+    /// The pass of `shaders/<shader>.comp`.
+    pub const fn new(
+        shader: &'static str,
+        section: &'static str,
+        reads: &'static [Resource],
+        writes: &'static [Resource],
+    ) -> Pass {
+        Pass {
+            shader,
+            section,
+            reads,
+            writes,
+        }
+    }
+
+    // One thread of primary visibility also resets the frame's counters (clear.glsl).
+    pub const PRIMARY: Pass = Pass::new(
+        "primary",
+        "primary visibility",
+        &[Instances, Geometries],
+        &[GBuffer, Stats, DispatchArgs],
+    );
+    pub const GBUFFER_FROM_VIS: Pass = Pass::new(
+        "gbuffer_from_vis",
+        "primary visibility",
+        &[Visibility, Geometries],
+        &[GBuffer, Stats, DispatchArgs],
+    );
+    pub const RTAO: Pass = Pass::new("rtao", "per-pixel RTAO", &[GBuffer, Stats], &[PixelRays, Stats]);
+    pub const CELL_FINDER: Pass = Pass::new(
+        "cell_finder",
+        "cell finder",
+        &[GBuffer, PixelCells, Regions, HashCells, Stats, DispatchArgs],
+        &[HashCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
+    );
+    pub const AO_UPDATE: Pass = Pass::new(
+        "ao_update",
+        "ray-tracing update",
+        &[
+            Stats, RayQueue, GBuffer, PixelCells, HashCells, FilterTmp, PixelRays,
+        ],
+        &[HashCells, FilterTmp, PixelRays, Stats],
+    );
+    pub const RESOLVE: Pass = Pass::new(
+        "resolve",
+        "per-pixel AO",
+        &[
+            GBuffer,
+            PixelCells,
+            HashCells,
+            PixelRays,
+            Regions,
+            Stats,
+            DispatchArgs,
+        ],
+        &[
+            FilterGuide,
+            SlicePrior,
+            LodUsed,
+            FilterPlan,
+            Ao,
+            FilterTmp,
+            FilterQueue,
+            Stats,
+            DispatchArgs,
+        ],
+    );
+    pub const FILTER: Pass = Pass::new(
+        "filter",
+        "filtering",
+        &[
+            Stats,
+            FilterQueue,
+            FilterPlan,
+            GBuffer,
+            LodUsed,
+            FilterGuide,
+            Ao,
+            FilterTmp,
+            SlicePrior,
+            Regions,
+        ],
+        &[Ao, FilterTmp],
+    );
+    pub const COMPOSITE: Pass = Pass::new(
+        "composite",
+        "composite",
+        &[
+            PixelCells,
+            LodUsed,
+            HashCells,
+            Instances,
+            GBuffer,
+            BiasEvidence,
+            Ao,
+            PixelRays,
+            Accum,
+            Regions,
+        ],
+        &[BiasEvidence, Ao, Accum, Output],
+    );
+    pub const HASH_TEST: Pass = Pass::new("hash_test", "hash test", &[HashTestCases], &[HashTestCases]);
+
+    /// The pass list: every compute pass, in frame order (the pass table's rows).
     pub const ALL: [Pass; 11] = [
-        Pass::Primary,
-        Pass::GbufferFromVis,
-        Pass::ContactDetail,
-        Pass::Rtao,
-        Pass::CellFinder,
-        Pass::AoUpdate,
-        Pass::Resolve,
-        Pass::Filter,
-        Pass::Corrections,
-        Pass::Composite,
-        Pass::HashTest,
+        Pass::PRIMARY,
+        Pass::GBUFFER_FROM_VIS,
+        crate::additions::contact_detail::OBSCURANCE,
+        Pass::RTAO,
+        Pass::CELL_FINDER,
+        Pass::AO_UPDATE,
+        Pass::RESOLVE,
+        Pass::FILTER,
+        crate::additions::CORRECTIONS,
+        Pass::COMPOSITE,
+        Pass::HASH_TEST,
     ];
 
     /// The shader file (`shaders/<name>.comp`).
     pub fn shader(self) -> &'static str {
-        match self {
-            Pass::Primary => "primary",
-            Pass::GbufferFromVis => "gbuffer_from_vis",
-            Pass::Rtao => "rtao",
-            Pass::CellFinder => "cell_finder",
-            Pass::AoUpdate => "ao_update",
-            Pass::Resolve => "resolve",
-            Pass::Filter => "filter",
-            Pass::ContactDetail => "contact_detail",
-            Pass::Corrections => "corrections",
-            Pass::Composite => "composite",
-            Pass::HashTest => "hash_test",
-        }
+        self.shader
     }
 
-    /// The timing section it belongs to (the paper's Table 2 columns, plus ours).
+    /// The timing section it belongs to.
     pub fn section(self) -> &'static str {
-        match self {
-            Pass::Primary | Pass::GbufferFromVis => "primary visibility",
-            Pass::Rtao => "per-pixel RTAO",
-            Pass::CellFinder => "cell finder",
-            Pass::AoUpdate => "ray-tracing update",
-            Pass::Resolve | Pass::ContactDetail | Pass::Corrections => "per-pixel AO",
-            Pass::Filter => "filtering",
-            Pass::Composite => "composite",
-            Pass::HashTest => "hash test",
-        }
+        self.section
+    }
+
+    /// The buffers its shader reads.
+    pub fn reads(self) -> &'static [Resource] {
+        self.reads
+    }
+
+    /// The buffers its shader writes.
+    pub fn writes(self) -> &'static [Resource] {
+        self.writes
     }
 }
 
@@ -205,87 +310,6 @@ impl Resource {
     }
 }
 
-impl Pass {
-    /// The buffers its shader reads (`tests/pass_declarations.rs` checks them against the shader). An
-    /// indirect dispatch also reads `DispatchArgs` (the recorder adds it).
-    pub fn reads(self) -> &'static [Resource] {
-        use Resource::*;
-        match self {
-            Pass::Primary => &[Instances, Geometries],
-            Pass::GbufferFromVis => &[Visibility, Geometries],
-            Pass::Rtao => &[GBuffer, Stats],
-            Pass::CellFinder => &[GBuffer, PixelCells, Regions, HashCells, Stats, DispatchArgs],
-            Pass::AoUpdate => &[
-                Stats, RayQueue, GBuffer, PixelCells, HashCells, FilterTmp, PixelRays,
-            ],
-            Pass::Resolve => &[
-                GBuffer,
-                PixelCells,
-                HashCells,
-                PixelRays,
-                Regions,
-                Stats,
-                DispatchArgs,
-            ],
-            Pass::Filter => &[
-                Stats,
-                FilterQueue,
-                FilterPlan,
-                GBuffer,
-                LodUsed,
-                FilterGuide,
-                Ao,
-                FilterTmp,
-                SlicePrior,
-                Regions,
-            ],
-            Pass::ContactDetail => &[GBuffer],
-            Pass::Corrections => &[Stats, RayQueue, FilterPlan, GBuffer, PixelRays, Obscurance, Ao],
-            Pass::Composite => &[
-                PixelCells,
-                LodUsed,
-                HashCells,
-                Instances,
-                GBuffer,
-                BiasEvidence,
-                Ao,
-                PixelRays,
-                Accum,
-                Regions,
-            ],
-            Pass::HashTest => &[HashTestCases],
-        }
-    }
-
-    /// The buffers its shader writes (atomics count as reads and writes).
-    pub fn writes(self) -> &'static [Resource] {
-        use Resource::*;
-        match self {
-            // One thread also resets the frame's counters (clear.glsl).
-            Pass::Primary | Pass::GbufferFromVis => &[GBuffer, Stats, DispatchArgs],
-            Pass::Rtao => &[PixelRays, Stats],
-            Pass::CellFinder => &[HashCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
-            Pass::AoUpdate => &[HashCells, FilterTmp, PixelRays, Stats],
-            Pass::Resolve => &[
-                FilterGuide,
-                SlicePrior,
-                LodUsed,
-                FilterPlan,
-                Ao,
-                FilterTmp,
-                FilterQueue,
-                Stats,
-                DispatchArgs,
-            ],
-            Pass::Filter => &[Ao, FilterTmp],
-            Pass::ContactDetail => &[Obscurance],
-            Pass::Corrections => &[Ao, Stats],
-            Pass::Composite => &[BiasEvidence, Ao, Accum, Output],
-            Pass::HashTest => &[HashTestCases],
-        }
-    }
-}
-
 /// The pass table of docs/architecture.md, rendered from the declarations: one row per pass in frame order,
 /// with its shader, its Table-2 timing section and the buffers it reads and writes.
 pub fn pass_table_markdown() -> String {
@@ -296,10 +320,10 @@ pub fn pass_table_markdown() -> String {
             rs.iter().map(|r| format!("{r:?}")).collect::<Vec<_>>().join(", ")
         }
     };
-    let mut out = String::from("| pass | shader | section | reads | writes |\n|---|---|---|---|---|\n");
+    let mut out = String::from("| pass | section | reads | writes |\n|---|---|---|---|\n");
     for pass in Pass::ALL {
         out += &format!(
-            "| {pass:?} | `shaders/{}.comp` | {} | {} | {} |\n",
+            "| `shaders/{}.comp` | {} | {} | {} |\n",
             pass.shader(),
             pass.section(),
             list(pass.reads()),

@@ -593,7 +593,7 @@ impl Rasterizer {
         let resolve = |rec: &mut Recorder| {
             if let Some((gw, gh)) = slice_grid {
                 rec.dispatch(
-                    Pass::GbufferFromVis,
+                    Pass::GBUFFER_FROM_VIS,
                     gw,
                     gh,
                     [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
@@ -614,7 +614,7 @@ impl Rasterizer {
         ];
         rec.commands(
             "raster visibility",
-            Some(Pass::Primary.section()),
+            Some(Pass::PRIMARY.section()),
             uses,
             |d, cmd| unsafe {
                 let clear = [

@@ -630,24 +630,24 @@ impl Renderer {
                     Some((gw, gh)),
                 );
             }
-            _ => rec.dispatch(Pass::Primary, gw, gh, [0; 4]),
+            _ => rec.dispatch(Pass::PRIMARY, gw, gh, [0; 4]),
         }
         additions::contact_detail::record_obscurance(&mut rec, &young_frame, gw, gh);
         if mode == Mode::Rtao {
-            rec.dispatch(Pass::Rtao, gw, gh, [0; 4]);
+            rec.dispatch(Pass::RTAO, gw, gh, [0; 4]);
         } else if mode.uses_hash() {
             // The last cell-finder dispatch also queues the pixels whose cell still takes rays, packed densely
             // (the update then runs no idle lanes), and its last work group writes the update's dispatch size.
             for &(top, bottom) in &cell_levels {
-                rec.dispatch(Pass::CellFinder, gw, gh, [top, bottom, 0, 0]);
+                rec.dispatch(Pass::CELL_FINDER, gw, gh, [top, bottom, 0, 0]);
             }
             let rays = gpu::RAY_ARGS_OFFSET;
             let args = self.dispatch_args.raw;
             // One dispatch, or three with adaptive sampling (ours) in a young map.
             for &phase in additions::adaptive_rays::update_phases(&young_frame) {
-                rec.dispatch_indirect(Pass::AoUpdate, args, rays, [phase, 0, 0, 0]);
+                rec.dispatch_indirect(Pass::AO_UPDATE, args, rays, [phase, 0, 0, 0]);
             }
-            rec.dispatch(Pass::Resolve, gw, gh, [0; 4]);
+            rec.dispatch(Pass::RESOLVE, gw, gh, [0; 4]);
             let iterations = settings.filter.filter_iterations;
             if iterations > 0 {
                 // Over the pixels the resolve queued (those whose plan takes an iteration). Ping-pong:
@@ -655,7 +655,7 @@ impl Renderer {
                 // last work group wrote the queue's dispatch size.
                 let filter = gpu::FILTER_ARGS_OFFSET;
                 for i in 0..iterations {
-                    rec.dispatch_indirect(Pass::Filter, args, filter, [i, iterations, 0, 0]);
+                    rec.dispatch_indirect(Pass::FILTER, args, filter, [i, iterations, 0, 0]);
                 }
             }
             // A young map's corrections (ours): the pooled residual, the contact detail.
@@ -681,11 +681,11 @@ impl Renderer {
                 }],
             );
         });
-        rec.dispatch(Pass::Composite, gw, gh, [0; 4]);
+        rec.dispatch(Pass::COMPOSITE, gw, gh, [0; 4]);
         if let Some(show) = new_level {
             // The first round of slices shows the finest grid of pixels drawn so far, interpolated over the
             // whole image (composite.comp `show_level`).
-            rec.dispatch(Pass::Composite, w, h, [1, show.edges as u32, 0, 0]);
+            rec.dispatch(Pass::COMPOSITE, w, h, [1, show.edges as u32, 0, 0]);
         }
         self.last_events = rec.finish();
         Ok(())
@@ -1115,7 +1115,7 @@ impl Renderer {
         let push = [addr as u32, (addr >> 32) as u32, cases.len() as u32, 0];
         self.gpu.run_commands(|cmd| {
             let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
-            rec.dispatch(Pass::HashTest, ROW, globals.height, push);
+            rec.dispatch(Pass::HASH_TEST, ROW, globals.height, push);
             rec.finish();
         })?;
         buf.read(cases.len())

@@ -440,7 +440,7 @@ fn declarations_name_only_shader_accesses() {
 /// The parser finds what it must on known statements (a parser that found nothing would pass the tests above).
 #[test]
 fn parser_finds_reads_writes_and_atomics() {
-    let found = shader_accesses(Pass::Primary);
+    let found = shader_accesses(Pass::PRIMARY);
     for a in [
         (Resource::DispatchArgs, true),
         (Resource::Stats, true),
@@ -452,7 +452,7 @@ fn parser_finds_reads_writes_and_atomics() {
         );
     }
     // ray_target.glsl: `atomicAdd(StatsRef(g.stats).counters[STAT_RAY_QUEUE], 1u)` and the queue write.
-    let found = shader_accesses(Pass::CellFinder);
+    let found = shader_accesses(Pass::CELL_FINDER);
     for a in [
         (Resource::Stats, true),
         (Resource::Stats, false),

@@ -3,7 +3,15 @@
 //! each frame to the rays the pixels traced. Its obscurance pass (contact_detail.comp) runs right after primary
 //! visibility; the corrections pass fits the gain in phase 1 (after the pooled residual) and corrects in phase 2.
 use super::{Correction, YoungFrame};
-use crate::pass::{Pass, Recorder};
+use crate::pass::{Pass, Recorder, Resource};
+
+/// Its obscurance pass: the G-buffer around each pixel → `Obscurance`.
+pub const OBSCURANCE: Pass = Pass::new(
+    "contact_detail",
+    "per-pixel AO",
+    &[Resource::GBuffer],
+    &[Resource::Obscurance],
+);
 
 /// Its bit of the corrections pass (corrections.comp `push.y`).
 const CORRECTION: Correction = Correction { bit: 2, phases: 2 };
@@ -21,6 +29,6 @@ pub fn correction(frame: &YoungFrame) -> Option<Correction> {
 /// G-buffer, so it shares the cell finder's barrier.
 pub fn record_obscurance(rec: &mut Recorder, frame: &YoungFrame, width: u32, height: u32) {
     if on(frame) {
-        rec.dispatch(Pass::ContactDetail, width, height, [0; 4]);
+        rec.dispatch(OBSCURANCE, width, height, [0; 4]);
     }
 }

@@ -13,7 +13,7 @@
 use ash::vk;
 
 use crate::gpu;
-use crate::pass::{Pass, Recorder};
+use crate::pass::{Pass, Recorder, Resource};
 use crate::settings::AoSettings;
 
 pub mod adaptive_rays;
@@ -38,6 +38,24 @@ pub struct Correction {
     pub phases: u32,
 }
 
+/// The young map's corrections pass (corrections.comp), over the ray queue: each correction reads the pixels' own
+/// rays and their neighbours' and writes the AO in place; the contact detail reads its obscurance and sums its
+/// fit into the frame's counters.
+pub const CORRECTIONS: Pass = Pass::new(
+    "corrections",
+    "per-pixel AO",
+    &[
+        Resource::Stats,
+        Resource::RayQueue,
+        Resource::FilterPlan,
+        Resource::GBuffer,
+        Resource::PixelRays,
+        Resource::Obscurance,
+        Resource::Ao,
+    ],
+    &[Resource::Ao, Resource::Stats],
+);
+
 /// The corrections on in `frame`, folded into the pass's push constants: (bits, phases).
 fn corrections(frame: &YoungFrame) -> (u32, u32) {
     [
@@ -54,7 +72,7 @@ fn corrections(frame: &YoungFrame) -> (u32, u32) {
 pub fn record_corrections(rec: &mut Recorder, frame: &YoungFrame, args: vk::Buffer) {
     let (bits, phases) = corrections(frame);
     for phase in 1..=phases {
-        rec.dispatch_indirect(Pass::Corrections, args, gpu::RAY_ARGS_OFFSET, [phase, bits, 0, 0]);
+        rec.dispatch_indirect(CORRECTIONS, args, gpu::RAY_ARGS_OFFSET, [phase, bits, 0, 0]);
     }
 }
 
