@@ -24,8 +24,16 @@ const int OBSCURANCE_RADIUS = 3;
 const float OBSCURANCE_BIAS = 0.05;
 // The weight of the fitted gain (1 = the fit).
 const float CONTACT_DETAIL_GAIN = 1.0;
+// Fixed point of the fit's sums.
+const float DETAIL_SUM_SCALE = 1048576.0;
 
-layout(buffer_reference, scalar, buffer_reference_align = 8) buffer DetailSumsRef { int64_t v[2]; };
+// Its buffer (`additions::contact_detail::Target`), whose address its passes get in push.zw: the fit's two sums
+// over the pixels it corrects, Σ t (y - a) d and Σ t d² in 1/DETAIL_SUM_SCALE units (reset by the obscurance
+// pass), then every pixel's obscurance.
+layout(buffer_reference, scalar, buffer_reference_align = 8) buffer ContactDetailRef {
+    int64_t sums[2];
+    float obscurance[];
+};
 
 // How much of the geometry around pixel `pix` rises above its tangent plane within R.
 float obscurance(uvec2 pix, GPixel px) {
@@ -48,7 +56,7 @@ float obscurance(uvec2 pix, GPixel px) {
 
 // The pixel's obscurance minus the mean of its surface's 3x3 neighbours' (itself included).
 float detail(uvec2 pix, GPixel px) {
-    FloatRef o = FloatRef(g.obscurance);
+    ContactDetailRef cd = ContactDetailRef(packUint2x32(push.zw));
     float tol = POOL_PLANE * step_world_size(px.t);
     float sum = 0.0;
     float n = 0.0;
@@ -58,11 +66,11 @@ float detail(uvec2 pix, GPixel px) {
             if (q.x < 0 || q.y < 0 || q.x >= int(g.width) || q.y >= int(g.height)) continue;
             uint qi = uint(q.y) * g.width + uint(q.x);
             if (!same_surface(px, GBufferRef(g.gbuffer).px[qi], tol)) continue;
-            sum += o.v[qi];
+            sum += cd.obscurance[qi];
             n += 1.0;
         }
     }
-    return o.v[pix.y * g.width + pix.x] - sum / max(n, 1.0);
+    return cd.obscurance[pix.y * g.width + pix.x] - sum / max(n, 1.0);
 }
 
 // The fit's sums over the pixel `index` (AO `a`, after the pooled residual): Σ t (y - a) d and Σ t d².
@@ -72,19 +80,17 @@ void contact_detail_fit(uint index, uvec2 pix, GPixel px, float a) {
     float d = detail(pix, px);
     float t = float(pr.near_traced);
     float y = float(pr.open) / t;
-    float scale = float(DETAIL_SUM_SCALE);
-    DetailSumsRef sums = DetailSumsRef(g.stats + uint64_t(4u * STAT_DETAIL_SUMS));
-    atomicAdd(sums.v[0], int64_t(t * (y - a) * d * scale));
-    atomicAdd(sums.v[1], int64_t(t * d * d * scale));
+    ContactDetailRef cd = ContactDetailRef(packUint2x32(push.zw));
+    atomicAdd(cd.sums[0], int64_t(t * (y - a) * d * DETAIL_SUM_SCALE));
+    atomicAdd(cd.sums[1], int64_t(t * d * d * DETAIL_SUM_SCALE));
 }
 
 // The pixel's AO `a` darkened by the fitted gain times its detail.
 float contact_detail_correct(uvec2 pix, GPixel px, float a) {
-    DetailSumsRef sums = DetailSumsRef(g.stats + uint64_t(4u * STAT_DETAIL_SUMS));
-    float scale = float(DETAIL_SUM_SCALE);
-    float dd = float(sums.v[1]) / scale;
+    ContactDetailRef cd = ContactDetailRef(packUint2x32(push.zw));
+    float dd = float(cd.sums[1]) / DETAIL_SUM_SCALE;
     if (dd <= 0.0) return a;
-    float k = min(float(sums.v[0]) / scale / dd, 0.0);
+    float k = min(float(cd.sums[0]) / DETAIL_SUM_SCALE / dd, 0.0);
     k *= k * k / (k * k + 0.25 / dd);
     return clamp(a + CONTACT_DETAIL_GAIN * k * detail(pix, px), 0.0, 1.0);
 }

@@ -2,7 +2,8 @@
 // A young map's corrections (ours, docs/algorithm.md), after the filter, over the pixels that traced rays into
 // their cells this frame (the ray queue), outside refinement frames, each in its own file: the pooled residual
 // (pooled_residual.glsl) and the contact detail (contact_detail.glsl). push.x is the phase, push.y the
-// corrections on (bit 0 the pooled residual, bit 1 the contact detail: `additions::Correction`):
+// corrections on (bit 0 the pooled residual, bit 1 the contact detail: `additions::Correction`), push.zw the
+// contact detail's buffer:
 //   1: the pooled residual, in place in `ao`; then the contact detail's fit;
 //   2: the contact detail's correction, in place in `ao` (a pixel writes only its own value).
 #include "common.glsl"

@@ -88,11 +88,7 @@ gpu_consts! {
     /// Pixels whose target cell still takes rays but that a fractional budget (`trace_fraction`) left out of
     /// this frame's ray queue: with the queued ones, the pixels on young cells.
     STAT_UNPICKED_PIXELS: u32 = 9;
-    /// Contact detail (ours, contact_detail.glsl): four words holding two i64 sums over the pixels it corrects,
-    /// in 1/DETAIL_SUM_SCALE units: Σ t (y - a) d and Σ t d², t the pixel's rays, y their open fraction, a its AO
-    /// and d its obscurance detail; their ratio is the frame's fitted detail gain.
-    STAT_DETAIL_SUMS: u32 = 10;
-    DETAIL_SUM_SCALE: u32 = 0x0010_0000;
+    // 10-13: free.
     /// Counters below this index are reset at the start of every frame (with all of `FrameStats::rays`).
     STAT_PER_FRAME: u32 = 14;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.
@@ -232,8 +228,6 @@ gpu_structs! {
         /// Per pixel, from the resolve to the filter's taps (filter_plan.glsl): position and packed normal in
         /// 16 bytes (a tap then reads a quarter of a cache line, not a 48-byte G-buffer sample).
         filter_guide: u64,
-        /// Per pixel, the screen-space obscurance of its G-buffer neighbourhood (contact_detail.glsl).
-        obscurance: u64,
         /// Slices (ours, `FrameDesc::slices`): this frame draws every `lattice`-th pixel in x and y from
         /// (`lattice_x`, `lattice_y`) (1, 0, 0: the whole image); passes that read this frame's neighbours step
         /// by `lattice` pixels (common.glsl `neighbour`).

@@ -229,8 +229,8 @@ pub enum Resource {
     FilterGuide,
     /// Per pixel, the LOD its AO came from.
     LodUsed,
-    /// Contact detail's per-pixel obscurance.
-    Obscurance,
+    /// Contact detail's buffer (`additions::contact_detail::Target`: its fit sums, its per-pixel obscurance).
+    ContactDetail,
     /// Per pixel, the cell estimate it resolved when last drawn (`SlicePrior`).
     SlicePrior,
     /// Still refinement's own-ray residuals.
@@ -263,7 +263,7 @@ impl Resource {
         Resource::FilterPlan,
         Resource::FilterGuide,
         Resource::LodUsed,
-        Resource::Obscurance,
+        Resource::ContactDetail,
         Resource::SlicePrior,
         Resource::BiasEvidence,
         Resource::Accum,
@@ -272,7 +272,8 @@ impl Resource {
     ];
 
     /// The `FrameGlobals` field holding its device address, which is how shaders reach it; None for a buffer
-    /// a pass gets through its push constants (the visibility, the hash test cases) or no shader reads.
+    /// a pass gets through its push constants (the visibility, contact detail's buffer, the hash test cases) or
+    /// no shader reads.
     pub fn field(self) -> Option<&'static str> {
         Some(match self {
             Resource::Instances => "instances",
@@ -291,12 +292,14 @@ impl Resource {
             Resource::FilterPlan => "filter_plan",
             Resource::FilterGuide => "filter_guide",
             Resource::LodUsed => "lod_used",
-            Resource::Obscurance => "obscurance",
             Resource::SlicePrior => "slice_prior",
             Resource::BiasEvidence => "bias_evidence",
             Resource::Accum => "accum",
             Resource::Output => "output_rgba",
-            Resource::Visibility | Resource::StatsReadback | Resource::HashTestCases => return None,
+            Resource::Visibility
+            | Resource::StatsReadback
+            | Resource::HashTestCases
+            | Resource::ContactDetail => return None,
         })
     }
 
@@ -305,6 +308,7 @@ impl Resource {
         match self {
             Resource::Visibility => Some("VisRef"),
             Resource::HashTestCases => Some("HashTestRef"),
+            Resource::ContactDetail => Some("ContactDetailRef"),
             _ => None,
         }
     }

@@ -45,7 +45,8 @@ struct Targets {
     pixel_cells: Buffer,
     ray_queue: Buffer,
     filter_queue: Buffer,
-    obscurance: Buffer,
+    /// Our additions' own buffers (`crate::additions`).
+    additions: additions::Targets,
     slice_prior: Buffer,
 }
 
@@ -78,7 +79,7 @@ impl Targets {
             pixel_cells: b("pixel cells", n * std::mem::size_of::<PixelCells>() as u64)?,
             ray_queue: b("ray queue", n * 4)?,
             filter_queue: b("filter queue", n * 4)?,
-            obscurance: b("obscurance", n * 4)?,
+            additions: additions::Targets::new(gpu, n)?,
             slice_prior: b("slice prior", n * std::mem::size_of::<gpu::SlicePrior>() as u64)?,
         })
     }
@@ -493,7 +494,6 @@ impl Renderer {
             filter_queue: t.filter_queue.address,
             dispatch_args: self.dispatch_args.address,
             regions: self.map.regions.address(),
-            obscurance: t.obscurance.address,
             slice_prior: t.slice_prior.address,
             bias_evidence: t.bias_evidence.address,
             projection: match cam.projection {
@@ -632,7 +632,13 @@ impl Renderer {
             }
             _ => rec.dispatch(Pass::PRIMARY, gw, gh, [0; 4]),
         }
-        additions::contact_detail::record_obscurance(&mut rec, &young_frame, gw, gh);
+        additions::contact_detail::record_obscurance(
+            &mut rec,
+            &young_frame,
+            &self.targets.additions.contact_detail,
+            gw,
+            gh,
+        );
         if mode == Mode::Rtao {
             rec.dispatch(Pass::RTAO, gw, gh, [0; 4]);
         } else if mode.uses_hash() {
@@ -659,7 +665,7 @@ impl Renderer {
                 }
             }
             // A young map's corrections (ours): the pooled residual, the contact detail.
-            additions::record_corrections(&mut rec, &young_frame, args);
+            additions::record_corrections(&mut rec, &young_frame, &self.targets.additions, args);
         }
         // The frame's counters, once, for `finish_frame`: composite.comp counts nothing (its declaration
         // writes no `Stats`), so the copy is recorded before it and shares its barrier.

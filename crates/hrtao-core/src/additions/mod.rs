@@ -10,8 +10,12 @@
 //!
 //! Each one's switch is a `bool` of `YoungMapSettings` (off = the paper). docs/architecture.md "Where an
 //! addition goes" lists what adding or deleting one touches.
+use std::sync::Arc;
+
 use ash::vk;
 
+use crate::context::Gpu;
+use crate::error::Result;
 use crate::gpu;
 use crate::pass::{Pass, Recorder, Resource};
 use crate::settings::AoSettings;
@@ -30,6 +34,20 @@ pub struct YoungFrame<'a> {
     pub young: bool,
 }
 
+/// The buffers of the additions that own one, sized for the renderer's images (held with its targets).
+pub struct Targets {
+    pub contact_detail: contact_detail::Target,
+}
+
+impl Targets {
+    /// For images of up to `pixels` pixels.
+    pub fn new(gpu: &Arc<Gpu>, pixels: u64) -> Result<Targets> {
+        Ok(Targets {
+            contact_detail: contact_detail::Target::new(gpu, pixels)?,
+        })
+    }
+}
+
 /// A correction of the corrections pass (corrections.comp): its bit of the pass's `push.y` and the phases it
 /// needs (1 to 2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,7 +58,7 @@ pub struct Correction {
 
 /// The young map's corrections pass (corrections.comp), over the ray queue: each correction reads the pixels' own
 /// rays and their neighbours' and writes the AO in place; the contact detail reads its obscurance and sums its
-/// fit into the frame's counters.
+/// fit in its buffer.
 pub const CORRECTIONS: Pass = Pass::new(
     "corrections",
     "per-pixel AO",
@@ -50,10 +68,10 @@ pub const CORRECTIONS: Pass = Pass::new(
         Resource::FilterPlan,
         Resource::GBuffer,
         Resource::PixelRays,
-        Resource::Obscurance,
+        Resource::ContactDetail,
         Resource::Ao,
     ],
-    &[Resource::Ao, Resource::Stats],
+    &[Resource::Ao, Resource::ContactDetail],
 );
 
 /// The corrections on in `frame`, folded into the pass's push constants: (bits, phases).
@@ -69,10 +87,11 @@ fn corrections(frame: &YoungFrame) -> (u32, u32) {
 
 /// Records the corrections pass over the pixels that traced rays into their cells this frame (the ray queue,
 /// an indirect dispatch sized at `RAY_ARGS_OFFSET` of `args`), once per phase the corrections on need.
-pub fn record_corrections(rec: &mut Recorder, frame: &YoungFrame, args: vk::Buffer) {
+pub fn record_corrections(rec: &mut Recorder, frame: &YoungFrame, targets: &Targets, args: vk::Buffer) {
     let (bits, phases) = corrections(frame);
+    let [lo, hi] = targets.contact_detail.push();
     for phase in 1..=phases {
-        rec.dispatch_indirect(CORRECTIONS, args, gpu::RAY_ARGS_OFFSET, [phase, bits, 0, 0]);
+        rec.dispatch_indirect(CORRECTIONS, args, gpu::RAY_ARGS_OFFSET, [phase, bits, lo, hi]);
     }
 }
 
