@@ -70,8 +70,8 @@ void main() {
     rays_add(RAYS_ALL, rays);
     // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
     if ((g.flags & FLAG_YOUNG_MAP) != 0u) {
-        // This frame's rays of the pixel, for the near-field control variate (resolve.comp, when classified)
-        // and the pooled residual (pooled_residual.glsl); both run only while the map is young.
+        // This frame's rays of the pixel, for a young map's additions (near_field.glsl, corrections.comp),
+        // which run only then.
         PixelRaysRef(g.pixel_rays).v[index].near_traced += rays;
         PixelRaysRef(g.pixel_rays).v[index].near_open += all_rays.z;
         PixelRaysRef(g.pixel_rays).v[index].open += all_rays.y;

@@ -1,6 +1,5 @@
 // The pixel's own rays pooled with its neighbours' on the same surface (ours): the rays traced this frame by
-// the pixel and its 3x3 neighbours that lie on its plane, for a young map's corrections: the pooled residual
-// (pooled_residual.glsl), the near field (near_field.glsl) and the contact detail (contact_detail.glsl). Needs
+// the pixel and its 3x3 neighbours that lie on its plane, for a young map's additions (crate::additions). Needs
 // common.glsl.
 #ifndef HRTAO_POOL_GLSL
 #define HRTAO_POOL_GLSL

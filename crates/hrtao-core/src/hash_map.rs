@@ -158,10 +158,8 @@ impl WorldHashMap {
 
     /// Whether the map is young this frame: new, re-keyed (eq. 6), or its cells still take many rays (in the
     /// last frame at least 1/YOUNG_CELL_RAYS_DEN of the budget: a new view, the first still frames). Our
-    /// first-frame additions run only then: adaptive sampling's three dispatches (`adaptive_rays`), the
-    /// near-field control variate's ray classification (`near_field`), the pooled residual
-    /// (`pooled_residual`) and contact detail (`contact_detail`). In a navigation frame a few newly seen
-    /// cells take rays, and in a late still frame the pixels' own: they trace as in the paper, one dispatch of
+    /// first-frame additions (`crate::additions`) run only then. In a navigation frame a few newly seen cells
+    /// take rays, and in a late still frame the pixels' own: they trace as in the paper, one dispatch of
     /// first-hit queries.
     pub fn young(&self, frame_index: u32) -> bool {
         let (cell_rays, budget) = self.last_cell_rays;

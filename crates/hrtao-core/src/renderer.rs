@@ -530,7 +530,7 @@ impl Renderer {
         if self.map.young(self.frame_index) {
             g.flags |= gpu::FLAG_YOUNG_MAP;
         }
-        g.flags |= additions::near_field::flags(&self.young_frame(frame));
+        g.flags |= additions::flags(&self.young_frame(frame));
         g
     }
 
@@ -632,13 +632,7 @@ impl Renderer {
             }
             _ => rec.dispatch(Pass::PRIMARY, gw, gh, [0; 4]),
         }
-        additions::contact_detail::record_obscurance(
-            &mut rec,
-            &young_frame,
-            &self.targets.additions.contact_detail,
-            gw,
-            gh,
-        );
+        additions::record_after_primary(&mut rec, &young_frame, &self.targets.additions, gw, gh);
         if mode == Mode::Rtao {
             rec.dispatch(Pass::RTAO, gw, gh, [0; 4]);
         } else if mode.uses_hash() {
@@ -650,7 +644,7 @@ impl Renderer {
             let rays = gpu::RAY_ARGS_OFFSET;
             let args = self.dispatch_args.raw;
             // One dispatch, or three with adaptive sampling (ours) in a young map.
-            for &phase in additions::adaptive_rays::update_phases(&young_frame) {
+            for &phase in additions::update_phases(&young_frame) {
                 rec.dispatch_indirect(Pass::AO_UPDATE, args, rays, [phase, 0, 0, 0]);
             }
             rec.dispatch(Pass::RESOLVE, gw, gh, [0; 4]);
@@ -664,7 +658,7 @@ impl Renderer {
                     rec.dispatch_indirect(Pass::FILTER, args, filter, [i, iterations, 0, 0]);
                 }
             }
-            // A young map's corrections (ours): the pooled residual, the contact detail.
+            // A young map's corrections (ours, `crate::additions`).
             additions::record_corrections(&mut rec, &young_frame, &self.targets.additions, args);
         }
         // The frame's counters, once, for `finish_frame`: composite.comp counts nothing (its declaration

@@ -8,8 +8,10 @@
 //!   corrections after the filter, in the young map's corrections pass (corrections.comp), which
 //!   `record_corrections` records for the corrections on.
 //!
-//! Each one's switch is a `bool` of `YoungMapSettings` (off = the paper). docs/architecture.md "Where an
-//! addition goes" lists what adding or deleting one touches.
+//! Each one's switch is a `bool` of `YoungMapSettings` (off = the paper). The renderer calls them through the
+//! hooks below (`flags`, `update_phases`, `record_after_primary`, `record_corrections`) and names none of them
+//! (`tests/addition_files.rs`); docs/architecture.md "Where an addition goes" lists what adding or deleting one
+//! touches.
 use std::sync::Arc;
 
 use ash::vk;
@@ -73,6 +75,28 @@ pub const CORRECTIONS: Pass = Pass::new(
     ],
     &[Resource::Ao, Resource::ContactDetail],
 );
+
+/// The additions' share of `FrameGlobals::flags` in `frame` (the near field's).
+pub fn flags(frame: &YoungFrame) -> u32 {
+    near_field::flags(frame)
+}
+
+/// The ray-tracing update's dispatches in `frame` (`push.x` of ao_update.comp): one, or adaptive sampling's.
+pub fn update_phases(frame: &YoungFrame) -> &'static [u32] {
+    adaptive_rays::update_phases(frame)
+}
+
+/// Records the additions' passes that read only the G-buffer, right after primary visibility (beside the cell
+/// finder, behind one barrier), over the frame's `width` x `height` pixels (its slice).
+pub fn record_after_primary(
+    rec: &mut Recorder,
+    frame: &YoungFrame,
+    targets: &Targets,
+    width: u32,
+    height: u32,
+) {
+    contact_detail::record_obscurance(rec, frame, &targets.contact_detail, width, height);
+}
 
 /// The corrections on in `frame`, folded into the pass's push constants: (bits, phases).
 fn corrections(frame: &YoungFrame) -> (u32, u32) {

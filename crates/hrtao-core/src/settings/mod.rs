@@ -186,6 +186,16 @@ impl AoSettings {
         list
     }
 
+    /// The names of our additions ("near field", ...), in the order of `additions_mut`: where the paper's mode
+    /// is described to a user, the list follows the settings.
+    pub fn addition_names() -> Vec<String> {
+        AoSettings::default()
+            .additions_mut()
+            .iter()
+            .map(Addition::label)
+            .collect()
+    }
+
     /// The published technique with these parameters: every group's `paper()` (our additions off, eq. (5)'s
     /// bins as published), so `hrtao bench` can run both side by side.
     pub fn paper(&self) -> AoSettings {

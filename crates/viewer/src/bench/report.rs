@@ -137,11 +137,11 @@ fn ours_vs_paper(m: &mut String, results: &[&BenchResult]) -> Result<()> {
     writeln!(m, "### Ours beside the paper's behaviour, same run\n")?;
     writeln!(
         m,
-        "Paper = `AoSettings::paper()`: every addition of ours off (still-camera refinement, the filter's noise \
-         stop, the near-field correction, level blend, adaptive rays, pooled residual, contact detail, local edits). \
+        "Paper = `AoSettings::paper()`: every addition of ours off ({}). \
          Navigation: GPU ms (median whole frame), and in brackets the median of the frame-by-frame ratios (the two \
          modes render each camera back to back, so a change of load hits both). Flicker: mean |ΔAO| between consecutive frames of the still camera after frame 4. \
-         MAE against the converged reference above.\n"
+         MAE against the converged reference above.\n",
+        hrtao_core::AoSettings::addition_names().join(", ")
     )?;
     writeln!(
         m,

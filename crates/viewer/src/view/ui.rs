@@ -379,11 +379,11 @@ impl Viewer {
             }
             if ui
                 .button("Paper")
-                .on_hover_text(
-                    "The paper's technique as published: every addition of ours off (refinement, contact \
-                     correction, level blend, adaptive rays, pooled residual, local edits, the filter's noise \
-                     stop); radius, budget and cells unchanged. Defaults turns them back on.",
-                )
+                .on_hover_text(format!(
+                    "The paper's technique as published: every addition of ours off ({}); radius, budget and \
+                     cells unchanged. Defaults turns them back on.",
+                    hrtao_core::AoSettings::addition_names().join(", ")
+                ))
                 .clicked()
             {
                 s = s.paper();
