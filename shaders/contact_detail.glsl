@@ -3,11 +3,11 @@
 // too dark. The G-buffer still holds that detail: a pixel's screen-space obscurance o (how much of the geometry
 // around it rises above its tangent plane within R) minus the mean o of its surface's 3x3 neighbours is its
 // detail d. The AO takes k d, where the gain k is fitted each frame by least squares to the rays the pixels
-// traced, y - a = k d (y a pixel's open fraction, a its AO after the pooled residual), over every corrected
-// pixel and weighted by their rays t: k = Σ t (y - a) d / Σ t d², shrunk by the Wiener weight k² / (k² + v)
-// against its binomial noise v <= 1/4 / Σ t d², and never positive (more geometry around a pixel never opens
-// it). The pixels' own rays enter a through its cells, but their noise is independent of d, so the fit is not
-// biased.
+// traced, y - a = k d (y a pixel's open fraction, a its AO after the corrections before it), over every
+// corrected pixel and weighted by their rays t: k = Σ t (y - a) d / Σ t d², shrunk by the Wiener weight
+// k² / (k² + v) against its binomial noise v <= 1/4 / Σ t d², and never positive (more geometry around a pixel
+// never opens it). The pixels' own rays enter a through its cells, but their noise is independent of d, so the
+// fit is not biased.
 //
 // Three steps: `contact_detail.comp` writes every pixel's obscurance right after primary visibility (it reads
 // only the G-buffer, so it shares the cell finder's barrier); after the filter, the young map's corrections
@@ -73,7 +73,7 @@ float detail(uvec2 pix, GPixel px) {
     return cd.obscurance[pix.y * g.width + pix.x] - sum / max(n, 1.0);
 }
 
-// The fit's sums over the pixel `index` (AO `a`, after the pooled residual): Σ t (y - a) d and Σ t d².
+// The fit's sums over the pixel `index` (AO `a`, after the corrections before it): Σ t (y - a) d and Σ t d².
 void contact_detail_fit(uint index, uvec2 pix, GPixel px, float a) {
     PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
     if (pr.near_traced == 0u) return;

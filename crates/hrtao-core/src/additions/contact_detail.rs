@@ -1,8 +1,8 @@
 //! Contact detail (ours, `YoungMapSettings::contact_detail`, shaders/contact_detail.glsl): while cells are young,
 //! the creases and contacts the G-buffer shows around a pixel, finer than its cells, darken it by a gain fitted
 //! each frame to the rays the pixels traced. Its obscurance pass (contact_detail.comp) runs right after primary
-//! visibility; the corrections pass fits the gain in phase 1 (after the pooled residual) and corrects in phase 2.
-//! It owns its buffer, which its passes reach through their push constants.
+//! visibility; the corrections pass fits the gain in phase 1 (after the corrections listed before it) and
+//! corrects in phase 2. It owns its buffer, which its passes reach through their push constants.
 use std::sync::Arc;
 
 use ash::vk;
