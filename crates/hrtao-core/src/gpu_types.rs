@@ -32,11 +32,11 @@ gpu_consts! {
     /// Some region epoch is not 0 (local edits, ours): cell keys read the region table (hash_map.glsl); without
     /// it every epoch is 0 and the keys are the paper's.
     FLAG_REGION_EPOCHS: u32 = 64;
-    /// The near-field control variate runs (ours, near_field.glsl: `near_field` on, in frames of a young map,
-    /// `Renderer::young_map`): the update classifies its rays and the resolve corrects by them; other frames
-    /// trace the paper's first-hit queries.
+    /// The near-field control variate runs (ours, near_field.glsl, `additions::near_field::flags`: `near_field`
+    /// on, in hash-map frames of a young map, `WorldHashMap::young`): the update classifies its rays and the
+    /// resolve corrects by them; other frames trace the paper's first-hit queries.
     FLAG_NEAR_FIELD: u32 = 128;
-    /// The map is young this frame (`Renderer::young_map`). A moving frame without it is a navigation frame
+    /// The map is young this frame (`WorldHashMap::young`). A moving frame without it is a navigation frame
     /// (`navigation_frame` in common.glsl), which resolves and filters as the paper does.
     FLAG_YOUNG_MAP: u32 = 256;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).

@@ -1,10 +1,11 @@
 //! The one way to declare and record a compute pass.
 //!
 //! Every pass shares one pipeline layout: set 0 = { binding 0: the TLAS, binding 1: `FrameGlobals` },
-//! plus 16 bytes of push constants. Buffers are reached through device addresses stored in `FrameGlobals`,
-//! so a pass is its shader and the buffers it reads and writes (`Pass::reads`, `Pass::writes`: the validation
-//! layer cannot see accesses through device addresses, so these declarations are the one source of truth,
-//! checked against the shaders by `tests/pass_declarations.rs`). `PassSet` builds all pipelines;
+//! plus 16 bytes of push constants. Buffers are reached through device addresses stored in `FrameGlobals` (or,
+//! for a buffer of one pass or one addition, in its push constants: `Resource::push_type`), so a pass is its
+//! shader and the buffers it reads and writes (`Pass::reads`, `Pass::writes`: the validation layer cannot see
+//! accesses through device addresses, so these declarations are the one source of truth, checked against the
+//! shaders by `tests/pass_declarations.rs`). `PassSet` builds all pipelines;
 //! `Recorder::dispatch` binds, inserts the barrier the declarations call for (`barrier::Tracker`), dispatches
 //! over pixels and times it under its Table-2 section.
 use std::sync::Arc;

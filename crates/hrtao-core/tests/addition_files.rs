@@ -3,7 +3,9 @@
 //! additions' list (`additions/mod.rs`), the pass list and GPU constants (`pass.rs`, `gpu_types.rs`), its own
 //! shader files (`shaders/NAME.glsl`, `shaders/NAME.comp`) and the shaders that include its file (the pass it
 //! changes). So adding or deleting one touches those, its test and its docs, never the renderer, the hash
-//! map or another addition. A name is the setting's field (`near_field`) as a whole word.
+//! map or another addition. A name is the setting's field as a whole word (`near_field`), or its type or
+//! constant form inside any identifier (`NearField`, `NEAR_FIELD`: `FLAG_NEAR_FIELD`, `ContactDetailRef`). The
+//! viewer, which offers the settings by name, and the tests are not checked.
 use std::path::{Path, PathBuf};
 
 use hrtao_core::settings::YoungMapSettings;
@@ -37,6 +39,20 @@ fn names(text: &str, word: &str) -> bool {
         let after = text[i + word.len()..].chars().next();
         !before.is_some_and(ident) && !after.is_some_and(ident)
     })
+}
+
+/// Whether `text` names addition `name` (snake case): the word itself, or its CamelCase or UPPER_CASE form
+/// anywhere.
+fn names_addition(text: &str, name: &str) -> bool {
+    let camel: String = name
+        .split('_')
+        .map(|w| {
+            let mut c = w.chars();
+            c.next()
+                .map_or(String::new(), |f| f.to_ascii_uppercase().to_string() + c.as_str())
+        })
+        .collect();
+    names(text, name) || text.contains(&camel) || text.contains(&name.to_ascii_uppercase())
 }
 
 /// The files that may name addition `name`.
@@ -91,7 +107,7 @@ fn each_young_map_addition_is_named_only_by_its_own_files_and_the_lists() {
             "{name} has its shader file"
         );
         for (path, text) in &sources {
-            if names(text, name) && !ok.contains(path) {
+            if names_addition(text, name) && !ok.contains(path) {
                 wrong.push(format!("{path} names {name}"));
             }
         }
@@ -104,9 +120,11 @@ fn each_young_map_addition_is_named_only_by_its_own_files_and_the_lists() {
 }
 
 #[test]
-fn a_whole_word_is_a_name() {
-    assert!(names("if (s.young.near_field) {", "near_field"));
-    assert!(names("#include \"near_field.glsl\"", "near_field"));
-    assert!(!names("near_field_on()", "near_field"));
-    assert!(!names("FLAG_NEAR_FIELD", "near_field"));
+fn names_of_an_addition() {
+    assert!(names_addition("if (s.young.near_field) {", "near_field"));
+    assert!(names_addition("#include \"near_field.glsl\"", "near_field"));
+    assert!(names_addition("g.flags |= gpu::FLAG_NEAR_FIELD;", "near_field"));
+    assert!(names_addition("Resource::ContactDetail", "contact_detail"));
+    assert!(!names_addition("near_field_on()", "near_field"));
+    assert!(!names_addition("the near field", "near_field"));
 }

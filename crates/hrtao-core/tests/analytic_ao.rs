@@ -142,8 +142,8 @@ fn validation_layer_is_live_and_counts_messages() {
 /// HRTAO's first frame near a contact (ours: the near-field control variate, docs/algorithm.md): a cell
 /// averages the AO of floor pixels near and far from the wall, so the pixels closest to the crease come out too
 /// bright; each pixel's own near-open rays correct that. Mean |AO - analytic| over the floor pixels within
-/// R/4 of the wall (one finest cell), one frame from an empty map: the paper's cell estimate (`near_weight` 0,
-/// `contact_detail` 0) against the default settings.
+/// R/4 of the wall (one finest cell), one frame from an empty map: the paper's cell estimate (`near_field` and
+/// `contact_detail` off) against the default settings.
 #[test]
 fn near_field_control_variate_cuts_contact_error() {
     let gpu = gpu();

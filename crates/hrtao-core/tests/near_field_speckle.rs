@@ -1,4 +1,4 @@
-//! The near-field control variate (ours, `near_weight`, docs/algorithm.md) corrects a young pixel with its own
+//! The near-field control variate (ours, `near_field`, near_field.glsl) corrects a young pixel with its own
 //! few rays. Where a pixel's rays were unlucky and its neighbours' were not, that correction is a dark or light
 //! dot: the first frames of a new view speckled. The correction now takes its strength from the rays of the
 //! pixel's same-surface 3x3 neighbours (pool.glsl), which a contact shadow shares and an unlucky pixel does not.

@@ -5,7 +5,8 @@
 //! The shader is read with the GLSL files it `#include`s; only functions reachable from `main` count. A buffer
 //! is reached through its `FrameGlobals` address (`g.<field>`, `Resource::field`), directly or through a local
 //! buffer reference (`CellRef cells = CellRef(g.hash_cells);`) or a parameter of a buffer reference type; or,
-//! for the visibility and the hash test cases, through a push-constant address (`Resource::push_type`). An
+//! for the visibility, contact detail's buffer and the hash test cases, through a push-constant address
+//! (`Resource::push_type`). An
 //! access is a write when it is the target of an assignment (`=`, `+=`, `++`, …) or the first argument of an
 //! atomic other than `atomicLoad`; read-modify-writes count as both.
 use std::collections::{BTreeSet, HashMap, HashSet};

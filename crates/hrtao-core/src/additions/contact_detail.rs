@@ -22,8 +22,8 @@ pub const OBSCURANCE: Pass = Pass::new(
     &[Resource::ContactDetail],
 );
 
-/// Its bit of the corrections pass (corrections.comp `push.y`).
-const CORRECTION: Correction = Correction { bit: 2, phases: 2 };
+/// Its bit of the corrections pass (corrections.comp `push.y`) and its phases.
+const CORRECTION: Correction = Correction { mask: 2, phases: 2 };
 
 /// Bytes of the fit's two i64 sums at the start of its buffer (contact_detail.glsl `ContactDetailRef`).
 const SUMS_BYTES: u64 = 16;

@@ -50,11 +50,11 @@ impl Targets {
     }
 }
 
-/// A correction of the corrections pass (corrections.comp): its bit of the pass's `push.y` and the phases it
-/// needs (1 to 2).
+/// A correction of the corrections pass (corrections.comp): its mask in the pass's `push.y` (one bit, its own)
+/// and the phases it needs (1 to 2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Correction {
-    pub bit: u32,
+    pub mask: u32,
     pub phases: u32,
 }
 
@@ -98,15 +98,19 @@ pub fn record_after_primary(
     contact_detail::record_obscurance(rec, frame, &targets.contact_detail, width, height);
 }
 
-/// The corrections on in `frame`, folded into the pass's push constants: (bits, phases).
-fn corrections(frame: &YoungFrame) -> (u32, u32) {
+/// The corrections on in `frame`, in the order the pass applies them.
+fn corrections_on(frame: &YoungFrame) -> impl Iterator<Item = Correction> {
     [
         pooled_residual::correction(frame),
         contact_detail::correction(frame),
     ]
     .into_iter()
     .flatten()
-    .fold((0, 0), |(bits, phases), c| (bits | c.bit, phases.max(c.phases)))
+}
+
+/// The corrections on in `frame`, folded into the pass's push constants: (masks, phases).
+fn corrections(frame: &YoungFrame) -> (u32, u32) {
+    corrections_on(frame).fold((0, 0), |(bits, phases), c| (bits | c.mask, phases.max(c.phases)))
 }
 
 /// Records the corrections pass over the pixels that traced rays into their cells this frame (the ray queue,
@@ -146,5 +150,22 @@ mod tests {
         s.young.contact_detail = true;
         assert_eq!(frame_of(&s, true), (0b10, 2));
         assert_eq!(frame_of(&s.paper(), true), (0, 0), "none in the paper's mode");
+    }
+
+    #[test]
+    fn each_correction_has_a_bit_of_its_own() {
+        let s = AoSettings::default();
+        let frame = YoungFrame {
+            settings: &s,
+            young: true,
+        };
+        let mut seen = 0u32;
+        for c in corrections_on(&frame) {
+            assert_eq!(c.mask.count_ones(), 1, "{c:?}: one bit");
+            assert_eq!(seen & c.mask, 0, "{c:?}: a bit no other correction has");
+            assert!((1..=2).contains(&c.phases), "{c:?}");
+            seen |= c.mask;
+        }
+        assert_eq!(seen.count_ones(), 2, "every correction is on by default");
     }
 }

@@ -3,8 +3,8 @@
 //! traced this frame, where they differ from the cell by more than their noise. Phase 1 of the corrections pass.
 use super::{Correction, YoungFrame};
 
-/// Its bit of the corrections pass (corrections.comp `push.y`).
-const CORRECTION: Correction = Correction { bit: 1, phases: 1 };
+/// Its bit of the corrections pass (corrections.comp `push.y`) and its phases.
+const CORRECTION: Correction = Correction { mask: 1, phases: 1 };
 
 /// Whether it runs in `frame`, as its correction.
 pub fn correction(frame: &YoungFrame) -> Option<Correction> {

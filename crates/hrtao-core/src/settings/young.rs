@@ -1,6 +1,6 @@
 //! The first frames of a young map (ours, docs/algorithm.md): while cells hold few rays, these bring back the
-//! detail finer than the cells and cut their noise. They run only in frames of a young map (`Renderer`'s
-//! `young_map`): a new map, a new view, the first still frames. Each is one switch here, one file in
+//! detail finer than the cells and cut their noise. They run only in frames of a young map
+//! (`WorldHashMap::young`): a new map, a new view, the first still frames. Each is one switch here, one file in
 //! `crate::additions` (when it runs) and one shader file (its GPU code and tuning constants).
 use super::settings_group;
 
