@@ -5,26 +5,21 @@
 //! for a buffer of one pass or one addition, in its push constants: `Resource::push_type`), so a pass is its
 //! shader and the buffers it reads and writes (`Pass::reads`, `Pass::writes`: the validation layer cannot see
 //! accesses through device addresses, so these declarations are the one source of truth, checked against the
-//! shaders by `tests/pass_declarations.rs`). `PassSet` builds all pipelines;
-//! `Recorder::dispatch` binds, inserts the barrier the declarations call for (`barrier::Tracker`), dispatches
-//! over pixels and times it under its Table-2 section.
+//! shaders by `tests/pass_declarations.rs`). `PassSet` builds all pipelines; `recorder::Recorder` records them.
 use std::sync::Arc;
 
 use ash::vk;
 
-use crate::barrier::{pass_uses, Barrier, Event, Stage, Tracker, Use};
 use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
-use crate::gpu::WORKGROUP_SIZE;
-use crate::timer::GpuTimer;
 use Resource::*;
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 
 /// A compute pass, declared once where it belongs (the paper's passes below, each addition's in its own file of
-/// `crate::additions`): its shader, the timing section it belongs to (the paper's Table 2 columns, plus ours)
-/// and the buffers its shader reads and writes (`tests/pass_declarations.rs` checks them against the shader;
+/// `crate::additions`; `crate::passes::ALL` lists them): its shader, the timing section it belongs to (the
+/// paper's Table 2 columns, plus ours) and the buffers its shader reads and writes (`tests/pass_declarations.rs` checks them against the shader;
 /// atomics count as reads and writes, and an indirect dispatch also reads `DispatchArgs`, which the recorder
 /// adds). The barriers of a frame and the pass table of docs/architecture.md follow from these declarations.
 #[derive(Clone, Copy, Debug)]
@@ -152,21 +147,6 @@ impl Pass {
         &[BiasEvidence, Ao, Accum, Output],
     );
     pub const HASH_TEST: Pass = Pass::new("hash_test", "hash test", &[HashTestCases], &[HashTestCases]);
-
-    /// The pass list: every compute pass, in frame order (the pass table's rows).
-    pub const ALL: [Pass; 11] = [
-        Pass::PRIMARY,
-        Pass::GBUFFER_FROM_VIS,
-        crate::additions::contact_detail::OBSCURANCE,
-        Pass::RTAO,
-        Pass::CELL_FINDER,
-        Pass::AO_UPDATE,
-        Pass::RESOLVE,
-        Pass::FILTER,
-        crate::additions::CORRECTIONS,
-        Pass::COMPOSITE,
-        Pass::HASH_TEST,
-    ];
 
     /// The shader file (`shaders/<name>.comp`).
     pub fn shader(self) -> &'static str {
@@ -315,36 +295,13 @@ impl Resource {
     }
 }
 
-/// The pass table of docs/architecture.md, rendered from the declarations: one row per pass in frame order,
-/// with its shader, its Table-2 timing section and the buffers it reads and writes.
-pub fn pass_table_markdown() -> String {
-    let list = |rs: &[Resource]| {
-        if rs.is_empty() {
-            "—".to_string()
-        } else {
-            rs.iter().map(|r| format!("{r:?}")).collect::<Vec<_>>().join(", ")
-        }
-    };
-    let mut out = String::from("| pass | section | reads | writes |\n|---|---|---|---|\n");
-    for pass in Pass::ALL {
-        out += &format!(
-            "| `shaders/{}.comp` | {} | {} | {} |\n",
-            pass.shader(),
-            pass.section(),
-            list(pass.reads()),
-            list(pass.writes())
-        );
-    }
-    out
-}
-
 /// Pipelines of all passes and their shared layout and descriptor set.
 pub struct PassSet {
     gpu: Arc<Gpu>,
     set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
     pool: vk::DescriptorPool,
-    set: vk::DescriptorSet,
+    pub(crate) set: vk::DescriptorSet,
     pipelines: Vec<(Pass, vk::Pipeline)>,
     bound_tlas: vk::AccelerationStructureKHR,
     /// The TLAS build generation binding 0 was last written for (0: never).
@@ -376,7 +333,8 @@ pub(crate) fn shader_module(gpu: &Gpu, name: &str) -> Result<vk::ShaderModule> {
 }
 
 impl PassSet {
-    pub fn new(gpu: &Arc<Gpu>, globals: &Buffer) -> Result<PassSet> {
+    /// The pipelines of the passes of `list` (`crate::passes::ALL`).
+    pub fn new(gpu: &Arc<Gpu>, globals: &Buffer, list: &[Pass]) -> Result<PassSet> {
         let device = &gpu.device;
         unsafe {
             let bindings = [
@@ -461,7 +419,7 @@ impl PassSet {
                 bound_generation: 0,
                 tlas_writes: 0,
             };
-            for pass in Pass::ALL {
+            for &pass in list {
                 let module = shader_module(gpu, pass.shader())?;
                 let entry = c"main";
                 let stage = vk::PipelineShaderStageCreateInfo::builder()
@@ -510,7 +468,7 @@ impl PassSet {
         self.tlas_writes
     }
 
-    fn pipeline(&self, pass: Pass) -> vk::Pipeline {
+    pub(crate) fn pipeline(&self, pass: Pass) -> vk::Pipeline {
         self.pipelines
             .iter()
             .find(|(p, _)| *p == pass)
@@ -529,143 +487,6 @@ impl Drop for PassSet {
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_pipeline_layout(self.layout, None);
             d.destroy_descriptor_set_layout(self.set_layout, None);
-        }
-    }
-}
-
-/// Records passes into one command buffer, each after the barrier its declared accesses call for.
-pub struct Recorder<'a> {
-    pub gpu: &'a Gpu,
-    pub cmd: vk::CommandBuffer,
-    passes: &'a PassSet,
-    timer: Option<&'a mut GpuTimer>,
-    tracker: Tracker,
-}
-
-fn record_barrier(gpu: &Gpu, cmd: vk::CommandBuffer, b: &Barrier) {
-    let barrier = [vk::MemoryBarrier::builder()
-        .src_access_mask(b.src_access)
-        .dst_access_mask(b.dst_access)
-        .build()];
-    unsafe {
-        gpu.device.cmd_pipeline_barrier(
-            cmd,
-            b.src_stages,
-            b.dst_stages,
-            vk::DependencyFlags::empty(),
-            &barrier,
-            &[],
-            &[],
-        );
-    }
-}
-
-impl<'a> Recorder<'a> {
-    pub fn new(
-        gpu: &'a Gpu,
-        cmd: vk::CommandBuffer,
-        passes: &'a PassSet,
-        mut timer: Option<&'a mut GpuTimer>,
-    ) -> Self {
-        if let Some(t) = timer.as_deref_mut() {
-            t.reset(cmd);
-        }
-        unsafe {
-            gpu.device.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                passes.layout,
-                0,
-                &[passes.set],
-                &[],
-            );
-        }
-        Recorder {
-            gpu,
-            cmd,
-            passes,
-            timer,
-            tracker: Tracker::default(),
-        }
-    }
-
-    /// Records the barrier `uses` call for (see `barrier::Tracker`) before a command.
-    fn sync(&mut self, label: &'static str, pass: Option<Pass>, indirect: bool, uses: Vec<Use>) {
-        if let Some(b) = self.tracker.command(label, pass, indirect, uses) {
-            record_barrier(self.gpu, self.cmd, &b);
-        }
-    }
-
-    /// Dispatches `pass` over a `width` x `height` grid of threads (one per pixel), with push constants `push`.
-    pub fn dispatch(&mut self, pass: Pass, width: u32, height: u32, push: [u32; 4]) {
-        self.sync(pass.shader(), Some(pass), false, pass_uses(pass));
-        let groups = (width.div_ceil(WORKGROUP_SIZE), height.div_ceil(WORKGROUP_SIZE));
-        self.record(pass, push, |d, cmd| unsafe {
-            d.cmd_dispatch(cmd, groups.0, groups.1, 1)
-        });
-    }
-
-    /// Dispatches `pass` with the group counts at word `offset` of `args` (the `DispatchArgs` buffer:
-    /// queue_args.glsl writes them).
-    pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, offset: u32, push: [u32; 4]) {
-        let mut uses = pass_uses(pass);
-        uses.push(Use::read(Resource::DispatchArgs, Stage::Indirect));
-        self.sync(pass.shader(), Some(pass), true, uses);
-        self.record(pass, push, |d, cmd| unsafe {
-            d.cmd_dispatch_indirect(cmd, args, offset as u64 * 4)
-        });
-    }
-
-    /// Records commands that are not a compute pass (the rasterised visibility, copies) with their accesses
-    /// `uses`, after the barrier they call for, timed under `section` when given.
-    pub fn commands(
-        &mut self,
-        label: &'static str,
-        section: Option<&'static str>,
-        uses: Vec<Use>,
-        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
-    ) {
-        self.sync(label, None, false, uses);
-        if let (Some(t), Some(section)) = (self.timer.as_deref_mut(), section) {
-            t.begin(self.cmd, section);
-        }
-        record(&self.gpu.device, self.cmd);
-        if let (Some(t), Some(_)) = (self.timer.as_deref_mut(), section) {
-            t.end(self.cmd);
-        }
-    }
-
-    /// Ends the recording with a barrier that makes every write visible to the host and to later copies and
-    /// shaders; returns what was recorded.
-    pub fn finish(mut self) -> Vec<Event> {
-        let b = self.tracker.finish();
-        record_barrier(self.gpu, self.cmd, &b);
-        self.tracker.take_events()
-    }
-
-    /// Binds `pass`, pushes its constants and records the dispatch under its timing section.
-    fn record(&mut self, pass: Pass, push: [u32; 4], dispatch: impl FnOnce(&ash::Device, vk::CommandBuffer)) {
-        let d = &self.gpu.device;
-        if let Some(t) = self.timer.as_deref_mut() {
-            t.begin(self.cmd, pass.section());
-        }
-        unsafe {
-            d.cmd_bind_pipeline(
-                self.cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.passes.pipeline(pass),
-            );
-            d.cmd_push_constants(
-                self.cmd,
-                self.passes.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
-                bytemuck::cast_slice(&push),
-            );
-        }
-        dispatch(d, self.cmd);
-        if let Some(t) = self.timer.as_deref_mut() {
-            t.end(self.cmd);
         }
     }
 }

@@ -19,7 +19,8 @@ use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{FrameGlobals, RasterInstance, RasterPush, NO_INSTANCE, PROJECTION_ORTHOGRAPHIC};
-use crate::pass::{shader_module, Pass, Recorder, Resource};
+use crate::pass::{shader_module, Pass, Resource};
+use crate::recorder::Recorder;
 
 /// How the renderer finds the surface seen through each pixel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

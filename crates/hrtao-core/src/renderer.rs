@@ -19,8 +19,9 @@ use crate::gpu::{
     PixelRays,
 };
 use crate::hash_map::WorldHashMap;
-use crate::pass::{Pass, PassSet, Recorder, Resource};
+use crate::pass::{Pass, PassSet, Resource};
 use crate::raster::{Primary, Rasterizer};
+use crate::recorder::Recorder;
 use crate::settings::{AoSettings, Mode};
 use crate::slice_order;
 use crate::timer::GpuTimer;
@@ -241,7 +242,7 @@ impl Renderer {
             MemoryLocation::GpuOnly,
             vk::BufferUsageFlags::INDIRECT_BUFFER,
         )?;
-        let passes = PassSet::new(gpu, &globals)?;
+        let passes = PassSet::new(gpu, &globals, &crate::passes::ALL)?;
         let r = Renderer {
             gpu: gpu.clone(),
             timer: GpuTimer::new(gpu)?,

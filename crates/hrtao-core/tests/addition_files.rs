@@ -1,8 +1,8 @@
 //! Where a young map's additions live (`crate::additions`, docs/architecture.md "Where an addition goes"): each
 //! is named, in the renderer's source and shaders, only by its settings group, its own Rust file and the
-//! additions' list (`additions/mod.rs`), the pass list and GPU constants (`pass.rs`, `gpu_types.rs`), its own
-//! shader files (`shaders/NAME.glsl`, `shaders/NAME.comp`) and the shaders that include its file (the pass it
-//! changes). So adding or deleting one touches those, its test and its docs, never the renderer, the hash
+//! additions' list (`additions/mod.rs`), the pass list (`passes.rs`), the buffers and GPU constants (`pass.rs`'s
+//! `Resource`, `gpu_types.rs`), its own shader files (`shaders/NAME.glsl`, `shaders/NAME.comp`) and the shaders
+//! that include its file (the pass it changes). So adding or deleting one touches those, its test and its docs, never the renderer, the hash
 //! map or another addition. A name is the setting's field as a whole word (`near_field`), or its type or
 //! constant form inside any identifier (`NearField`, `NEAR_FIELD`: `FLAG_NEAR_FIELD`, `ContactDetailRef`). The
 //! viewer, which offers the settings by name, and the tests are not checked.
@@ -61,6 +61,7 @@ fn allowed(name: &str, sources: &[(String, String)]) -> Vec<String> {
         "crates/hrtao-core/src/settings/young.rs",
         "crates/hrtao-core/src/settings/mod.rs",
         "crates/hrtao-core/src/additions/mod.rs",
+        "crates/hrtao-core/src/passes.rs",
         "crates/hrtao-core/src/pass.rs",
         "crates/hrtao-core/src/gpu_types.rs",
     ]

@@ -125,7 +125,7 @@ fn a_new_tlas_generation_is_written_even_with_the_same_handle_value() {
         ash::vk::BufferUsageFlags::empty(),
     )
     .unwrap();
-    let mut passes = hrtao_core::pass::PassSet::new(&gpu, &globals).unwrap();
+    let mut passes = hrtao_core::pass::PassSet::new(&gpu, &globals, &hrtao_core::passes::ALL).unwrap();
     let g = sg.tlas_generation();
     passes.bind_tlas(sg.tlas.raw, g);
     passes.bind_tlas(sg.tlas.raw, g);

@@ -12,7 +12,8 @@ use super::{Correction, YoungFrame};
 use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::Result;
-use crate::pass::{Pass, Recorder, Resource};
+use crate::pass::{Pass, Resource};
+use crate::recorder::Recorder;
 
 /// Its obscurance pass: the G-buffer around each pixel → its buffer (and the fit's sums reset).
 pub const OBSCURANCE: Pass = Pass::new(

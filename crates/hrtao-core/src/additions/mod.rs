@@ -19,7 +19,8 @@ use ash::vk;
 use crate::context::Gpu;
 use crate::error::Result;
 use crate::gpu;
-use crate::pass::{Pass, Recorder, Resource};
+use crate::pass::{Pass, Resource};
+use crate::recorder::Recorder;
 use crate::settings::AoSettings;
 
 pub mod adaptive_rays;

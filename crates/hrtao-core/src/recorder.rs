@@ -1,0 +1,147 @@
+//! Records a frame's passes into one command buffer (`Recorder::dispatch`): binds each pass, inserts the barrier
+//! its declared accesses call for (`barrier::Tracker`), dispatches over pixels and times it under its Table-2
+//! section. Above `pass.rs` (the declarations and pipelines) and `barrier.rs` (which reads the declarations).
+use ash::vk;
+
+use crate::barrier::{pass_uses, Barrier, Event, Stage, Tracker, Use};
+use crate::context::Gpu;
+use crate::gpu::WORKGROUP_SIZE;
+use crate::pass::{Pass, PassSet, Resource};
+use crate::timer::GpuTimer;
+
+/// Records passes into one command buffer, each after the barrier its declared accesses call for.
+pub struct Recorder<'a> {
+    pub gpu: &'a Gpu,
+    pub cmd: vk::CommandBuffer,
+    passes: &'a PassSet,
+    timer: Option<&'a mut GpuTimer>,
+    tracker: Tracker,
+}
+
+fn record_barrier(gpu: &Gpu, cmd: vk::CommandBuffer, b: &Barrier) {
+    let barrier = [vk::MemoryBarrier::builder()
+        .src_access_mask(b.src_access)
+        .dst_access_mask(b.dst_access)
+        .build()];
+    unsafe {
+        gpu.device.cmd_pipeline_barrier(
+            cmd,
+            b.src_stages,
+            b.dst_stages,
+            vk::DependencyFlags::empty(),
+            &barrier,
+            &[],
+            &[],
+        );
+    }
+}
+
+impl<'a> Recorder<'a> {
+    pub fn new(
+        gpu: &'a Gpu,
+        cmd: vk::CommandBuffer,
+        passes: &'a PassSet,
+        mut timer: Option<&'a mut GpuTimer>,
+    ) -> Self {
+        if let Some(t) = timer.as_deref_mut() {
+            t.reset(cmd);
+        }
+        unsafe {
+            gpu.device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                passes.layout,
+                0,
+                &[passes.set],
+                &[],
+            );
+        }
+        Recorder {
+            gpu,
+            cmd,
+            passes,
+            timer,
+            tracker: Tracker::default(),
+        }
+    }
+
+    /// Records the barrier `uses` call for (see `barrier::Tracker`) before a command.
+    fn sync(&mut self, label: &'static str, pass: Option<Pass>, indirect: bool, uses: Vec<Use>) {
+        if let Some(b) = self.tracker.command(label, pass, indirect, uses) {
+            record_barrier(self.gpu, self.cmd, &b);
+        }
+    }
+
+    /// Dispatches `pass` over a `width` x `height` grid of threads (one per pixel), with push constants `push`.
+    pub fn dispatch(&mut self, pass: Pass, width: u32, height: u32, push: [u32; 4]) {
+        self.sync(pass.shader(), Some(pass), false, pass_uses(pass));
+        let groups = (width.div_ceil(WORKGROUP_SIZE), height.div_ceil(WORKGROUP_SIZE));
+        self.record(pass, push, |d, cmd| unsafe {
+            d.cmd_dispatch(cmd, groups.0, groups.1, 1)
+        });
+    }
+
+    /// Dispatches `pass` with the group counts at word `offset` of `args` (the `DispatchArgs` buffer:
+    /// queue_args.glsl writes them).
+    pub fn dispatch_indirect(&mut self, pass: Pass, args: vk::Buffer, offset: u32, push: [u32; 4]) {
+        let mut uses = pass_uses(pass);
+        uses.push(Use::read(Resource::DispatchArgs, Stage::Indirect));
+        self.sync(pass.shader(), Some(pass), true, uses);
+        self.record(pass, push, |d, cmd| unsafe {
+            d.cmd_dispatch_indirect(cmd, args, offset as u64 * 4)
+        });
+    }
+
+    /// Records commands that are not a compute pass (the rasterised visibility, copies) with their accesses
+    /// `uses`, after the barrier they call for, timed under `section` when given.
+    pub fn commands(
+        &mut self,
+        label: &'static str,
+        section: Option<&'static str>,
+        uses: Vec<Use>,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) {
+        self.sync(label, None, false, uses);
+        if let (Some(t), Some(section)) = (self.timer.as_deref_mut(), section) {
+            t.begin(self.cmd, section);
+        }
+        record(&self.gpu.device, self.cmd);
+        if let (Some(t), Some(_)) = (self.timer.as_deref_mut(), section) {
+            t.end(self.cmd);
+        }
+    }
+
+    /// Ends the recording with a barrier that makes every write visible to the host and to later copies and
+    /// shaders; returns what was recorded.
+    pub fn finish(mut self) -> Vec<Event> {
+        let b = self.tracker.finish();
+        record_barrier(self.gpu, self.cmd, &b);
+        self.tracker.take_events()
+    }
+
+    /// Binds `pass`, pushes its constants and records the dispatch under its timing section.
+    fn record(&mut self, pass: Pass, push: [u32; 4], dispatch: impl FnOnce(&ash::Device, vk::CommandBuffer)) {
+        let d = &self.gpu.device;
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.begin(self.cmd, pass.section());
+        }
+        unsafe {
+            d.cmd_bind_pipeline(
+                self.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.passes.pipeline(pass),
+            );
+            d.cmd_push_constants(
+                self.cmd,
+                self.passes.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::cast_slice(&push),
+            );
+        }
+        dispatch(d, self.cmd);
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.end(self.cmd);
+        }
+    }
+}
