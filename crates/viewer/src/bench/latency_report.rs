@@ -102,6 +102,9 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
     writeln!(m, "|---|---|---|---|---|---|---|")?;
     for r in results {
         let j = &r.json;
+        if j["latency_ms"].is_null() {
+            continue; // an --orbit run alone (the alternating runs below)
+        }
         writeln!(
             m,
             "| {} | {}{} | {} | {} | {} | {} | {} |",
@@ -146,6 +149,7 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
         )?;
     }
     writeln!(m)?;
+    converge_runs(m, results)?;
     if results.iter().any(|r| !r.json["roughness"].is_null()) {
         writeln!(
             m,
@@ -179,6 +183,59 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
     if results.iter().any(|r| r.json["note"].is_string()) {
         writeln!(m)?;
     }
+    Ok(())
+}
+
+/// The median of `v` (the mean of the middle two for an even count).
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    (n > 0).then(|| (v[(n - 1) / 2] + v[n / 2]) / 2.0)
+}
+
+/// The table of the versions whose `--orbit` runs alternated in one session (`converge_runs_ms`): each run's
+/// time to converge and the ratio of medians to the scene's `before-ab` version.
+fn converge_runs(m: &mut String, results: &[LatencyResult]) -> Result<()> {
+    let runs = |r: &LatencyResult| -> Option<Vec<f64>> {
+        let v: Vec<f64> = r.json["converge_runs_ms"]
+            .as_array()?
+            .iter()
+            .filter_map(Value::as_f64)
+            .collect();
+        (!v.is_empty()).then_some(v)
+    };
+    let rows: Vec<(&LatencyResult, Vec<f64>)> = results.iter().filter_map(|r| Some((r, runs(r)?))).collect();
+    if rows.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        m,
+        "Time to converge with the versions' `--orbit 20` runs alternating in one session (a ratio of medians to \
+         `before-ab`, the code before the still refinement in slices, is a ratio measured side by side):\n"
+    )?;
+    writeln!(
+        m,
+        "| scene | version | time to converge, each run | median | against before-ab |"
+    )?;
+    writeln!(m, "|---|---|---|---|---|")?;
+    for (r, v) in &rows {
+        let base = rows
+            .iter()
+            .find(|(b, _)| b.scene == r.scene && b.version == "before-ab")
+            .and_then(|(_, bv)| median(bv.clone()));
+        let med = median(v.clone()).unwrap_or(f64::NAN);
+        let each: Vec<String> = v.iter().map(|x| format!("{:.1} s", x / 1e3)).collect();
+        writeln!(
+            m,
+            "| {} | {} | {} | {:.1} s | {} |",
+            r.scene,
+            r.version,
+            each.join(", "),
+            med / 1e3,
+            base.map_or("–".into(), |b| format!("{:.2}×", med / b)),
+        )?;
+    }
+    writeln!(m)?;
     Ok(())
 }
 
@@ -223,8 +280,32 @@ mod tests {
             m.contains("- bundled (after): measured with the old smoothing"),
             "{m}"
         );
+        assert!(!m.contains("each run"), "no alternating runs, no table: {m}");
         let mut empty = String::new();
         section(&mut empty, &[]).unwrap();
         assert!(empty.is_empty());
+    }
+
+    #[test]
+    fn alternating_runs_give_a_ratio_of_medians() {
+        let row = |version: &str, runs: &[f64]| LatencyResult {
+            version: version.into(),
+            scene: "san_francisco".into(),
+            json: serde_json::json!({"schema": LATENCY_SCHEMA, "converge_runs_ms": runs}),
+        };
+        let results = [
+            row("before-ab", &[60_000.0, 64_000.0]),
+            row("head-ab", &[62_000.0, 70_000.0, 68_000.0]),
+        ];
+        let mut m = String::new();
+        section(&mut m, &results).unwrap();
+        assert!(
+            m.contains("| san_francisco | before-ab | 60.0 s, 64.0 s | 62.0 s | 1.00× |"),
+            "{m}"
+        );
+        assert!(
+            m.contains("| san_francisco | head-ab | 62.0 s, 70.0 s, 68.0 s | 68.0 s | 1.10× |"),
+            "{m}"
+        );
     }
 }
