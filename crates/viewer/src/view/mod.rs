@@ -18,6 +18,7 @@ pub mod nav;
 pub mod prefs;
 pub mod present;
 mod sections;
+mod selection;
 mod settings_panel;
 pub mod shot;
 pub mod slices;

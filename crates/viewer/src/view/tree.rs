@@ -182,8 +182,7 @@ enum TreeAction {
 impl TreeAction {
     /// A click on a node's row: Shift or Ctrl toggles it in the selection, a plain click selects it.
     fn click(ui: &egui::Ui, node: u32) -> Self {
-        let m = super::ui::click_modifiers(ui.ctx());
-        if m.shift || m.command {
+        if super::selection::click_toggles(ui.ctx()) {
             TreeAction::Toggle(node)
         } else {
             TreeAction::Select(node)

@@ -84,25 +84,6 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("Ctrl+Q", "quit"),
 ];
 
-/// The modifiers held when the last primary button event of this frame happened (a quick Shift+click can press
-/// and release Shift within one frame's events, so the frame's final modifiers may no longer hold it).
-pub(crate) fn click_modifiers(ctx: &egui::Context) -> egui::Modifiers {
-    ctx.input(|i| {
-        i.events
-            .iter()
-            .rev()
-            .find_map(|e| match e {
-                egui::Event::PointerButton {
-                    button: PointerButton::Primary,
-                    modifiers,
-                    ..
-                } => Some(*modifiers),
-                _ => None,
-            })
-            .unwrap_or(i.modifiers)
-    })
-}
-
 impl Viewer {
     pub(crate) fn ui(&mut self, ctx: &egui::Context) {
         self.frame_started = Instant::now();
@@ -823,8 +804,7 @@ impl Viewer {
         } else if resp.clicked() {
             let hit = resp.interact_pointer_pos().and_then(|p| self.pick(p, rect, ppp));
             let sel = hit.map(|h| h.1).unwrap_or(u32::MAX);
-            let m = click_modifiers(ctx);
-            if m.shift || m.command {
+            if super::selection::click_toggles(ctx) {
                 self.toggle_selected(sel);
             } else if sel != self.selected {
                 self.set_selected(sel);
