@@ -19,6 +19,12 @@ pub struct Buffer {
 }
 
 impl Buffer {
+    /// Its device address as two push-constant words (low, high), for a pass that gets it through its push
+    /// constants (`Resource::push_type`; the shader rebuilds it with `packUint2x32`).
+    pub fn address_words(&self) -> [u32; 2] {
+        [self.address as u32, (self.address >> 32) as u32]
+    }
+
     /// Creates a buffer of `size` bytes (at least 16) in `location`, usable as storage, transfer source/destination
     /// and by address, plus `extra` usages.
     pub fn new(

@@ -589,16 +589,12 @@ impl Rasterizer {
             section_count: globals.section_count,
             generation,
         };
-        let (vis, inst) = (t.vis_buffer.address, scene.instances.address);
+        let ([vis_lo, vis_hi], [inst_lo, inst_hi]) =
+            (t.vis_buffer.address_words(), scene.instances.address_words());
         // Over the frame's pixels (its slice): each reads its own pixel of the whole frame's visibility.
         let resolve = |rec: &mut Recorder| {
             if let Some((gw, gh)) = slice_grid {
-                rec.dispatch(
-                    Pass::GBUFFER_FROM_VIS,
-                    gw,
-                    gh,
-                    [vis as u32, (vis >> 32) as u32, inst as u32, (inst >> 32) as u32],
-                )
+                rec.dispatch(Pass::GBUFFER_FROM_VIS, gw, gh, [vis_lo, vis_hi, inst_lo, inst_hi])
             }
         };
         if self.drawn.as_ref() == Some(&key) {

@@ -1112,8 +1112,8 @@ impl Renderer {
         globals.height = (cases.len() as u32).div_ceil(ROW).max(1);
         self.globals.write(&[globals])?;
         self.passes.bind_tlas(scene.tlas.raw, scene.tlas_generation());
-        let addr = buf.address;
-        let push = [addr as u32, (addr >> 32) as u32, cases.len() as u32, 0];
+        let [lo, hi] = buf.address_words();
+        let push = [lo, hi, cases.len() as u32, 0];
         self.gpu.run_commands(|cmd| {
             let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
             rec.dispatch(Pass::HASH_TEST, ROW, globals.height, push);

@@ -50,7 +50,7 @@ impl Target {
 
     /// The last two words of its passes' push constants: its buffer's address.
     pub fn push(&self) -> [u32; 2] {
-        [self.buffer.address as u32, (self.buffer.address >> 32) as u32]
+        self.buffer.address_words()
     }
 }
 
