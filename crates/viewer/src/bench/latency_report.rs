@@ -7,6 +7,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde_json::Value;
 
+use super::stats::median;
+
 pub const LATENCY_SCHEMA: &str = "hrtao-latency/1";
 
 /// One result file: its version (the file name's prefix, e.g. `before`), scene label and content.
@@ -186,13 +188,6 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
     Ok(())
 }
 
-/// The median of `v` (the mean of the middle two for an even count).
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    (n > 0).then(|| (v[(n - 1) / 2] + v[n / 2]) / 2.0)
-}
-
 /// The table of the versions whose `--orbit` runs alternated in one session (`converge_runs_ms`): each run's
 /// time to converge and the ratio of medians to the scene's `before-ab` version.
 fn converge_runs(m: &mut String, results: &[LatencyResult]) -> Result<()> {
@@ -222,8 +217,9 @@ fn converge_runs(m: &mut String, results: &[LatencyResult]) -> Result<()> {
         let base = rows
             .iter()
             .find(|(b, _)| b.scene == r.scene && b.version == "before-ab")
-            .and_then(|(_, bv)| median(bv.clone()));
-        let med = median(v.clone()).unwrap_or(f64::NAN);
+            .map(|(_, bv)| median(bv))
+            .filter(|b| b.is_finite());
+        let med = median(v);
         let each: Vec<String> = v.iter().map(|x| format!("{:.1} s", x / 1e3)).collect();
         writeln!(
             m,
