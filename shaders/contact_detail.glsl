@@ -1,3 +1,4 @@
+// @correction order=2
 // Contact detail (ours, `contact_detail`, docs/algorithm.md), while the map is young. Cells and the filter average
 // AO over several pixels, so contact shadows finer than them come out too light and the open faces beside them
 // too dark. The G-buffer still holds that detail: a pixel's screen-space obscurance o (how much of the geometry
@@ -11,11 +12,12 @@
 //
 // Three steps: `contact_detail.comp` writes every pixel's obscurance right after primary visibility (it reads
 // only the G-buffer, so it shares the cell finder's barrier); after the filter, the young map's corrections
-// pass (corrections.comp) sums the fit in its phase 1 (`contact_detail_fit`) and corrects in its phase 2
-// (`contact_detail_correct`). Needs common.glsl.
+// pass (corrections.comp) sums the fit in its phase 1 (`contact_detail_phase1`, after the corrections of lower
+// order) and corrects in its phase 2 (`contact_detail_phase2`). Needs common.glsl.
 #ifndef HRTAO_CONTACT_DETAIL_GLSL
 #define HRTAO_CONTACT_DETAIL_GLSL
 #include "pool.glsl"
+#include "correction.glsl"
 
 // The obscurance's taps: the (2 r + 1)^2 - 1 pixels around the pixel (of the frame's lattice).
 const int OBSCURANCE_RADIUS = 3;
@@ -73,26 +75,27 @@ float detail(uvec2 pix, GPixel px) {
     return cd.obscurance[pix.y * g.width + pix.x] - sum / max(n, 1.0);
 }
 
-// The fit's sums over the pixel `index` (AO `a`, after the corrections before it): Σ t (y - a) d and Σ t d².
-void contact_detail_fit(uint index, uvec2 pix, GPixel px, float a) {
-    PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
-    if (pr.near_traced == 0u) return;
-    float d = detail(pix, px);
+// The fit's sums over pixel `c` (AO `a`, after the corrections before it): Σ t (y - a) d and Σ t d². Leaves `a`.
+float contact_detail_phase1(CorrectedPixel c, float a) {
+    PixelRays pr = PixelRaysRef(g.pixel_rays).v[c.index];
+    if (pr.near_traced == 0u) return a;
+    float d = detail(c.pix, c.px);
     float t = float(pr.near_traced);
     float y = float(pr.open) / t;
     ContactDetailRef cd = ContactDetailRef(packUint2x32(push.zw));
     atomicAdd(cd.sums[0], int64_t(t * (y - a) * d * DETAIL_SUM_SCALE));
     atomicAdd(cd.sums[1], int64_t(t * d * d * DETAIL_SUM_SCALE));
+    return a;
 }
 
-// The pixel's AO `a` darkened by the fitted gain times its detail.
-float contact_detail_correct(uvec2 pix, GPixel px, float a) {
+// The AO `a` of pixel `c` darkened by the fitted gain times its detail.
+float contact_detail_phase2(CorrectedPixel c, float a) {
     ContactDetailRef cd = ContactDetailRef(packUint2x32(push.zw));
     float dd = float(cd.sums[1]) / DETAIL_SUM_SCALE;
     if (dd <= 0.0) return a;
     float k = min(float(cd.sums[0]) / DETAIL_SUM_SCALE / dd, 0.0);
     k *= k * k / (k * k + 0.25 / dd);
-    return clamp(a + CONTACT_DETAIL_GAIN * k * detail(pix, px), 0.0, 1.0);
+    return clamp(a + CONTACT_DETAIL_GAIN * k * detail(c.pix, c.px), 0.0, 1.0);
 }
 
 #endif

@@ -1,21 +1,16 @@
 #version 460
-// A young map's corrections (ours, docs/algorithm.md), after the filter, over the pixels that traced rays into
-// their cells this frame (the ray queue), outside refinement frames, each in its own file: the pooled residual
-// (pooled_residual.glsl) and the contact detail (contact_detail.glsl). push.x is the phase, push.y the
-// corrections on (bit 0 the pooled residual, bit 1 the contact detail: `additions::Correction`), push.zw the
-// contact detail's buffer:
-//   1: the pooled residual, in place in `ao`; then the contact detail's fit;
-//   2: the contact detail's correction, in place in `ao` (a pixel writes only its own value).
+// A young map's corrections (ours, docs/algorithm.md, `crate::additions`), after the filter, over the pixels that
+// traced rays into their cells this frame (the ray queue), outside refinement frames. Each correction is a shader
+// file of its own, marked `@correction` (correction.glsl); build.rs generates `corrections.glsl` from them: their
+// includes and `apply_corrections`, which applies in their order those of a phase that are on. push.x is the
+// phase, push.y the corrections on (their masks, `additions::generated`), push.zw what a correction's buffer
+// needs (`additions::record_corrections`). A pixel reads and writes only its own AO.
 #include "common.glsl"
 #include "filter_plan.glsl"
-#include "pool.glsl"
-#include "pooled_residual.glsl"
-#include "contact_detail.glsl"
+#include "correction.glsl"
+#include "corrections.glsl"
 
 void main() {
-    uint phase = push.x;
-    bool residual = (push.y & 1u) != 0u;
-    bool contact = (push.y & 2u) != 0u;
     if (refine_frame()) return;
     uint q;
     if (!queue_entry(StatsRef(g.stats).counters[STAT_RAY_QUEUE], q)) return;
@@ -25,12 +20,9 @@ void main() {
     if (samples == 0u || samples >= g.max_samples) return;   // no AO, or a full cell
     GPixel px = GBufferRef(g.gbuffer).px[index];
     if (px.t < 0.0) return;
-    uvec2 pix = uvec2(index % g.width, index / g.width);
+    CorrectedPixel c = CorrectedPixel(index, uvec2(index % g.width, index / g.width), px, samples);
     FloatRef ao = FloatRef(g.ao);
-    if (phase == 1u) {
-        if (residual) ao.v[index] = pooled_residual_ao(pix, px, samples, ao.v[index]);
-        if (contact) contact_detail_fit(index, pix, px, ao.v[index]);
-    } else if (contact) {
-        ao.v[index] = contact_detail_correct(pix, px, ao.v[index]);
-    }
+    float a = ao.v[index];
+    float corrected = apply_corrections(push.x, push.y, c, a);
+    if (corrected != a) ao.v[index] = corrected;
 }

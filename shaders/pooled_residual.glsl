@@ -1,3 +1,4 @@
+// @correction order=1
 // Pooled residual control variate (ours, `pooled_residual`, docs/algorithm.md), after the filter: a pixel whose
 // cell is young corrects its filtered AO a by the rays traced this frame by it and its 3x3 neighbours on the same
 // surface, r = open / traced - a, shrunk against the binomial noise v of those rays (Wiener: r^2 / (r^2 + λ v)).
@@ -9,19 +10,20 @@
 #ifndef HRTAO_POOLED_RESIDUAL_GLSL
 #define HRTAO_POOLED_RESIDUAL_GLSL
 #include "pool.glsl"
+#include "correction.glsl"
 
 // The λ of the Wiener weight r^2 / (r^2 + λ v).
 const float POOLED_RESIDUAL_LAMBDA = 16.0;
 
-// The AO `a` of pixel `pix` (G-buffer sample `px`, its cell of `samples` rays) corrected by the pooled rays.
-float pooled_residual_ao(uvec2 pix, GPixel px, uint samples, float a) {
-    vec3 pool = pooled_rays(pix, px);
+// The AO `a` of pixel `c` corrected by the pooled rays.
+float pooled_residual_phase1(CorrectedPixel c, float a) {
+    vec3 pool = pooled_rays(c.pix, c.px);
     if (pool.z <= 0.0) return a;
     float n = pool.z;
     float r = pool.x / n - a;
     float p = clamp(a, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
     float v = p * (1.0 - p) / n;
-    float cell_var = p * (1.0 - p) / float(samples);
+    float cell_var = p * (1.0 - p) / float(c.samples);
     float e = r * r + cell_var;
     return clamp(a + r * e / (e + POOLED_RESIDUAL_LAMBDA * v), 0.0, 1.0);
 }

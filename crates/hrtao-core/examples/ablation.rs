@@ -4,7 +4,7 @@
 //! first-frame cost and navigation cost, written to `OUT/NAME.json`.
 //!
 //! `HRTAO_SHARED=DIR cargo run --release -p hrtao-core --example ablation -- --name NAME [--base default|paper]
-//! [--set '{"near_field": false}'] [--out docs/bench/ablation] [--size 640x360] [--rays 8] [--frames 32] [--nav 8]
+//! [--set '{"refine": false}'] [--out docs/bench/ablation] [--size 640x360] [--rays 8] [--frames 32] [--nav 8]
 //! [--nav-deg 0.25] [KEY...]` (keys default to every view of the index).
 //!
 //! `... --example ablation -- --configs` lists the configurations (`scripts/ablation.sh` runs them).

@@ -9,6 +9,14 @@
 //! - `hash`: CPU mirror of the shaders' hash functions (paper eq. 1-6).
 //! - `tile`: a window of a larger image (large screenshots rendered tile by tile).
 //! - `camera`, `settings`, `imageio`, `headless`: inputs and outputs.
+// The test helpers the integration tests share (tests/common), also for the unit tests of a module that keeps its
+// GPU tests beside its code (each of `additions`): they name this crate as the integration tests do.
+#[cfg(test)]
+extern crate self as hrtao_core;
+#[cfg(test)]
+#[path = "../tests/common/mod.rs"]
+pub(crate) mod testkit;
+
 pub mod accel;
 pub mod additions;
 pub mod barrier;

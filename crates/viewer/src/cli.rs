@@ -257,7 +257,7 @@ pub struct AoArgs {
     #[arg(long, default_value_t = AoSettings::default().display.crease_deg)]
     pub crease: f32,
     /// Any other AO setting, as a JSON object of `AoSettings` fields (applied last), e.g.
-    /// `--set '{"near_field": false, "adaptive_rays": false}'`.
+    /// `--set '{"refine": false, "filter_iterations": 3}'`.
     #[arg(long, value_name = "JSON", value_parser = parse_settings_json)]
     pub set: Option<String>,
 }

@@ -328,16 +328,16 @@ mod tests {
     fn overrides_set_named_fields_and_reject_unknown_or_invalid_ones() {
         let base = AoSettings::default();
         let s = base
-            .with_overrides(r#"{"near_field": false, "adaptive_rays": false, "ao_radius": 3}"#)
+            .with_overrides(r#"{"refine": false, "filter_iterations": 3, "ao_radius": 3}"#)
             .unwrap();
         assert_eq!(
-            (s.young.near_field, s.young.adaptive_rays, s.map.ao_radius),
-            (false, false, 3.0)
+            (s.still.refine, s.filter.filter_iterations, s.map.ao_radius),
+            (false, 3, 3.0)
         );
         assert_eq!(s.map.s_p, base.map.s_p);
-        let err = base.with_overrides(r#"{"near_feild": false}"#).unwrap_err();
-        assert!(err.contains("near_feild"), "{err}");
-        assert!(base.with_overrides(r#"{"near_field": "no"}"#).is_err());
+        let err = base.with_overrides(r#"{"refnie": false}"#).unwrap_err();
+        assert!(err.contains("refnie"), "{err}");
+        assert!(base.with_overrides(r#"{"refine": "no"}"#).is_err());
         let err = base.with_overrides(r#"{"ao_radius": -1}"#).unwrap_err();
         assert!(err.contains("AO radius"), "{err}");
         assert!(base.with_overrides("not json").is_err());

@@ -563,3 +563,22 @@ pub fn ring_pixels(r: &Headless, bounds: hrtao_scene::Aabb, ring: f32) -> Vec<us
 pub fn mean_at(img: &[f32], px: &[usize]) -> f32 {
     px.iter().map(|&i| img[i]).sum::<f32>() / px.len().max(1) as f32
 }
+
+/// AO on a floor at distance `d` from an infinite wall rising from it (a 90° wedge), radius `r`:
+/// cosine-weighted directions project uniformly on the unit disk, and those with x <= -d/r hit the wall,
+/// so the occluded fraction is a circular segment: (acos(a) - a sqrt(1 - a^2)) / pi with a = d/r.
+pub fn wedge_ao(d: f32, r: f32) -> f32 {
+    let a = (d / r).clamp(0.0, 1.0);
+    1.0 - (a.acos() - a * (1.0 - a * a).sqrt()) / std::f32::consts::PI
+}
+
+/// Floor z = 0 and a wall x = 0 (facing +x), both far larger than any AO radius used here.
+pub fn wedge() -> Scene {
+    let wall = quad(Vec3::new(0.0, 0.0, 50.0), Vec3::Y * 100.0, Vec3::Z * 50.0);
+    scene_of(vec![floor(), wall])
+}
+
+/// A 160×90 view of the wedge from `eye` toward `target`, z up.
+pub fn wedge_camera(eye: [f32; 3], target: [f32; 3]) -> hrtao_core::Camera {
+    z_up_camera(eye, target, 160, 90)
+}
