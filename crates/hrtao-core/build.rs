@@ -174,7 +174,7 @@ fn corrections(shader_dir: &Path) -> Vec<CorrectionDecl> {
 /// - `corrections.glsl` (included by corrections.comp): includes each, and `apply_corrections(phase, on, c, a)`
 ///   applies those of `on` (their masks) that run in `phase`, in their order;
 /// - `corrections.rs` (included by `additions::generated`): each one's `Correction` (mask, phases) as a constant
-///   named after its file (`pooled_residual.glsl` -> `POOLED_RESIDUAL`).
+///   named after its file (`pooled_residual.glsl` -> `POOLED_RESIDUAL`), and `ALL` of them.
 fn write_corrections(shader_dir: &Path, out_dir: &Path) {
     let list = corrections(shader_dir);
     let mut glsl =
@@ -185,15 +185,21 @@ fn write_corrections(shader_dir: &Path, out_dir: &Path) {
         let _ = writeln!(glsl, "#include \"{}.glsl\"", c.name);
         let _ = writeln!(
             rust,
-            "/// shaders/{}.glsl: `order={}`, phases {:?}.\npub const {}: super::Correction = super::Correction {{ mask: {}, phases: {} }};",
+            "/// shaders/{}.glsl: `order={}`, phases {:?}.\npub const {}: super::Correction = super::Correction {{ name: \"{}\", mask: {}, phases: {} }};",
             c.name,
             c.order,
             c.phases,
             c.name.to_uppercase(),
+            c.name,
             1u32 << i,
             c.phases.iter().max().unwrap()
         );
     }
+    let _ = writeln!(
+        rust,
+        "/// Every correction a shader file declares, in their order.\npub const ALL: &[super::Correction] = &[{}];",
+        list.iter().map(|c| c.name.to_uppercase()).collect::<Vec<_>>().join(", ")
+    );
     glsl.push_str("\n// The AO `a` of pixel `c` after the corrections of `on` (their masks) that run in `phase`, in their order.\n");
     glsl.push_str("float apply_corrections(uint phase, uint on, CorrectedPixel c, float a) {\n");
     for k in 1..=MAX_PHASES {
