@@ -6,31 +6,10 @@ mod common;
 use common::*;
 use hrtao_core::gpu::GPixel;
 use hrtao_core::{AoSettings, Camera, SceneGpu};
-use hrtao_scene::glam::Vec3;
 use hrtao_scene::Scene;
-
-/// AO on a floor at distance `d` from an infinite wall rising from it (see analytic_ao.rs).
-fn wedge_ao(d: f32, r: f32) -> f32 {
-    let a = (d / r).clamp(0.0, 1.0);
-    1.0 - (a.acos() - a * (1.0 - a * a).sqrt()) / std::f32::consts::PI
-}
 
 const RADIUS: f32 = 4.0;
 const FRAMES: u32 = 16;
-
-fn wedge() -> (Scene, Camera) {
-    let wall = quad(Vec3::new(0.0, 0.0, 50.0), Vec3::Y * 100.0, Vec3::Z * 50.0);
-    let cam = Camera {
-        eye: [6.0, 0.0, 8.0],
-        target: [2.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width: 160,
-        height: 90,
-        ..Default::default()
-    };
-    (scene_of(vec![floor(), wall]), cam)
-}
 
 /// A still run: flicker (mean |ΔAO| between consecutive frames after frame 4, as `hrtao bench`) and the last
 /// image with its G-buffer.
@@ -78,7 +57,7 @@ fn wedge_error(ao: &[f32], gb: &[GPixel], lo: f32, hi: f32) -> f32 {
 #[test]
 fn still_wedge_flickers_no_more_than_the_paper_and_converges_at_the_crease() {
     let gpu = gpu();
-    let (scene, cam) = wedge();
+    let (scene, cam) = (wedge(), wedge_camera([6.0, 0.0, 8.0], [2.0, 0.0, 0.0]));
     let ours = hrtao(8, RADIUS);
     let (flicker, ao, gb) = still_run(&gpu, &scene, &cam, ours.clone());
     let (paper_flicker, paper_ao, _) = still_run(&gpu, &scene, &cam, ours.paper());
