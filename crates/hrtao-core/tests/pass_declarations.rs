@@ -19,16 +19,17 @@ fn shader_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders")
 }
 
-/// The text of `name` with its includes inlined once each (the generated gpu_types.glsl, which holds only
-/// types and constants, is skipped), comments removed.
+/// The text of `name` with its includes inlined once each, comments removed: a file of shaders/, or one build.rs
+/// generates (the corrections' calls, corrections.glsl; gpu_types.glsl, which holds only types and constants, is
+/// skipped).
 fn source(name: &str, seen: &mut HashSet<String>) -> String {
-    if !seen.insert(name.to_string()) {
+    if !seen.insert(name.to_string()) || name == "gpu_types.glsl" {
         return String::new();
     }
     let path = shader_dir().join(name);
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        assert_eq!(name, "gpu_types.glsl", "{} not found", path.display());
-        return String::new();
+    let generated = Path::new(env!("OUT_DIR")).join(name);
+    let Ok(text) = std::fs::read_to_string(&path).or_else(|_| std::fs::read_to_string(&generated)) else {
+        panic!("{} not found, nor {}", path.display(), generated.display());
     };
     let mut out = String::new();
     for line in strip_comments(&text).lines() {
