@@ -310,9 +310,12 @@ impl Renderer {
         (self.targets.width, self.targets.height)
     }
 
-    /// Empties the hash map (all cached AO is forgotten).
+    /// Forgets all cached AO: empties the hash map and restarts the still image (whose pixels' own rays are
+    /// cached AO too), so the next frame is a first frame from an empty map, as after opening a scene.
     pub fn clear_cache(&mut self) -> Result<()> {
-        self.map.clear(&self.stats)
+        self.map.clear(&self.stats)?;
+        self.restart_still_image();
+        Ok(())
     }
 
     /// Makes the renderer ready for `frame`: targets of its size, a map of its capacity, and what its change

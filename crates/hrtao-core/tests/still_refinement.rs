@@ -97,3 +97,54 @@ fn still_wedge_flickers_no_more_than_the_paper_and_converges_at_the_crease() {
     );
     assert_clean(&gpu);
 }
+
+/// "Clear cache" (the panel's button, a new scene, each of `hrtao bench`'s first-frame repetitions) forgets all
+/// cached AO: after a still image's refinement frames, the next frame is a first frame from an empty map, as a
+/// fresh renderer's (no accumulated frames, no refinement rays, the same rays). Before, it cleared the map only,
+/// and the next frame was the still image's next refinement frame (the bench timed those as first frames).
+#[test]
+fn clear_cache_starts_from_an_empty_map_and_a_new_still_image() {
+    let gpu = gpu();
+    let (scene, cam) = (wedge(), wedge_camera([6.0, 0.0, 8.0], [2.0, 0.0, 0.0]));
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let settings = hrtao(4, RADIUS);
+    assert!(settings.still.refine, "refinement on by default");
+    let fresh = {
+        let mut r = Headless::new(&gpu, cam.width, cam.height, settings.clone()).unwrap();
+        r.render(&sg, scene.f(), &cam).unwrap()
+    };
+    let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
+    for _ in 0..3 {
+        r.render(&sg, scene.f(), &cam).unwrap();
+    }
+    let refining = r.render(&sg, scene.f(), &cam).unwrap();
+    assert!(
+        refining.accumulated_frames > 1 && refining.refine_rays > 0,
+        "the still image refines: {} frames, {} own rays",
+        refining.accumulated_frames,
+        refining.refine_rays
+    );
+    r.r.clear_cache().unwrap();
+    let first = r.render(&sg, scene.f(), &cam).unwrap();
+    println!(
+        "after clear_cache: {} accumulated frames, {} refinement rays, {} rays (fresh renderer: {} / {} / {})",
+        first.accumulated_frames,
+        first.refine_rays,
+        first.rays,
+        fresh.accumulated_frames,
+        fresh.refine_rays,
+        fresh.rays
+    );
+    assert_eq!(
+        (first.accumulated_frames, first.refine_rays),
+        (fresh.accumulated_frames, fresh.refine_rays),
+        "a first frame"
+    );
+    assert!(
+        (first.rays as f64 - fresh.rays as f64).abs() <= 0.01 * fresh.rays as f64,
+        "a first frame's rays: {} against {}",
+        first.rays,
+        fresh.rays
+    );
+    assert_clean(&gpu);
+}

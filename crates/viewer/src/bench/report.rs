@@ -867,6 +867,10 @@ fn render_markdown(
         )?;
     }
     step_table(&mut m, &load_step_results(dir)?)?;
+    super::first_frame_report::section(
+        &mut m,
+        &super::first_frame_report::load(&dir.join("first_frame"))?,
+    )?;
     super::latency_report::section(&mut m, &super::latency_report::load(&dir.join("latency"))?)?;
     Ok(m)
 }
