@@ -42,16 +42,9 @@ fn still_run(
 
 /// Mean |AO - analytic| over floor pixels with `lo <= x < hi` (distance from the wall).
 fn wedge_error(ao: &[f32], gb: &[GPixel], lo: f32, hi: f32) -> f32 {
-    let (mut sum, mut n) = (0.0, 0);
-    for (p, a) in gb.iter().zip(ao) {
-        if p.t < 0.0 || p.normal[2] < 0.99 || p.position[0] < lo || p.position[0] >= hi {
-            continue;
-        }
-        sum += (a - wedge_ao(p.position[0], RADIUS)).abs();
-        n += 1;
-    }
+    let (e, n) = wedge_floor_error(ao, gb, RADIUS, lo, hi);
     assert!(n > 100, "enough floor pixels in [{lo}, {hi}): {n}");
-    sum / n as f32
+    e
 }
 
 #[test]

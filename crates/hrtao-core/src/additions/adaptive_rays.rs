@@ -34,23 +34,13 @@ mod tests {
             let rays = r.render(&sg, scene.f(), &cam).expect("frame").rays;
             let ao = r.read_ao().unwrap();
             let gb = r.read_gbuffer().unwrap();
-            let (mut n, mut sum, mut open) = (0usize, 0.0f32, 0usize);
-            for (p, a) in gb.iter().zip(&ao) {
-                let x = p.position[0];
-                if p.t > 0.0 && p.normal[2] > 0.99 && x > 0.01 {
-                    if x < radius {
-                        sum += (a - wedge_ao(x, radius)).abs();
-                        n += 1;
-                    } else {
-                        open += 1;
-                    }
-                }
-            }
+            let (error, n) = wedge_floor_error(&ao, &gb, radius, 0.01, radius);
+            let (_, open) = wedge_floor_error(&ao, &gb, radius, radius, f32::INFINITY);
             assert!(
                 n > 300 && open > n,
                 "floor pixels near the wall ({n}) and open ({open})"
             );
-            (sum / n as f32, rays)
+            (error, rays)
         };
         let ours = hrtao(8, radius);
         assert!(ours.young.adaptive_rays, "on by default");

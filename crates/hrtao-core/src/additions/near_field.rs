@@ -31,16 +31,9 @@ mod tests {
             let (r, _sg) = render(&gpu, &scene, &cam, settings, 1);
             let ao = r.read_ao().unwrap();
             let gb = r.read_gbuffer().unwrap();
-            let (mut n, mut sum) = (0usize, 0.0f32);
-            for (p, a) in gb.iter().zip(&ao) {
-                let x = p.position[0];
-                if p.t > 0.0 && p.normal[2] > 0.99 && x > 0.01 && x < radius / 4.0 {
-                    sum += (a - wedge_ao(x, radius)).abs();
-                    n += 1;
-                }
-            }
+            let (error, n) = wedge_floor_error(&ao, &gb, radius, 0.01, radius / 4.0);
             assert!(n > 200, "enough floor pixels near the crease ({n})");
-            sum / n as f32
+            error
         };
         let ours = hrtao(8, radius);
         assert!(ours.young.near_field, "the correction is on by default");

@@ -582,3 +582,23 @@ pub fn wedge() -> Scene {
 pub fn wedge_camera(eye: [f32; 3], target: [f32; 3]) -> hrtao_core::Camera {
     z_up_camera(eye, target, 160, 90)
 }
+
+/// Mean |AO - analytic| over the wedge's floor pixels at `lo <= x < hi` from the wall (AO radius `radius`), and
+/// how many there are.
+pub fn wedge_floor_error(
+    ao: &[f32],
+    gb: &[hrtao_core::gpu::GPixel],
+    radius: f32,
+    lo: f32,
+    hi: f32,
+) -> (f32, usize) {
+    let (mut sum, mut n) = (0.0f32, 0usize);
+    for (p, a) in gb.iter().zip(ao) {
+        let x = p.position[0];
+        if p.t > 0.0 && p.normal[2] > 0.99 && x >= lo && x < hi {
+            sum += (a - wedge_ao(x, radius)).abs();
+            n += 1;
+        }
+    }
+    (sum / n.max(1) as f32, n)
+}
