@@ -104,7 +104,7 @@ mod tests {
     }
 
     /// The ratio pairs each of our first frames with the paper's of the same turn: a machine that slows down
-    /// between turns moves both frames of a pair, not the ratio (a ratio of medians would read 1.5 here).
+    /// between turns moves both frames of a pair, not the ratio (the ratio of the medians would read 1.33 here).
     #[test]
     fn the_ratio_is_the_median_of_the_paired_frames() {
         let mut run = committed().into_iter().next().expect("committed results").result;
@@ -120,9 +120,9 @@ mod tests {
                 .collect();
         };
         set(&mut run.hrtao.first, &[200.0, 400.0, 900.0]);
-        set(&mut run.paper.as_mut().unwrap().first, &[100.0, 200.0, 600.0]);
+        set(&mut run.paper.as_mut().unwrap().first, &[100.0, 300.0, 450.0]);
         let (ours, paper, ratio) = first_frame_ratio(&run).unwrap();
-        assert_eq!((ours, paper, ratio), (400.0, 200.0, 2.0));
+        assert_eq!((ours, paper, ratio), (400.0, 300.0, 2.0));
         let mut m = String::new();
         section(
             &mut m,
@@ -132,7 +132,7 @@ mod tests {
             }],
         )
         .unwrap();
-        assert!(m.contains("| default | 400 / 200 ms, **2.00×** |"), "{m}");
+        assert!(m.contains("| default | 400 / 300 ms, **2.00×** |"), "{m}");
     }
 
     /// Every committed configuration has a row, `default` first, each scene a column.
