@@ -17,11 +17,16 @@ settings_group! {
     }
 }
 
+/// The crease angles the feature edges accept, in degrees (the panel's slider spans the same range).
+pub const CREASE_DEG_RANGE: std::ops::RangeInclusive<f32> = 0.0..=180.0;
+
 impl DisplaySettings {
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.crease_deg.is_finite() && (0.0..=180.0).contains(&self.crease_deg)) {
+        if !(self.crease_deg.is_finite() && CREASE_DEG_RANGE.contains(&self.crease_deg)) {
             return Err(format!(
-                "crease angle must be in 0..=180 degrees, got {}",
+                "crease angle must be in {}..={} degrees, got {}",
+                CREASE_DEG_RANGE.start(),
+                CREASE_DEG_RANGE.end(),
                 self.crease_deg
             ));
         }

@@ -19,7 +19,7 @@ mod mode;
 mod still;
 mod young;
 
-pub use display::DisplaySettings;
+pub use display::{DisplaySettings, CREASE_DEG_RANGE};
 pub use edits::EditSettings;
 pub use filter::{FilterSettings, FILTER_SIGMA};
 pub use map::{MapSettings, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use super::Viewer;
+use super::command::{Command, ViewState};
 
 /// A dialog that returns nothing sooner than this never appeared (no portal, no zenity): say so.
 const NO_DIALOG: Duration = Duration::from_millis(400);
@@ -43,30 +43,100 @@ pub fn dropped_model(paths: &[PathBuf]) -> Result<Option<PathBuf>, String> {
     }
 }
 
-impl Viewer {
-    /// Files dropped on the window: opens the model among them (the current scene stays if it fails).
-    pub(crate) fn open_dropped(&mut self, paths: &[PathBuf]) {
-        match dropped_model(paths) {
-            Ok(Some(p)) => {
-                log::info!("dropped file: {}", p.display());
-                self.start_loading(p.display().to_string());
-            }
-            Ok(None) => {}
-            Err(e) => self.toast(e, true),
+/// The "Scene" section's open controls: a path or spec to type, Open, the Open… dialog, the bundled scene, the
+/// running load and the last load error.
+#[derive(Default)]
+pub struct FilesPanel {
+    /// The path in the text field.
+    pub open_path: String,
+    /// An Open… dialog running on its own thread: the chosen file arrives here.
+    dialog: Option<mpsc::Receiver<DialogResult>>,
+}
+
+impl FilesPanel {
+    pub fn new(spec: &str) -> FilesPanel {
+        FilesPanel {
+            open_path: spec.to_string(),
+            dialog: None,
         }
     }
 
-    /// Opens the file chooser (one at a time).
-    pub(crate) fn open_file_dialog(&mut self) {
-        if self.open_dialog.is_some() {
-            return;
+    pub fn ui(&mut self, ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
+        let mut out = Vec::new();
+        let idle = state.loading.is_none();
+        ui.horizontal(|ui| {
+            let edit = ui.add(
+                egui::TextEdit::singleline(&mut self.open_path)
+                    .hint_text("file.glb / .gltf / .obj / gen:city")
+                    .desired_width(200.0),
+            );
+            let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            if (ui.button("Open").clicked() || enter) && idle {
+                out.push(Command::Open(self.open_path.trim().to_string()));
+            }
+            if ui
+                .add_enabled(self.dialog.is_none(), egui::Button::new("Open…"))
+                .on_hover_text("Choose a file (desktop portal, or zenity when no portal runs)")
+                .clicked()
+            {
+                out.push(Command::OpenDialog);
+            }
+        })
+        .response
+        .on_hover_text(
+            "Open a glTF/GLB/OBJ file or a generator spec (drag & drop a file onto the window too)",
+        );
+        if ui.button("Open the bundled scene").clicked() && idle {
+            out.push(Command::Open(super::default_spec()));
         }
-        let start = std::path::Path::new(&self.scene_spec)
+        if let Some(l) = &state.loading {
+            let cancel = ui
+                .horizontal(|ui| {
+                    ui.spinner();
+                    ui.label(format!("loading: {}", l.progress));
+                    ui.button("Cancel")
+                        .on_hover_text("Stop loading; the current scene stays")
+                        .clicked()
+                })
+                .inner;
+            if cancel {
+                out.push(Command::CancelLoading);
+            }
+        }
+        if let Some(e) = state.load_error {
+            ui.colored_label(egui::Color32::from_rgb(230, 80, 70), e);
+        }
+        out
+    }
+
+    /// A scene opened: the text field shows it.
+    pub fn opened(&mut self, spec: &str) {
+        self.open_path = spec.to_string();
+    }
+
+    /// Files dropped on the window: opens the model among them (the current scene stays if it fails).
+    pub fn dropped(paths: &[PathBuf]) -> Option<Command> {
+        match dropped_model(paths) {
+            Ok(Some(p)) => {
+                log::info!("dropped file: {}", p.display());
+                Some(Command::Open(p.display().to_string()))
+            }
+            Ok(None) => None,
+            Err(e) => Some(Command::toast(e, true)),
+        }
+    }
+
+    /// Opens the file chooser (one at a time), starting in the folder of `current` (the open scene's file).
+    pub fn open_dialog(&mut self, current: &str, ctx: &egui::Context) -> Option<Command> {
+        if self.dialog.is_some() {
+            return None;
+        }
+        let start = std::path::Path::new(current)
             .parent()
             .filter(|d| d.is_dir())
             .map(PathBuf::from);
         let (tx, rx) = mpsc::channel();
-        let ctx = self.egui_ctx.clone();
+        let ctx = ctx.clone();
         let spawned = std::thread::Builder::new()
             .name("open-dialog".into())
             .spawn(move || {
@@ -83,35 +153,37 @@ impl Viewer {
                 ctx.request_repaint();
             });
         match spawned {
-            Ok(_) => self.open_dialog = Some(rx),
-            Err(e) => self.toast(format!("cannot open the file dialog: {e}"), true),
+            Ok(_) => {
+                self.dialog = Some(rx);
+                None
+            }
+            Err(e) => Some(Command::toast(format!("cannot open the file dialog: {e}"), true)),
         }
     }
 
-    /// Starts loading the file the dialog returned, if it has.
-    pub(crate) fn poll_open_dialog(&mut self) {
-        let Some(rx) = &self.open_dialog else {
-            return;
-        };
+    /// The file the dialog returned, if it has, to open (unless a load is running).
+    pub fn poll_dialog(&mut self, loading: bool) -> Option<Command> {
+        let rx = self.dialog.as_ref()?;
         match rx.try_recv() {
-            Err(mpsc::TryRecvError::Empty) => {}
+            Err(mpsc::TryRecvError::Empty) => None,
             Ok((Some(path), _)) => {
-                self.open_dialog = None;
+                self.dialog = None;
                 log::info!("file dialog chose {}", path.display());
-                if self.loading.is_none() {
-                    self.start_loading(path.display().to_string());
-                }
+                (!loading).then(|| Command::Open(path.display().to_string()))
             }
             Ok((None, open_for)) => {
-                self.open_dialog = None;
-                if open_for < NO_DIALOG {
-                    self.toast(
+                self.dialog = None;
+                (open_for < NO_DIALOG).then(|| {
+                    Command::toast(
                         "no file dialog could be shown (it needs xdg-desktop-portal or zenity): type the path or drop the file on the window",
                         true,
-                    );
-                }
+                    )
+                })
             }
-            Err(mpsc::TryRecvError::Disconnected) => self.open_dialog = None,
+            Err(mpsc::TryRecvError::Disconnected) => {
+                self.dialog = None;
+                None
+            }
         }
     }
 }

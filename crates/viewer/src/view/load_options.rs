@@ -4,7 +4,8 @@
 use hrtao_scene::CadTessellation;
 use serde::{Deserialize, Serialize};
 
-use super::Viewer;
+use super::command::{Command, ViewState};
+use super::ui_probe;
 
 /// Smallest and largest linear deflection relative to a part's size (fraction of its bounding-box diagonal).
 const RELATIVE_RANGE: (f64, f64) = (1e-5, 0.1);
@@ -89,22 +90,26 @@ pub fn is_cad_file(spec: &str) -> bool {
         .is_some_and(|e| ["step", "stp", "iges", "igs"].contains(&e.to_ascii_lowercase().as_str()))
 }
 
-impl Viewer {
-    /// The "Load options" section: the tessellation of STEP/IGES files, and reopening the current one with it.
-    pub(crate) fn load_options_section(&mut self, ui: &mut egui::Ui) {
+/// The "Load options" section: the tessellation of STEP/IGES files (kept in the preferences), and reopening the
+/// current file with it.
+#[derive(Default)]
+pub struct LoadOptionsPanel;
+
+impl LoadOptionsPanel {
+    pub fn ui(&mut self, ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
         let ppp = ui.ctx().pixels_per_point();
-        let probe = &mut self.ui_probe;
-        let o = &mut self.prefs.cad_load;
+        let mut prefs = state.prefs.clone();
+        let o = &mut prefs.cad_load;
         ui.label("STEP / IGES tessellation (OpenCASCADE)");
         ui.horizontal(|ui| {
             let r = ui
                 .radio_value(&mut o.relative, true, "relative to each part")
                 .on_hover_text("Linear deflection as a fraction of each part's size (--deflection)");
-            probe.note("relative to each part", r.rect, ppp);
+            ui_probe::note("relative to each part", r.rect, ppp);
             let r = ui
                 .radio_value(&mut o.relative, false, "in millimetres")
                 .on_hover_text("One linear deflection for every part (--deflection-mm)");
-            probe.note("in millimetres", r.rect, ppp);
+            ui_probe::note("in millimetres", r.rect, ppp);
         });
         egui::Grid::new("cad_load_options").show(ui, |ui| {
             ui.label("linear deflection");
@@ -128,7 +133,7 @@ impl Viewer {
                         .max_decimals(4)
                         .suffix(" mm"),
                 );
-                probe.note("linear deflection mm", r.rect, ppp);
+                ui_probe::note("linear deflection mm", r.rect, ppp);
             }
             ui.end_row();
             ui.label("angular deflection");
@@ -143,21 +148,25 @@ impl Viewer {
                 "At most this angle between neighbouring triangles of a curved face (--angular-deflection); \
                  keep it at most the crease angle so that curved faces do not read as facets",
             );
-            probe.note("angular deflection", r.rect, ppp);
+            ui_probe::note("angular deflection", r.rect, ppp);
             ui.end_row();
         });
         if ui.button("Defaults").clicked() {
             *o = CadLoadOptions::default();
         }
-        let current = self.scene_spec.clone();
-        let reopen = is_cad_file(&current) && self.loading.is_none();
+        let mut out = Vec::new();
+        if prefs != *state.prefs {
+            out.push(Command::Prefs(Box::new(prefs)));
+        }
+        let reopen = is_cad_file(state.spec) && state.loading.is_none();
         let r = ui
             .add_enabled(reopen, egui::Button::new("Reopen with these options"))
             .on_hover_text("Opens the current STEP/IGES file again; new files open with them too");
-        self.ui_probe.note("Reopen with these options", r.rect, ppp);
+        ui_probe::note("Reopen with these options", r.rect, ppp);
         if r.clicked() {
-            self.start_loading(current);
+            out.push(Command::Open(state.spec.to_string()));
         }
+        out
     }
 }
 

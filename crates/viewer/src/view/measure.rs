@@ -4,8 +4,7 @@
 //! file's own coordinates (`Scene::origin` added back).
 use glam::{DVec3, Vec3};
 use hrtao_core::Camera;
-
-use super::Viewer;
+use hrtao_scene::Scene;
 
 /// A length unit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -172,23 +171,20 @@ pub fn project(cam: &Camera, p: Vec3) -> Option<[f32; 2]> {
 
 const POINT_COLOR: egui::Color32 = egui::Color32::from_rgb(255, 200, 40);
 
-impl Viewer {
+impl Measure {
     /// Adds a picked scene point to the measurement.
-    pub(crate) fn measure_pick(&mut self, p: [f32; 3]) {
-        let Some(scene) = &self.scene else {
-            return;
-        };
+    pub fn pick(&mut self, scene: &Scene, p: [f32; 3]) {
         let scene_p = Vec3::from(p);
-        self.measure.add(Point {
+        self.add(Point {
             scene: scene_p,
             file: scene.to_file(scene_p),
         });
-        log::info!("measure point {} picked", self.measure.points.len());
-        if let Some(m) = self.measure.result() {
+        log::info!("measure point {} picked", self.points.len());
+        if let Some(m) = self.result() {
             log::info!(
                 "measured distance {:.6} {} (dx {:.6}, dy {:.6}, dz {:.6})",
                 m.distance,
-                self.measure.show_unit.label(),
+                self.show_unit.label(),
                 m.delta.x,
                 m.delta.y,
                 m.delta.z
@@ -197,26 +193,23 @@ impl Viewer {
     }
 
     /// The model's bounding box size in file units (cached per scene version).
-    fn model_size(&mut self) -> Option<Vec3> {
-        let scene = self.scene.as_ref()?;
+    fn model_size(&mut self, scene: &Scene) -> Vec3 {
         let key = (scene.f(), scene.instances.len());
-        match self.measure.dims {
-            Some((k, size)) if k == key => Some(size),
+        match self.dims {
+            Some((k, size)) if k == key => size,
             _ => {
                 let b = scene.bounds();
                 let size = if b.is_empty() { Vec3::ZERO } else { b.max - b.min };
-                self.measure.dims = Some((key, size));
-                Some(size)
+                self.dims = Some((key, size));
+                size
             }
         }
     }
 
     /// "Dimensions: x × y × z" of the visible model in the display unit.
-    pub(crate) fn dimensions_row(&mut self, ui: &mut egui::Ui) {
-        let Some(size) = self.model_size() else {
-            return;
-        };
-        let (file, show) = (self.measure.file_unit, self.measure.show_unit);
+    pub fn dimensions_row(&mut self, ui: &mut egui::Ui, scene: &Scene) {
+        let size = self.model_size(scene);
+        let (file, show) = (self.file_unit, self.show_unit);
         let c = |v: f32| format_len(convert(v as f64, file, show), show);
         ui.label(format!(
             "Dimensions: {} × {} × {}",
@@ -227,12 +220,13 @@ impl Viewer {
         .on_hover_text("Bounding box of the visible instances (x × y × z), in the unit chosen under Measure");
     }
 
-    pub(crate) fn measure_section(&mut self, ui: &mut egui::Ui) {
+    /// The "Measure" section: the mode, the units and the measured distance.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            ui.toggle_value(&mut self.measure.active, "Measure (M)")
+            ui.toggle_value(&mut self.active, "Measure (M)")
                 .on_hover_text("Click two surface points in the view");
             if ui.button("Clear").clicked() {
-                self.measure.points.clear();
+                self.points.clear();
             }
         });
         let unit_combo = |ui: &mut egui::Ui, id: &str, unit: &mut Unit| {
@@ -249,12 +243,12 @@ impl Viewer {
             ui.label("1 file unit =").on_hover_text(
                 "glTF is in metres; STL, PLY and OBJ carry no unit (CAD exports are often mm)",
             );
-            unit_combo(ui, "file-unit", &mut self.measure.file_unit);
+            unit_combo(ui, "file-unit", &mut self.file_unit);
             ui.label("show in");
-            unit_combo(ui, "show-unit", &mut self.measure.show_unit);
+            unit_combo(ui, "show-unit", &mut self.show_unit);
         });
-        let show = self.measure.show_unit;
-        for (k, p) in self.measure.points.iter().enumerate() {
+        let show = self.show_unit;
+        for (k, p) in self.points.iter().enumerate() {
             ui.label(format!(
                 "{} ({:.4}, {:.4}, {:.4}) file units",
                 ["A", "B"][k.min(1)],
@@ -263,7 +257,7 @@ impl Viewer {
                 p.file.z
             ));
         }
-        match self.measure.result() {
+        match self.result() {
             Some(m) => {
                 ui.strong(format!("distance {}", format_len(m.distance, show)));
                 ui.label(format!(
@@ -273,32 +267,24 @@ impl Viewer {
                     format_len(m.delta.z, show)
                 ));
             }
-            None if self.measure.active => {
-                ui.weak(format!(
-                    "click point {}",
-                    ["A", "B"][self.measure.points.len().min(1)]
-                ));
+            None if self.active => {
+                ui.weak(format!("click point {}", ["A", "B"][self.points.len().min(1)]));
             }
             None => {}
         }
     }
 
     /// Draws the picked points, the line between them and the distance over the 3D view.
-    pub(crate) fn measure_overlay(&self, painter: &egui::Painter, rect: egui::Rect) {
-        if self.measure.points.is_empty() {
+    /// `cam`: the camera at the 3D view's size.
+    pub fn overlay(&self, painter: &egui::Painter, rect: egui::Rect, cam: &Camera) {
+        if self.points.is_empty() {
             return;
         }
-        let cam = Camera {
-            width: self.view_rect[2].max(1) as u32,
-            height: self.view_rect[3].max(1) as u32,
-            ..self.nav.cam
-        };
         let screen: Vec<Option<egui::Pos2>> = self
-            .measure
             .points
             .iter()
             .map(|p| {
-                project(&cam, p.scene)
+                project(cam, p.scene)
                     .map(|[fx, fy]| rect.min + egui::vec2(fx * rect.width(), fy * rect.height()))
             })
             .collect();
@@ -306,11 +292,11 @@ impl Viewer {
             painter.circle_filled(*s, 4.0, POINT_COLOR);
             painter.circle_stroke(*s, 4.0, egui::Stroke::new(1.0, egui::Color32::BLACK));
         }
-        let (Some(m), [Some(a), Some(b)]) = (self.measure.result(), screen.as_slice()) else {
+        let (Some(m), [Some(a), Some(b)]) = (self.result(), screen.as_slice()) else {
             return;
         };
         painter.line_segment([*a, *b], egui::Stroke::new(2.0, POINT_COLOR));
-        let show = self.measure.show_unit;
+        let show = self.show_unit;
         let text = format!(
             "{}\ndx {}  dy {}  dz {}",
             format_len(m.distance, show),

@@ -8,10 +8,13 @@
 //! - `shot`: custom-size screenshots rendered in the background, tile by tile, while the window keeps drawing.
 //! - `ui`: the panel, navigation and picking input, toasts.
 pub mod budget;
+mod command;
 pub mod edits;
 mod files;
+mod input;
 pub mod latency;
 mod load_options;
+mod loader;
 pub mod measure;
 pub mod motion;
 pub mod nav;
@@ -46,6 +49,7 @@ use hrtao_core::{
 use hrtao_scene::Scene;
 
 use crate::cli::ViewArgs;
+use command::{Command, PickFor};
 use edits::EditStack;
 use nav::Nav;
 use prefs::Prefs;
@@ -301,27 +305,6 @@ impl egui_ash::App for App {
     }
 }
 
-/// Messages from the background loader.
-enum LoadMsg {
-    Progress(String),
-    Done(std::result::Result<Scene, String>, Duration),
-}
-
-struct Loading {
-    spec: String,
-    /// Its cancel flag stops the loader thread at its next chunk or mesh.
-    opts: hrtao_scene::LoadOptions,
-    rx: Receiver<LoadMsg>,
-    progress: String,
-    started: Instant,
-}
-
-pub(crate) struct Toast {
-    text: String,
-    error: bool,
-    until: Instant,
-}
-
 /// Scripted-mode state.
 struct Script {
     frames: Option<u32>,
@@ -344,6 +327,8 @@ struct Script {
     rendered: u32,
     done: bool,
     ui_capture_pending: bool,
+    /// The --screenshot-ui capture was asked for (once).
+    ui_captured: bool,
 }
 
 /// A background screenshot's PNG being written on its own thread.
@@ -359,13 +344,20 @@ struct ShotRequest {
     path: PathBuf,
 }
 
+/// What the command line asked of the first scene: its camera, up axis, AO radius and section planes.
+struct Startup {
+    camera: Option<PathBuf>,
+    up: Option<UpAxis>,
+    radius: Option<f32>,
+    /// --section planes (file coordinates).
+    sections: crate::cli::SectionArgs,
+}
+
 pub(crate) struct Viewer {
     gpu: Arc<Gpu>,
     presenter: Presenter,
     egui_ctx: egui::Context,
     exit_signal: egui_ash::ExitSignal,
-    /// F11 toggles it.
-    fullscreen: bool,
     outcome: Arc<Mutex<Outcome>>,
     // Scene and rendering.
     scene: Option<Scene>,
@@ -383,23 +375,14 @@ pub(crate) struct Viewer {
     nav: Nav,
     home: Camera,
     default_radius: f32,
-    /// The instance move and delete act on (u32::MAX: none); `selection` holds what is highlighted.
-    selected: u32,
+    /// What is highlighted; its primary instance is what move and delete act on.
     selection: tree::Selection,
-    tree_view: tree::TreeView,
-    measure: measure::Measure,
-    /// An Open… dialog running on its own thread: the chosen file arrives here.
-    open_dialog: Option<Receiver<files::DialogResult>>,
+    /// The panels and tools, each with its own state; they send commands (`apply`).
+    panels: ui::Panels,
     edits: EditStack,
-    loading: Option<Loading>,
-    load_error: Option<String>,
-    open_path: String,
-    initial_camera: Option<PathBuf>,
-    forced_up: Option<UpAxis>,
-    args_radius: Option<f32>,
-    /// --section planes (file coordinates), applied to the first scene.
-    args_sections: crate::cli::SectionArgs,
-    section_state: sections::SectionState,
+    loader: loader::Loader,
+    /// What the command line asked of the first scene.
+    startup: Startup,
     // View.
     /// The user's render scale: the internal resolution of a still image, and the cap while moving.
     render_scale: f32,
@@ -420,10 +403,6 @@ pub(crate) struct Viewer {
     frame_ms_avg: f64,
     interval_ms_avg: f64,
     last_frame_at: Option<Instant>,
-    bookmark_name: String,
-    show_panel: bool,
-    /// Tab was pressed this frame: drop the focus egui's keyboard navigation gave a widget.
-    drop_nav_focus: bool,
     /// The last frame left nothing to refine: the event loop waits for input.
     resting: bool,
     /// This frame held the view's image for a press that has not moved anything (`Motion::holds`).
@@ -435,21 +414,16 @@ pub(crate) struct Viewer {
     shows_moving: bool,
     // Persistence.
     prefs: Prefs,
-    prefs_path: Option<PathBuf>,
-    prefs_saved: Prefs,
-    prefs_saved_at: Instant,
+    prefs_file: prefs::PrefsFile,
     // Messages.
-    toasts: Vec<Toast>,
+    toasts: Vec<ui::Toast>,
     shot: Option<ShotRequest>,
     /// A custom-size screenshot rendering in the background, then its PNG being written.
-    pub(crate) background_shot: Option<shot::BackgroundShot>,
+    background_shot: Option<shot::BackgroundShot>,
     saving: Option<Saving>,
     script: Script,
-    pending_ui_readback: Option<(PathBuf, Buffer, u32, u32, bool)>,
     /// Presentation and input stamps, `--ao-out`, `--exit-after`.
     latency: latency::Latency,
-    /// Window tests' hook: where the panel's controls are (`HRTAO_UI_PROBE`).
-    ui_probe: ui_probe::UiProbe,
     shut_down: bool,
 }
 
@@ -464,11 +438,7 @@ impl Viewer {
         egui_ctx: egui::Context,
     ) -> Viewer {
         let prefs_path = (!args.no_config).then(|| args.config.clone().unwrap_or_else(prefs::default_path));
-        let (mut prefs, prefs_msg) = match &prefs_path {
-            Some(p) => prefs::load(p),
-            None => (Prefs::default(), None),
-        };
-        let prefs_saved = prefs.clone();
+        let (prefs_file, mut prefs, prefs_msg) = prefs::PrefsFile::open(prefs_path);
         if let Some(m) = args.mode {
             prefs.settings.display.mode = m;
         }
@@ -500,14 +470,12 @@ impl Viewer {
         } else {
             egui::Visuals::light()
         });
-        let forced_up = args.up.map(UpAxis::from);
         let spec = args.file.clone().unwrap_or_else(default_spec);
         let mut v = Viewer {
             gpu,
             presenter,
             egui_ctx,
             exit_signal,
-            fullscreen: false,
             outcome,
             scene: None,
             scene_spec: String::new(),
@@ -526,20 +494,16 @@ impl Viewer {
             },
             home: Camera::default(),
             default_radius: 1.0,
-            selected: u32::MAX,
             selection: tree::Selection::default(),
-            tree_view: tree::TreeView::default(),
-            measure: measure::Measure::for_spec(&spec),
-            open_dialog: None,
+            panels: ui::Panels::new(&spec, !args.no_panel),
             edits: EditStack::default(),
-            loading: None,
-            load_error: None,
-            open_path: spec.clone(),
-            initial_camera: args.camera.clone(),
-            forced_up,
-            args_radius: args.radius,
-            args_sections: args.sections.clone(),
-            section_state: sections::SectionState::default(),
+            loader: loader::Loader::default(),
+            startup: Startup {
+                camera: args.camera.clone(),
+                up: args.up.map(UpAxis::from),
+                radius: args.radius,
+                sections: args.sections.clone(),
+            },
             render_scale,
             motion: motion::Motion::new(moving_scale.min(render_scale)),
             view_rect: [0, 0, 1, 1],
@@ -553,17 +517,12 @@ impl Viewer {
             frame_ms_avg: 0.0,
             interval_ms_avg: 0.0,
             last_frame_at: None,
-            bookmark_name: String::new(),
-            show_panel: !args.no_panel,
-            drop_nav_focus: false,
             resting: false,
             holding: false,
             settling: false,
             shows_moving: false,
             prefs,
-            prefs_path,
-            prefs_saved,
-            prefs_saved_at: Instant::now(),
+            prefs_file,
             toasts: Vec::new(),
             shot: None,
             background_shot: None,
@@ -591,10 +550,9 @@ impl Viewer {
                 rendered: 0,
                 done: false,
                 ui_capture_pending: false,
+                ui_captured: false,
             },
-            pending_ui_readback: None,
             latency: latency::Latency::new(args.ao_out.clone(), args.exit_after),
-            ui_probe: ui_probe::UiProbe::from_env(),
             shut_down: false,
         };
         if let Some(m) = prefs_msg {
@@ -604,14 +562,14 @@ impl Viewer {
         v
     }
 
-    pub(crate) fn toast(&mut self, text: impl Into<String>, error: bool) {
+    fn toast(&mut self, text: impl Into<String>, error: bool) {
         let text = text.into();
         if error {
             log::warn!("{text}");
         } else {
             log::info!("{text}");
         }
-        self.toasts.push(Toast {
+        self.toasts.push(ui::Toast {
             text,
             error,
             until: Instant::now() + Duration::from_secs(if error { 8 } else { 4 }),
@@ -634,53 +592,15 @@ impl Viewer {
 
     /// Starts loading `spec` on a background thread (the window keeps running; the old scene stays).
     /// A load still running is cancelled.
-    pub(crate) fn start_loading(&mut self, spec: String) {
-        if let Some(old) = self.loading.take() {
-            old.opts.cancel.store(true, std::sync::atomic::Ordering::Relaxed);
-        }
-        let (tx, rx) = mpsc::channel();
-        let s = spec.clone();
-        let opts = self.prefs.cad_load.load_options();
-        let thread_opts = opts.clone();
-        std::thread::spawn(move || {
-            let t0 = Instant::now();
-            let mut last = Instant::now() - Duration::from_secs(1);
-            let ptx = tx.clone();
-            let result = hrtao_scene::load_with(&s, &thread_opts, &mut |p| {
-                if last.elapsed() > Duration::from_millis(100) {
-                    last = Instant::now();
-                    let pct = if p.total > 0 {
-                        format!(" {:.0}%", 100.0 * p.done as f64 / p.total as f64)
-                    } else {
-                        String::new()
-                    };
-                    let mb = if p.stage == "read" {
-                        format!(" of {:.0} MB", p.total as f64 / 1e6)
-                    } else {
-                        String::new()
-                    };
-                    let _ = ptx.send(LoadMsg::Progress(format!("{}{pct}{mb}", p.stage)));
-                }
-            })
-            .map_err(|e| format!("cannot open `{s}`: {e}"));
-            let _ = tx.send(LoadMsg::Done(result, t0.elapsed()));
-        });
-        self.loading = Some(Loading {
-            spec,
-            opts,
-            rx,
-            progress: "starting".into(),
-            started: Instant::now(),
-        });
-        self.load_error = None;
+    fn start_loading(&mut self, spec: String) {
+        self.loader.start(spec, self.prefs.cad_load.load_options());
     }
 
     /// Cancel button: stops the running load; the current scene stays.
-    pub(crate) fn cancel_loading(&mut self) {
-        if let Some(l) = self.loading.take() {
-            l.opts.cancel.store(true, std::sync::atomic::Ordering::Relaxed);
+    fn cancel_loading(&mut self) {
+        if let Some(spec) = self.loader.cancel() {
             self.toast(
-                format!("cancelled opening {}; the current scene stays", l.spec),
+                format!("cancelled opening {spec}; the current scene stays"),
                 false,
             );
         }
@@ -688,35 +608,29 @@ impl Viewer {
 
     /// Polls the loader; installs a loaded scene (GPU build, camera, radius).
     fn poll_loading(&mut self) {
-        let Some(loading) = &mut self.loading else {
-            return;
-        };
         if !self.laid_out {
             // The first UI pass has not laid out the 3D view yet (its aspect frames the camera).
             return;
         }
-        let mut done = None;
-        while let Ok(msg) = loading.rx.try_recv() {
-            match msg {
-                LoadMsg::Progress(p) => loading.progress = p,
-                LoadMsg::Done(r, t) => done = Some((r, t)),
-            }
-        }
-        let Some((result, took)) = done else {
+        let Some(loaded) = self.loader.poll() else {
             return;
         };
-        let spec = loading.spec.clone();
-        self.loading = None;
-        match result.and_then(|scene| {
+        let spec = loaded.spec;
+        match loaded.result.and_then(|scene| {
             self.install_scene(scene, &spec)
                 .map_err(|e| format!("cannot open `{spec}`: {e:#}"))
         }) {
-            Ok(()) => self.toast(format!("opened {spec} in {:.1} s", took.as_secs_f64()), false),
+            Ok(()) => self.toast(
+                format!("opened {spec} in {:.1} s", loaded.took.as_secs_f64()),
+                false,
+            ),
             Err(e) => {
-                self.load_error = Some(e.clone());
-                self.toast(e, true);
+                self.loader.error = Some(e.clone());
                 if self.scene.is_none() && self.script.exit {
-                    self.fatal("no scene could be opened".into());
+                    // The exit status's line names the file and the reason (the OS's, for a missing file).
+                    self.fatal(e);
+                } else {
+                    self.toast(e, true);
                 }
             }
         }
@@ -728,7 +642,7 @@ impl Viewer {
             bail!("the scene is empty");
         }
         self.gpu.wait_idle();
-        let initial_sections = std::mem::take(&mut self.args_sections)
+        let initial_sections = std::mem::take(&mut self.startup.sections)
             .sections(&scene)
             .map_err(|e| anyhow!(e))?;
         let section_state = sections::SectionState::for_scene(bounds, &initial_sections);
@@ -739,11 +653,13 @@ impl Viewer {
         // Camera: --camera for the first scene, else NAME.camera.json beside the file, else fit.
         let beside = Path::new(spec).with_extension("camera.json");
         let cam_file = self
-            .initial_camera
+            .startup
+            .camera
             .take()
             .or_else(|| beside.is_file().then_some(beside));
         let up = self
-            .forced_up
+            .startup
+            .up
             .unwrap_or(if is_default { UpAxis::Z } else { UpAxis::Y });
         let cam = match &cam_file {
             Some(p) => Camera::load_in(p, scene.origin).with_context(|| format!("camera {}", p.display()))?,
@@ -760,7 +676,7 @@ impl Viewer {
         } else {
             (diag * 0.05).max(1e-6)
         };
-        let radius = self.args_radius.take().unwrap_or(self.default_radius);
+        let radius = self.startup.radius.take().unwrap_or(self.default_radius);
         // Orient the camera with a true up vector (nav keeps it orthogonal).
         let mut cam = nav::orbit(&cam, nav::target(&cam), world_up.vector(), 0.0, 0.0);
         // A camera file framed for a wider image: back off so the 3D view shows the same horizontal extent.
@@ -781,20 +697,15 @@ impl Viewer {
             world_up,
         };
         self.home = cam;
-        self.selected = u32::MAX;
         self.selection = tree::Selection::default();
-        self.tree_view = tree::TreeView::default();
-        self.measure = measure::Measure::for_spec(spec);
-        // STEP and IGES declare their length unit.
-        if let Some(u) = scene.unit_m.and_then(measure::Unit::from_metres) {
-            self.measure.file_unit = u;
-            self.measure.show_unit = u;
-        }
-        if is_default {
-            // The bundled gearbox is a CAD export in millimetres (its glTF says metres).
-            self.measure.file_unit = measure::Unit::Mm;
-            self.measure.show_unit = measure::Unit::Mm;
-        }
+        // STEP and IGES declare their length unit; the bundled gearbox is a CAD export in millimetres (its glTF
+        // says metres).
+        let unit = if is_default {
+            Some(measure::Unit::Mm)
+        } else {
+            scene.unit_m.and_then(measure::Unit::from_metres)
+        };
+        self.panels.scene_opened(spec, section_state, unit);
         self.edits.clear();
         if self.renderer.is_none() {
             self.renderer = Some(Renderer::new(&self.gpu)?);
@@ -838,11 +749,9 @@ impl Viewer {
         }
         self.installed = true;
         self.prefs.settings.map.ao_radius = radius;
-        self.section_state = section_state;
         self.scene_gpu = Some(scene_gpu);
         self.scene = Some(scene);
         self.scene_spec = spec.to_string();
-        self.open_path = spec.to_string();
         let title = format!(
             "hrtao — {}",
             Path::new(spec)
@@ -873,9 +782,8 @@ impl Viewer {
     }
 
     /// Selects one instance (u32::MAX: nothing), as a pick in the view does, and reveals its tree node.
-    pub(crate) fn set_selected(&mut self, sel: u32) {
+    fn set_selected(&mut self, sel: u32) {
         let Some(scene) = &self.scene else {
-            self.selected = sel;
             return;
         };
         let selection = tree::Selection::of_instance(&scene.tree, sel);
@@ -888,12 +796,12 @@ impl Viewer {
                 .collect();
             log::info!("selected instance {sel} (tree: {})", path.join(" / "));
         }
-        self.tree_view.reveal(selection.node);
+        self.panels.tree.reveal(selection.node);
         self.apply_selection(selection);
     }
 
     /// Shift/Ctrl+click: adds the instance to the selection or removes it (u32::MAX: nothing changes).
-    pub(crate) fn toggle_selected(&mut self, instance: u32) {
+    fn toggle_selected(&mut self, instance: u32) {
         let Some(scene) = &self.scene else {
             return;
         };
@@ -903,13 +811,12 @@ impl Viewer {
             selection.instances.len(),
             selection.instances
         );
-        self.tree_view.reveal(selection.node);
+        self.panels.tree.reveal(selection.node);
         self.apply_selection(selection);
     }
 
     /// Makes `selection` current and updates the highlight (TLAS instance flags).
-    pub(crate) fn apply_selection(&mut self, selection: tree::Selection) {
-        self.selected = selection.primary();
+    fn apply_selection(&mut self, selection: tree::Selection) {
         self.selection = selection;
         if let (Some(sg), Some(scene)) = (&mut self.scene_gpu, &self.scene) {
             self.gpu.wait_idle();
@@ -921,7 +828,7 @@ impl Viewer {
     }
 
     /// Applies an edit / undo / redo through the edit stack (F increments, TLAS rebuilt).
-    pub(crate) fn edit(&mut self, action: edits::Action) {
+    fn edit(&mut self, action: edits::Action) {
         let (Some(scene), Some(sg)) = (&mut self.scene, &mut self.scene_gpu) else {
             return;
         };
@@ -949,6 +856,180 @@ impl Viewer {
             }
             Ok(None) => {}
             Err(e) => self.toast(format!("edit failed: {e:#}"), true),
+        }
+    }
+
+    /// The UI pass: the loader and the scripted run move on, the panels draw and send commands, the viewer
+    /// applies them in order.
+    fn ui(&mut self, ctx: &egui::Context) {
+        self.frame_started = Instant::now();
+        self.poll_loading();
+        self.script_orbit();
+        if let Some(d) = self.script.deadline {
+            if Instant::now() > d {
+                self.script.deadline = None;
+                self.fatal("scripted run timed out (--timeout)".into());
+            }
+        }
+        let state = command::ViewState {
+            device: &self.gpu.info,
+            validation_messages: self.gpu.validation_messages(),
+            scene: self.scene.as_ref(),
+            spec: &self.scene_spec,
+            section_sides: self.scene_gpu.as_ref().map(|sg| sg.section_sides),
+            selection: &self.selection,
+            nav: &self.nav,
+            home: self.home,
+            prefs: &self.prefs,
+            default_radius: self.default_radius,
+            render_scale: self.render_scale,
+            can_scale: self.presenter.blit_ok || self.presenter.images.is_empty(),
+            view_rect: self.view_rect,
+            report: self.last_report.as_ref(),
+            internal: self.renderer.as_ref().map_or((0, 0), |r| r.size()),
+            frame_ms: (self.frame_ms_avg, self.interval_ms_avg),
+            loading: self.loader.view(),
+            load_error: self.loader.error.as_deref(),
+            undo: self.edits.undo_label(),
+            redo: self.edits.redo_label(),
+            shot: shot_progress(&self.background_shot, &self.saving),
+        };
+        let commands = self.panels.ui(ctx, &state);
+        ui::draw_toasts(ctx, &mut self.toasts);
+        for c in commands {
+            self.apply(c);
+        }
+    }
+
+    /// Carries out a command of a panel, the view's input, a shortcut or a scripted run.
+    fn apply(&mut self, command: Command) {
+        match command {
+            Command::Open(spec) => self.start_loading(spec),
+            Command::OpenDialog => {
+                if let Some(c) = self.panels.files.open_dialog(&self.scene_spec, &self.egui_ctx) {
+                    self.apply(c);
+                }
+            }
+            Command::CancelLoading => self.cancel_loading(),
+            Command::Select(selection) => self.apply_selection(selection),
+            Command::SelectInstance(instance) => self.set_selected(instance),
+            Command::Pick { at, purpose } => self.pick(at, purpose),
+            Command::Edit(action) => self.edit(action),
+            Command::DeleteSelection => {
+                // One edit (one undo step) for the whole selection, which is cleared.
+                if let Some(e) = edits::Edit::delete_all(&self.selection.instances) {
+                    self.apply_selection(tree::Selection::default());
+                    self.edit(edits::Action::Apply(e));
+                }
+            }
+            Command::Settings(s) => match s.validate() {
+                Ok(()) => self.prefs.settings = *s,
+                Err(e) => self.toast(format!("settings: {e}"), true),
+            },
+            Command::Prefs(p) => {
+                // The AO settings change through Command::Settings only (validated).
+                let settings = std::mem::take(&mut self.prefs.settings);
+                self.prefs = *p;
+                self.prefs.settings = settings;
+            }
+            Command::RenderScale(scale) => self.render_scale = scale.clamp(0.05, 2.0),
+            Command::ClearCache => {
+                if let Some(Err(e)) = self.renderer.as_mut().map(|r| r.clear_cache()) {
+                    self.toast(format!("{e}"), true);
+                }
+            }
+            Command::Camera { cam, pivot } => {
+                self.nav.cam = cam;
+                self.nav.pivot = pivot;
+            }
+            Command::Drag { dragging, moved } => self.motion.drag(dragging, moved),
+            Command::Sections(sections) => self.apply_sections(sections),
+            Command::Screenshot => self.request_screenshot(),
+            Command::CancelScreenshot(why) => self.cancel_background_shot(why),
+            Command::Fullscreen(on) => {
+                log::info!("full screen {}", if on { "on" } else { "off" });
+                self.egui_ctx
+                    .send_viewport_cmd(egui::ViewportCommand::Fullscreen(on));
+            }
+            Command::Quit => {
+                log::info!("quit (Ctrl+Q)");
+                self.exit_signal.send(ExitCode::SUCCESS);
+            }
+            Command::ViewRect(rect) => {
+                self.view_rect = rect;
+                self.laid_out = true;
+            }
+            Command::Toast { text, error } => self.toast(text, error),
+        }
+    }
+
+    /// A click or double-click in the view at `at` (fractions of the view): picks the surface under it from the
+    /// last frame's G-buffer and selects, toggles, sets the pivot or measures.
+    fn pick(&mut self, at: [f32; 2], purpose: PickFor) {
+        let hit = match &self.renderer {
+            Some(r) if (0.0..1.0).contains(&at[0]) && (0.0..1.0).contains(&at[1]) => {
+                let (iw, ih) = r.size();
+                let (x, y) = ((at[0] * iw as f32) as u32, (at[1] * ih as f32) as u32);
+                self.gpu.wait_idle();
+                match r.pick(x, y) {
+                    Ok(px) => px.map(|px| (Vec3::from_slice(&px.position[..3]), px.instance)),
+                    Err(e) => {
+                        self.toast(format!("pick failed: {e}"), true);
+                        return;
+                    }
+                }
+            }
+            _ => None,
+        };
+        match (purpose, hit) {
+            (PickFor::Select, _) => {
+                let sel = hit.map_or(u32::MAX, |h| h.1);
+                if sel != self.selection.primary() {
+                    self.set_selected(sel);
+                }
+            }
+            (PickFor::Toggle, _) => self.toggle_selected(hit.map_or(u32::MAX, |h| h.1)),
+            (PickFor::Pivot, Some((pos, _))) => {
+                self.nav.pivot = pos;
+                // Same view; the focal distance becomes the pivot's depth (zoom speed follows).
+                let c = self.nav.cam;
+                let f = nav::forward(&c);
+                let depth = (pos - nav::eye(&c)).dot(f).max(1e-4);
+                self.nav.cam.target = (nav::eye(&c) + f * depth).to_array();
+                self.toast(
+                    format!("pivot set to ({:.2}, {:.2}, {:.2})", pos.x, pos.y, pos.z),
+                    false,
+                );
+            }
+            (PickFor::Measure, Some((pos, _))) => {
+                if let Some(scene) = &self.scene {
+                    self.panels.measure.pick(scene, pos.to_array());
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Sends section planes to the scene (TLAS rebuild; F of the frame moves on).
+    fn apply_sections(&mut self, sections: hrtao_core::Sections) {
+        let (Some(sg), Some(scene)) = (&mut self.scene_gpu, &self.scene) else {
+            return;
+        };
+        if *sg.sections() == sections {
+            return;
+        }
+        self.gpu.wait_idle();
+        match sg.set_sections(scene, &sections, self.selection.instances.as_slice()) {
+            Ok(()) => log::info!(
+                "section planes: {:?}; instances untouched, crossed, cut away: {:?}",
+                sections
+                    .planes
+                    .iter()
+                    .map(|p| (p.normal, p.offset))
+                    .collect::<Vec<_>>(),
+                sg.section_sides
+            ),
+            Err(e) => self.toast(format!("section planes: {e}"), true),
         }
     }
 
@@ -990,7 +1071,7 @@ impl Viewer {
     }
 
     /// `MODEL-YYYYMMDD-HHMMSS.png` in the panel's folder, else the pictures directory, else the working directory.
-    pub(crate) fn screenshot_path(&self) -> PathBuf {
+    fn screenshot_path(&self) -> PathBuf {
         let folder = self
             .prefs
             .screenshot_folder
@@ -1002,7 +1083,7 @@ impl Viewer {
     }
 
     /// F12/the button: a custom size renders in the background; the window's size right away.
-    pub(crate) fn request_screenshot(&mut self) {
+    fn request_screenshot(&mut self) {
         let path = self.screenshot_path();
         if self.prefs.screenshot_custom {
             let size = (self.prefs.screenshot_width, self.prefs.screenshot_height);
@@ -1017,7 +1098,7 @@ impl Viewer {
     }
 
     /// Starts a background screenshot of the current view at `size` (one at a time).
-    pub(crate) fn start_background_shot(&mut self, size: (u32, u32), path: PathBuf) {
+    fn start_background_shot(&mut self, size: (u32, u32), path: PathBuf) {
         if self.background_shot.is_some() || self.saving.is_some() {
             self.toast("a screenshot is already in progress", true);
             return;
@@ -1064,7 +1145,7 @@ impl Viewer {
     }
 
     /// Cancel button (or a new scene): the background screenshot is dropped.
-    pub(crate) fn cancel_background_shot(&mut self, why: &str) {
+    fn cancel_background_shot(&mut self, why: &str) {
         if self.background_shot.take().is_some() {
             // Its last frame was waited for with the viewer's frame: nothing of it is in flight.
             self.toast(format!("screenshot cancelled{why}"), false);
@@ -1080,17 +1161,6 @@ impl Viewer {
         } else {
             self.toast(msg, true);
         }
-    }
-
-    /// Background screenshot: the progress for the panel (fraction, text), or the PNG being written.
-    pub(crate) fn shot_progress(&self) -> Option<(f32, String)> {
-        if let Some(s) = &self.background_shot {
-            return Some((s.progress(), s.status()));
-        }
-        self.saving.as_ref().map(|s| {
-            let [w, h] = s.summary.size;
-            (1.0, format!("{w}×{h}: writing the PNG"))
-        })
     }
 
     /// After the viewer's frame completed: the background screenshot's frame; a finished image is written on a
@@ -1527,10 +1597,10 @@ impl Viewer {
             if let Some(wait) = self.motion.still_in(now) {
                 self.egui_ctx.request_repaint_after(wait);
             }
-        } else if self.loading.is_some() {
+        } else if self.loader.is_loading() {
             self.egui_ctx.request_repaint_after(Duration::from_millis(100));
         }
-        let resting = !busy && self.loading.is_none() && !self.holding && !self.settling;
+        let resting = !busy && !self.loader.is_loading() && !self.holding && !self.settling;
         if resting && !self.resting {
             let frames = self.last_report.as_ref().map_or(0, |r| r.accumulated_frames);
             log::info!("at rest: the image has converged ({frames} frames); waiting for input");
@@ -1566,7 +1636,7 @@ impl Viewer {
         if let Some((k, file)) = self.script.open.clone() {
             if n == k {
                 log::info!("scripted open of {file}");
-                self.start_loading(file);
+                self.apply(Command::Open(file));
             }
         }
         for (_, json) in self
@@ -1579,20 +1649,21 @@ impl Viewer {
         {
             log::info!("scripted settings after frame {n}: {json}");
             match self.prefs.settings.with_overrides(&json) {
-                Ok(s) => self.apply_settings(s),
+                Ok(s) => self.apply(Command::Settings(Box::new(s))),
                 Err(e) => self.fatal(format!("--set-at-frame {n}: {e}")),
             }
         }
         if self.script.orbit_left > 0 || (self.script.wait_converged && !self.converged_full()) {
             return;
         }
-        if n >= frames && self.loading.is_some() {
+        if n >= frames && self.loader.is_loading() {
             // Let a scripted open finish (success or error) before the screenshots.
             return;
         }
-        if n == frames && self.script.screenshot_ui.is_some() {
-            // Captured with the next presented frame.
+        if n >= frames && !self.script.ui_captured && self.script.screenshot_ui.is_some() {
+            // Captured with the next presented frame (after --frames N, or once --orbit has converged).
             self.script.ui_capture_pending = true;
+            self.script.ui_captured = true;
             return;
         }
         if n >= frames {
@@ -1662,17 +1733,21 @@ impl Viewer {
         if self.script.frames.is_none() || self.script.orbit_left == 0 || self.scene.is_none() {
             return;
         }
-        if self.loading.is_some() || self.last_report.is_none() {
+        if self.loader.is_loading() || self.last_report.is_none() {
             return;
         }
         self.script.orbit_left -= 1;
-        self.nav.cam = nav::orbit(
+        let cam = nav::orbit(
             &self.nav.cam,
             self.nav.pivot,
             self.nav.world_up.vector(),
             2f32.to_radians(),
             0.0,
         );
+        self.apply(Command::Camera {
+            cam,
+            pivot: self.nav.pivot,
+        });
     }
 
     /// Writes `--stats` (once; an error is fatal in scripted mode).
@@ -1693,23 +1768,9 @@ impl Viewer {
     }
 
     fn maybe_save_prefs(&mut self, force: bool) {
-        let Some(path) = self.prefs_path.clone() else {
-            return;
-        };
         self.prefs.max_render_scale = Some(self.render_scale);
-        if self.prefs == self.prefs_saved {
-            return;
-        }
-        if !force && self.prefs_saved_at.elapsed() < Duration::from_secs(1) {
-            return;
-        }
-        self.prefs_saved_at = Instant::now();
-        match prefs::save(&path, &self.prefs) {
-            Ok(()) => self.prefs_saved = self.prefs.clone(),
-            Err(e) => {
-                self.prefs_saved = self.prefs.clone();
-                self.toast(format!("cannot save settings to {}: {e:#}", path.display()), true);
-            }
+        if let Err(e) = self.prefs_file.maybe_save(&self.prefs, force) {
+            self.toast(e, true);
         }
     }
 
@@ -1722,7 +1783,6 @@ impl Viewer {
         self.maybe_save_prefs(true);
         self.write_stats();
         self.gpu.wait_idle();
-        self.pending_ui_readback = None;
         self.background_shot = None;
         self.renderer = None;
         self.scene_gpu = None;
@@ -1734,6 +1794,20 @@ impl Drop for Viewer {
     fn drop(&mut self) {
         self.shutdown();
     }
+}
+
+/// Background screenshot: the progress for the panels (fraction, text, cancellable), or the PNG being written.
+fn shot_progress(
+    shot: &Option<shot::BackgroundShot>,
+    saving: &Option<Saving>,
+) -> Option<(f32, String, bool)> {
+    if let Some(s) = shot {
+        return Some((s.progress(), s.status(), true));
+    }
+    saving.as_ref().map(|s| {
+        let [w, h] = s.summary.size;
+        (1.0, format!("{w}×{h}: writing the PNG"), false)
+    })
 }
 
 /// `MODEL-YYYYMMDD-HHMMSS` in local time, the model's name made safe for a file name.

@@ -139,6 +139,45 @@ pub fn save(path: &Path, prefs: &Prefs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Where the preferences are kept and what was last written there: changes are saved at most once a second
+/// (and when the window closes). None with `--no-config`.
+pub struct PrefsFile {
+    path: Option<PathBuf>,
+    saved: Prefs,
+    saved_at: std::time::Instant,
+}
+
+impl PrefsFile {
+    /// Reads `path` (None: nothing is read or saved): the preferences and a message for the user when the file
+    /// could not be used.
+    pub fn open(path: Option<PathBuf>) -> (PrefsFile, Prefs, Option<String>) {
+        let (prefs, msg) = match &path {
+            Some(p) => load(p),
+            None => (Prefs::default(), None),
+        };
+        let file = PrefsFile {
+            path,
+            saved: prefs.clone(),
+            saved_at: std::time::Instant::now(),
+        };
+        (file, prefs, msg)
+    }
+
+    /// Saves `prefs` if they changed, unless the last save was under a second ago (`force`: now). An error names
+    /// the file (and is not retried until the preferences change again).
+    pub fn maybe_save(&mut self, prefs: &Prefs, force: bool) -> Result<(), String> {
+        let Some(path) = &self.path else {
+            return Ok(());
+        };
+        if *prefs == self.saved || (!force && self.saved_at.elapsed() < std::time::Duration::from_secs(1)) {
+            return Ok(());
+        }
+        self.saved_at = std::time::Instant::now();
+        self.saved = prefs.clone();
+        save(path, prefs).map_err(|e| format!("cannot save settings to {}: {e:#}", path.display()))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

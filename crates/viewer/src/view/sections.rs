@@ -6,8 +6,8 @@ use hrtao_core::gpu::MAX_SECTIONS;
 use hrtao_core::{Camera, SectionPlane, Sections};
 use hrtao_scene::{Aabb, Scene};
 
+use super::command::{Command, ViewState};
 use super::nav;
-use super::Viewer;
 
 const PLANES: usize = MAX_SECTIONS as usize;
 
@@ -105,14 +105,14 @@ fn from_file(scene: &Scene, normal: [f32; 3], d: f64) -> f32 {
     (d - DVec3::from(normal.map(f64::from)).dot(DVec3::from(scene.origin))) as f32
 }
 
-impl Viewer {
-    /// The "Section planes" panel section.
-    pub(super) fn sections_section(&mut self, ui: &mut egui::Ui) {
-        let Some(scene) = &self.scene else {
+impl SectionState {
+    /// The "Section planes" section: a changed plane sends the enabled planes.
+    pub fn ui(&mut self, ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
+        let Some(scene) = state.scene else {
             ui.label("no scene");
-            return;
+            return Vec::new();
         };
-        let mut s = self.section_state.clone();
+        let mut s = self.clone();
         let bounds = s.bounds;
         for i in 0..PLANES {
             ui.push_id(i, |ui| {
@@ -153,8 +153,7 @@ impl Viewer {
                 p.offset = from_file(scene, p.normal, d);
             });
         }
-        if let Some(sg) = &self.scene_gpu {
-            let [kept, crossing, cut] = sg.section_sides;
+        if let Some([kept, crossing, cut]) = state.section_sides {
             ui.label(format!(
                 "instances: {kept} untouched, {crossing} crossed, {cut} cut away"
             ));
@@ -163,51 +162,25 @@ impl Viewer {
             egui::RichText::new("Ctrl+Shift+left drag in the view moves the selected plane (radio button).")
                 .weak(),
         );
-        if s != self.section_state {
-            self.section_state = s;
-            self.apply_sections();
+        if s == *self {
+            return Vec::new();
         }
+        *self = s;
+        vec![Command::Sections(self.sections())]
     }
 
-    /// Sends the panel's planes to the scene (TLAS rebuild; F of the frame moves on).
-    pub(super) fn apply_sections(&mut self) {
-        let sections = self.section_state.sections();
-        if let (Some(sg), Some(scene)) = (&mut self.scene_gpu, &self.scene) {
-            if *sg.sections() == sections {
-                return;
-            }
-            self.gpu.wait_idle();
-            match sg.set_sections(scene, &sections, self.selection.instances.as_slice()) {
-                Ok(()) => log::info!(
-                    "section planes: {:?}; instances untouched, crossed, cut away: {:?}",
-                    sections
-                        .planes
-                        .iter()
-                        .map(|p| (p.normal, p.offset))
-                        .collect::<Vec<_>>(),
-                    sg.section_sides
-                ),
-                Err(e) => {
-                    let msg = format!("section planes: {e}");
-                    self.toast(msg, true);
-                }
-            }
-        }
-    }
-
-    /// Ctrl+Shift+drag: moves the active plane along its normal by the drag projected on the normal's screen direction.
-    pub(super) fn drag_section(&mut self, delta: egui::Vec2) {
-        let state = &mut self.section_state;
-        let bounds = state.bounds;
-        let p = &mut state.planes[state.active];
+    /// Ctrl+Shift+drag: moves the active plane along its normal by the drag projected on the normal's screen
+    /// direction (`view_h`: the view's height in pixels).
+    pub fn drag(&mut self, cam: &Camera, delta: egui::Vec2, view_h: f32) -> Option<Command> {
+        let bounds = self.bounds;
+        let p = &mut self.planes[self.active];
         if delta == egui::Vec2::ZERO || !p.enabled {
-            return;
+            return None;
         }
-        let view_h = self.view_rect[3].max(1) as f32;
-        let amount = drag_amount(&self.nav.cam, Vec3::from(p.normal), delta, view_h);
+        let amount = drag_amount(cam, Vec3::from(p.normal), delta, view_h);
         let (lo, hi) = offset_range(&bounds, p.normal);
         p.offset = (p.offset + amount).clamp(lo, hi);
-        self.apply_sections();
+        Some(Command::Sections(self.sections()))
     }
 }
 

@@ -5,6 +5,102 @@ use hrtao_core::settings::{
 };
 use hrtao_core::Mode;
 
+use super::command::{Command, ViewState};
+
+/// The "Ambient occlusion" section: the settings groups, the ray budget and frame-time target, the render
+/// scale, Clear cache, Defaults and Paper.
+pub struct SettingsPanel;
+
+impl SettingsPanel {
+    pub fn ui(&mut self, ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
+        let mut out = Vec::new();
+        let mut s = state.prefs.settings.clone();
+        let mut prefs = state.prefs.clone();
+        display(ui, &mut s.display);
+        ui.add_enabled(
+            !prefs.auto_budget,
+            egui::Slider::new(
+                &mut prefs.rays_per_frame,
+                super::budget::MIN_RAYS_PER_FRAME..=16_000_000,
+            )
+            .logarithmic(true)
+            .text("rays / frame"),
+        )
+        .on_hover_text(
+            "Ray budget (§3, §6): rays traced per frame whatever the resolution, shared between the hash \
+             cells visible in the image (collaborative ray tracing); the renderer gets it as rays per pixel \
+             (at least 1). Higher: faster convergence, slower frames.",
+        );
+        map(ui, &mut s.map, state.default_radius);
+        filter(ui, &mut s.filter);
+        still(ui, &mut s.still);
+        young(ui, &mut s.young);
+        edits(ui, &mut s.edits);
+        ui.separator();
+        let mut scale = state.render_scale;
+        ui.add_enabled(
+            state.can_scale,
+            egui::Slider::new(&mut scale, 0.1..=1.0).text("max render scale"),
+        )
+        .on_hover_text(
+            "Internal resolution of a still image as a fraction of the 3D view (blitted to the window). While \
+             the camera moves the resolution drops to meet the frame-time target (not below 0.35 of the view \
+             unless this cap is lower). s_p counts view pixels, so the hash cells do not change with it.",
+        );
+        if scale != state.render_scale {
+            out.push(Command::RenderScale(scale));
+        }
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut prefs.auto_budget, "frame-time target")
+                .on_hover_text(
+                "§6: \"the ray budget can be adjusted to match a target rendering speed\": while the camera \
+                 moves, the ray budget and the render scale adapt to reach the target frame time.",
+            );
+            ui.add_enabled(
+                prefs.auto_budget,
+                egui::DragValue::new(&mut prefs.target_ms)
+                    .clamp_range(5.0..=2000.0)
+                    .suffix(" ms target"),
+            );
+        });
+        ui.horizontal(|ui| {
+            if ui
+                .button("Clear cache")
+                .on_hover_text("Forget all cached AO (the hash map restarts empty)")
+                .clicked()
+            {
+                out.push(Command::ClearCache);
+            }
+            if ui
+                .button("Defaults")
+                .on_hover_text("AoSettings::default() with the scene's radius")
+                .clicked()
+            {
+                s = hrtao_core::AoSettings::default().with_radius(state.default_radius);
+            }
+            if ui
+                .button("Paper")
+                .on_hover_text(format!(
+                    "The paper's technique as published: every addition of ours off ({}); radius, budget and \
+                     cells unchanged. Defaults turns them back on.",
+                    hrtao_core::AoSettings::addition_names().join(", ")
+                ))
+                .clicked()
+            {
+                s = s.paper();
+            }
+        });
+        prefs.settings = state.prefs.settings.clone();
+        if prefs != *state.prefs {
+            out.push(Command::Prefs(Box::new(prefs)));
+        }
+        if s != state.prefs.settings {
+            out.push(Command::Settings(Box::new(s)));
+        }
+        out
+    }
+}
+
 /// What is shown: the mode, shading and feature edges.
 pub fn display(ui: &mut egui::Ui, s: &mut DisplaySettings) {
     egui::ComboBox::from_label("mode")
@@ -27,7 +123,7 @@ pub fn display(ui: &mut egui::Ui, s: &mut DisplaySettings) {
         );
         ui.add_enabled(
             s.edges,
-            egui::Slider::new(&mut s.crease_deg, 5.0..=120.0).text("crease °"),
+            egui::Slider::new(&mut s.crease_deg, hrtao_core::settings::CREASE_DEG_RANGE).text("crease °"),
         )
         .on_hover_text("Faces meeting at more than this angle draw a crease line.");
     });

@@ -4,8 +4,8 @@
 use egui::collapsing_header::CollapsingState;
 use hrtao_scene::{NodeTree, Scene};
 
+use super::command::{Command, ViewState};
 use super::edits::{Action, Edit};
-use super::Viewer;
 
 /// Children listed under one node before "… N more" (a search finds the rest).
 const MAX_ROWS_PER_NODE: usize = 200;
@@ -256,44 +256,36 @@ impl Rows<'_> {
     }
 }
 
-impl Viewer {
-    /// Selects a tree node: its subtree's instances are highlighted; a node of one instance also makes it the
-    /// instance that move and delete act on.
-    pub(crate) fn select_node(&mut self, node: u32) {
-        let Some(scene) = &self.scene else {
-            return;
-        };
-        let sel = Selection::of_node(&scene.tree, node);
-        self.apply_selection(sel);
-    }
-
-    pub(crate) fn tree_section(&mut self, ui: &mut egui::Ui) {
-        let Some(scene) = &self.scene else {
+impl TreeView {
+    /// The "Model tree" section: search, hide/isolate/show all, and the rows; clicks become commands.
+    pub fn ui(&mut self, ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
+        let Some(scene) = state.scene else {
             ui.label("no scene");
-            return;
+            return Vec::new();
         };
-        self.tree_view.refresh(scene);
-        let node = self.selection.node;
+        self.refresh(scene);
+        let selection = state.selection;
+        let mut out = Vec::new();
         ui.horizontal(|ui| {
             ui.label("Search");
-            ui.add(egui::TextEdit::singleline(&mut self.tree_view.search).desired_width(160.0));
+            ui.add(egui::TextEdit::singleline(&mut self.search).desired_width(160.0));
         });
-        let mut edit = None;
         ui.horizontal(|ui| {
-            let has = !self.selection.instances.is_empty();
+            let has = !selection.instances.is_empty();
+            let mut edit = None;
             if ui
                 .add_enabled(has, egui::Button::new("Hide"))
                 .on_hover_text("Hide the selection (H)")
                 .clicked()
             {
-                edit = self.hide_selection_edit(scene);
+                edit = hide_selection_edit(scene, selection);
             }
             if ui
                 .add_enabled(has, egui::Button::new("Isolate"))
                 .on_hover_text("Show only the selection (I)")
                 .clicked()
             {
-                edit = self.isolate_edit(scene);
+                edit = isolate_edit(scene, selection);
             }
             if ui
                 .button("Show all")
@@ -302,20 +294,17 @@ impl Viewer {
             {
                 edit = show_all(scene);
             }
+            out.extend(edit.map(|e| Command::Edit(Action::Apply(e))));
         });
-        let reveal_path = self
-            .tree_view
-            .reveal_now()
-            .map(|n| scene.tree.path(n))
-            .unwrap_or_default();
+        let reveal_path = self.reveal_now().map(|n| scene.tree.path(n)).unwrap_or_default();
         let mut rows = Rows {
             tree: &scene.tree,
-            view: &self.tree_view,
-            selected: node,
+            view: self,
+            selected: selection.node,
             reveal_path,
             actions: Vec::new(),
         };
-        let query = self.tree_view.search.trim();
+        let query = self.search.trim();
         let revealing = !rows.reveal_path.is_empty();
         let area = egui::ScrollArea::vertical()
             .id_source("model-tree")
@@ -352,99 +341,75 @@ impl Viewer {
             // The tree's own scroll area took the row's scroll request; the panel scrolls to the tree.
             ui.scroll_to_rect(area.inner_rect, Some(egui::Align::Center));
         }
-        for action in std::mem::take(&mut rows.actions) {
-            match action {
-                TreeAction::Select(n) => {
-                    self.select_node(n);
-                    return self.finish_tree_edit(edit);
-                }
-                TreeAction::Toggle(n) => {
-                    if let Some(scene) = &self.scene {
-                        let sel = self.selection.toggled_node(&scene.tree, n);
-                        self.apply_selection(sel);
-                    }
-                    return self.finish_tree_edit(edit);
-                }
-                TreeAction::Visible(n, v) => {
-                    if let Some(scene) = &self.scene {
-                        edit = set_node_visible(scene, n, v);
-                    }
-                }
-            }
+        for action in rows.actions {
+            out.push(match action {
+                // A node's subtree is highlighted; a node of one instance is also what move and delete act on.
+                TreeAction::Select(n) => Command::Select(Selection::of_node(&scene.tree, n)),
+                TreeAction::Toggle(n) => Command::Select(selection.toggled_node(&scene.tree, n)),
+                TreeAction::Visible(n, v) => match set_node_visible(scene, n, v) {
+                    Some(e) => Command::Edit(Action::Apply(e)),
+                    None => continue,
+                },
+            });
         }
-        self.finish_tree_edit(edit);
+        out
     }
+}
 
-    /// A line naming a multi-instance selection (a tree node, or instances added with Shift/Ctrl+click) and a
-    /// Delete button for all of it; false when there is none.
-    pub(crate) fn selection_summary(&mut self, ui: &mut egui::Ui) -> bool {
-        let Some(scene) = &self.scene else {
-            return false;
-        };
-        let n = self.selection.instances.len();
-        if n < 2 {
-            return false;
-        }
-        let what = match self.selection.node {
-            Some(node) => format!("{}: {n} instances", node_name(scene, node)),
-            None => format!("{n} instances selected"),
-        };
-        ui.label(format!("{what} (H hide, I isolate, Delete)"));
-        if ui.button("Delete").clicked() {
-            self.delete_selection();
-        }
-        true
+/// A line naming a multi-instance selection (a tree node, or instances added with Shift/Ctrl+click) and a
+/// Delete button for all of it; None when there is none.
+pub fn selection_summary(ui: &mut egui::Ui, state: &ViewState) -> Option<Vec<Command>> {
+    let scene = state.scene?;
+    let selection = state.selection;
+    let n = selection.instances.len();
+    if n < 2 {
+        return None;
     }
+    let what = match selection.node {
+        Some(node) => format!("{}: {n} instances", node_name(scene, node)),
+        None => format!("{n} instances selected"),
+    };
+    ui.label(format!("{what} (H hide, I isolate, Delete)"));
+    Some(if ui.button("Delete").clicked() {
+        vec![Command::DeleteSelection]
+    } else {
+        Vec::new()
+    })
+}
 
-    fn finish_tree_edit(&mut self, edit: Option<Edit>) {
-        if let Some(e) = edit {
-            self.edit(Action::Apply(e));
-        }
-    }
-
-    /// Deletes every selected instance as one edit (one undo step) and clears the selection.
-    pub(crate) fn delete_selection(&mut self) {
-        if let Some(e) = Edit::delete_all(&self.selection.instances) {
-            self.apply_selection(Selection::default());
-            self.edit(Action::Apply(e));
-        }
-    }
-
-    /// Hide the selection (a node: its subtree; else the picked instance) or show it if all of it is hidden.
-    pub(crate) fn hide_selection_edit(&self, scene: &Scene) -> Option<Edit> {
-        let all_hidden = self
-            .selection
-            .instances
-            .iter()
-            .all(|&i| scene.instances.get(i as usize).is_some_and(|x| !x.visible));
-        match self.selection.node {
-            Some(n) if self.selection.instances.len() > 1 => set_node_visible(scene, n, all_hidden),
-            _ => visibility_edit(scene, if all_hidden { "show" } else { "hide" }.into(), |i| {
-                self.selection
-                    .instances
-                    .binary_search(&i)
-                    .is_ok()
-                    .then_some(all_hidden)
-            }),
-        }
-    }
-
-    pub(crate) fn isolate_edit(&self, scene: &Scene) -> Option<Edit> {
-        if self.selection.instances.is_empty() {
-            return None;
-        }
-        let what = match (self.selection.node, self.selection.instances.len()) {
-            (Some(n), k) if k > 1 => node_name(scene, n),
-            _ => self
-                .selection
+/// Hide the selection (a node: its subtree; else the picked instance) or show it if all of it is hidden.
+pub fn hide_selection_edit(scene: &Scene, selection: &Selection) -> Option<Edit> {
+    let all_hidden = selection
+        .instances
+        .iter()
+        .all(|&i| scene.instances.get(i as usize).is_some_and(|x| !x.visible));
+    match selection.node {
+        Some(n) if selection.instances.len() > 1 => set_node_visible(scene, n, all_hidden),
+        _ => visibility_edit(scene, if all_hidden { "show" } else { "hide" }.into(), |i| {
+            selection
                 .instances
-                .first()
-                .and_then(|&i| scene.instances.get(i as usize))
-                .map(|i| i.name.clone())
-                .unwrap_or_default(),
-        };
-        isolate(scene, &self.selection.instances, what)
+                .binary_search(&i)
+                .is_ok()
+                .then_some(all_hidden)
+        }),
     }
+}
+
+/// Show only the selection (a node: named after it; else after its first instance).
+pub fn isolate_edit(scene: &Scene, selection: &Selection) -> Option<Edit> {
+    if selection.instances.is_empty() {
+        return None;
+    }
+    let what = match (selection.node, selection.instances.len()) {
+        (Some(n), k) if k > 1 => node_name(scene, n),
+        _ => selection
+            .instances
+            .first()
+            .and_then(|&i| scene.instances.get(i as usize))
+            .map(|i| i.name.clone())
+            .unwrap_or_default(),
+    };
+    isolate(scene, &selection.instances, what)
 }
 
 #[cfg(test)]
