@@ -24,6 +24,7 @@ mod sections;
 mod selection;
 mod settings_panel;
 pub mod shot;
+mod shots;
 pub mod slices;
 pub mod stats;
 pub mod tree;
@@ -32,7 +33,6 @@ mod ui_probe;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -331,19 +331,6 @@ struct Script {
     ui_captured: bool,
 }
 
-/// A background screenshot's PNG being written on its own thread.
-pub(crate) struct Saving {
-    summary: shot::ShotSummary,
-    rx: Receiver<std::result::Result<(), String>>,
-}
-
-/// A screenshot asked for by F12/the button, taken before the next frame.
-struct ShotRequest {
-    size: Option<(u32, u32)>,
-    frames: u32,
-    path: PathBuf,
-}
-
 /// What the command line asked of the first scene: its camera, up axis, AO radius and section planes.
 struct Startup {
     camera: Option<PathBuf>,
@@ -417,10 +404,8 @@ pub(crate) struct Viewer {
     prefs_file: prefs::PrefsFile,
     // Messages.
     toasts: Vec<ui::Toast>,
-    shot: Option<ShotRequest>,
-    /// A custom-size screenshot rendering in the background, then its PNG being written.
-    background_shot: Option<shot::BackgroundShot>,
-    saving: Option<Saving>,
+    /// Screenshots asked for, rendering in the background or being written.
+    shots: shots::Shots,
     script: Script,
     /// Presentation and input stamps, `--ao-out`, `--exit-after`.
     latency: latency::Latency,
@@ -524,9 +509,7 @@ impl Viewer {
             prefs,
             prefs_file,
             toasts: Vec::new(),
-            shot: None,
-            background_shot: None,
-            saving: None,
+            shots: shots::Shots::default(),
             script: Script {
                 frames: args.frames.or(args.orbit.map(|_| 0)),
                 orbit_left: args.orbit.unwrap_or(0),
@@ -892,7 +875,7 @@ impl Viewer {
             load_error: self.loader.error.as_deref(),
             undo: self.edits.undo_label(),
             redo: self.edits.redo_label(),
-            shot: shot_progress(&self.background_shot, &self.saving),
+            shot: self.shots.progress(),
         };
         let commands = self.panels.ui(ctx, &state);
         ui::draw_toasts(ctx, &mut self.toasts);
@@ -1057,7 +1040,7 @@ impl Viewer {
     }
 
     /// Takes a screenshot of the 3D view without UI and writes the PNG on a background thread.
-    fn take_screenshot(&mut self, req: ShotRequest) -> Result<PathBuf> {
+    fn take_screenshot(&mut self, req: shots::ShotRequest) -> Result<PathBuf> {
         let size = req
             .size
             .unwrap_or((self.view_rect[2].max(1) as u32, self.view_rect[3].max(1) as u32));
@@ -1090,7 +1073,7 @@ impl Viewer {
             self.start_background_shot(size, path);
             return;
         }
-        self.shot = Some(ShotRequest {
+        self.shots.pending = Some(shots::ShotRequest {
             size: None,
             frames: self.prefs.screenshot_frames.min(4),
             path,
@@ -1099,63 +1082,40 @@ impl Viewer {
 
     /// Starts a background screenshot of the current view at `size` (one at a time).
     fn start_background_shot(&mut self, size: (u32, u32), path: PathBuf) {
-        if self.background_shot.is_some() || self.saving.is_some() {
-            self.toast("a screenshot is already in progress", true);
-            return;
-        }
-        // The folder first: a bad destination fails now, not after minutes of rendering.
-        let folder = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            Some(dir) => {
-                std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
+        // A slice costs about what a moving frame of the view costs (the frame-time target).
+        let (w, h) = self.internal_size_at(self.motion.moving_scale.min(self.render_scale));
+        let (gpu, settings, cam) = (&self.gpu, &self.prefs.settings, &self.nav.cam);
+        let primary = self
+            .scene_gpu
+            .as_ref()
+            .and(self.renderer.as_ref())
+            .map(|r| r.primary());
+        let started = self.shots.start(size, || {
+            // The folder first: a bad destination fails now, not after minutes of rendering.
+            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
             }
-            None => Ok(()),
-        };
-        let result = match (&self.scene_gpu, &self.renderer, folder) {
-            (_, _, Err(e)) => Err(e),
-            (Some(_), Some(renderer), Ok(())) => {
-                // A slice costs about what a moving frame of the view costs (the frame-time target).
-                let (w, h) = self.internal_size_at(self.motion.moving_scale.min(self.render_scale));
-                shot::BackgroundShot::new(
-                    &self.gpu,
-                    &self.prefs.settings,
-                    &self.nav.cam,
-                    size,
-                    path,
-                    w as u64 * h as u64,
-                    renderer.primary(),
-                )
-            }
-            _ => Err(anyhow!("no scene is open")),
-        };
-        match result {
-            Ok(s) => {
-                self.toast(
-                    format!(
-                        "rendering a {}×{} screenshot in the background ({} tiles)",
-                        size.0,
-                        size.1,
-                        s.tiles()
-                    ),
-                    false,
-                );
-                self.background_shot = Some(s);
-            }
-            Err(e) => self.shot_failed(format!("{e:#}")),
+            let primary = primary.ok_or_else(|| anyhow!("no scene is open"))?;
+            let pixels = w as u64 * h as u64;
+            shot::BackgroundShot::new(gpu, settings, cam, size, path, pixels, primary)
+        });
+        match started {
+            Ok(msg) => self.toast(msg, false),
+            Err(e) => self.shot_failed(e),
         }
     }
 
     /// Cancel button (or a new scene): the background screenshot is dropped.
     fn cancel_background_shot(&mut self, why: &str) {
-        if self.background_shot.take().is_some() {
+        if self.shots.cancel() {
             // Its last frame was waited for with the viewer's frame: nothing of it is in flight.
             self.toast(format!("screenshot cancelled{why}"), false);
         }
     }
 
-    /// A failed background screenshot: a toast (fatal in a scripted run); the viewer keeps running.
+    /// A failed screenshot: a toast (fatal in a scripted run with a background screenshot); the viewer keeps
+    /// running.
     fn shot_failed(&mut self, msg: String) {
-        self.background_shot = None;
-        let msg = format!("screenshot failed: {msg}");
         if self.script.screenshot_size.is_some() && self.script.frames.is_some() {
             self.fatal(msg);
         } else {
@@ -1163,58 +1123,18 @@ impl Viewer {
         }
     }
 
-    /// After the viewer's frame completed: the background screenshot's frame; a finished image is written on a
-    /// thread. Returns the shot's GPU milliseconds.
+    /// After the viewer's frame completed: the background screenshot's frame. Returns its GPU milliseconds.
     fn finish_shot_frame(&mut self, viewer_rendered: bool) -> f64 {
-        let Some(s) = &mut self.background_shot else {
-            return 0.0;
-        };
-        s.viewer_frames += 1;
-        s.viewer_rendered += viewer_rendered as u32;
-        match s.finish() {
-            Ok(None) => s.last_gpu_ms,
-            Ok(Some(done)) => {
-                let ms = s.last_gpu_ms;
-                self.background_shot = None;
-                self.save_in_background(done);
-                ms
-            }
-            Err(e) => {
-                self.shot_failed(format!("{e:#}"));
-                0.0
-            }
-        }
-    }
-
-    fn save_in_background(&mut self, done: shot::Finished) {
-        let (tx, rx) = mpsc::channel();
-        let summary = done.summary;
-        let (path, [w, h]) = (summary.path.clone(), summary.size);
-        let rgba = done.rgba;
-        std::thread::spawn(move || {
-            let result = hrtao_core::imageio::write_png(&path, w, h, &rgba)
-                .with_context(|| format!("cannot write {}", path.display()));
-            let _ = tx.send(result.map_err(|e| format!("{e:#}")));
-        });
-        self.saving = Some(Saving { summary, rx });
+        self.shots.finish_frame(viewer_rendered).unwrap_or_else(|e| {
+            self.shot_failed(e);
+            0.0
+        })
     }
 
     /// Polls the PNG writer of a background screenshot.
     fn poll_saving(&mut self) {
-        let Some(saving) = &self.saving else {
-            return;
-        };
-        let result = match saving.rx.try_recv() {
-            Ok(r) => r,
-            Err(mpsc::TryRecvError::Empty) => return,
-            Err(mpsc::TryRecvError::Disconnected) => Err("the PNG writer stopped".into()),
-        };
-        let Some(saving) = self.saving.take() else {
-            return;
-        };
-        let sm = &saving.summary;
-        match result {
-            Ok(()) => {
+        match self.shots.poll_saving() {
+            Some(Ok(sm)) => {
                 self.toast(
                     format!(
                         "screenshot saved: {} ({}×{}, {} tiles, {} frames, {:.1} s)",
@@ -1228,10 +1148,11 @@ impl Viewer {
                     false,
                 );
                 if let Some(log) = &mut self.script.stats {
-                    log.screenshot = Some(saving.summary);
+                    log.screenshot = Some(sm);
                 }
             }
-            Err(e) => self.shot_failed(e),
+            Some(Err(e)) => self.shot_failed(e),
+            None => {}
         }
     }
 
@@ -1256,7 +1177,7 @@ impl Viewer {
             return Ok(());
         }
         self.poll_saving();
-        if let Some(req) = self.shot.take() {
+        if let Some(req) = self.shots.pending.take() {
             match self.take_screenshot(req) {
                 Ok(p) => self.toast(format!("screenshot saved: {}", p.display()), false),
                 Err(e) => self.toast(format!("screenshot failed: {e:#}"), true),
@@ -1298,7 +1219,7 @@ impl Viewer {
         // A press on the view that has not moved anything: present the image already in the output again.
         let held = match &self.renderer {
             Some(r) if self.motion.holds() && !changed && self.last_report.is_some() => {
-                (!script_running && self.background_shot.is_none()).then(|| r.size())
+                (!script_running && !self.shots.rendering()).then(|| r.size())
             }
             _ => None,
         };
@@ -1314,7 +1235,7 @@ impl Viewer {
         let settle = !self.holding
             && self.motion.settling(changed, now)
             && self.shows_moving
-            && self.background_shot.is_none()
+            && !self.shots.rendering()
             && self.last_report.is_some();
         let (iw, ih) = match (held, &self.renderer) {
             (Some(size), _) => size,
@@ -1366,9 +1287,9 @@ impl Viewer {
             ..self.nav.cam
         };
         let mut shot_error = None;
-        if let (Some(s), Some(sg), Some(scene)) = (&mut self.background_shot, &self.scene_gpu, &self.scene) {
+        if let (Some(sg), Some(scene)) = (&self.scene_gpu, &self.scene) {
             // One frame of the background screenshot's current tile, before the view's own passes.
-            shot_error = s.record(cmd, sg, scene.f()).err();
+            shot_error = self.shots.record(cmd, sg, scene.f()).err();
         }
         if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
             let frame_settings = motion::frame_settings(&self.prefs.settings, moving);
@@ -1388,7 +1309,7 @@ impl Viewer {
             // A converged image of this very view is already in the output: present it again (expose events,
             // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render, except
             // during a background screenshot, where the view rests once converged as it would for a user.
-            let scripted = script_running && self.background_shot.is_none() && self.saving.is_none();
+            let scripted = script_running && !self.shots.rendering() && !self.shots.in_background();
             self.settling = settle && r.shows(&frame);
             let render = !self.holding && !self.settling && (scripted || !r.shows_final(&frame));
             // Each round of a still image in slices starts with the view's visibility drawn in a frame of its
@@ -1447,7 +1368,8 @@ impl Viewer {
         let shot_ms = self.finish_shot_frame(rendered);
         if let Some(e) = shot_error {
             // Dropped only now: its commands were in the frame just completed.
-            self.shot_failed(format!("{e:#}"));
+            self.shots.cancel();
+            self.shot_failed(format!("screenshot failed: {e:#}"));
         }
         if let Some((path, buf, w, h, bgra)) = readback {
             let mut px: Vec<u8> = buf.read((w * h * 4) as usize)?;
@@ -1536,7 +1458,7 @@ impl Viewer {
                     self.frame_time_target(view_ms);
                     self.last_moving = Some((view_ms, work));
                 }
-            } else if !installed && self.prefs.auto_budget && self.background_shot.is_none() {
+            } else if !installed && self.prefs.auto_budget && !self.shots.rendering() {
                 // (A background screenshot's tiles share the frame: its cost is not the view's.)
                 let target = slices::slice_target_ms(self.prefs.target_ms);
                 let slices = self.last_report.as_ref().map_or(1, |r| r.slices);
@@ -1585,9 +1507,7 @@ impl Viewer {
         let converging = viewing && !self.converged_full();
         // A held view waits for the press's motion or release (input wakes the loop).
         let busy = script_running
-            || self.shot.is_some()
-            || self.background_shot.is_some()
-            || self.saving.is_some()
+            || self.shots.busy()
             || self.script.ui_capture_pending
             || (!self.holding && !self.settling && (converging || (viewing && self.motion.moving(now))));
         if busy {
@@ -1673,7 +1593,7 @@ impl Viewer {
                     self.script.shot_started = true;
                     self.start_background_shot(size, path);
                 }
-                if self.background_shot.is_some() || self.saving.is_some() {
+                if self.shots.in_background() {
                     return;
                 }
             }
@@ -1684,7 +1604,7 @@ impl Viewer {
                 .clone()
                 .filter(|_| self.script.screenshot_size.is_none())
             {
-                let req = ShotRequest {
+                let req = shots::ShotRequest {
                     size: None,
                     frames: self.script.screenshot_frames,
                     path,
@@ -1783,7 +1703,7 @@ impl Viewer {
         self.maybe_save_prefs(true);
         self.write_stats();
         self.gpu.wait_idle();
-        self.background_shot = None;
+        self.shots = shots::Shots::default();
         self.renderer = None;
         self.scene_gpu = None;
         self.presenter.destroy();
@@ -1794,20 +1714,6 @@ impl Drop for Viewer {
     fn drop(&mut self) {
         self.shutdown();
     }
-}
-
-/// Background screenshot: the progress for the panels (fraction, text, cancellable), or the PNG being written.
-fn shot_progress(
-    shot: &Option<shot::BackgroundShot>,
-    saving: &Option<Saving>,
-) -> Option<(f32, String, bool)> {
-    if let Some(s) = shot {
-        return Some((s.progress(), s.status(), true));
-    }
-    saving.as_ref().map(|s| {
-        let [w, h] = s.summary.size;
-        (1.0, format!("{w}×{h}: writing the PNG"), false)
-    })
 }
 
 /// `MODEL-YYYYMMDD-HHMMSS` in local time, the model's name made safe for a file name.
