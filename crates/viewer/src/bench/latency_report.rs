@@ -188,7 +188,7 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
     Ok(())
 }
 
-/// The table of the versions whose `--orbit` runs alternated in one session (`converge_runs_ms`): each run's
+/// The table of the versions whose `--orbit` runs alternated back to back (`converge_runs_ms`): each run's
 /// time to converge and the ratio of medians to the scene's `before-ab` version.
 fn converge_runs(m: &mut String, results: &[LatencyResult]) -> Result<()> {
     let runs = |r: &LatencyResult| -> Option<Vec<f64>> {
@@ -205,7 +205,7 @@ fn converge_runs(m: &mut String, results: &[LatencyResult]) -> Result<()> {
     }
     writeln!(
         m,
-        "Time to converge with the versions' `--orbit 20` runs alternating in one session (a ratio of medians to \
+        "Time to converge with the versions' `--orbit 20` runs alternating back to back (a ratio of medians to \
          `before-ab`, the code before the still refinement in slices, is a ratio measured side by side):\n"
     )?;
     writeln!(

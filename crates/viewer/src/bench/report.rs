@@ -1034,7 +1034,7 @@ mod tests {
         dir
     }
 
-    /// Words the reference docs must not contain: `session`, `issue N` / `issue #N`, `agent(s)`.
+    /// Words the reference docs must not contain: `session`, `issue N` / `issue #N`, a bare `#N`, `agent(s)`.
     fn forbidden_words(text: &str) -> Vec<String> {
         let lower = text.to_lowercase();
         let mut found = Vec::new();
@@ -1044,6 +1044,15 @@ mod tests {
         for (i, _) in lower.match_indices("issue ") {
             let next = lower[i + 6..].chars().next();
             if next.is_some_and(|c| c.is_ascii_digit() || c == '#') {
+                found.push(lower[i..].chars().take(30).collect());
+            }
+        }
+        // `#28` names an issue as well (`issue #28` is counted above, once).
+        for (i, _) in lower.match_indices('#') {
+            let before = lower[..i].chars().next_back();
+            let digit = lower[i + 1..].chars().next().is_some_and(|c| c.is_ascii_digit());
+            let word_start = !before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '&');
+            if digit && word_start && !lower[..i].ends_with("issue ") {
                 found.push(lower[i..].chars().take(30).collect());
             }
         }
@@ -1124,6 +1133,45 @@ mod tests {
         assert_eq!(forbidden_words("the other agents; an Agent").len(), 2);
         assert_eq!(forbidden_words("### Session 7").len(), 1);
         assert!(forbidden_words("the issue's target, reagents, agentic, issue tracker").is_empty());
+        assert_eq!(forbidden_words("the code before #28's slices (#3)").len(), 2);
+        assert!(forbidden_words("# Benchmarks\n### 2 scenes, x#1, &#39;").is_empty());
+    }
+
+    /// Every file under `dir` (recursively) whose name ends in `.json`.
+    fn json_files(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                json_files(&p, out);
+            } else if p.extension().and_then(|x| x.to_str()) == Some("json") {
+                out.push(p);
+            }
+        }
+    }
+
+    /// The committed reference docs, not only a regenerated copy: `docs/benchmarks.md` (its hand-kept parts
+    /// and notes included) and every bench result under `docs/bench`, whose notes the report quotes.
+    #[test]
+    fn the_committed_docs_name_no_session_or_issue() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let mut files = vec![root.join("docs/benchmarks.md")];
+        json_files(&root.join("docs/bench"), &mut files);
+        assert!(files.len() > 10, "no bench JSON under docs/bench");
+        let bad: Vec<String> = files
+            .iter()
+            .flat_map(|f| {
+                let text = std::fs::read_to_string(f).unwrap();
+                let name = f.strip_prefix(&root).unwrap_or(f).display().to_string();
+                forbidden_words(&text)
+                    .into_iter()
+                    .map(move |w| format!("{name}: {w:?}"))
+            })
+            .collect();
+        assert!(
+            bad.is_empty(),
+            "forbidden words in the committed docs:\n{}",
+            bad.join("\n")
+        );
     }
 
     #[test]
