@@ -331,6 +331,14 @@ struct Script {
     ui_captured: bool,
 }
 
+/// The presented image copied for `--screenshot-ui`, read after the frame.
+struct UiCapture {
+    path: PathBuf,
+    buf: Buffer,
+    size: (u32, u32),
+    bgra: bool,
+}
+
 /// What the command line asked of the first scene: its camera, up axis, AO radius and section planes.
 struct Startup {
     camera: Option<PathBuf>,
@@ -1156,6 +1164,93 @@ impl Viewer {
         }
     }
 
+    /// Scripted UI capture (`--screenshot-ui`): records the copy of the presented image (3D view and UI).
+    fn record_ui_capture(&mut self, cmd: vk::CommandBuffer, index: u32) -> Result<Option<UiCapture>> {
+        if !(self.script.ui_capture_pending && self.presenter.readback_ok) {
+            return Ok(None);
+        }
+        self.script.ui_capture_pending = false;
+        let Some(path) = self.script.screenshot_ui.clone() else {
+            return Ok(None);
+        };
+        let (w, h) = (self.presenter.extent.width, self.presenter.extent.height);
+        let buf = Buffer::new(
+            &self.gpu,
+            "window readback",
+            w as u64 * h as u64 * 4,
+            MemoryLocation::GpuToCpu,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        self.presenter.record_readback(cmd, index, buf.raw);
+        let bgra = self.presenter.is_bgra();
+        Ok(Some(UiCapture {
+            path,
+            buf,
+            size: (w, h),
+            bgra,
+        }))
+    }
+
+    /// After the frame: writes the UI capture's PNG (a surface that cannot be read back fails the run).
+    fn finish_ui_capture(&mut self, capture: Option<UiCapture>) -> Result<()> {
+        let Some(UiCapture {
+            path,
+            buf,
+            size: (w, h),
+            bgra,
+        }) = capture
+        else {
+            if self.script.ui_capture_pending {
+                self.fatal("this surface cannot be read back (no TRANSFER_SRC)".into());
+            }
+            return Ok(());
+        };
+        let mut px: Vec<u8> = buf.read((w * h * 4) as usize)?;
+        for p in px.chunks_exact_mut(4) {
+            if bgra {
+                p.swap(0, 2);
+            }
+            p[3] = 255;
+        }
+        match hrtao_core::imageio::write_png(&path, w, h, &px) {
+            Ok(()) => self.toast(format!("window captured: {}", path.display()), false),
+            Err(e) => self.fatal(format!("cannot write {}: {e}", path.display())),
+        }
+        Ok(())
+    }
+
+    /// The swapchain image to draw into: the swapchain recreated first when the window's size changed (egui's
+    /// renderer told), None when there is none to draw into now (a repaint is asked for when it is out of date).
+    fn next_image(
+        &mut self,
+        size: winit::dpi::PhysicalSize<u32>,
+        egui_cmd: &mut egui_ash::EguiCommand,
+    ) -> Result<Option<u32>> {
+        let p = &mut self.presenter;
+        if p.dirty
+            || p.extent.width != size.width
+            || p.extent.height != size.height
+            || egui_cmd.swapchain_recreate_required()
+        {
+            if !p.recreate(size.width, size.height)? {
+                std::thread::sleep(Duration::from_millis(30));
+                return Ok(None);
+            }
+            egui_cmd.update_swapchain(egui_ash::SwapchainUpdateInfo {
+                width: p.extent.width,
+                height: p.extent.height,
+                swapchain_images: p.images.clone(),
+                surface_format: p.format,
+            });
+        }
+        let index = self.presenter.acquire()?;
+        if index.is_none() {
+            // Out of date: the next frame recreates the swapchain.
+            self.egui_ctx.request_repaint();
+        }
+        Ok(index)
+    }
+
     /// The per-frame work: swapchain upkeep, the renderer's passes, the blit, egui, present, statistics.
     fn draw(
         &mut self,
@@ -1183,35 +1278,11 @@ impl Viewer {
                 Err(e) => self.toast(format!("screenshot failed: {e:#}"), true),
             }
         }
-        let p = &mut self.presenter;
-        if p.dirty
-            || p.extent.width != size.width
-            || p.extent.height != size.height
-            || egui_cmd.swapchain_recreate_required()
-        {
-            if !p.recreate(size.width, size.height)? {
-                std::thread::sleep(Duration::from_millis(30));
-                return Ok(());
-            }
-            egui_cmd.update_swapchain(egui_ash::SwapchainUpdateInfo {
-                width: p.extent.width,
-                height: p.extent.height,
-                swapchain_images: p.images.clone(),
-                surface_format: p.format,
-            });
-        }
-        let Some(index) = self.presenter.acquire()? else {
-            // Out of date: the next frame recreates the swapchain.
-            self.egui_ctx.request_repaint();
+        let Some(index) = self.next_image(size, &mut egui_cmd)? else {
             return Ok(());
         };
-        // The 3D view rectangle (clamped to the swapchain) and the renderer's resolution.
-        let ext = self.presenter.extent;
-        let mut rect = self.view_rect;
-        rect[0] = rect[0].clamp(0, ext.width as i32 - 1);
-        rect[1] = rect[1].clamp(0, ext.height as i32 - 1);
-        rect[2] = rect[2].clamp(1, ext.width as i32 - rect[0]);
-        rect[3] = rect[3].clamp(1, ext.height as i32 - rect[1]);
+        // The 3D view rectangle, clamped to the swapchain.
+        let rect = self.presenter.clamp(self.view_rect);
         self.view_rect = rect;
         let now = Instant::now();
         let changed = !self.last_drawn_cam.is_some_and(|c| same_view(&c, &self.nav.cam));
@@ -1338,23 +1409,7 @@ impl Viewer {
         split.record = laps.lap();
         egui_cmd.record(cmd, index as usize);
         split.egui_record = laps.lap();
-        // Scripted UI capture: copy the presented image (3D view + UI).
-        let mut readback = None;
-        if self.script.ui_capture_pending && self.presenter.readback_ok {
-            if let Some(path) = self.script.screenshot_ui.clone() {
-                let (w, h) = (self.presenter.extent.width, self.presenter.extent.height);
-                let buf = Buffer::new(
-                    &gpu,
-                    "window readback",
-                    w as u64 * h as u64 * 4,
-                    MemoryLocation::GpuToCpu,
-                    vk::BufferUsageFlags::empty(),
-                )?;
-                self.presenter.record_readback(cmd, index, buf.raw);
-                readback = Some((path, buf, w, h, self.presenter.is_bgra()));
-            }
-            self.script.ui_capture_pending = false;
-        }
+        let readback = self.record_ui_capture(cmd, index)?;
         unsafe {
             gpu.device.end_command_buffer(cmd)?;
         }
@@ -1371,23 +1426,7 @@ impl Viewer {
             self.shots.cancel();
             self.shot_failed(format!("screenshot failed: {e:#}"));
         }
-        if let Some((path, buf, w, h, bgra)) = readback {
-            let mut px: Vec<u8> = buf.read((w * h * 4) as usize)?;
-            if bgra {
-                for p in px.chunks_exact_mut(4) {
-                    p.swap(0, 2);
-                }
-            }
-            for p in px.chunks_exact_mut(4) {
-                p[3] = 255;
-            }
-            match hrtao_core::imageio::write_png(&path, w, h, &px) {
-                Ok(()) => self.toast(format!("window captured: {}", path.display()), false),
-                Err(e) => self.fatal(format!("cannot write {}: {e}", path.display())),
-            }
-        } else if self.script.ui_capture_pending {
-            self.fatal("this surface cannot be read back (no TRANSFER_SRC)".into());
-        }
+        self.finish_ui_capture(readback)?;
         if rendered {
             let now = Instant::now();
             if let Some(last) = self.last_frame_at {

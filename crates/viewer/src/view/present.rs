@@ -42,6 +42,16 @@ pub struct Presenter {
 }
 
 impl Presenter {
+    /// A view rectangle (x, y, width, height in pixels) clamped to the swapchain's extent, at least 1×1.
+    pub fn clamp(&self, mut rect: [i32; 4]) -> [i32; 4] {
+        let ext = self.extent;
+        rect[0] = rect[0].clamp(0, ext.width as i32 - 1);
+        rect[1] = rect[1].clamp(0, ext.height as i32 - 1);
+        rect[2] = rect[2].clamp(1, ext.width as i32 - rect[0]);
+        rect[3] = rect[3].clamp(1, ext.height as i32 - rect[1]);
+        rect
+    }
+
     pub fn new(gpu: &Arc<Gpu>, window: &egui_ash::winit::window::Window) -> Result<Presenter> {
         use egui_ash::raw_window_handle::{HasRawDisplayHandle, HasRawWindowHandle};
         unsafe {
