@@ -80,6 +80,18 @@ impl From<Up> for UpAxis {
     }
 }
 
+/// `--primary`: how primary visibility is found (`crate::setup::Device::install` applies it).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum PrimaryChoice {
+    /// Measured: the faster of ray queries and rasterisation for this scene on this device.
+    #[default]
+    Auto,
+    /// One ray query per pixel.
+    RayQuery,
+    /// Rasterised visibility, then one ray-triangle test per pixel.
+    Raster,
+}
+
 /// `bench --auto-camera`.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AutoCamera {
@@ -223,7 +235,7 @@ pub struct AoArgs {
     /// AO mode.
     #[arg(long, default_value = "hrtao", value_parser = mode_parser())]
     pub mode: Mode,
-    /// AO radius in scene units (default: 5% of the scene's bounding-box diagonal).
+    /// AO radius in scene units (default: 8 for the bundled scene, else 5% of the bounds diagonal).
     #[arg(long)]
     pub radius: Option<f32>,
     /// Ray budget: rays per pixel per frame.
@@ -263,15 +275,12 @@ pub struct AoArgs {
 }
 
 impl AoArgs {
-    pub fn settings(&self, scene_diagonal: f32) -> anyhow::Result<AoSettings> {
-        let scene_diagonal = if scene_diagonal.is_finite() && scene_diagonal > 0.0 {
-            scene_diagonal
-        } else {
-            1.0
-        };
+    /// The settings these options ask for, with `ao_radius` the radius the setup chose (`setup::Prepared::radius`:
+    /// `--radius` when given, else the scene's default; the one place for that rule is `crate::setup`).
+    pub fn settings(&self, ao_radius: f32) -> anyhow::Result<AoSettings> {
         let mut settings = AoSettings::default();
         settings.display.mode = self.mode;
-        settings.map.ao_radius = self.radius.unwrap_or((scene_diagonal * 0.05).max(1e-6));
+        settings.map.ao_radius = ao_radius;
         settings.map.rays_per_pixel = self.rays;
         settings.map.s_p = self.sp;
         settings.map.s_nd = self.snd;
@@ -296,7 +305,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
-    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: fit the scene.
+    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's
+    /// `NAME.camera.json` beside it, else fit the scene.
     #[arg(long)]
     pub camera: Option<PathBuf>,
     /// Image width (overrides the camera file).
@@ -305,9 +315,13 @@ pub struct RenderArgs {
     /// Image height (overrides the camera file).
     #[arg(long)]
     pub height: Option<u32>,
-    /// Up axis for the automatic camera.
-    #[arg(long, value_enum, default_value_t = Up::Y, ignore_case = true)]
-    pub up: Up,
+    /// World up axis: the automatic camera's (default: the camera file's, else z for the bundled scene and gen:
+    /// specs, else y).
+    #[arg(long, value_enum, ignore_case = true)]
+    pub up: Option<Up>,
+    /// Primary visibility: measured (auto), ray queries or rasterised.
+    #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
+    pub primary: PrimaryChoice,
     #[command(flatten)]
     pub ao: AoArgs,
     /// Frames to render with the same camera (per-pixel RTAO averages them; the HRTAO map persists).
@@ -341,9 +355,12 @@ pub struct ViewArgs {
     /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
     #[arg(long)]
     pub camera: Option<PathBuf>,
-    /// Up axis when fitting a camera (default: z for the bundled scene, y otherwise).
+    /// World up axis (default: the camera file's, else z for the bundled scene and gen: specs, else y).
     #[arg(long, value_enum, ignore_case = true)]
     pub up: Option<Up>,
+    /// Primary visibility: measured (auto), ray queries or rasterised.
+    #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
+    pub primary: PrimaryChoice,
     /// Window size, e.g. 1280x720.
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
@@ -436,7 +453,8 @@ pub struct BenchArgs {
     #[arg(long, required_unless_present = "report")]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
-    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: fit the scene.
+    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's
+    /// `NAME.camera.json` beside it, else fit the scene.
     #[arg(long)]
     pub camera: Option<PathBuf>,
     /// Navigation path: a JSON array of cameras (or {"cameras": [...]}); sizes come from --width/--height.
@@ -454,9 +472,12 @@ pub struct BenchArgs {
     /// Image height (default: the camera file's, else 180).
     #[arg(long)]
     pub height: Option<u32>,
-    /// Up axis for the automatic camera (default z for gen: scenes, else y).
+    /// World up axis: the automatic camera's (default: the camera file's, else z for gen: specs, else y).
     #[arg(long, value_enum, ignore_case = true)]
     pub up: Option<Up>,
+    /// Primary visibility of every mode: measured (auto), ray queries or rasterised.
+    #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
+    pub primary: PrimaryChoice,
     /// At most this many static frames after the first frame and before the navigation, letting cells fill as
     /// they would during the first fraction of a second on a GPU (the paper's navigation is with a warm map).
     #[arg(long, default_value_t = 128)]
@@ -464,9 +485,10 @@ pub struct BenchArgs {
     /// Stop settling once a frame traces fewer than this fraction of the first frame's rays.
     #[arg(long, default_value_t = 0.1)]
     pub settle_until: f64,
-    /// Automatic camera (no --camera); from a corner, inside a room, depth complexity grows with its size.
-    #[arg(long, value_enum, default_value_t = AutoCamera::Fit)]
-    pub auto_camera: AutoCamera,
+    /// Automatic camera, instead of the file's `NAME.camera.json` (no --camera); from a corner, inside a room,
+    /// depth complexity grows with its size [default: fit].
+    #[arg(long, value_enum)]
+    pub auto_camera: Option<AutoCamera>,
     /// First-frame repetitions (each from an empty hash map); the summary takes medians.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeat: u32,

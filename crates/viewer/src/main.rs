@@ -4,6 +4,7 @@ mod cli;
 mod common;
 mod occt_worker;
 mod render_cmd;
+mod setup;
 mod view;
 
 use clap::{CommandFactory, FromArgMatches};

@@ -2,10 +2,11 @@
 use std::time::Instant;
 
 use anyhow::{anyhow, Result};
-use hrtao_core::{imageio, Camera, FrameDesc, FrameReport, Renderer, SceneGpu};
+use hrtao_core::{imageio, FrameDesc, FrameReport};
 
 use crate::cli::{DeviceArgs, RenderArgs};
-use crate::common::{default_scene_path, load_scene, open_gpu, progress, write_json};
+use crate::common::{load_scene, open_gpu, progress, write_json};
+use crate::setup::{self, Device, Installed, SetupInputs};
 
 #[derive(serde::Serialize)]
 struct RenderStats<'a> {
@@ -31,62 +32,32 @@ struct RenderStats<'a> {
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let set_at_frame = crate::cli::set_at_frame(&args.set_at_frame)?;
-    // No --scene: the bundled gearbox, with its camera and the viewer's radius for it.
-    let bundled = args.scene.is_none();
-    let spec = match &args.scene {
-        Some(s) => s.clone(),
-        None => default_scene_path().display().to_string(),
-    };
+    let inputs = SetupInputs::from_render(args);
+    let spec = inputs.load_spec();
     // The device opens and the renderer makes its pipelines while the scene loads (a STEP file loads in a worker
     // process; on a CPU device both take a core).
     let early = {
         let device = args.device.clone();
-        std::thread::spawn(move || -> Result<_> {
-            let gpu = open_gpu(&device)?;
-            let renderer = Renderer::new(&gpu)?;
-            Ok((gpu, renderer))
-        })
+        std::thread::spawn(move || Device::open(&device))
     };
     // Everything that can fail before the device is needed; the device thread is joined whatever happens (no
     // exit while that thread is inside the driver).
     let prepared = (|| -> Result<_> {
         let (scene, load_ms) = load_scene(&spec)?;
-        let bounds = scene.bounds();
-        let camera_file = args
-            .camera
-            .clone()
-            .or_else(|| bundled.then(|| std::path::Path::new(&spec).with_extension("camera.json")));
-        let mut camera = match &camera_file {
-            Some(p) => Camera::load_in(p, scene.origin)?,
-            None => Camera::fit(bounds.min, bounds.max, args.up.into(), 40.0, 640, 360),
-        };
-        if let Some(w) = args.width {
-            camera.width = w;
-        }
-        if let Some(h) = args.height {
-            camera.height = h;
-        }
-        camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
-        let mut settings = args.ao.settings(bounds.diagonal().length())?;
-        if bundled && args.ao.radius.is_none() {
-            settings.map.ao_radius = crate::view::BUNDLED_RADIUS;
-        }
+        let prepared = setup::prepare(&inputs, &scene)?;
+        let settings = args.ao.settings(prepared.radius)?;
         settings.validate().map_err(|e| anyhow::anyhow!(e))?;
-        let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
-        Ok((scene, load_ms, camera, settings, sections))
+        Ok((scene, load_ms, prepared, settings))
     })();
     let device = early.join().map_err(|_| anyhow!("the device thread panicked"))?;
-    let (scene, load_ms, camera, mut settings, sections) = prepared?;
-    let (gpu, mut renderer) = device?;
-    let mut scene_gpu = SceneGpu::new(&gpu, &scene)?;
-    scene_gpu.set_sections(&scene, &sections, u32::MAX)?;
-    log::info!(
-        "acceleration structures: {} BLAS in {:.0} ms, TLAS of {} instances in {:.1} ms",
-        scene_gpu.stats.blas_count,
-        scene_gpu.stats.blas_ms,
-        scene_gpu.stats.tlas_instances,
-        scene_gpu.stats.tlas_ms
-    );
+    let (scene, load_ms, prepared, mut settings) = prepared?;
+    let Installed {
+        gpu,
+        scene_gpu,
+        mut renderer,
+        ..
+    } = device?.install(&scene, &prepared, &settings)?;
+    let (camera, sections) = (prepared.camera, &prepared.sections);
     let t0 = Instant::now();
     let mut frames = Vec::new();
     let bar = progress(args.frames as u64, "rendering");
@@ -149,7 +120,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frames: &frames,
             render_ms,
             validation_messages,
-            sections: &sections,
+            sections,
             section_sides: scene_gpu.section_sides,
         };
         write_json(path, &stats)?;

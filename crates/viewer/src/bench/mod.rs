@@ -18,13 +18,14 @@ pub mod stats;
 use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
-use hrtao_core::camera::UpAxis;
 use hrtao_core::metrics::{ao_error, AoError};
+use hrtao_core::raster::Primary;
 use hrtao_core::{imageio, AoSettings, Camera, FrameDesc, FrameReport, Mode, Renderer, SceneGpu};
 use serde::{Deserialize, Serialize};
 
-use crate::cli::{AutoCamera, BenchArgs};
-use crate::common::{load_scene, open_gpu, write_json};
+use crate::cli::BenchArgs;
+use crate::common::{load_scene, write_json};
+use crate::setup::{self, Device, Installed, SetupInputs};
 use stats::{
     median, rays_to_reach, section_sum, segment_mean, CurvePoint, Match, HRTAO_PASSES, NON_RAY_PASSES,
 };
@@ -310,6 +311,9 @@ pub struct BenchResult {
     pub width: u32,
     pub height: u32,
     pub camera: Camera,
+    /// Primary visibility of every mode (`setup::Device::install`; results without it used ray queries).
+    #[serde(default)]
+    pub primary: Primary,
     pub settings: serde_json::Value,
     /// "orbit" or "path", and the navigation frame count.
     pub navigation: String,
@@ -353,27 +357,6 @@ pub fn load_path(path: &std::path::Path, width: u32, height: u32) -> Result<Vec<
             Ok(c)
         })
         .collect()
-}
-
-/// A camera at the `min` corner of the box (outside it by 2 % of the diagonal), at 80 % of its height, looking at
-/// the middle of the far half.
-pub fn corner_camera(min: glam::Vec3, max: glam::Vec3, up: UpAxis) -> Camera {
-    let upv = up.vector();
-    let d = max - min;
-    let along = d - upv * d.dot(upv);
-    let base_min = min - upv * min.dot(upv);
-    let h = |f: f32| upv * (min.dot(upv) + f * d.dot(upv));
-    let eye = base_min - along.normalize_or_zero() * d.length() * 0.02 + h(0.8);
-    let target = base_min + along * 0.6 + h(0.3);
-    Camera {
-        eye: eye.to_array(),
-        target: target.to_array(),
-        up: upv.to_array(),
-        fov_y_deg: 50.0,
-        width: 320,
-        height: 180,
-        ..Default::default()
-    }
 }
 
 /// `n` cameras orbiting `cam.target` about `cam.up`, `step_deg` apart, starting one step after `cam`.
@@ -453,30 +436,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         bail!("--step must be at least 1");
     }
     let t_bench = std::time::Instant::now();
+    let inputs = SetupInputs::from_bench(args);
     let (scene, load_ms) = load_scene(spec)?;
-    let bounds = scene.bounds();
-    if bounds.is_empty() {
-        bail!("scene `{spec}` has no visible geometry");
-    }
-    let up = match args.up {
-        Some(u) => u.into(),
-        None if spec.starts_with("gen:") => UpAxis::Z,
-        None => UpAxis::Y,
-    };
-    let mut camera = match &args.camera {
-        Some(p) => Camera::load_in(p, scene.origin)?,
-        None => match args.auto_camera {
-            AutoCamera::Fit => Camera::fit(bounds.min, bounds.max, up, 40.0, 320, 180),
-            AutoCamera::Corner => corner_camera(bounds.min, bounds.max, up),
-        },
-    };
-    if let Some(w) = args.width {
-        camera.width = w;
-    }
-    if let Some(h) = args.height {
-        camera.height = h;
-    }
-    camera.validate().map_err(|e| anyhow::anyhow!("camera: {e}"))?;
+    let prepared = setup::prepare(&inputs, &scene)?;
+    let camera = prepared.camera;
     let (w, h) = (camera.width, camera.height);
     let (nav_cams, navigation) = match &args.path {
         Some(p) => (load_path(p, w, h)?, "path".to_string()),
@@ -488,7 +451,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if nav_cams.is_empty() {
         bail!("no navigation frame (--orbit 0)");
     }
-    let mut hrtao_settings = args.ao.settings(bounds.diagonal().length())?;
+    let mut hrtao_settings = args.ao.settings(prepared.radius)?;
     hrtao_settings.display.mode = Mode::Hrtao;
     hrtao_settings.validate().map_err(|e| anyhow::anyhow!(e))?;
     if hrtao_settings.map.rays_per_pixel == 0 {
@@ -506,24 +469,25 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // Progress by phase: build, warm-up, HRTAO timing, per-pixel RTAO timing, quality.
     let bar = crate::common::progress(if args.no_quality { 4 } else { 5 }, "bench");
     bar.set_message("building");
-    let gpu = open_gpu(&args.device)?;
-    if !gpu.info.timestamps {
+    let device = Device::open(&args.device)?;
+    if !device.gpu.info.timestamps {
         log::warn!("the device has no timestamp queries: GPU times will be zero");
     }
-    let sections = args.sections.sections(&scene).map_err(|e| anyhow::anyhow!(e))?;
-    let mut scene_gpu = SceneGpu::new(&gpu, &scene)?;
-    scene_gpu.set_sections(&scene, &sections, u32::MAX)?;
-    let device_scene_bytes = gpu.device_memory_bytes();
+    // Every renderer of the run (ours, the paper's mode, per-pixel RTAO) finds primary visibility the same way,
+    // chosen once: the modes differ in their AO only.
+    let installed = device.install(&scene, &prepared, &hrtao_settings)?;
+    let (device_scene_bytes, device_total_bytes) =
+        (installed.scene_device_bytes, installed.total_device_bytes);
+    let mut paper_r = installed.another_renderer()?;
+    let Installed {
+        gpu,
+        scene_gpu,
+        renderer: mut r,
+        primary,
+        ..
+    } = installed;
+    let sections = &prepared.sections;
     let scene_estimate = scene_device_estimate(&scene_gpu.stats);
-    log::info!(
-        "acceleration structures: {} BLAS in {:.0} ms, TLAS of {} instances in {:.1} ms",
-        scene_gpu.stats.blas_count,
-        scene_gpu.stats.blas_ms,
-        scene_gpu.stats.tlas_instances,
-        scene_gpu.stats.tlas_ms
-    );
-    let mut r = Renderer::new(&gpu)?;
-    let device_total_bytes = gpu.device_memory_bytes();
     let (device_scene_bytes, device_total_bytes, device_bytes_source) =
         if sane_bytes(device_scene_bytes) && sane_bytes(device_total_bytes) {
             (device_scene_bytes, device_total_bytes, "allocator")
@@ -534,8 +498,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         };
     let sf = scene.f();
 
-    // The paper's behaviour (our additions off) on a renderer of its own, so both run side by side.
-    let mut paper_r = Renderer::new(&gpu)?;
+    // The paper's behaviour (our additions off) on a renderer of its own (`paper_r`), so both run side by side.
     let paper_settings = hrtao_settings.paper();
 
     bar.inc(1);
@@ -649,6 +612,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         width: w,
         height: h,
         camera,
+        primary,
         settings: {
             let mut v = serde_json::to_value(&hrtao_settings)?;
             v["sections"] = serde_json::to_value(&sections.planes)?;
