@@ -41,7 +41,7 @@ use hrtao_scene::Scene;
 use crate::cli::{AutoCamera, BenchArgs, DeviceArgs, PrimaryChoice, RenderArgs, SectionArgs, ViewArgs};
 
 /// The AO radius of the bundled gearbox (millimetres; 5 % of its diagonal would be 3× as wide).
-pub const BUNDLED_RADIUS: f32 = crate::view::BUNDLED_RADIUS;
+pub const BUNDLED_RADIUS: f32 = 8.0;
 
 /// Field of view of an automatic camera, in degrees.
 const FIT_FOV_DEG: f32 = 40.0;
@@ -96,8 +96,6 @@ impl Default for SetupInputs {
 
 impl SetupInputs {
     /// `hrtao [view] [FILE]`: the viewer's first scene (it sizes the camera to its window itself).
-    // The viewer's `install_scene` is to call it (and read `Prepared`'s fields the headless commands leave).
-    #[cfg_attr(not(test), allow(dead_code))]
     pub fn from_view(args: &ViewArgs) -> SetupInputs {
         SetupInputs {
             spec: args.file.clone(),
@@ -205,7 +203,6 @@ pub fn up_axis_of(camera: &Camera) -> UpAxis {
 
 /// What [`prepare`] decided for a loaded scene.
 #[derive(Clone, Debug)]
-#[cfg_attr(not(test), allow(dead_code))]
 pub struct Prepared {
     /// The first camera, in the scene's coordinates, at the command's image size.
     pub camera: Camera,
@@ -354,7 +351,8 @@ impl Device {
         let scene_gpu = build_scene_gpu(&gpu, scene, &prepared.sections)?;
         let total_device_bytes = gpu.device_memory_bytes();
         let frame = FrameDesc::new(&scene_gpu, scene.f(), prepared.camera, settings);
-        let primary = choose_primary(&gpu, &mut renderer, prepared.primary, prepared.pass_times, &frame)?;
+        let (primary, _) =
+            choose_primary(&gpu, &mut renderer, prepared.primary, prepared.pass_times, &frame)?;
         Ok(Installed {
             scene_device_bytes: total_device_bytes.saturating_sub(renderer_bytes),
             total_device_bytes,
@@ -392,19 +390,20 @@ pub fn build_scene_gpu(gpu: &Arc<Gpu>, scene: &Scene, sections: &Sections) -> Re
 /// Sets `renderer`'s primary visibility as `choice` asks: `Auto` measures both on `frame`
 /// (`Renderer::pick_primary`, which leaves the hash map alone and starts a new still image), unless `pass_times`
 /// and the device cannot time rasterised frames (then ray queries, unmeasured); `Raster` on a device that cannot
-/// rasterise it is an error.
+/// rasterise it is an error. Returns the choice and, when measured, the ray-query frame's milliseconds (else NaN):
+/// the viewer's first ray budget follows it.
 pub fn choose_primary(
     gpu: &Gpu,
     renderer: &mut Renderer,
     choice: PrimaryChoice,
     pass_times: bool,
     frame: &FrameDesc,
-) -> Result<Primary> {
+) -> Result<(Primary, f64)> {
     let primary = match choice {
         PrimaryChoice::Auto if pass_times && !times_frames(renderer, Primary::Raster) => {
             log::info!("primary visibility: RayQuery (this device does not time rasterised frames' passes)");
             renderer.set_primary(Primary::RayQuery);
-            return Ok(Primary::RayQuery);
+            return Ok((Primary::RayQuery, f64::NAN));
         }
         PrimaryChoice::Auto => {
             let (primary, rq_ms, raster_ms) = renderer.pick_primary(frame)?;
@@ -413,7 +412,7 @@ pub fn choose_primary(
                 frame.camera.width,
                 frame.camera.height
             );
-            return Ok(primary);
+            return Ok((primary, rq_ms));
         }
         PrimaryChoice::RayQuery => Primary::RayQuery,
         PrimaryChoice::Raster => {
@@ -426,7 +425,7 @@ pub fn choose_primary(
     };
     renderer.set_primary(primary);
     log::info!("primary visibility: {primary:?} (--primary)");
-    Ok(primary)
+    Ok((primary, f64::NAN))
 }
 
 /// Whether the device times the passes of `renderer`'s frames with `primary` (its own primary kept).

@@ -49,6 +49,7 @@ use hrtao_core::{
 use hrtao_scene::Scene;
 
 use crate::cli::ViewArgs;
+use crate::setup;
 use command::{Command, PickFor};
 use edits::EditStack;
 use nav::Nav;
@@ -64,9 +65,6 @@ fn scripted_timeout(args: &ViewArgs) -> u64 {
 
 /// The window's application id, the name of the desktop entry (`hrtao.desktop`).
 pub const APP_ID: &str = "hrtao";
-
-/// The AO radius for the bundled gearbox (millimetres; 5 % of its diagonal would be 3× as wide).
-pub const BUNDLED_RADIUS: f32 = 8.0;
 
 /// The key and mouse bindings (the panel's Help table; `hrtao --help` prints them too).
 pub use ui::BINDINGS;
@@ -339,15 +337,6 @@ struct UiCapture {
     bgra: bool,
 }
 
-/// What the command line asked of the first scene: its camera, up axis, AO radius and section planes.
-struct Startup {
-    camera: Option<PathBuf>,
-    up: Option<UpAxis>,
-    radius: Option<f32>,
-    /// --section planes (file coordinates).
-    sections: crate::cli::SectionArgs,
-}
-
 pub(crate) struct Viewer {
     gpu: Arc<Gpu>,
     presenter: Presenter,
@@ -376,8 +365,8 @@ pub(crate) struct Viewer {
     panels: ui::Panels,
     edits: EditStack,
     loader: loader::Loader,
-    /// What the command line asked of the first scene.
-    startup: Startup,
+    /// What the command line asked of the first scene (crate::setup), then of the scenes opened after it.
+    startup: crate::setup::SetupInputs,
     // View.
     /// The user's render scale: the internal resolution of a still image, and the cap while moving.
     render_scale: f32,
@@ -491,12 +480,7 @@ impl Viewer {
             panels: ui::Panels::new(&spec, !args.no_panel),
             edits: EditStack::default(),
             loader: loader::Loader::default(),
-            startup: Startup {
-                camera: args.camera.clone(),
-                up: args.up.map(UpAxis::from),
-                radius: args.radius,
-                sections: args.sections.clone(),
-            },
+            startup: crate::setup::SetupInputs::from_view(args),
             render_scale,
             motion: motion::Motion::new(moving_scale.min(render_scale)),
             view_rect: [0, 0, 1, 1],
@@ -628,52 +612,31 @@ impl Viewer {
     }
 
     fn install_scene(&mut self, scene: Scene, spec: &str) -> Result<()> {
-        let bounds = scene.bounds();
-        if bounds.is_empty() {
-            bail!("the scene is empty");
-        }
+        // The command line's camera, radius and sections are the first scene's; its up axis and primary
+        // visibility hold for every scene (crate::setup: the rules `render` and `bench` follow too).
+        let later = setup::SetupInputs {
+            up: self.startup.up,
+            primary: self.startup.primary,
+            ..Default::default()
+        };
+        let inputs = setup::SetupInputs {
+            spec: Some(spec.to_string()),
+            ..std::mem::replace(&mut self.startup, later)
+        };
+        let p = setup::prepare(&inputs, &scene)?;
         self.gpu.wait_idle();
-        let initial_sections = std::mem::take(&mut self.startup.sections)
-            .sections(&scene)
-            .map_err(|e| anyhow!(e))?;
-        let section_state = sections::SectionState::for_scene(bounds, &initial_sections);
+        let section_state = sections::SectionState::for_scene(scene.bounds(), &p.sections);
         self.cancel_background_shot(": another scene was opened");
-        let mut scene_gpu = SceneGpu::new(&self.gpu, &scene)?;
-        scene_gpu.set_sections(&scene, &section_state.sections(), u32::MAX)?;
-        let is_default = std::fs::canonicalize(spec).ok() == std::fs::canonicalize(default_spec()).ok();
-        // Camera: --camera for the first scene, else NAME.camera.json beside the file, else fit.
-        let beside = Path::new(spec).with_extension("camera.json");
-        let cam_file = self
-            .startup
-            .camera
-            .take()
-            .or_else(|| beside.is_file().then_some(beside));
-        let up = self
-            .startup
-            .up
-            .unwrap_or(if is_default { UpAxis::Z } else { UpAxis::Y });
-        let cam = match &cam_file {
-            Some(p) => Camera::load_in(p, scene.origin).with_context(|| format!("camera {}", p.display()))?,
-            None => Camera::fit(bounds.min, bounds.max, up, 40.0, 640, 360),
-        };
-        let world_up = if cam_file.is_some() {
-            nav::up_axis_of(&cam)
-        } else {
-            up
-        };
-        let diag = bounds.diagonal().length();
-        self.default_radius = if is_default {
-            BUNDLED_RADIUS
-        } else {
-            (diag * 0.05).max(1e-6)
-        };
-        let radius = self.startup.radius.take().unwrap_or(self.default_radius);
+        let scene_gpu = setup::build_scene_gpu(&self.gpu, &scene, &section_state.sections())?;
+        self.default_radius = p.default_radius;
+        let radius = p.radius;
+        let world_up = p.up;
         // Orient the camera with a true up vector (nav keeps it orthogonal).
-        let mut cam = nav::orbit(&cam, nav::target(&cam), world_up.vector(), 0.0, 0.0);
+        let mut cam = nav::orbit(&p.camera, nav::target(&p.camera), world_up.vector(), 0.0, 0.0);
         // A camera file framed for a wider image: back off so the 3D view shows the same horizontal extent.
         let file_aspect = cam.width as f32 / cam.height.max(1) as f32;
         let view_aspect = self.view_rect[2].max(1) as f32 / self.view_rect[3].max(1) as f32;
-        if cam_file.is_some() && self.view_rect[2] > 1 && view_aspect < file_aspect {
+        if p.camera_file.is_some() && self.view_rect[2] > 1 && view_aspect < file_aspect {
             let widen = file_aspect / view_aspect;
             if cam.is_orthographic() {
                 cam.ortho_height *= widen;
@@ -691,7 +654,7 @@ impl Viewer {
         self.selection = tree::Selection::default();
         // STEP and IGES declare their length unit; the bundled gearbox is a CAD export in millimetres (its glTF
         // says metres).
-        let unit = if is_default {
+        let unit = if p.bundled {
             Some(measure::Unit::Mm)
         } else {
             scene.unit_m.and_then(measure::Unit::from_metres)
@@ -713,12 +676,8 @@ impl Viewer {
                 ..self.nav.cam
             };
             let settings = self.prefs.settings.clone().with_radius(radius);
-            let (primary, rq_ms, raster_ms) =
-                r.pick_primary(&FrameDesc::new(&scene_gpu, scene.f(), probe, &settings))?;
-            log::info!(
-                "primary visibility: {primary:?} (ray queries {rq_ms:.0} ms, raster {raster_ms:.0} ms at {w}x{h})"
-            );
-            probe_rq_ms = rq_ms;
+            let frame = FrameDesc::new(&scene_gpu, scene.f(), probe, &settings);
+            probe_rq_ms = setup::choose_primary(&self.gpu, r, p.primary, false, &frame)?.1;
             // The first frames after opening answer input as soon as any other (no pipeline compiles in them).
             let t = Instant::now();
             r.warm_up(&FrameDesc {

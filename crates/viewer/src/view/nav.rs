@@ -212,16 +212,6 @@ pub fn std_view(c: &Camera, view: StdView, up: UpAxis, min: Vec3, max: Vec3) -> 
     fit(&oriented, min, max)
 }
 
-/// Guesses the up axis of a scene from its camera's up vector.
-pub fn up_axis_of(c: &Camera) -> UpAxis {
-    let u = Vec3::from(c.up);
-    if u.z.abs() > u.y.abs() {
-        UpAxis::Z
-    } else {
-        UpAxis::Y
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
