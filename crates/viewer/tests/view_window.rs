@@ -245,53 +245,6 @@ fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
     }
 }
 
-/// The frame-time target's ray budget belongs to the scene it was found on: a saved budget that a heavy scene cut
-/// to the minimum does not carry over to the next scene, whose first frames would trace almost nothing (the budget
-/// only grows again in moving frames). Each scene starts from its own (`budget::first_rays_per_frame`).
-#[test]
-fn a_saved_budget_cut_by_a_heavy_scene_does_not_carry_over() {
-    let _display = display_lock();
-    if !display_available() {
-        return;
-    }
-    let dir = out_dir("budget");
-    std::fs::create_dir_all(dir.join("hrtao")).unwrap();
-    std::fs::write(
-        dir.join("hrtao/viewer.json"),
-        r#"{"rays_per_frame": 1000, "auto_budget": true}"#,
-    )
-    .unwrap();
-    let stats = dir.join("stats.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(["view", "--size", "320x200", "--no-panel", "--frames", "3"])
-        .arg("--stats")
-        .arg(&stats)
-        .arg("--exit")
-        .env("XDG_CONFIG_HOME", &dir)
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
-    assert!(!err.contains("[vulkan"), "validation messages:\n{err}");
-    let json = read_json(&stats);
-    let rays: Vec<u64> = json["frames"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|f| f["rays"].as_u64().unwrap())
-        .collect();
-    println!("rays per frame: {rays:?}");
-    // The first frame (at the moving scale, 112×70) traces the scene's own first budget (the rays its primary probe
-    // traced in a quarter of the 100 ms target: tens of thousands on lavapipe), not the saved 1000 (397 rays before
-    // the fix: a grainy first image of the new scene).
-    assert!(
-        rays[0] > 5_000,
-        "the first frame traces the scene's own budget, not the saved one: {rays:?}"
-    );
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
 /// Screenshots to an unwritable place or a full disk give an error message and a clean exit status.
 #[test]
 fn screenshot_to_unwritable_or_full_destination_fails_cleanly() {
@@ -500,10 +453,10 @@ fn scripted_orbit_writes_stats_and_ends_at_full_resolution() {
         assert!(iw as f64 >= 0.35 * vw as f64 - 1.0, "not below 0.35: {f}");
         assert!(f["wall_ms"].as_f64().unwrap() > 0.0);
     }
-    // The first frame's wall time includes the scene's install (seconds): the frame-time target does not take
-    // it for a moving frame's cost (it cut the first budget to a quarter).
+    // The first frame's wall time includes the scene's install: the frame-time target does not take it for a
+    // moving frame's cost (it cut the first budget to a quarter; the rule's own test replays it on a controlled
+    // clock, view/pacer).
     let budget = |f: &serde_json::Value| f["rays_per_frame"].as_u64().unwrap();
-    assert!(moving[0]["wall_ms"].as_f64().unwrap() > 100.0, "{json}");
     assert_eq!(budget(moving[1]), budget(moving[0]), "{json}");
     // Where each frame's wall time went: consecutive CPU spans that add up to at most the wall time, the device's
     // share (the wait for the frame's fence) among them.

@@ -110,6 +110,8 @@ pub struct ViewState<'a> {
     pub internal: (u32, u32),
     /// Average render and interval milliseconds of the view's frames.
     pub frame_ms: (f64, f64),
+    /// The rays per frame in use (the frame-time target's, or the user's).
+    pub rays_per_frame: u32,
     pub loading: Option<LoadingView<'a>>,
     pub load_error: Option<&'a str>,
     pub undo: Option<String>,

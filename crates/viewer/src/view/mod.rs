@@ -7,7 +7,6 @@
 //! - `present`: swapchain, the scaled blit of the renderer's output, readback of the presented image.
 //! - `shot`: custom-size screenshots rendered in the background, tile by tile, while the window keeps drawing.
 //! - `ui`: the panel, navigation and picking input, toasts.
-pub mod budget;
 mod command;
 pub mod edits;
 mod files;
@@ -16,8 +15,8 @@ pub mod latency;
 mod load_options;
 mod loader;
 pub mod measure;
-pub mod motion;
 pub mod nav;
+mod pacer;
 pub mod prefs;
 pub mod present;
 mod sections;
@@ -25,7 +24,6 @@ mod selection;
 mod settings_panel;
 pub mod shot;
 mod shots;
-pub mod slices;
 pub mod stats;
 pub mod tree;
 mod ui;
@@ -43,9 +41,7 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use hrtao_core::buffer::Buffer;
 use hrtao_core::camera::UpAxis;
-use hrtao_core::{
-    Camera, ContextOptions, FrameDesc, FrameReport, Gpu, Mode, Output, RayBudget, Renderer, SceneGpu,
-};
+use hrtao_core::{Camera, ContextOptions, FrameDesc, FrameReport, Gpu, Output, Renderer, SceneGpu};
 use hrtao_scene::Scene;
 
 use crate::cli::ViewArgs;
@@ -270,7 +266,7 @@ impl egui_ash::App for App {
         let mut v = self.lock();
         v.latency.ui_pass(latency::egui_has_input(ctx));
         v.ui(ctx);
-        v.ui_done = Instant::now();
+        v.clock.ui_done = Instant::now();
     }
 
     fn handle_event(&mut self, event: egui_ash::event::Event) {
@@ -329,6 +325,9 @@ struct Script {
     ui_captured: bool,
 }
 
+/// The renderer's output to present: its buffer, width and height.
+type ViewOutput = (vk::Buffer, u32, u32);
+
 /// The presented image copied for `--screenshot-ui`, read after the frame.
 struct UiCapture {
     path: PathBuf,
@@ -348,14 +347,8 @@ pub(crate) struct Viewer {
     scene_spec: String,
     scene_gpu: Option<SceneGpu>,
     renderer: Option<Renderer>,
-    /// This frame's ray budget, from `prefs.rays_per_frame` at the internal size (`apply_ray_budget`). The AO
-    /// settings live in `prefs.settings` only: every frame hands them to the renderer (`FrameDesc`).
-    ray_budget: RayBudget,
-    /// Still frames in slices of the frame-time target (`slices.rs`).
-    slicing: slices::Slicing,
-    /// The last moving frame's wall time and work (`slices::frame_work`): the first estimate of a still
-    /// frame's cost.
-    last_moving: Option<(f64, u64)>,
+    /// Frame pacing: what each frame renders (size, ray budget, slices) or holds, and when the loop wakes.
+    pacer: pacer::Pacer,
     nav: Nav,
     home: Camera,
     default_radius: f32,
@@ -370,32 +363,11 @@ pub(crate) struct Viewer {
     // View.
     /// The user's render scale: the internal resolution of a still image, and the cap while moving.
     render_scale: f32,
-    motion: motion::Motion,
     view_rect: [i32; 4],
     laid_out: bool,
     last_report: Option<FrameReport>,
-    /// The camera of the last rendered frame (a different one this frame: the view is moving).
-    last_drawn_cam: Option<Camera>,
-    /// When this frame's UI pass started (the frame's wall time runs from here to the present).
-    frame_started: Instant,
-    /// The next rendered frame's wall time includes the scene's install: the frame-time target skips it.
-    installed: bool,
-    /// When this frame's UI pass ended (egui's tessellation runs from here to `draw`).
-    ui_done: Instant,
-    /// When the previous rendered frame's UI pass started.
-    last_rendered_start: Option<Instant>,
-    frame_ms_avg: f64,
-    interval_ms_avg: f64,
-    last_frame_at: Option<Instant>,
-    /// The last frame left nothing to refine: the event loop waits for input.
-    resting: bool,
-    /// This frame held the view's image for a press that has not moved anything (`Motion::holds`).
-    holding: bool,
-    /// This frame held the view's image while the view settles (`Motion::settling`): the camera has not moved
-    /// since the moving image in the output, which stays until the view counts as still.
-    settling: bool,
-    /// The image in the renderer's output is a moving frame's (reduced scale, not refined).
-    shows_moving: bool,
+    /// The stamps of the view's frames (statistics, and the pacer's clock).
+    clock: stats::FrameClock,
     // Persistence.
     prefs: Prefs,
     prefs_file: prefs::PrefsFile,
@@ -425,7 +397,7 @@ impl Viewer {
             prefs.settings.display.mode = m;
         }
         if let Some(r) = args.rays_per_frame {
-            prefs.rays_per_frame = r.clamp(budget::MIN_RAYS_PER_FRAME, budget::MAX_RAYS_PER_FRAME);
+            prefs.rays_per_frame = r.clamp(pacer::MIN_RAYS_PER_FRAME, pacer::MAX_RAYS_PER_FRAME);
             prefs.auto_budget = false;
         }
         if args.no_auto_budget {
@@ -443,7 +415,7 @@ impl Viewer {
             .clamp(0.05, 2.0);
         // While moving: today's 0.35 on software devices, adapted to the frame-time target from there.
         let moving_scale = if gpu.info.is_software {
-            motion::MIN_MOVING_SCALE
+            pacer::MIN_MOVING_SCALE
         } else {
             1.0
         };
@@ -463,12 +435,11 @@ impl Viewer {
             scene_spec: String::new(),
             scene_gpu: None,
             renderer: None,
-            ray_budget: RayBudget {
-                rays_per_pixel: 1,
-                trace_fraction: 1.0,
-            },
-            slicing: slices::Slicing::default(),
-            last_moving: None,
+            pacer: pacer::Pacer::new(
+                prefs.rays_per_frame,
+                moving_scale.min(render_scale),
+                std::time::Duration::ZERO,
+            ),
             nav: Nav {
                 cam: Camera::default(),
                 pivot: Vec3::ZERO,
@@ -482,22 +453,10 @@ impl Viewer {
             loader: loader::Loader::default(),
             startup: crate::setup::SetupInputs::from_view(args),
             render_scale,
-            motion: motion::Motion::new(moving_scale.min(render_scale)),
             view_rect: [0, 0, 1, 1],
             laid_out: false,
             last_report: None,
-            last_drawn_cam: None,
-            frame_started: Instant::now(),
-            installed: false,
-            ui_done: Instant::now(),
-            last_rendered_start: None,
-            frame_ms_avg: 0.0,
-            interval_ms_avg: 0.0,
-            last_frame_at: None,
-            resting: false,
-            holding: false,
-            settling: false,
-            shows_moving: false,
+            clock: stats::FrameClock::new(),
             prefs,
             prefs_file,
             toasts: Vec::new(),
@@ -686,18 +645,9 @@ impl Viewer {
             })?;
             log::info!("passes warmed up in {:.0} ms", t.elapsed().as_secs_f64() * 1e3);
         }
-        if self.prefs.auto_budget {
-            // The frame-time target found its budget for the old scene (rays cost 0.07–5 Mrays/s here, by mesh),
-            // and it only moves in moving frames: each scene starts from its own, the rays its primary probe
-            // traced in the target's share for rays (a heavy scene's first frame answers input as soon as any).
-            self.prefs.rays_per_frame = budget::first_rays_per_frame(
-                probe_rq_ms,
-                w as u64 * h as u64,
-                self.prefs.target_ms.max(1.0) as f64,
-            );
-            log::info!("first ray budget: {} rays per frame", self.prefs.rays_per_frame);
-        }
-        self.installed = true;
+        let pacing = pacing(&self.prefs, self.render_scale);
+        self.pacer
+            .scene_installed(probe_rq_ms, w as u64 * h as u64, pacing);
         self.prefs.settings.map.ao_radius = radius;
         self.scene_gpu = Some(scene_gpu);
         self.scene = Some(scene);
@@ -721,14 +671,8 @@ impl Viewer {
 
     /// Internal resolution at `scale` (1 when the swapchain cannot blit: the output is copied 1:1).
     fn internal_size_at(&self, scale: f32) -> (u32, u32) {
-        let scale = if self.presenter.blit_ok || self.presenter.images.is_empty() {
-            scale
-        } else {
-            1.0
-        };
-        let w = ((self.view_rect[2].max(1) as f32) * scale).round().max(1.0) as u32;
-        let h = ((self.view_rect[3].max(1) as f32) * scale).round().max(1.0) as u32;
-        (w.min(16384), h.min(16384))
+        let can_scale = self.presenter.blit_ok || self.presenter.images.is_empty();
+        internal_size(self.view_rect, can_scale, scale)
     }
 
     /// Selects one instance (u32::MAX: nothing), as a pick in the view does, and reveals its tree node.
@@ -812,7 +756,7 @@ impl Viewer {
     /// The UI pass: the loader and the scripted run move on, the panels draw and send commands, the viewer
     /// applies them in order.
     fn ui(&mut self, ctx: &egui::Context) {
-        self.frame_started = Instant::now();
+        self.clock.ui_started = Instant::now();
         self.poll_loading();
         self.script_orbit();
         if let Some(d) = self.script.deadline {
@@ -837,7 +781,8 @@ impl Viewer {
             view_rect: self.view_rect,
             report: self.last_report.as_ref(),
             internal: self.renderer.as_ref().map_or((0, 0), |r| r.size()),
-            frame_ms: (self.frame_ms_avg, self.interval_ms_avg),
+            frame_ms: self.pacer.averages(),
+            rays_per_frame: self.pacer.rays_per_frame(),
             loading: self.loader.view(),
             load_error: self.loader.error.as_deref(),
             undo: self.edits.undo_label(),
@@ -892,7 +837,7 @@ impl Viewer {
                 self.nav.cam = cam;
                 self.nav.pivot = pivot;
             }
-            Command::Drag { dragging, moved } => self.motion.drag(dragging, moved),
+            Command::Drag { dragging, moved } => self.pacer.drag(dragging, moved),
             Command::Sections(sections) => self.apply_sections(sections),
             Command::Screenshot => self.request_screenshot(),
             Command::CancelScreenshot(why) => self.cancel_background_shot(why),
@@ -997,7 +942,7 @@ impl Viewer {
         // The view's frame at another size (RGBA output): the next view frame restarts its still image.
         let frame = FrameDesc {
             jitter: true,
-            budget: Some(self.ray_budget),
+            budget: Some(self.pacer.budget()),
             ..FrameDesc::new(sg, scene.f(), cam, &self.prefs.settings)
         };
         for _ in 0..frames.max(1) {
@@ -1050,7 +995,7 @@ impl Viewer {
     /// Starts a background screenshot of the current view at `size` (one at a time).
     fn start_background_shot(&mut self, size: (u32, u32), path: PathBuf) {
         // A slice costs about what a moving frame of the view costs (the frame-time target).
-        let (w, h) = self.internal_size_at(self.motion.moving_scale.min(self.render_scale));
+        let (w, h) = self.internal_size_at(self.pacer.moving_scale().min(self.render_scale));
         let (gpu, settings, cam) = (&self.gpu, &self.prefs.settings, &self.nav.cam);
         let primary = self
             .scene_gpu
@@ -1210,7 +1155,8 @@ impl Viewer {
         Ok(index)
     }
 
-    /// The per-frame work: swapchain upkeep, the renderer's passes, the blit, egui, present, statistics.
+    /// The per-frame work: swapchain upkeep, the pacer's plan, the renderer's passes, the blit, egui, present,
+    /// what the frame measured.
     fn draw(
         &mut self,
         size: winit::dpi::PhysicalSize<u32>,
@@ -1220,10 +1166,10 @@ impl Viewer {
             return Ok(());
         }
         let mut split = stats::CpuSplit {
-            ui: ms_between(self.frame_started, self.ui_done),
+            ui: ms_between(self.clock.ui_started, self.clock.ui_done),
             ..Default::default()
         };
-        let mut laps = stats::Laps::start_at(self.ui_done);
+        let mut laps = stats::Laps::start_at(self.clock.ui_done);
         split.tessellate = laps.lap();
         if size.width == 0 || size.height == 0 {
             // Minimised: nothing to present; don't spin.
@@ -1241,136 +1187,51 @@ impl Viewer {
             return Ok(());
         };
         // The 3D view rectangle, clamped to the swapchain.
-        let rect = self.presenter.clamp(self.view_rect);
-        self.view_rect = rect;
-        let now = Instant::now();
-        let changed = !self.last_drawn_cam.is_some_and(|c| same_view(&c, &self.nav.cam));
+        self.view_rect = self.presenter.clamp(self.view_rect);
         let script_running = self.script.frames.is_some() && !self.script.done;
-        // A press on the view that has not moved anything: present the image already in the output again.
-        let held = match &self.renderer {
-            Some(r) if self.motion.holds() && !changed && self.last_report.is_some() => {
-                (!script_running && !self.shots.rendering()).then(|| r.size())
-            }
-            _ => None,
-        };
-        self.holding = held.is_some();
-        if !self.holding {
-            self.motion.frame(changed, now);
-        }
-        let moving = self.motion.moving(now);
-        // The camera stopped (or a drag pauses) less than STILL_AFTER ago: a frame now would only refine the
-        // moving image at its reduced scale, which the still image replaces a moment later, and input that
-        // comes meanwhile would wait for it. The output keeps the moving image instead (unless something else
-        // changed: the renderer is asked below), and the loop wakes at the still deadline or on input.
-        let settle = !self.holding
-            && self.motion.settling(changed, now)
-            && self.shows_moving
-            && !self.shots.rendering()
-            && self.last_report.is_some();
-        let (iw, ih) = match (held, &self.renderer) {
-            (Some(size), _) => size,
-            (None, Some(r)) if settle => r.size(),
-            _ => self.internal_size_at(self.motion.scale(self.render_scale, now)),
-        };
-        if !self.holding && !settle {
-            self.apply_ray_budget(iw, ih);
-        }
-        // Still frames in slices of the frame-time target (with the target on): one budget per still image.
-        let lattice = if self.holding {
-            1
-        } else if moving || !self.prefs.auto_budget {
-            self.slicing.moving();
-            1
-        } else {
-            let target = slices::slice_target_ms(self.prefs.target_ms);
-            let s = &self.prefs.settings;
-            // Refining: the rays that complete the own rays with the anti-aliasing; else the ray budget.
-            let rays_per_pixel = if s.accumulates() {
-                slices::still_rays_per_pixel(s.still.still_samples, hrtao_core::renderer::AA_FRAMES)
-            } else {
-                self.ray_budget.rays_per_pixel
-            };
-            let work = slices::frame_work(iw, ih, rays_per_pixel as f64);
-            self.ray_budget = self
-                .slicing
-                .still_budget(rays_per_pixel, work, self.last_moving, target);
-            self.slicing.lattice()
-        };
-        let bgra_direct = !self.presenter.blit_ok && self.presenter.is_bgra();
-        let gpu = self.gpu.clone();
+        let (rect, can_scale) = (
+            self.view_rect,
+            self.presenter.blit_ok || self.presenter.images.is_empty(),
+        );
+        let size_at = move |scale| internal_size(rect, can_scale, scale);
+        let plan = self.pacer.plan(pacer::PlanInputs {
+            now: self.clock.now(),
+            camera: &self.nav.cam,
+            pacing: pacing(&self.prefs, self.render_scale),
+            output: self.renderer.as_ref().map(|r| r.size()),
+            has_image: self.last_report.is_some(),
+            scripted: script_running,
+            shooting: self.shots.rendering(),
+            size_at: &size_at,
+        });
         let cmd = self.presenter.cmd;
         split.acquire = laps.lap();
         let t0 = Instant::now();
         unsafe {
-            gpu.device
+            let info =
+                vk::CommandBufferBeginInfo::builder().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            self.gpu
+                .device
                 .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
-            gpu.device.begin_command_buffer(
-                cmd,
-                &vk::CommandBufferBeginInfo::builder().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-            )?;
+            self.gpu.device.begin_command_buffer(cmd, &info)?;
         }
-        let mut src = None;
-        let mut rendered = false;
-        let cam = Camera {
-            width: iw,
-            height: ih,
-            ..self.nav.cam
+        // One frame of the background screenshot's current tile, before the view's own passes.
+        let shot_error = match (&self.scene_gpu, &self.scene) {
+            (Some(sg), Some(scene)) => self.shots.record(cmd, sg, scene.f()).err(),
+            _ => None,
         };
-        let mut shot_error = None;
-        if let (Some(sg), Some(scene)) = (&self.scene_gpu, &self.scene) {
-            // One frame of the background screenshot's current tile, before the view's own passes.
-            shot_error = self.shots.record(cmd, sg, scene.f()).err();
-        }
-        if let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) {
-            let frame_settings = motion::frame_settings(&self.prefs.settings, moving);
-            let frame = FrameDesc {
-                // s_p counts view pixels: cells keep their size when the render scale changes.
-                view_height: self.view_rect[3].max(1) as u32,
-                budget: Some(self.ray_budget),
-                // Still frames are jittered and accumulated: anti-aliased stills (docs/algorithm.md).
-                jitter: true,
-                lattice,
-                output: Output {
-                    bgra: bgra_direct,
-                    ..Output::default()
-                },
-                ..FrameDesc::new(sg, scene.f(), cam, &frame_settings)
-            };
-            // A converged image of this very view is already in the output: present it again (expose events,
-            // UI repaints) instead of rendering. Scripted runs count rendered frames: they always render, except
-            // during a background screenshot, where the view rests once converged as it would for a user.
-            let scripted = script_running && !self.shots.rendering() && !self.shots.in_background();
-            self.settling = settle && r.shows(&frame);
-            let render = !self.holding && !self.settling && (scripted || !r.shows_final(&frame));
-            // Each round of a still image in slices starts with the view's visibility drawn in a frame of its
-            // own (`Renderer::record_visibility`): input that comes meanwhile waits for the draw alone, and the
-            // view shows the last image until the round's first slice.
-            if render && !moving && r.record_visibility(cmd, &frame)? {
-                let (w, h) = r.size();
-                src = Some((r.output_buffer().raw, w, h));
-            } else {
-                if render {
-                    r.record_frame(cmd, &frame)?;
-                    rendered = true;
-                }
-                src = Some((r.output_buffer().raw, iw, ih));
-            }
-        }
+        let (src, rendered) = self.record_view_frame(cmd, &plan, script_running)?;
         if let (true, Some((_, w, h))) = (self.presenter.blit_ok, src) {
             self.presenter.ensure_internal(w, h)?;
         }
-        let bg = if self.egui_ctx.style().visuals.dark_mode {
-            [0.11, 0.11, 0.12, 1.0]
-        } else {
-            [0.93, 0.93, 0.94, 1.0]
-        };
-        self.presenter.record_view(cmd, index, src, rect, bg);
+        let bg = background(self.egui_ctx.style().visuals.dark_mode);
+        self.presenter.record_view(cmd, index, src, self.view_rect, bg);
         split.record = laps.lap();
         egui_cmd.record(cmd, index as usize);
         split.egui_record = laps.lap();
         let readback = self.record_ui_capture(cmd, index)?;
         unsafe {
-            gpu.device.end_command_buffer(cmd)?;
+            self.gpu.device.end_command_buffer(cmd)?;
         }
         split.record += laps.lap();
         self.presenter.submit_and_wait(index)?;
@@ -1387,81 +1248,7 @@ impl Viewer {
         }
         self.finish_ui_capture(readback)?;
         if rendered {
-            let now = Instant::now();
-            if let Some(last) = self.last_frame_at {
-                let dt = now.duration_since(last).as_secs_f64() * 1e3;
-                self.interval_ms_avg = ema(self.interval_ms_avg, dt);
-            }
-            self.last_frame_at = Some(now);
-            self.shows_moving = moving;
-            let full = self.internal_size();
-            let r = self.renderer.as_mut().unwrap();
-            let report = r.finish_frame(gpu_wall)?;
-            let converged = motion::image_converged(&report) && r.size() == full;
-            let input_ms = self.latency.take_input(changed);
-            let stats_index = self.script.stats.as_ref().map_or(0, |log| log.frames.len());
-            let round_end = report.slice + 1 >= report.slices;
-            let roughness = self.latency.dump_ao(r, stats_index, !moving, round_end)?;
-            self.last_drawn_cam = Some(cam);
-            split.finish = laps.lap();
-            let wall_ms = self.frame_started.elapsed().as_secs_f64() * 1e3;
-            let interval_ms = self
-                .last_rendered_start
-                .map_or(0.0, |t| ms_between(t, self.frame_started));
-            self.last_rendered_start = Some(self.frame_started);
-            if let Some(log) = &mut self.script.stats {
-                log.frames.push(stats::FrameStat {
-                    wall_ms,
-                    gpu_ms: report.gpu_total_ms,
-                    gpu_sections_ms: report.gpu_ms.iter().cloned().collect(),
-                    internal: [iw, ih],
-                    view: [rect[2] as u32, rect[3] as u32],
-                    moving: changed,
-                    still: !moving,
-                    refining: !moving && !converged,
-                    converged,
-                    slice: report.slice,
-                    slices: report.slices,
-                    presented_ms,
-                    input: input_ms.is_some(),
-                    input_ms: input_ms.map(|i| i.0),
-                    input_last_ms: input_ms.map(|i| i.1),
-                    roughness: None,
-                    rays: report.rays,
-                    rays_per_frame: self.prefs.rays_per_frame,
-                    cpu_ms: split,
-                    interval_ms,
-                });
-                for (i, value) in roughness {
-                    if let Some(f) = log.frames.get_mut(i) {
-                        f.roughness = value;
-                    }
-                }
-            }
-            self.frame_ms_avg = ema(self.frame_ms_avg, gpu_wall);
-            self.last_report = Some(report);
-            // The background screenshot's share of the frame is not the view's.
-            let view_ms = (wall_ms - shot_ms).max(0.0);
-            // The first frame after a scene's install counted the install in its wall time: the frame-time
-            // target skips it, and the first still image's lattice takes its device time alone (a young map's
-            // first frame: at least a moving frame's cost).
-            let installed = std::mem::take(&mut self.installed);
-            if moving {
-                let b = self.ray_budget;
-                let rays = b.rays_per_pixel as f64 * b.trace_fraction.clamp(0.0, 1.0) as f64;
-                let work = slices::frame_work(iw, ih, rays);
-                if installed {
-                    self.last_moving = Some((split.gpu_wait, work));
-                } else {
-                    self.frame_time_target(view_ms);
-                    self.last_moving = Some((view_ms, work));
-                }
-            } else if !installed && self.prefs.auto_budget && !self.shots.rendering() {
-                // (A background screenshot's tiles share the frame: its cost is not the view's.)
-                let target = slices::slice_target_ms(self.prefs.target_ms);
-                let slices = self.last_report.as_ref().map_or(1, |r| r.slices);
-                self.slicing.observe(view_ms, slices, target);
-            }
+            self.frame_rendered(&plan, gpu_wall, shot_ms, presented_ms, split, laps)?;
             self.script_step();
         }
         self.maybe_save_prefs(false);
@@ -1469,62 +1256,159 @@ impl Viewer {
         Ok(())
     }
 
-    /// The frame-time target, applied after a moving frame only (a still image keeps its budget and size so
-    /// that it converges): the moving render scale and the ray budget per frame both follow it.
-    fn frame_time_target(&mut self, frame_ms: f64) {
-        if !self.prefs.auto_budget {
-            return;
-        }
-        let target = self.prefs.target_ms.max(1.0) as f64;
-        self.motion.adapt(frame_ms, target, self.render_scale);
-        let mode = self.prefs.settings.display.mode;
-        let traces = mode.uses_hash() || mode == Mode::Rtao;
-        if traces {
-            self.prefs.rays_per_frame =
-                budget::next_rays_per_frame(self.prefs.rays_per_frame, frame_ms, target);
-        }
-    }
-
-    /// Converts the budget in rays per frame to the renderer's rays per pixel at `width`×`height`.
-    fn apply_ray_budget(&mut self, width: u32, height: u32) {
-        let (rays_per_pixel, trace_fraction) =
-            budget::per_pixel_budget(self.prefs.rays_per_frame, width, height);
-        self.ray_budget = RayBudget {
-            rays_per_pixel,
-            trace_fraction,
+    /// Records the view's own frame as `plan` says: renders (a frame, or a round's visibility ahead of its
+    /// slices), or presents the output again (held, settling, or already converged on this view). Returns the
+    /// output to present (buffer, width, height) and whether a frame was rendered.
+    fn record_view_frame(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        plan: &pacer::FramePlan,
+        script_running: bool,
+    ) -> Result<(Option<ViewOutput>, bool)> {
+        let (Some(r), Some(sg), Some(scene)) = (&mut self.renderer, &self.scene_gpu, &self.scene) else {
+            return Ok((None, false));
         };
+        let (iw, ih) = plan.size;
+        let settings = plan.settings(&self.prefs.settings);
+        let frame = FrameDesc {
+            // s_p counts view pixels: cells keep their size when the render scale changes.
+            view_height: self.view_rect[3].max(1) as u32,
+            budget: Some(plan.budget),
+            // Still frames are jittered and accumulated: anti-aliased stills (docs/algorithm.md).
+            jitter: true,
+            lattice: plan.lattice,
+            output: Output {
+                bgra: !self.presenter.blit_ok && self.presenter.is_bgra(),
+                ..Output::default()
+            },
+            ..FrameDesc::new(
+                sg,
+                scene.f(),
+                Camera {
+                    width: iw,
+                    height: ih,
+                    ..self.nav.cam
+                },
+                &settings,
+            )
+        };
+        // A converged image of this very view is already in the output: present it again (expose events, UI
+        // repaints) instead of rendering. Scripted runs count rendered frames: they always render, except during
+        // a background screenshot, where the view rests once converged as it would for a user.
+        let scripted = script_running && !self.shots.in_background();
+        let settling = self.pacer.settles(r.shows(&frame));
+        let render = !plan.hold && !settling && (scripted || !r.shows_final(&frame));
+        // Each round of a still image in slices starts with the view's visibility drawn in a frame of its own
+        // (`Renderer::record_visibility`): input that comes meanwhile waits for the draw alone, and the view
+        // shows the last image until the round's first slice.
+        if render && !plan.moving && r.record_visibility(cmd, &frame)? {
+            let (w, h) = r.size();
+            return Ok((Some((r.output_buffer().raw, w, h)), false));
+        }
+        if render {
+            r.record_frame(cmd, &frame)?;
+        }
+        Ok((Some((r.output_buffer().raw, iw, ih)), render))
     }
 
-    /// Asks for another frame while something is still changing: input was handled (egui asks by itself),
-    /// the camera moves or has just stopped, the image has not converged at full resolution, a scene is
-    /// loading, a screenshot or a scripted run is pending. Otherwise the event loop waits for events.
+    /// After a rendered frame: its report, what the pacer learns from it, the statistics and the AO dumps.
+    fn frame_rendered(
+        &mut self,
+        plan: &pacer::FramePlan,
+        gpu_wall: f64,
+        shot_ms: f64,
+        presented_ms: f64,
+        mut split: stats::CpuSplit,
+        mut laps: stats::Laps,
+    ) -> Result<()> {
+        let full = self.internal_size();
+        let Some(r) = self.renderer.as_mut() else {
+            return Ok(());
+        };
+        let report = r.finish_frame(gpu_wall)?;
+        let converged = pacer::image_converged(&report) && r.size() == full;
+        let input_ms = self.latency.take_input(plan.changed);
+        let stats_index = self.script.stats.as_ref().map_or(0, |log| log.frames.len());
+        let round_end = report.slice + 1 >= report.slices;
+        let roughness = self.latency.dump_ao(r, stats_index, !plan.moving, round_end)?;
+        split.finish = laps.lap();
+        let wall_ms = self.clock.ui_started.elapsed().as_secs_f64() * 1e3;
+        let interval_ms = self.clock.rendered();
+        let (iw, ih) = plan.size;
+        // The background screenshot's share of the frame is not the view's.
+        let measured = pacer::FrameMeasurement {
+            now: self.clock.now(),
+            camera: Camera {
+                width: iw,
+                height: ih,
+                ..self.nav.cam
+            },
+            view_ms: (wall_ms - shot_ms).max(0.0),
+            device_ms: split.gpu_wait,
+            render_ms: gpu_wall,
+            slices: report.slices,
+            shooting: self.shots.rendering(),
+        };
+        // The statistics record the budget this frame traced with, before the frame-time target moves it.
+        let rays_per_frame = self.pacer.rays_per_frame();
+        self.pacer
+            .observe(measured, pacing(&self.prefs, self.render_scale));
+        if let Some(log) = &mut self.script.stats {
+            log.frames.push(stats::FrameStat {
+                wall_ms,
+                gpu_ms: report.gpu_total_ms,
+                gpu_sections_ms: report.gpu_ms.iter().cloned().collect(),
+                internal: [iw, ih],
+                view: [self.view_rect[2] as u32, self.view_rect[3] as u32],
+                moving: plan.changed,
+                still: !plan.moving,
+                refining: !plan.moving && !converged,
+                converged,
+                slice: report.slice,
+                slices: report.slices,
+                presented_ms,
+                input: input_ms.is_some(),
+                input_ms: input_ms.map(|i| i.0),
+                input_last_ms: input_ms.map(|i| i.1),
+                roughness: None,
+                rays: report.rays,
+                rays_per_frame,
+                cpu_ms: split,
+                interval_ms,
+            });
+            for (i, value) in roughness {
+                if let Some(f) = log.frames.get_mut(i) {
+                    f.roughness = value;
+                }
+            }
+        }
+        self.last_report = Some(report);
+        Ok(())
+    }
+
+    /// Asks for another frame while something is still changing (the pacer decides; a scripted run, a
+    /// screenshot or a capture waits for frames too); otherwise the event loop waits for events.
     fn schedule_repaint(&mut self) {
         let now = Instant::now();
-        let script_running = self.script.frames.is_some() && !self.script.done;
-        let viewing = self.renderer.is_some() && self.scene.is_some();
-        let converging = viewing && !self.converged_full();
-        // A held view waits for the press's motion or release (input wakes the loop).
-        let busy = script_running
-            || self.shots.busy()
-            || self.script.ui_capture_pending
-            || (!self.holding && !self.settling && (converging || (viewing && self.motion.moving(now))));
-        if busy {
-            self.egui_ctx.request_repaint();
-        } else if self.settling {
-            // Input wakes the loop sooner.
-            if let Some(wait) = self.motion.still_in(now) {
-                self.egui_ctx.request_repaint_after(wait);
-            }
-        } else if self.loader.is_loading() {
-            self.egui_ctx.request_repaint_after(Duration::from_millis(100));
+        let repaint = self.pacer.repaint(pacer::RepaintInputs {
+            now: self.clock.now(),
+            busy: (self.script.frames.is_some() && !self.script.done)
+                || self.shots.busy()
+                || self.script.ui_capture_pending,
+            viewing: self.renderer.is_some() && self.scene.is_some(),
+            converged: self.converged_full(),
+            loading: self.loader.is_loading(),
+        });
+        match repaint.wake {
+            pacer::Wake::Now => self.egui_ctx.request_repaint(),
+            pacer::Wake::After(d) => self.egui_ctx.request_repaint_after(d),
+            pacer::Wake::Rest => {}
         }
-        let resting = !busy && !self.loader.is_loading() && !self.holding && !self.settling;
-        if resting && !self.resting {
+        if repaint.came_to_rest {
             let frames = self.last_report.as_ref().map_or(0, |r| r.accumulated_frames);
             log::info!("at rest: the image has converged ({frames} frames); waiting for input");
         }
-        self.resting = resting;
-        match self.latency.exit_after(resting, now) {
+        match self.latency.exit_after(repaint.resting, now) {
             latency::ExitAfter::Now => self.exit_signal.send(ExitCode::SUCCESS),
             latency::ExitAfter::WakeIn(d) => self.egui_ctx.request_repaint_after(d),
             latency::ExitAfter::No => {}
@@ -1641,7 +1525,7 @@ impl Viewer {
     fn converged_full(&self) -> bool {
         let full = self.internal_size();
         match (&self.last_report, &self.renderer) {
-            (Some(rep), Some(r)) => motion::image_converged(rep) && r.size() == full,
+            (Some(rep), Some(r)) => pacer::image_converged(rep) && r.size() == full,
             _ => false,
         }
     }
@@ -1742,27 +1626,38 @@ fn unique_path(folder: &Path, name: &str) -> PathBuf {
         .expect("a free name")
 }
 
-/// Same camera pose and lens (the image size is not part of the view).
-fn same_view(a: &Camera, b: &Camera) -> bool {
-    a.eye == b.eye
-        && a.target == b.target
-        && a.up == b.up
-        && a.fov_y_deg == b.fov_y_deg
-        && a.projection == b.projection
-        && a.ortho_height == b.ortho_height
+/// The internal resolution of the view `rect` at `scale` (1 when the swapchain cannot blit: the output is
+/// copied 1:1).
+fn internal_size(rect: [i32; 4], can_scale: bool, scale: f32) -> (u32, u32) {
+    let scale = if can_scale { scale } else { 1.0 };
+    let w = ((rect[2].max(1) as f32) * scale).round().max(1.0) as u32;
+    let h = ((rect[3].max(1) as f32) * scale).round().max(1.0) as u32;
+    (w.min(16384), h.min(16384))
+}
+
+/// The window's colour around and behind the 3D view, by the UI's theme.
+fn background(dark: bool) -> [f32; 4] {
+    if dark {
+        [0.11, 0.11, 0.12, 1.0]
+    } else {
+        [0.93, 0.93, 0.94, 1.0]
+    }
+}
+
+/// What pacing follows of the user's settings.
+fn pacing(prefs: &Prefs, render_scale: f32) -> pacer::Pacing<'_> {
+    pacer::Pacing {
+        auto_budget: prefs.auto_budget,
+        target_ms: prefs.target_ms,
+        rays_per_frame: prefs.rays_per_frame,
+        render_scale,
+        settings: &prefs.settings,
+    }
 }
 
 /// Milliseconds from `a` to `b` (0 when `b` is earlier).
 fn ms_between(a: Instant, b: Instant) -> f64 {
     b.saturating_duration_since(a).as_secs_f64() * 1e3
-}
-
-fn ema(avg: f64, x: f64) -> f64 {
-    if avg == 0.0 {
-        x
-    } else {
-        avg * 0.9 + x * 0.1
-    }
 }
 
 #[cfg(test)]

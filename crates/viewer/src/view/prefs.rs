@@ -49,7 +49,7 @@ impl Default for Prefs {
         Prefs {
             settings: AoSettings::default(),
             max_render_scale: None,
-            rays_per_frame: super::budget::DEFAULT_RAYS_PER_FRAME,
+            rays_per_frame: super::pacer::DEFAULT_RAYS_PER_FRAME,
             auto_budget: true,
             target_ms: 100.0,
             screenshot_folder: None,

@@ -17,14 +17,18 @@ impl SettingsPanel {
         let mut s = state.prefs.settings.clone();
         let mut prefs = state.prefs.clone();
         display(ui, &mut s.display);
+        // With the frame-time target on, the slider shows the target's budget; off, it sets the user's.
+        let mut live = state.rays_per_frame;
+        let rays = if prefs.auto_budget {
+            &mut live
+        } else {
+            &mut prefs.rays_per_frame
+        };
         ui.add_enabled(
             !prefs.auto_budget,
-            egui::Slider::new(
-                &mut prefs.rays_per_frame,
-                super::budget::MIN_RAYS_PER_FRAME..=16_000_000,
-            )
-            .logarithmic(true)
-            .text("rays / frame"),
+            egui::Slider::new(rays, super::pacer::MIN_RAYS_PER_FRAME..=16_000_000)
+                .logarithmic(true)
+                .text("rays / frame"),
         )
         .on_hover_text(
             "Ray budget (§3, §6): rays traced per frame whatever the resolution, shared between the hash \

@@ -117,6 +117,44 @@ impl Laps {
     }
 }
 
+/// The wall-clock stamps of the view's frames: when the viewer started (the pacer's clock counts from it), when
+/// this frame's UI pass started and ended, and when the previous rendered frame's UI pass started.
+pub struct FrameClock {
+    epoch: std::time::Instant,
+    /// The frame's wall time runs from here to the present.
+    pub ui_started: std::time::Instant,
+    /// egui's tessellation runs from here to the frame's recording.
+    pub ui_done: std::time::Instant,
+    last_rendered_start: Option<std::time::Instant>,
+}
+
+impl FrameClock {
+    pub fn new() -> FrameClock {
+        let now = std::time::Instant::now();
+        FrameClock {
+            epoch: now,
+            ui_started: now,
+            ui_done: now,
+            last_rendered_start: None,
+        }
+    }
+
+    /// Now, on the pacer's clock.
+    pub fn now(&self) -> std::time::Duration {
+        self.epoch.elapsed()
+    }
+
+    /// A frame was rendered: milliseconds from the previous rendered frame's UI pass to this one's (0 for the
+    /// first).
+    pub fn rendered(&mut self) -> f64 {
+        let interval = self.last_rendered_start.map_or(0.0, |t| {
+            self.ui_started.saturating_duration_since(t).as_secs_f64() * 1e3
+        });
+        self.last_rendered_start = Some(self.ui_started);
+        interval
+    }
+}
+
 #[derive(Serialize)]
 struct StatsFile<'a> {
     device: &'a str,

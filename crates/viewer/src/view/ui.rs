@@ -378,7 +378,7 @@ fn stats_section(ui: &mut egui::Ui, state: &ViewState) {
         );
         row(
             "image",
-            if super::motion::image_converged(rep) {
+            if super::pacer::image_converged(rep) {
                 format!("converged ({} frames)", rep.accumulated_frames)
             } else {
                 format!("refining ({} frames)", rep.accumulated_frames)

@@ -20,7 +20,7 @@
 //! one unit for the pixel's primary visibility and its other passes), fitted to the frames measured.
 use std::collections::BTreeMap;
 
-use hrtao_core::{RayBudget, MAX_LATTICE};
+use hrtao_core::MAX_LATTICE;
 
 use super::budget::MAX_RAYS_PER_PIXEL;
 
@@ -130,7 +130,7 @@ pub struct Slicing {
     /// A smaller lattice to try when the next still image starts (`PROBE_BELOW`).
     probe: Option<u32>,
     /// Set when a still image starts, kept until the view moves again.
-    still_budget: Option<RayBudget>,
+    still_rays: Option<u32>,
 }
 
 impl Default for Slicing {
@@ -143,7 +143,7 @@ impl Default for Slicing {
             wanted_rays: 1,
             warm_up: false,
             probe: None,
-            still_budget: None,
+            still_rays: None,
         }
     }
 }
@@ -156,11 +156,11 @@ impl Slicing {
 
     /// The view moves: whole frames at the moving scale, and the next still image gets a new budget.
     pub fn moving(&mut self) {
-        self.still_budget = None;
+        self.still_rays = None;
     }
 
-    /// The budget of a still frame: the current still image's, or, when one starts, `rays_per_pixel` and its
-    /// lattice, from the slices measured so far or else from the last moving frame (its milliseconds over its
+    /// The rays per pixel of a still frame: the current still image's, or, when one starts, `rays_per_pixel` and
+    /// its lattice, from the slices measured so far or else from the last moving frame (its milliseconds over its
     /// `frame_work`, scaled to the still frame's `work`).
     pub fn still_budget(
         &mut self,
@@ -168,8 +168,8 @@ impl Slicing {
         work: u64,
         moving: Option<(f64, u64)>,
         target_ms: f64,
-    ) -> RayBudget {
-        if let Some(b) = self.still_budget {
+    ) -> u32 {
+        if let Some(b) = self.still_rays {
             return b;
         }
         let wanted = rays_per_pixel.clamp(1, MAX_RAYS_PER_PIXEL);
@@ -198,12 +198,8 @@ impl Slicing {
         self.warm_up = true;
         self.cut_checked = false;
         self.wanted_rays = wanted;
-        let b = RayBudget {
-            rays_per_pixel: rays,
-            trace_fraction: 1.0,
-        };
-        self.still_budget = Some(b);
-        b
+        self.still_rays = Some(rays);
+        rays
     }
 
     /// After a still frame that took `frame_ms` and drew one of `slices` slices (the renderer takes a new
@@ -250,13 +246,10 @@ impl Slicing {
             let fewer = self
                 .predictor_from(MAX_LATTICE, self.rays(), frame_ms)
                 .map(|cost| rays_within(self.wanted_rays, |r| cost(MAX_LATTICE, r), target_ms));
-            if let (Some(r), Some(b)) = (fewer, self.still_budget.as_mut()) {
-                if r < b.rays_per_pixel {
-                    log::debug!(
-                        "slices: {r} rays per pixel and visit (of {}): {frame_ms:.0} ms",
-                        b.rays_per_pixel
-                    );
-                    b.rays_per_pixel = r;
+            if let (Some(r), Some(b)) = (fewer, self.still_rays.as_mut()) {
+                if r < *b {
+                    log::debug!("slices: {r} rays per pixel and visit (of {b}): {frame_ms:.0} ms");
+                    *b = r;
                 }
             }
         }
@@ -264,7 +257,7 @@ impl Slicing {
 
     /// The rays per pixel and visit of the frames observed: the current still image's.
     fn rays(&self) -> u32 {
-        self.still_budget.map_or(1, |b| b.rays_per_pixel)
+        self.still_rays.unwrap_or(1)
     }
 
     /// The model a + w (1 + r) / L² fitted (least squares in x = (1 + r) / L²) to the measured costs; with one
@@ -418,7 +411,7 @@ mod tests {
         let mut s = Slicing::default();
         // An 82 ms moving frame of 87k pixels: a 707k-pixel still frame would take about 666 ms.
         let b = s.still_budget(4, 707_200, Some((82.0, 87_000)), 100.0);
-        assert_eq!((s.lattice(), b.rays_per_pixel), (3, 4));
+        assert_eq!((s.lattice(), b), (3, 4));
         // The still image's first frame pays the switch from the moving size: not measured.
         s.observe(900.0, 9, 100.0);
         assert_eq!(s.lattice(), 3, "the first frame of a still image is not measured");
@@ -427,7 +420,7 @@ mod tests {
         assert_eq!(s.still_budget(1, 707_200, None, 100.0), b, "kept");
         s.moving();
         let b2 = s.still_budget(1, 707_200, Some((10.0, 87_000)), 100.0);
-        assert_eq!(b2.rays_per_pixel, 1);
+        assert_eq!(b2, 1);
         assert_eq!(
             s.lattice(),
             4,
@@ -619,7 +612,7 @@ mod tests {
         // raster floor outweighs its rays: the rays stay until a slice is measured.
         let moving = (110.0, frame_work(280, 280, 0.2));
         let b = s.still_budget(8, frame_work(800, 800, 8.0), Some(moving), 50.0);
-        assert_eq!((s.lattice(), b.rays_per_pixel), (FIRST_LATTICE_MAX, 8));
+        assert_eq!((s.lattice(), b), (FIRST_LATTICE_MAX, 8));
         s.observe(device(8, 8), 64, 50.0);
         assert_eq!(
             (s.lattice(), s.rays()),
@@ -631,11 +624,7 @@ mod tests {
         // 10 + 1100 (1 + r) / 144 <= 50 ms: 4 rays.
         s.observe(device(MAX_LATTICE, 8), MAX_LATTICE * MAX_LATTICE, 50.0);
         assert_eq!(s.rays(), 4, "then the rays");
-        assert_eq!(
-            s.still_budget(8, 1, None, 50.0).rays_per_pixel,
-            4,
-            "the viewer's next frame"
-        );
+        assert_eq!(s.still_budget(8, 1, None, 50.0), 4, "the viewer's next frame");
         let over = image_frames(&mut s, 70, 50.0, device) + images_of_8_rays(&mut s, 5, 50.0, device);
         assert_eq!((s.lattice(), s.rays()), (MAX_LATTICE, 4));
         assert_eq!(over, 0, "no frame over the target after the first measured one");

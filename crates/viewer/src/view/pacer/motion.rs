@@ -1,6 +1,6 @@
 //! When the view moves and when the image is done: the convergence test that lets the viewer rest, and the
 //! internal resolution that follows from motion (reduced while the camera moves, full once it rests).
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use hrtao_core::{AoSettings, FrameReport};
 
@@ -35,7 +35,7 @@ pub const STILL_FRAMES: u32 = 1;
 /// (so a frame meets the frame-time target), the full scale (the user's cap) once it rests.
 #[derive(Debug, Clone)]
 pub struct Motion {
-    last_change: Instant,
+    last_change: Duration,
     frames_since_change: u32,
     /// Scale used while moving; adapted to the frame-time target within [MIN_MOVING_SCALE, cap].
     pub moving_scale: f32,
@@ -46,9 +46,9 @@ pub struct Motion {
 }
 
 impl Motion {
-    pub fn new(moving_scale: f32) -> Motion {
+    pub fn new(moving_scale: f32, now: Duration) -> Motion {
         Motion {
-            last_change: Instant::now(),
+            last_change: now,
             frames_since_change: 0,
             moving_scale,
             dragging: false,
@@ -71,7 +71,7 @@ impl Motion {
     }
 
     /// Records one frame: `changed` when its camera differs from the previous frame's.
-    pub fn frame(&mut self, changed: bool, now: Instant) {
+    pub fn frame(&mut self, changed: bool, now: Duration) {
         if changed {
             self.last_change = now;
             self.frames_since_change = 0;
@@ -81,31 +81,31 @@ impl Motion {
     }
 
     /// True while the camera moves (or has just stopped).
-    pub fn moving(&self, now: Instant) -> bool {
+    pub fn moving(&self, now: Duration) -> bool {
         self.dragging
             || self.frames_since_change < STILL_FRAMES
-            || now.duration_since(self.last_change) < STILL_AFTER
+            || now.saturating_sub(self.last_change) < STILL_AFTER
     }
 
     /// The view has not moved this frame (`changed` false) but does not count as still yet: within STILL_AFTER
     /// of its last change, or a drag that has acted pauses. A frame rendered now would refine the moving image
     /// at the moving scale, to be replaced by the still image once the view counts as still.
-    pub fn settling(&self, changed: bool, now: Instant) -> bool {
+    pub fn settling(&self, changed: bool, now: Duration) -> bool {
         !changed && self.moving(now)
     }
 
     /// How long until the view counts as still if nothing moves it meanwhile; None during a drag (its motion
     /// or release, input both, end the wait).
-    pub fn still_in(&self, now: Instant) -> Option<Duration> {
+    pub fn still_in(&self, now: Duration) -> Option<Duration> {
         (!self.dragging).then(|| {
             (self.last_change + STILL_AFTER)
-                .saturating_duration_since(now)
+                .saturating_sub(now)
                 .max(Duration::from_millis(1))
         })
     }
 
     /// The render scale for the next frame; `cap` is the user's render-scale setting.
-    pub fn scale(&self, cap: f32, now: Instant) -> f32 {
+    pub fn scale(&self, cap: f32, now: Duration) -> f32 {
         if self.moving(now) {
             self.moving_scale.clamp(MIN_MOVING_SCALE.min(cap), cap)
         } else {
@@ -134,8 +134,8 @@ mod tests {
 
     #[test]
     fn full_scale_once_still_reduced_while_moving() {
-        let t0 = Instant::now();
-        let mut m = Motion::new(0.35);
+        let t0 = Duration::from_secs(100);
+        let mut m = Motion::new(0.35, t0);
         m.frame(true, t0);
         assert!(m.moving(t0));
         assert_eq!(m.scale(1.0, t0), 0.35);
@@ -151,7 +151,7 @@ mod tests {
 
     #[test]
     fn a_press_holds_the_view_until_its_drag_moves_something() {
-        let mut m = Motion::new(0.35);
+        let mut m = Motion::new(0.35, Duration::ZERO);
         assert!(!m.holds());
         // Pressed: nothing moved yet.
         m.drag(true, false);
@@ -170,8 +170,8 @@ mod tests {
 
     #[test]
     fn a_view_that_stopped_settles_until_the_still_deadline() {
-        let t0 = Instant::now();
-        let mut m = Motion::new(0.35);
+        let t0 = Duration::from_secs(100);
+        let mut m = Motion::new(0.35, t0);
         m.frame(true, t0);
         assert!(!m.settling(true, t0), "a frame that moves the camera renders");
         // No change 40 ms later: settling, woken at the still deadline.
@@ -224,7 +224,7 @@ mod tests {
 
     #[test]
     fn moving_scale_follows_the_frame_time_target() {
-        let mut m = Motion::new(1.0);
+        let mut m = Motion::new(1.0, Duration::ZERO);
         for _ in 0..100 {
             m.adapt(500.0, 100.0, 1.0);
         }
