@@ -197,11 +197,17 @@ pub fn map(ui: &mut egui::Ui, s: &mut MapSettings, default_radius: f32) {
 /// The adaptive à-trous filter.
 pub fn filter(ui: &mut egui::Ui, s: &mut FilterSettings) {
     ui.horizontal(|ui| {
-        ui.add(egui::Slider::new(&mut s.filter_iterations, 0..=8).text("filter iterations"))
-            .on_hover_text(
-                "Adaptive à-trous filter (§5): each iteration doubles its reach; the footprint follows the cell \
+        ui.add(
+            egui::Slider::new(
+                &mut s.filter_iterations,
+                0..=hrtao_core::settings::MAX_FILTER_ITERATIONS,
+            )
+            .text("filter iterations"),
+        )
+        .on_hover_text(
+            "Adaptive à-trous filter (§5): each iteration doubles its reach; the footprint follows the cell \
                  size. 0: no filter.",
-            );
+        );
         additions(ui, s.additions_mut());
     });
 }
