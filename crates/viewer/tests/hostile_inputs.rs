@@ -132,12 +132,11 @@ fn hostile_files_give_errors_or_images() {
                         case.name
                     );
                 }
-                // Errors come from the loader, before any GPU work: seconds at most.
+                // Errors come from the loader, before any GPU work: no acceleration structure was built.
                 assert!(
-                    run.took < Duration::from_secs(10),
-                    "{}: the error took {:?}",
-                    case.name,
-                    run.took
+                    !stderr.contains("acceleration structures"),
+                    "{}: the error came after the scene's GPU build\n{stderr}",
+                    case.name
                 );
                 errors += 1;
             }

@@ -95,11 +95,12 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     // counts the scene's install, and the frame-time target skips it; its device time sets the first lattice
     // (with no estimate, whole frames came first, ~2 s each at 800x800, whenever the install frame outlasted the
     // moving window so that no moving frame followed it: timing-dependent, seen with the panel at 1280x800).
-    let software = s["device"].as_str().unwrap_or("").contains("llvmpipe");
+    // (The rule itself is replayed on a controlled clock in view/pacer's tests; here, whatever the machine's
+    // speed: a first still image in whole frames is one whose frames fit the slice target of 50 ms.)
     let first_still = frames.iter().find(|f| f["still"] == true).expect("a still frame");
     assert!(
-        !software || first_still["slices"].as_u64().unwrap() > 1,
-        "the first still image in whole frames: {first_still}"
+        first_still["slices"].as_u64().unwrap() > 1 || first_still["wall_ms"].as_f64().unwrap() <= 50.0 * 1.5,
+        "the first still image in whole frames over the slice target: {first_still}"
     );
     let presented: Vec<f64> = frames
         .iter()
@@ -219,14 +220,15 @@ fn a_press_that_has_not_moved_holds_the_view() {
         .iter()
         .map(|f| f["presented_ms"].as_f64().unwrap())
         .collect();
-    // The frame in flight at the press, and the one the press reached, end well within 0.5 s.
+    // At most the frame in flight at the press and the one the press reached; then the view holds until the
+    // release (a count: a slow frame takes longer, never more frames).
     let during: Vec<f64> = presented
         .iter()
-        .filter(|&&t| t > pressed + 500.0 && t < released)
+        .filter(|&&t| t > pressed && t < released)
         .map(|t| t - pressed)
         .collect();
     assert!(
-        during.is_empty(),
+        during.len() <= 2,
         "frames rendered while the button was held (ms after the press): {during:?}"
     );
     assert!(

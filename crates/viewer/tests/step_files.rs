@@ -240,7 +240,8 @@ fn cancel_kills_the_worker() {
     })
     .unwrap_err();
     assert!(matches!(e, SceneError::Cancelled(_)), "{e}");
-    assert!(t0.elapsed() < Duration::from_secs(10));
+    // A hang guard only (the big model alone takes longer): the check is the worker gone, below.
+    assert!(t0.elapsed() < Duration::from_secs(120), "{:?}", t0.elapsed());
     assert!(!seen.is_empty(), "a worker ran");
     assert!(workers(&dir).is_empty(), "the worker is gone after Cancel");
     for pid in seen {
@@ -295,9 +296,13 @@ fn hostile_step_and_iges_files_give_errors_or_images() {
             }
         }
         if case.name == "step_over_entity_cap" {
-            // Refused by counting, before the kernel runs (the kernel alone takes seconds per 10^5 entities).
-            assert!(took < Duration::from_secs(5), "refused quickly: {took:?}");
-            assert!(matches!(loaded, Err(SceneError::TooLarge(_))));
+            // Refused by counting the file's entities, before the kernel runs (the kernel alone takes seconds per
+            // 10^5 entities): the error gives the count against the cap.
+            assert!(
+                matches!(&loaded, Err(SceneError::TooLarge(m)) if m.contains("entities, over the cap")),
+                "{:?}",
+                loaded.as_ref().err()
+            );
         }
     }
     println!("{}", table.join("\n"));

@@ -640,4 +640,38 @@ mod tests {
         assert_eq!(r.pacer.rays_per_frame(), 2_000_000);
         assert!(r.pacer.moving_scale() < scale || scale == MIN_MOVING_SCALE);
     }
+
+    /// The first still image after a scene's install, with no moving frame after the install frame, is sliced
+    /// from the install frame's device time (before, whole frames of seconds came first whenever the install
+    /// frame outlasted the moving window). Fails when the install frame leaves no estimate (`last_moving` not
+    /// set when `installed`).
+    #[test]
+    fn the_first_still_image_after_an_install_is_sliced_by_the_install_frames_device_time() {
+        let s = AoSettings::default();
+        let p = pacing(&s, true, 300_000);
+        let mut r = Replay::new(300_000);
+        r.pacer.scene_installed(459.0, 960 * 800, p);
+        let a = camera(0.0);
+        let first = r.plan(&a, p);
+        assert!(first.moving);
+        // The install frame: 3 s of wall time, 400 ms of it the device's (at the moving scale).
+        r.wait(3_000);
+        r.output = Some(first.size);
+        r.pacer.observe(
+            FrameMeasurement {
+                now: r.now,
+                camera: a,
+                view_ms: 3_000.0,
+                device_ms: 400.0,
+                render_ms: 3_000.0,
+                slices: 1,
+                shooting: false,
+            },
+            p,
+        );
+        // Past the moving window with no other frame: the still image at full size is sliced.
+        let still = r.plan(&a, p);
+        assert!(!still.moving && still.size == size_at(1.0));
+        assert!(still.lattice > 1, "{still:?}");
+    }
 }
