@@ -468,17 +468,22 @@ mod tests {
             })
         }
 
-        /// The renderer draws the plan in `ms` (nothing of it was a scene install's).
+        /// The renderer draws the plan in `ms`, all of it the device's.
         fn render(&mut self, plan: &FramePlan, cam: &Camera, ms: f64, p: Pacing) {
-            self.wait(ms as u64);
+            self.render_split(plan, cam, ms, ms, p);
+        }
+
+        /// The renderer draws the plan in `wall_ms`, `device_ms` of it the device's.
+        fn render_split(&mut self, plan: &FramePlan, cam: &Camera, wall_ms: f64, device_ms: f64, p: Pacing) {
+            self.wait(wall_ms as u64);
             self.output = Some(plan.size);
             self.pacer.observe(
                 FrameMeasurement {
                     now: self.now,
                     camera: *cam,
-                    view_ms: ms,
-                    device_ms: ms,
-                    render_ms: ms,
+                    view_ms: wall_ms,
+                    device_ms,
+                    render_ms: wall_ms,
                     slices: plan.lattice * plan.lattice,
                     shooting: false,
                 },
@@ -655,20 +660,7 @@ mod tests {
         let first = r.plan(&a, p);
         assert!(first.moving);
         // The install frame: 3 s of wall time, 400 ms of it the device's (at the moving scale).
-        r.wait(3_000);
-        r.output = Some(first.size);
-        r.pacer.observe(
-            FrameMeasurement {
-                now: r.now,
-                camera: a,
-                view_ms: 3_000.0,
-                device_ms: 400.0,
-                render_ms: 3_000.0,
-                slices: 1,
-                shooting: false,
-            },
-            p,
-        );
+        r.render_split(&first, &a, 3_000.0, 400.0, p);
         // Past the moving window with no other frame: the still image at full size is sliced.
         let still = r.plan(&a, p);
         assert!(!still.moving && still.size == size_at(1.0));
