@@ -36,7 +36,7 @@ impl AccelStruct {
             let raw = gpu
                 .accel
                 .create_acceleration_structure(
-                    &vk::AccelerationStructureCreateInfoKHR::builder()
+                    &vk::AccelerationStructureCreateInfoKHR::default()
                         .buffer(buffer.raw)
                         .size(size)
                         .ty(ty),
@@ -44,7 +44,7 @@ impl AccelStruct {
                 )
                 .map_err(|e| CoreError::from_vk("vkCreateAccelerationStructureKHR", e))?;
             let address = gpu.accel.get_acceleration_structure_device_address(
-                &vk::AccelerationStructureDeviceAddressInfoKHR::builder().acceleration_structure(raw),
+                &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
             );
             Ok(AccelStruct {
                 gpu: gpu.clone(),
@@ -162,12 +162,12 @@ fn geometry_triangles(
     vertex_address: u64,
     index_address: u64,
     vertex_count: u32,
-) -> vk::AccelerationStructureGeometryKHR {
-    vk::AccelerationStructureGeometryKHR::builder()
+) -> vk::AccelerationStructureGeometryKHR<'static> {
+    vk::AccelerationStructureGeometryKHR::default()
         .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
         .flags(vk::GeometryFlagsKHR::OPAQUE)
         .geometry(vk::AccelerationStructureGeometryDataKHR {
-            triangles: vk::AccelerationStructureGeometryTrianglesDataKHR::builder()
+            triangles: vk::AccelerationStructureGeometryTrianglesDataKHR::default()
                 .vertex_format(vk::Format::R32G32B32_SFLOAT)
                 .vertex_data(vk::DeviceOrHostAddressConstKHR {
                     device_address: vertex_address,
@@ -177,17 +177,15 @@ fn geometry_triangles(
                 .index_type(vk::IndexType::UINT32)
                 .index_data(vk::DeviceOrHostAddressConstKHR {
                     device_address: index_address,
-                })
-                .build(),
+                }),
         })
-        .build()
 }
 
 /// A BLAS build of `geoms`: fast trace, compactable.
-fn blas_build_info(
-    geoms: &[vk::AccelerationStructureGeometryKHR],
-) -> vk::AccelerationStructureBuildGeometryInfoKHRBuilder<'_> {
-    vk::AccelerationStructureBuildGeometryInfoKHR::builder()
+fn blas_build_info<'a>(
+    geoms: &'a [vk::AccelerationStructureGeometryKHR<'a>],
+) -> vk::AccelerationStructureBuildGeometryInfoKHR<'a> {
+    vk::AccelerationStructureBuildGeometryInfoKHR::default()
         .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
         .flags(
             vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
@@ -321,11 +319,13 @@ impl SceneGpu {
                         .collect();
                     let counts: Vec<u32> = geos.iter().map(|g| g.triangles).collect();
                     let info = blas_build_info(&geoms);
-                    let sizes = unsafe {
+                    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+                    unsafe {
                         gpu.accel.get_acceleration_structure_build_sizes(
                             vk::AccelerationStructureBuildTypeKHR::DEVICE,
                             &info,
                             &counts,
+                            &mut sizes,
                         )
                     };
                     scratch_total += align_up(sizes.build_scratch_size, gpu.scratch_alignment);
@@ -349,7 +349,7 @@ impl SceneGpu {
             let query_pool = unsafe {
                 gpu.device
                     .create_query_pool(
-                        &vk::QueryPoolCreateInfo::builder()
+                        &vk::QueryPoolCreateInfo::default()
                             .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
                             .query_count(batch.len() as u32),
                         None,
@@ -365,8 +365,7 @@ impl SceneGpu {
                         .dst_acceleration_structure(dst.raw)
                         .scratch_data(vk::DeviceOrHostAddressKHR {
                             device_address: scratch.base + offset,
-                        })
-                        .build();
+                        });
                     offset += align_up(sizes.build_scratch_size, gpu.scratch_alignment);
                     let ranges: Vec<vk::AccelerationStructureBuildRangeInfoKHR> = counts
                         .iter()
@@ -380,10 +379,9 @@ impl SceneGpu {
                     gpu.accel
                         .cmd_build_acceleration_structures(cmd, &[info], &[&ranges]);
                 }
-                let barrier = [vk::MemoryBarrier::builder()
+                let barrier = [vk::MemoryBarrier::default()
                     .src_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR)
-                    .dst_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR)
-                    .build()];
+                    .dst_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR)];
                 gpu.device.cmd_pipeline_barrier(
                     cmd,
                     vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR,
@@ -409,7 +407,6 @@ impl SceneGpu {
                         .get_query_pool_results(
                             query_pool,
                             0,
-                            batch.len() as u32,
                             &mut sizes,
                             vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
                         )
@@ -434,7 +431,7 @@ impl SceneGpu {
                 for (src, dst) in built.iter().zip(&compacted) {
                     gpu.accel.cmd_copy_acceleration_structure(
                         cmd,
-                        &vk::CopyAccelerationStructureInfoKHR::builder()
+                        &vk::CopyAccelerationStructureInfoKHR::default()
                             .src(src.raw)
                             .dst(dst.raw)
                             .mode(vk::CopyAccelerationStructureModeKHR::COMPACT),
@@ -715,28 +712,28 @@ impl SceneGpu {
         self.tlas_instances.write_bytes(0, &raw)?;
 
         let t0 = Instant::now();
-        let geometry = [vk::AccelerationStructureGeometryKHR::builder()
+        let geometry = [vk::AccelerationStructureGeometryKHR::default()
             .geometry_type(vk::GeometryTypeKHR::INSTANCES)
             .geometry(vk::AccelerationStructureGeometryDataKHR {
-                instances: vk::AccelerationStructureGeometryInstancesDataKHR::builder()
+                instances: vk::AccelerationStructureGeometryInstancesDataKHR::default()
                     .array_of_pointers(false)
                     .data(vk::DeviceOrHostAddressConstKHR {
                         device_address: self.tlas_instances.address,
-                    })
-                    .build(),
-            })
-            .build()];
+                    }),
+            })];
         let flags = vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE;
-        let info = vk::AccelerationStructureBuildGeometryInfoKHR::builder()
+        let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
             .flags(flags)
             .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
             .geometries(&geometry);
-        let sizes = unsafe {
+        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+        unsafe {
             gpu.accel.get_acceleration_structure_build_sizes(
                 vk::AccelerationStructureBuildTypeKHR::DEVICE,
                 &info,
                 &[count],
+                &mut sizes,
             )
         };
         let tlas = AccelStruct::new(
@@ -760,7 +757,7 @@ impl SceneGpu {
         gpu.run_commands(|cmd| unsafe {
             full_barrier(&gpu, cmd);
             gpu.accel
-                .cmd_build_acceleration_structures(cmd, &[info.build()], &[&range]);
+                .cmd_build_acceleration_structures(cmd, &[info], &[&range]);
             full_barrier(&gpu, cmd);
         })?;
         drop(scratch);

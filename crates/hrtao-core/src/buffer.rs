@@ -54,7 +54,7 @@ impl Buffer {
         unsafe {
             let raw = gpu
                 .device
-                .create_buffer(&vk::BufferCreateInfo::builder().size(size).usage(usage), None)
+                .create_buffer(&vk::BufferCreateInfo::default().size(size).usage(usage), None)
                 .map_err(|e| CoreError::from_vk("vkCreateBuffer", e))?;
             let requirements = gpu.device.get_buffer_memory_requirements(raw);
             let allocation = gpu.allocator().allocate(&AllocationCreateDesc {
@@ -85,7 +85,7 @@ impl Buffer {
                 .fetch_add(allocation.size(), std::sync::atomic::Ordering::Relaxed);
             let address = gpu
                 .device
-                .get_buffer_device_address(&vk::BufferDeviceAddressInfo::builder().buffer(raw));
+                .get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw));
             Ok(Buffer {
                 gpu: gpu.clone(),
                 raw,
@@ -212,7 +212,7 @@ pub fn human_bytes(b: u64) -> String {
 
 /// Records a full memory barrier between shader/transfer/AS work (the passes form a simple linear chain).
 pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
-    let barrier = [vk::MemoryBarrier::builder()
+    let barrier = [vk::MemoryBarrier::default()
         .src_access_mask(
             vk::AccessFlags::SHADER_WRITE
                 | vk::AccessFlags::TRANSFER_WRITE
@@ -225,8 +225,7 @@ pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
                 | vk::AccessFlags::TRANSFER_WRITE
                 | vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR
                 | vk::AccessFlags::INDIRECT_COMMAND_READ,
-        )
-        .build()];
+        )];
     let stages = vk::PipelineStageFlags::COMPUTE_SHADER
         | vk::PipelineStageFlags::TRANSFER
         | vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR;
@@ -245,10 +244,9 @@ pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
 
 /// Makes all device writes visible to the host (end of a command buffer whose results are read back).
 pub fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
-    let barrier = [vk::MemoryBarrier::builder()
+    let barrier = [vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-        .dst_access_mask(vk::AccessFlags::HOST_READ)
-        .build()];
+        .dst_access_mask(vk::AccessFlags::HOST_READ)];
     unsafe {
         gpu.device.cmd_pipeline_barrier(
             cmd,

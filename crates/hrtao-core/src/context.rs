@@ -8,7 +8,6 @@ use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 
-use ash::extensions::{ext, khr};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
@@ -97,7 +96,7 @@ pub struct Gpu {
     pub physical: vk::PhysicalDevice,
     pub queue: vk::Queue,
     pub queue_family: u32,
-    pub accel: khr::AccelerationStructure,
+    pub accel: ash::khr::acceleration_structure::Device,
     pub info: DeviceInfo,
     pub limits: vk::PhysicalDeviceLimits,
     pub scratch_alignment: u64,
@@ -107,15 +106,15 @@ pub struct Gpu {
     pub(crate) memory_limit: Option<u64>,
     allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
     command_pool: Mutex<vk::CommandPool>,
-    debug: Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     /// Kept alive until the very end: the loader library must outlive every Vulkan call.
     pub entry: ash::Entry,
 }
 
 const DEVICE_EXTENSIONS: [&CStr; 3] = [
-    vk::KhrAccelerationStructureFn::name(),
-    vk::KhrRayQueryFn::name(),
-    vk::KhrDeferredHostOperationsFn::name(),
+    ash::khr::acceleration_structure::NAME,
+    ash::khr::ray_query::NAME,
+    ash::khr::deferred_host_operations::NAME,
 ];
 
 unsafe extern "system" fn debug_callback(
@@ -221,12 +220,14 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
     let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
     let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::builder()
-        .push_next(&mut rq)
-        .push_next(&mut asf)
-        .push_next(&mut v12)
-        .build();
-    instance.get_physical_device_features2(physical, &mut f2);
+    let features = {
+        let mut f2 = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut rq)
+            .push_next(&mut asf)
+            .push_next(&mut v12);
+        instance.get_physical_device_features2(physical, &mut f2);
+        f2.features
+    };
     let mut lacking = Vec::new();
     if rq.ray_query == 0 {
         lacking.push("rayQuery");
@@ -240,10 +241,10 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
     if v12.scalar_block_layout == 0 {
         lacking.push("scalarBlockLayout");
     }
-    if f2.features.shader_int64 == 0 {
+    if features.shader_int64 == 0 {
         lacking.push("shaderInt64");
     }
-    if f2.features.shader_clip_distance == 0 {
+    if features.shader_clip_distance == 0 {
         // Section planes clip the rasterised primary visibility.
         lacking.push("shaderClipDistance");
     }
@@ -308,11 +309,11 @@ pub fn list_devices(options: &ContextOptions) -> Result<Vec<DeviceListing>> {
     unsafe {
         let entry = load_entry()?;
         let app_name = CString::new("hrtao").unwrap();
-        let app = vk::ApplicationInfo::builder()
+        let app = vk::ApplicationInfo::default()
             .application_name(&app_name)
             .api_version(vk::API_VERSION_1_2);
         let instance = entry
-            .create_instance(&vk::InstanceCreateInfo::builder().application_info(&app), None)
+            .create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None)
             .map_err(|e| CoreError::NoDevice(format!("vkCreateInstance failed: {e}. {LAVAPIPE_HINT}")))?;
         let physicals = instance.enumerate_physical_devices().unwrap_or_default();
         let mut candidates: Vec<Candidate> =
@@ -341,7 +342,7 @@ impl Gpu {
     unsafe fn create(options: &ContextOptions) -> Result<Arc<Gpu>> {
         let entry = load_entry()?;
         let app_name = CString::new("hrtao").unwrap();
-        let app = vk::ApplicationInfo::builder()
+        let app = vk::ApplicationInfo::default()
             .application_name(&app_name)
             .application_version(1)
             .engine_name(&app_name)
@@ -371,16 +372,16 @@ impl Gpu {
             .enumerate_instance_extension_properties(None)
             .unwrap_or_default()
             .iter()
-            .any(|e| CStr::from_ptr(e.extension_name.as_ptr()) == ext::DebugUtils::name());
+            .any(|e| CStr::from_ptr(e.extension_name.as_ptr()) == ash::ext::debug_utils::NAME);
         if have_debug_utils {
-            extensions.push(ext::DebugUtils::name().as_ptr());
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
         }
         let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut features =
-            vk::ValidationFeaturesEXT::builder().enabled_validation_features(&enabled_features);
+            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
         let counters = Arc::new(ValidationCounters::default());
         let messenger_info = || {
-            vk::DebugUtilsMessengerCreateInfoEXT::builder()
+            vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
                     vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
                         | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
@@ -393,12 +394,11 @@ impl Gpu {
                 )
                 .pfn_user_callback(Some(debug_callback))
                 .user_data(Arc::as_ptr(&counters) as *mut c_void)
-                .build()
         };
         // One messenger info chained into instance creation (covers vkCreateInstance itself), another for the
         // persistent messenger: a struct chained once has its pNext set and cannot be reused.
         let mut creation_messenger = messenger_info();
-        let mut create = vk::InstanceCreateInfo::builder()
+        let mut create = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
@@ -409,7 +409,7 @@ impl Gpu {
             .create_instance(&create, None)
             .map_err(|e| CoreError::NoDevice(format!("vkCreateInstance failed: {e}. {LAVAPIPE_HINT}")))?;
         let debug = if validation && have_debug_utils {
-            let du = ext::DebugUtils::new(&entry, &instance);
+            let du = ash::ext::debug_utils::Instance::new(&entry, &instance);
             match du.create_debug_utils_messenger(&messenger_info(), None) {
                 Ok(m) => Some((du, m)),
                 Err(e) => {
@@ -420,12 +420,13 @@ impl Gpu {
         } else {
             None
         };
-        let destroy_instance = |debug: &Option<(ext::DebugUtils, vk::DebugUtilsMessengerEXT)>| {
-            if let Some((du, m)) = debug {
-                du.destroy_debug_utils_messenger(*m, None);
-            }
-            instance.destroy_instance(None);
-        };
+        let destroy_instance =
+            |debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
+                if let Some((du, m)) = debug {
+                    du.destroy_debug_utils_messenger(*m, None);
+                }
+                instance.destroy_instance(None);
+            };
 
         let physicals = instance.enumerate_physical_devices().unwrap_or_default();
         let mut candidates: Vec<Candidate> =
@@ -454,10 +455,9 @@ impl Gpu {
         let props = instance.get_physical_device_properties(physical);
         let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
         let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
-        let mut props2 = vk::PhysicalDeviceProperties2::builder()
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
             .push_next(&mut as_props)
-            .push_next(&mut driver_props)
-            .build();
+            .push_next(&mut driver_props);
         instance.get_physical_device_properties2(physical, &mut props2);
         let name = CStr::from_ptr(props.device_name.as_ptr())
             .to_string_lossy()
@@ -473,48 +473,48 @@ impl Gpu {
         // Features: ray queries, acceleration structures, buffer device address, scalar layout, int64 (+ atomics).
         let mut supported_v11 = vk::PhysicalDeviceVulkan11Features::default();
         let mut supported_v12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut supported = vk::PhysicalDeviceFeatures2::builder()
-            .push_next(&mut supported_v11)
-            .push_next(&mut supported_v12)
-            .build();
-        instance.get_physical_device_features2(physical, &mut supported);
-        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::builder().ray_query(true);
+        let supported = {
+            let mut f2 = vk::PhysicalDeviceFeatures2::default()
+                .push_next(&mut supported_v11)
+                .push_next(&mut supported_v12);
+            instance.get_physical_device_features2(physical, &mut f2);
+            f2.features
+        };
+        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
         let mut asf =
-            vk::PhysicalDeviceAccelerationStructureFeaturesKHR::builder().acceleration_structure(true);
-        let mut v12 = vk::PhysicalDeviceVulkan12Features::builder()
+            vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(true)
             .scalar_block_layout(true)
             .host_query_reset(supported_v12.host_query_reset == vk::TRUE)
             .shader_buffer_int64_atomics(true);
-        let primitive_id_in_fragment = supported.features.geometry_shader == vk::TRUE;
+        let primitive_id_in_fragment = supported.geometry_shader == vk::TRUE;
         let draw_parameters = supported_v11.shader_draw_parameters == vk::TRUE;
-        let mut v11 = vk::PhysicalDeviceVulkan11Features::builder().shader_draw_parameters(draw_parameters);
+        let mut v11 = vk::PhysicalDeviceVulkan11Features::default().shader_draw_parameters(draw_parameters);
         let multi_draw_indirect = !options.single_draws
-            && supported.features.multi_draw_indirect == vk::TRUE
-            && supported.features.draw_indirect_first_instance == vk::TRUE;
-        let base = vk::PhysicalDeviceFeatures::builder()
+            && supported.multi_draw_indirect == vk::TRUE
+            && supported.draw_indirect_first_instance == vk::TRUE;
+        let base = vk::PhysicalDeviceFeatures::default()
             .shader_int64(true)
             .shader_clip_distance(true)
             .geometry_shader(primitive_id_in_fragment)
             .multi_draw_indirect(multi_draw_indirect)
-            .draw_indirect_first_instance(multi_draw_indirect)
-            .build();
-        let mut features2 = vk::PhysicalDeviceFeatures2::builder()
+            .draw_indirect_first_instance(multi_draw_indirect);
+        let mut features2 = vk::PhysicalDeviceFeatures2::default()
             .features(base)
             .push_next(&mut rq)
             .push_next(&mut asf)
             .push_next(&mut v12)
             .push_next(&mut v11);
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::builder()
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
-            .queue_priorities(&priorities)
-            .build()];
+            .queue_priorities(&priorities)];
         let mut dev_exts: Vec<*const i8> = DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
         if !options.surface_extensions.is_empty() {
-            dev_exts.push(khr::Swapchain::name().as_ptr());
+            dev_exts.push(ash::khr::swapchain::NAME.as_ptr());
         }
-        let device_info = vk::DeviceCreateInfo::builder()
+        let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_extension_names(&dev_exts)
             .push_next(&mut features2);
@@ -537,13 +537,13 @@ impl Gpu {
         .map_err(|e| CoreError::Memory(format!("creating the allocator: {e}")))?;
         let pool = device
             .create_command_pool(
-                &vk::CommandPoolCreateInfo::builder()
+                &vk::CommandPoolCreateInfo::default()
                     .queue_family_index(queue_family)
                     .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
                 None,
             )
             .map_err(|e| CoreError::Vulkan("vkCreateCommandPool", e))?;
-        let accel = khr::AccelerationStructure::new(&instance, &device);
+        let accel = ash::khr::acceleration_structure::Device::new(&instance, &device);
         let is_software = props.device_type == vk::PhysicalDeviceType::CPU;
         if is_software {
             keep_freed_memory();
@@ -612,7 +612,7 @@ impl Gpu {
             let cmd = self
                 .device
                 .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::builder()
+                    &vk::CommandBufferAllocateInfo::default()
                         .command_pool(*pool)
                         .command_buffer_count(1),
                 )
@@ -621,7 +621,7 @@ impl Gpu {
                 self.device
                     .begin_command_buffer(
                         cmd,
-                        &vk::CommandBufferBeginInfo::builder()
+                        &vk::CommandBufferBeginInfo::default()
                             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                     )
                     .map_err(|e| CoreError::Vulkan("vkBeginCommandBuffer", e))?;
@@ -650,7 +650,7 @@ impl Gpu {
                 .create_fence(&vk::FenceCreateInfo::default(), None)
                 .map_err(|e| CoreError::Vulkan("vkCreateFence", e))?;
             let cmds = [cmd];
-            let submit = [vk::SubmitInfo::builder().command_buffers(&cmds).build()];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
             let result = self
                 .device
                 .queue_submit(self.queue, &submit, fence)

@@ -327,7 +327,7 @@ pub(crate) fn shader_module(gpu: &Gpu, name: &str) -> Result<vk::ShaderModule> {
     let words = spirv_words(spirv);
     unsafe {
         gpu.device
-            .create_shader_module(&vk::ShaderModuleCreateInfo::builder().code(&words), None)
+            .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
             .map_err(|e| CoreError::from_vk("vkCreateShaderModule", e))
     }
 }
@@ -338,22 +338,20 @@ impl PassSet {
         let device = &gpu.device;
         unsafe {
             let bindings = [
-                vk::DescriptorSetLayoutBinding::builder()
+                vk::DescriptorSetLayoutBinding::default()
                     .binding(0)
                     .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
                     .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-                    .build(),
-                vk::DescriptorSetLayoutBinding::builder()
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE),
+                vk::DescriptorSetLayoutBinding::default()
                     .binding(1)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-                    .build(),
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE),
             ];
             let set_layout = device
                 .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::builder().bindings(&bindings),
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
                     None,
                 )
                 .map_err(|e| CoreError::from_vk("vkCreateDescriptorSetLayout", e))?;
@@ -365,7 +363,7 @@ impl PassSet {
             let set_layouts = [set_layout];
             let layout = device
                 .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::builder()
+                    &vk::PipelineLayoutCreateInfo::default()
                         .set_layouts(&set_layouts)
                         .push_constant_ranges(&push),
                     None,
@@ -383,7 +381,7 @@ impl PassSet {
             ];
             let pool = device
                 .create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::builder()
+                    &vk::DescriptorPoolCreateInfo::default()
                         .max_sets(1)
                         .pool_sizes(&sizes),
                     None,
@@ -391,7 +389,7 @@ impl PassSet {
                 .map_err(|e| CoreError::from_vk("vkCreateDescriptorPool", e))?;
             let set = device
                 .allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::builder()
+                    &vk::DescriptorSetAllocateInfo::default()
                         .descriptor_pool(pool)
                         .set_layouts(&set_layouts),
                 )
@@ -401,12 +399,11 @@ impl PassSet {
                 offset: 0,
                 range: vk::WHOLE_SIZE,
             }];
-            let write = vk::WriteDescriptorSet::builder()
+            let write = vk::WriteDescriptorSet::default()
                 .dst_set(set)
                 .dst_binding(1)
                 .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .buffer_info(&buffer_info)
-                .build();
+                .buffer_info(&buffer_info);
             device.update_descriptor_sets(&[write], &[]);
             let mut passes = PassSet {
                 gpu: gpu.clone(),
@@ -422,15 +419,13 @@ impl PassSet {
             for &pass in list {
                 let module = shader_module(gpu, pass.shader())?;
                 let entry = c"main";
-                let stage = vk::PipelineShaderStageCreateInfo::builder()
+                let stage = vk::PipelineShaderStageCreateInfo::default()
                     .stage(vk::ShaderStageFlags::COMPUTE)
                     .module(module)
-                    .name(entry)
-                    .build();
-                let info = [vk::ComputePipelineCreateInfo::builder()
+                    .name(entry);
+                let info = [vk::ComputePipelineCreateInfo::default()
                     .stage(stage)
-                    .layout(layout)
-                    .build()];
+                    .layout(layout)];
                 let result = device.create_compute_pipelines(vk::PipelineCache::null(), &info, None);
                 device.destroy_shader_module(module, None);
                 let pipeline = result.map_err(|(_, e)| CoreError::from_vk("vkCreateComputePipelines", e))?[0];
@@ -449,13 +444,12 @@ impl PassSet {
         }
         let handles = [tlas];
         let mut as_write =
-            vk::WriteDescriptorSetAccelerationStructureKHR::builder().acceleration_structures(&handles);
-        let mut write = vk::WriteDescriptorSet::builder()
+            vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&handles);
+        let mut write = vk::WriteDescriptorSet::default()
             .dst_set(self.set)
             .dst_binding(0)
             .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
-            .push_next(&mut as_write)
-            .build();
+            .push_next(&mut as_write);
         write.descriptor_count = 1;
         unsafe { self.gpu.device.update_descriptor_sets(&[write], &[]) };
         self.bound_tlas = tlas;

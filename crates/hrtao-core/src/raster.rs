@@ -271,7 +271,7 @@ impl Image {
             let raw = gpu
                 .device
                 .create_image(
-                    &vk::ImageCreateInfo::builder()
+                    &vk::ImageCreateInfo::default()
                         .image_type(vk::ImageType::TYPE_2D)
                         .format(format)
                         .extent(vk::Extent3D {
@@ -316,7 +316,7 @@ impl Image {
             image.view = gpu
                 .device
                 .create_image_view(
-                    &vk::ImageViewCreateInfo::builder()
+                    &vk::ImageViewCreateInfo::default()
                         .image(raw)
                         .view_type(vk::ImageViewType::TYPE_2D)
                         .format(format)
@@ -395,7 +395,7 @@ impl VisTargets {
         let framebuffer = unsafe {
             gpu.device
                 .create_framebuffer(
-                    &vk::FramebufferCreateInfo::builder()
+                    &vk::FramebufferCreateInfo::default()
                         .render_pass(render_pass)
                         .attachments(&views)
                         .width(size.0)
@@ -495,7 +495,7 @@ impl Rasterizer {
         r.layout = unsafe {
             gpu.device
                 .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::builder().push_constant_ranges(&push),
+                    &vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&push),
                     None,
                 )
                 .map_err(|e| CoreError::from_vk("vkCreatePipelineLayout", e))?
@@ -629,7 +629,7 @@ impl Rasterizer {
                 ];
                 d.cmd_begin_render_pass(
                     cmd,
-                    &vk::RenderPassBeginInfo::builder()
+                    &vk::RenderPassBeginInfo::default()
                         .render_pass(self.render_pass)
                         .framebuffer(t.framebuffer)
                         .render_area(vk::Rect2D {
@@ -764,7 +764,7 @@ impl Drop for Rasterizer {
 /// The external dependencies order it after the previous frame's copy and resolve, and the copy after it.
 fn create_render_pass(gpu: &Gpu) -> Result<vk::RenderPass> {
     let attachments = [
-        vk::AttachmentDescription::builder()
+        vk::AttachmentDescription::default()
             .format(VIS_FORMAT)
             .samples(vk::SampleCountFlags::TYPE_1)
             .load_op(vk::AttachmentLoadOp::CLEAR)
@@ -772,9 +772,8 @@ fn create_render_pass(gpu: &Gpu) -> Result<vk::RenderPass> {
             .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
             .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
             .initial_layout(vk::ImageLayout::UNDEFINED)
-            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
-            .build(),
-        vk::AttachmentDescription::builder()
+            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
+        vk::AttachmentDescription::default()
             .format(DEPTH_FORMAT)
             .samples(vk::SampleCountFlags::TYPE_1)
             .load_op(vk::AttachmentLoadOp::CLEAR)
@@ -782,8 +781,7 @@ fn create_render_pass(gpu: &Gpu) -> Result<vk::RenderPass> {
             .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
             .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
             .initial_layout(vk::ImageLayout::UNDEFINED)
-            .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL)
-            .build(),
+            .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL),
     ];
     let color_ref = [vk::AttachmentReference {
         attachment: 0,
@@ -793,11 +791,10 @@ fn create_render_pass(gpu: &Gpu) -> Result<vk::RenderPass> {
         attachment: 1,
         layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
     };
-    let subpass = [vk::SubpassDescription::builder()
+    let subpass = [vk::SubpassDescription::default()
         .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
         .color_attachments(&color_ref)
-        .depth_stencil_attachment(&depth_ref)
-        .build()];
+        .depth_stencil_attachment(&depth_ref)];
     let fragment_tests =
         vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
     let dependencies = [
@@ -832,7 +829,7 @@ fn create_render_pass(gpu: &Gpu) -> Result<vk::RenderPass> {
     unsafe {
         gpu.device
             .create_render_pass(
-                &vk::RenderPassCreateInfo::builder()
+                &vk::RenderPassCreateInfo::default()
                     .attachments(&attachments)
                     .subpasses(&subpass)
                     .dependencies(&dependencies),
@@ -860,24 +857,22 @@ fn create_pipeline(
     };
     let entry = c"main";
     let stages = [
-        vk::PipelineShaderStageCreateInfo::builder()
+        vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::VERTEX)
             .module(vert)
-            .name(entry)
-            .build(),
-        vk::PipelineShaderStageCreateInfo::builder()
+            .name(entry),
+        vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::FRAGMENT)
             .module(frag)
-            .name(entry)
-            .build(),
+            .name(entry),
     ];
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::builder();
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
     let input_assembly =
-        vk::PipelineInputAssemblyStateCreateInfo::builder().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-    let viewport = vk::PipelineViewportStateCreateInfo::builder()
+        vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let viewport = vk::PipelineViewportStateCreateInfo::default()
         .viewport_count(1)
         .scissor_count(1);
-    let raster = vk::PipelineRasterizationStateCreateInfo::builder()
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
         .polygon_mode(vk::PolygonMode::FILL)
         .cull_mode(match faces {
             Faces::Both => vk::CullModeFlags::NONE,
@@ -891,19 +886,18 @@ fn create_pipeline(
         })
         .line_width(1.0);
     let multisample =
-        vk::PipelineMultisampleStateCreateInfo::builder().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let depth = vk::PipelineDepthStencilStateCreateInfo::builder()
+        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
         .depth_test_enable(true)
         .depth_write_enable(true)
         .depth_compare_op(vk::CompareOp::GREATER);
-    let blend_attachment = [vk::PipelineColorBlendAttachmentState::builder()
+    let blend_attachment = [vk::PipelineColorBlendAttachmentState::default()
         .blend_enable(false)
-        .color_write_mask(vk::ColorComponentFlags::RGBA)
-        .build()];
-    let blend = vk::PipelineColorBlendStateCreateInfo::builder().attachments(&blend_attachment);
+        .color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachment);
     let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-    let dynamic = vk::PipelineDynamicStateCreateInfo::builder().dynamic_states(&dynamic_states);
-    let info = [vk::GraphicsPipelineCreateInfo::builder()
+    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+    let info = [vk::GraphicsPipelineCreateInfo::default()
         .stages(&stages)
         .vertex_input_state(&vertex_input)
         .input_assembly_state(&input_assembly)
@@ -915,8 +909,7 @@ fn create_pipeline(
         .dynamic_state(&dynamic)
         .layout(layout)
         .render_pass(render_pass)
-        .subpass(0)
-        .build()];
+        .subpass(0)];
     let result = unsafe {
         gpu.device
             .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)

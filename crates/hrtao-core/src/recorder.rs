@@ -19,10 +19,9 @@ pub struct Recorder<'a> {
 }
 
 fn record_barrier(gpu: &Gpu, cmd: vk::CommandBuffer, b: &Barrier) {
-    let barrier = [vk::MemoryBarrier::builder()
+    let barrier = [vk::MemoryBarrier::default()
         .src_access_mask(b.src_access)
-        .dst_access_mask(b.dst_access)
-        .build()];
+        .dst_access_mask(b.dst_access)];
     unsafe {
         gpu.device.cmd_pipeline_barrier(
             cmd,

@@ -24,7 +24,7 @@ impl GpuTimer {
         let pool = unsafe {
             gpu.device
                 .create_query_pool(
-                    &vk::QueryPoolCreateInfo::builder()
+                    &vk::QueryPoolCreateInfo::default()
                         .query_type(vk::QueryType::TIMESTAMP)
                         .query_count(MAX_SCOPES * 2),
                     None,
@@ -88,7 +88,6 @@ impl GpuTimer {
                 .get_query_pool_results(
                     self.pool,
                     0,
-                    (n * 2) as u32,
                     &mut raw,
                     vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
                 )

@@ -107,7 +107,7 @@ fn validation_layer_is_live_and_counts_messages() {
     let before = gpu.validation_messages();
     unsafe {
         use ash::vk;
-        let info = vk::BufferCreateInfo::builder()
+        let info = vk::BufferCreateInfo::default()
             .size(0)
             .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
         if let Ok(b) = gpu.device.create_buffer(&info, None) {

@@ -99,7 +99,7 @@ pub fn view_input(
             m.nav.pivot = nav::target(&m.nav.cam);
         }
     }
-    let scroll = ctx.input(|i| i.scroll_delta.y);
+    let scroll = wheel_points(ctx);
     if resp.hovered() && scroll != 0.0 {
         if let Some(pos) = resp.hover_pos() {
             let cam = Camera {
@@ -243,9 +243,29 @@ pub enum CameraButton {
     Reset,
 }
 
+/// The wheel's vertical turn this frame in points, as it came (not eased over later frames as egui's scroll
+/// delta is): a wheel notch zooms the view at once. A line counts 50 points.
+fn wheel_points(ctx: &egui::Context) -> f32 {
+    const POINTS_PER_LINE: f32 = 50.0;
+    ctx.input(|i| {
+        i.raw
+            .events
+            .iter()
+            .map(|e| match e {
+                egui::Event::MouseWheel { unit, delta, .. } => match unit {
+                    egui::MouseWheelUnit::Point => delta.y,
+                    egui::MouseWheelUnit::Line => delta.y * POINTS_PER_LINE,
+                    egui::MouseWheelUnit::Page => delta.y * i.viewport_rect().height(),
+                },
+                _ => 0.0,
+            })
+            .sum()
+    })
+}
+
 /// Is the user typing into a text field (then letters are text, not shortcuts)?
 fn typing(ctx: &egui::Context) -> bool {
-    ctx.memory(|m| m.focus())
+    ctx.memory(|m| m.focused())
         .is_some_and(|id| egui::TextEdit::load_state(ctx, id).is_some())
 }
 
@@ -483,11 +503,11 @@ mod tests {
             ..Default::default()
         };
         let mut delta = egui::Vec2::ZERO;
-        let _ = ctx.run(input, |ctx| {
-            egui::CentralPanel::default().show(ctx, |ui| {
+        let _ = ctx.run_ui(input, |root| {
+            egui::CentralPanel::default().show(root, |ui| {
                 let rect = ui.max_rect();
                 let resp = ui.allocate_rect(rect, egui::Sense::click_and_drag());
-                delta = super::view_drag_delta(ctx, &resp);
+                delta = super::view_drag_delta(ui.ctx(), &resp);
             });
         });
         delta

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use egui_ash::winit::event::{DeviceEvent, WindowEvent};
 use hrtao_core::Renderer;
+use winit::event::{DeviceEvent, WindowEvent};
 
 /// Milliseconds on CLOCK_MONOTONIC: the clock of Python's `time.monotonic()` on Linux, and of `Instant`.
 pub fn monotonic_ms() -> f64 {
@@ -57,7 +57,7 @@ pub fn egui_has_input(ctx: &egui::Context) -> bool {
                 e,
                 egui::Event::PointerMoved(_)
                     | egui::Event::PointerButton { .. }
-                    | egui::Event::Scroll(_)
+                    | egui::Event::MouseWheel { .. }
                     | egui::Event::Zoom(_)
                     | egui::Event::Key { .. }
                     | egui::Event::Touch { .. }
@@ -258,9 +258,9 @@ mod tests {
         l.event(&focus);
         assert_eq!(l.take_input(true), None, "focus is not input");
         let press = WindowEvent::MouseWheel {
-            device_id: unsafe { egui_ash::winit::event::DeviceId::dummy() },
-            delta: egui_ash::winit::event::MouseScrollDelta::LineDelta(0.0, 1.0),
-            phase: egui_ash::winit::event::TouchPhase::Moved,
+            device_id: winit::event::DeviceId::dummy(),
+            delta: winit::event::MouseScrollDelta::LineDelta(0.0, 1.0),
+            phase: winit::event::TouchPhase::Moved,
         };
         l.event(&press);
         let (t, _) = l.pending_input_ms.unwrap();
@@ -303,12 +303,8 @@ mod tests {
         let ctx = egui::Context::default();
         let mut raw = egui::RawInput::default();
         raw.events.push(egui::Event::PointerMoved(egui::pos2(3.0, 4.0)));
-        ctx.begin_frame(raw);
-        assert!(egui_has_input(&ctx));
-        let _ = ctx.end_frame();
-        ctx.begin_frame(egui::RawInput::default());
-        assert!(!egui_has_input(&ctx));
-        let _ = ctx.end_frame();
+        let _ = ctx.run_ui(raw, |ui| assert!(egui_has_input(ui.ctx())));
+        let _ = ctx.run_ui(egui::RawInput::default(), |ui| assert!(!egui_has_input(ui.ctx())));
     }
 
     #[test]
@@ -324,7 +320,7 @@ mod tests {
         std::thread::sleep(Duration::from_millis(20));
         let later = Instant::now();
         l.event(&WindowEvent::CursorMoved {
-            device_id: unsafe { egui_ash::winit::event::DeviceId::dummy() },
+            device_id: winit::event::DeviceId::dummy(),
             position: (1.0, 2.0).into(),
         });
         assert!(matches!(

@@ -117,7 +117,7 @@ impl LoadOptionsPanel {
                 let mut pct = o.relative_fraction * 100.0;
                 let r = ui.add(
                     egui::DragValue::new(&mut pct)
-                        .clamp_range(RELATIVE_RANGE.0 * 100.0..=RELATIVE_RANGE.1 * 100.0)
+                        .range(RELATIVE_RANGE.0 * 100.0..=RELATIVE_RANGE.1 * 100.0)
                         .speed(0.005)
                         .max_decimals(4)
                         .suffix(" % of the part"),
@@ -128,7 +128,7 @@ impl LoadOptionsPanel {
             } else {
                 let r = ui.add(
                     egui::DragValue::new(&mut o.absolute_mm)
-                        .clamp_range(ABSOLUTE_RANGE_MM.0..=ABSOLUTE_RANGE_MM.1)
+                        .range(ABSOLUTE_RANGE_MM.0..=ABSOLUTE_RANGE_MM.1)
                         .speed(0.01)
                         .max_decimals(4)
                         .suffix(" mm"),
@@ -139,7 +139,7 @@ impl LoadOptionsPanel {
             ui.label("angular deflection");
             let r = ui.add(
                 egui::DragValue::new(&mut o.angular_deg)
-                    .clamp_range(ANGULAR_RANGE_DEG.0..=ANGULAR_RANGE_DEG.1)
+                    .range(ANGULAR_RANGE_DEG.0..=ANGULAR_RANGE_DEG.1)
                     .speed(0.1)
                     .max_decimals(2)
                     .suffix("°"),

@@ -230,7 +230,7 @@ impl Measure {
             }
         });
         let unit_combo = |ui: &mut egui::Ui, id: &str, unit: &mut Unit| {
-            egui::ComboBox::from_id_source(id)
+            egui::ComboBox::from_id_salt(id)
                 .selected_text(unit.label())
                 .width(60.0)
                 .show_ui(ui, |ui| {

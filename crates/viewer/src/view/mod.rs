@@ -1,5 +1,6 @@
-//! `hrtao view`: the interactive viewer. A winit window with an egui panel through egui-ash
-//! (`HandleRedraw::Handle`: we record the 3D view into the swapchain image, egui-ash records the UI on top).
+//! `hrtao view`: the interactive viewer. A winit window (`app`: the event loop and egui-winit) with an egui
+//! panel; each frame records the 3D view into the swapchain image and egui on top (`ui_layer`,
+//! egui-ash-renderer).
 //!
 //! - `nav`: CAD camera maths (pure, unit tested).
 //! - `edits`: scene edits with undo/redo (F increments, TLAS rebuild).
@@ -7,6 +8,7 @@
 //! - `present`: swapchain, the scaled blit of the renderer's output, readback of the presented image.
 //! - `shot`: custom-size screenshots rendered in the background, tile by tile, while the window keeps drawing.
 //! - `ui`: the panel, navigation and picking input, toasts.
+mod app;
 mod command;
 pub mod edits;
 mod files;
@@ -27,6 +29,7 @@ mod shots;
 pub mod stats;
 pub mod tree;
 mod ui;
+mod ui_layer;
 mod ui_probe;
 
 use std::path::{Path, PathBuf};
@@ -36,12 +39,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
-use egui_ash::winit;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use hrtao_core::buffer::Buffer;
 use hrtao_core::camera::UpAxis;
-use hrtao_core::{Camera, ContextOptions, FrameDesc, FrameReport, Gpu, Output, Renderer, SceneGpu};
+use hrtao_core::{Camera, FrameDesc, FrameReport, Gpu, Output, Renderer, SceneGpu};
 use hrtao_scene::Scene;
 
 use crate::cli::ViewArgs;
@@ -79,7 +81,6 @@ struct Outcome {
 }
 
 pub fn run(args: &ViewArgs) -> Result<()> {
-    let size = args.size.unwrap_or((1280, 800));
     let resize = match crate::cli::frame_pairs("--resize-at-frame", &args.resize_at_frame)?.as_slice() {
         [] => None,
         [(k, wh)] => Some((
@@ -107,28 +108,10 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         );
     }
     let outcome = Arc::new(Mutex::new(Outcome::default()));
-    let creator = Creator {
-        args: args.clone(),
-        hooks: ScriptHooks { resize, set_at_frame },
-        outcome: outcome.clone(),
-    };
-    let options = egui_ash::RunOption {
-        viewport_builder: Some(
-            egui::ViewportBuilder::default()
-                .with_title("hrtao")
-                // Wayland app_id and X11 WM_CLASS: the desktop entry packaging/hrtao.desktop matches it.
-                .with_app_id(APP_ID)
-                .with_inner_size([size.0 as f32, size.1 as f32])
-                .with_drag_and_drop(true),
-        ),
-        follow_system_theme: false,
-        default_theme: egui_ash::Theme::Dark,
-        present_mode: vk::PresentModeKHR::FIFO,
-        ..Default::default()
-    };
-    let code = egui_ash::run("hrtao", creator, options);
+    let hooks = ScriptHooks { resize, set_at_frame };
+    let code = app::run(args, hooks, outcome.clone());
     let mut out = outcome.lock().unwrap_or_else(|p| p.into_inner());
-    // The last Arc<Gpu> goes here, after egui-ash and the app released everything they held.
+    // The last Arc<Gpu> goes here, after the window and the viewer released everything they held.
     let gpu = out.gpu.take();
     let validation = gpu.as_ref().map(|g| g.validation_messages()).unwrap_or(0);
     drop(gpu);
@@ -138,7 +121,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     if validation > 0 {
         bail!("the validation layer reported {validation} messages");
     }
-    if code != ExitCode::SUCCESS {
+    if code? != ExitCode::SUCCESS {
         bail!("the viewer exited with an error");
     }
     Ok(())
@@ -153,150 +136,11 @@ struct ScriptHooks {
     set_at_frame: Vec<(u32, String)>,
 }
 
-struct Creator {
-    args: ViewArgs,
-    hooks: ScriptHooks,
-    outcome: Arc<Mutex<Outcome>>,
-}
-
-type Allocator = Arc<Mutex<gpu_allocator::vulkan::Allocator>>;
-
-impl egui_ash::AppCreator<Allocator> for Creator {
-    type App = App;
-
-    fn create(&self, cc: egui_ash::CreationContext) -> (App, egui_ash::AshRenderState<Allocator>) {
-        // Instance extensions for the window system; ash-window's list is 'static.
-        use egui_ash::raw_window_handle::HasRawDisplayHandle;
-        let exts: Vec<&'static std::ffi::CStr> =
-            ash_window::enumerate_required_extensions(cc.main_window.raw_display_handle())
-                .map(|list| {
-                    list.iter()
-                        .map(|&p| unsafe { std::ffi::CStr::from_ptr(p) })
-                        .collect()
-                })
-                .unwrap_or_default();
-        let opts = ContextOptions {
-            validation: self.args.device.validation || hrtao_core::context::validation_requested_by_env(),
-            device: self.args.device.device.clone(),
-            surface_extensions: exts,
-            ..Default::default()
-        };
-        let gpu = match Gpu::new(&opts) {
-            Ok(g) => g,
-            Err(e) => {
-                eprintln!("hrtao: error: {e}");
-                std::process::exit(1);
-            }
-        };
-        self.outcome.lock().unwrap().gpu = Some(gpu.clone());
-        let presenter = match Presenter::new(&gpu, cc.main_window) {
-            Ok(p) => p,
-            Err(e) => {
-                eprintln!("hrtao: error: {e:#}");
-                std::process::exit(1);
-            }
-        };
-        let state = AshState {
-            entry: gpu.entry.clone(),
-            instance: gpu.instance.clone(),
-            physical: gpu.physical,
-            device: gpu.device.clone(),
-            surface_loader: presenter.surface_loader.clone(),
-            swapchain_loader: presenter.swapchain_loader.clone(),
-            queue: gpu.queue,
-            queue_family: gpu.queue_family,
-            pool: presenter.pool,
-            allocator: gpu.allocator_arc(),
-        };
-        let viewer = Viewer::new(
-            gpu,
-            presenter,
-            &self.args,
-            self.hooks.clone(),
-            cc.exit_signal,
-            self.outcome.clone(),
-            cc.context.clone(),
-        );
-        let render_state = egui_ash::AshRenderState {
-            entry: state.entry,
-            instance: state.instance,
-            physical_device: state.physical,
-            device: state.device,
-            surface_loader: state.surface_loader,
-            swapchain_loader: state.swapchain_loader,
-            queue: state.queue,
-            queue_family_index: state.queue_family,
-            command_pool: state.pool,
-            allocator: state.allocator,
-        };
-        (
-            App {
-                viewer: Arc::new(Mutex::new(viewer)),
-            },
-            render_state,
-        )
-    }
-}
-
-struct AshState {
-    entry: ash::Entry,
-    instance: ash::Instance,
-    physical: vk::PhysicalDevice,
-    device: ash::Device,
-    surface_loader: ash::extensions::khr::Surface,
-    swapchain_loader: ash::extensions::khr::Swapchain,
-    queue: vk::Queue,
-    queue_family: u32,
-    pool: vk::CommandPool,
-    allocator: Allocator,
-}
-
-pub struct App {
-    viewer: Arc<Mutex<Viewer>>,
-}
-
-impl App {
-    fn lock(&self) -> std::sync::MutexGuard<'_, Viewer> {
-        self.viewer.lock().unwrap_or_else(|p| p.into_inner())
-    }
-}
-
-impl egui_ash::App for App {
-    fn ui(&mut self, ctx: &egui::Context) {
-        let mut v = self.lock();
-        v.latency.ui_pass(latency::egui_has_input(ctx));
-        v.ui(ctx);
-        v.clock.ui_done = Instant::now();
-    }
-
-    fn handle_event(&mut self, event: egui_ash::event::Event) {
-        use egui_ash::event::{AppEvent, Event};
-        match event {
-            Event::AppEvent {
-                event: AppEvent::LoopExiting,
-            } => self.lock().shutdown(),
-            Event::AppEvent {
-                event: AppEvent::NewEvents(_),
-            } => self.lock().latency.wake(),
-            Event::ViewportEvent {
-                event: winit::event::WindowEvent::Resized(_),
-                ..
-            } => self.lock().presenter.dirty = true,
-            Event::ViewportEvent { event, .. } => self.lock().latency.event(&event),
-            Event::DeviceEvent { event, .. } => self.lock().latency.device_event(&event),
-            _ => {}
-        }
-    }
-
-    fn request_redraw(&mut self, _viewport_id: egui::ViewportId) -> egui_ash::HandleRedraw {
-        let viewer = self.viewer.clone();
-        egui_ash::HandleRedraw::Handle(Box::new(move |size, egui_cmd| {
-            let mut v = viewer.lock().unwrap_or_else(|p| p.into_inner());
-            if let Err(e) = v.draw(size, egui_cmd) {
-                v.fatal(format!("{e:#}"));
-            }
-        }))
-    }
+/// What egui's UI pass produced for the frame: its triangles, their scale, and the textures it changed.
+pub(crate) struct UiFrame {
+    pub primitives: Vec<egui::ClippedPrimitive>,
+    pub pixels_per_point: f32,
+    pub textures: egui::TexturesDelta,
 }
 
 /// Scripted-mode state.
@@ -340,7 +184,7 @@ pub(crate) struct Viewer {
     gpu: Arc<Gpu>,
     presenter: Presenter,
     egui_ctx: egui::Context,
-    exit_signal: egui_ash::ExitSignal,
+    exit_signal: app::ExitSignal,
     outcome: Arc<Mutex<Outcome>>,
     // Scene and rendering.
     scene: Option<Scene>,
@@ -387,7 +231,7 @@ impl Viewer {
         presenter: Presenter,
         args: &ViewArgs,
         hooks: ScriptHooks,
-        exit_signal: egui_ash::ExitSignal,
+        exit_signal: app::ExitSignal,
         outcome: Arc<Mutex<Outcome>>,
         egui_ctx: egui::Context,
     ) -> Viewer {
@@ -419,10 +263,10 @@ impl Viewer {
         } else {
             1.0
         };
-        egui_ctx.set_visuals(if prefs.dark_theme {
-            egui::Visuals::dark()
+        egui_ctx.set_theme(if prefs.dark_theme {
+            egui::Theme::Dark
         } else {
-            egui::Visuals::light()
+            egui::Theme::Light
         });
         let spec = args.file.clone().unwrap_or_else(default_spec);
         let mut v = Viewer {
@@ -755,7 +599,7 @@ impl Viewer {
 
     /// The UI pass: the loader and the scripted run move on, the panels draw and send commands, the viewer
     /// applies them in order.
-    fn ui(&mut self, ctx: &egui::Context) {
+    fn ui(&mut self, ui: &mut egui::Ui) {
         self.clock.ui_started = Instant::now();
         self.poll_loading();
         self.script_orbit();
@@ -789,8 +633,8 @@ impl Viewer {
             redo: self.edits.redo_label(),
             shot: self.shots.progress(),
         };
-        let commands = self.panels.ui(ctx, &state);
-        ui::draw_toasts(ctx, &mut self.toasts);
+        let commands = self.panels.ui(ui, &state);
+        ui::draw_toasts(ui.ctx(), &mut self.toasts);
         for c in commands {
             self.apply(c);
         }
@@ -1125,27 +969,13 @@ impl Viewer {
 
     /// The swapchain image to draw into: the swapchain recreated first when the window's size changed (egui's
     /// renderer told), None when there is none to draw into now (a repaint is asked for when it is out of date).
-    fn next_image(
-        &mut self,
-        size: winit::dpi::PhysicalSize<u32>,
-        egui_cmd: &mut egui_ash::EguiCommand,
-    ) -> Result<Option<u32>> {
+    fn next_image(&mut self, size: winit::dpi::PhysicalSize<u32>) -> Result<Option<u32>> {
         let p = &mut self.presenter;
-        if p.dirty
-            || p.extent.width != size.width
-            || p.extent.height != size.height
-            || egui_cmd.swapchain_recreate_required()
+        if (p.dirty || p.extent.width != size.width || p.extent.height != size.height)
+            && !p.recreate(size.width, size.height)?
         {
-            if !p.recreate(size.width, size.height)? {
-                std::thread::sleep(Duration::from_millis(30));
-                return Ok(None);
-            }
-            egui_cmd.update_swapchain(egui_ash::SwapchainUpdateInfo {
-                width: p.extent.width,
-                height: p.extent.height,
-                swapchain_images: p.images.clone(),
-                surface_format: p.format,
-            });
+            std::thread::sleep(Duration::from_millis(30));
+            return Ok(None);
         }
         let index = self.presenter.acquire()?;
         if index.is_none() {
@@ -1155,13 +985,32 @@ impl Viewer {
         Ok(index)
     }
 
+    /// The UI pass of a frame: egui's input, the panels, the clock.
+    fn ui_pass(&mut self, ui: &mut egui::Ui) {
+        self.latency.ui_pass(latency::egui_has_input(ui.ctx()));
+        self.ui(ui);
+        self.clock.ui_done = Instant::now();
+    }
+
+    /// A frame after its UI pass (an error is fatal: shown, and the exit status of scripted runs).
+    fn paint(&mut self, size: winit::dpi::PhysicalSize<u32>, mut ui: UiFrame) {
+        // egui's texture changes apply whether or not this frame presents: later frames' shapes use them.
+        let pool = self.presenter.pool;
+        if let Err(e) = self
+            .presenter
+            .ui
+            .update_textures(pool, &mut ui.textures)
+            .and_then(|()| self.draw(size, &ui))
+        {
+            self.fatal(format!("{e:#}"));
+        }
+        // The frame that drew with them has completed (or none was submitted).
+        self.presenter.ui.frame_done();
+    }
+
     /// The per-frame work: swapchain upkeep, the pacer's plan, the renderer's passes, the blit, egui, present,
     /// what the frame measured.
-    fn draw(
-        &mut self,
-        size: winit::dpi::PhysicalSize<u32>,
-        mut egui_cmd: egui_ash::EguiCommand,
-    ) -> Result<()> {
+    fn draw(&mut self, size: winit::dpi::PhysicalSize<u32>, ui: &UiFrame) -> Result<()> {
         if self.shut_down {
             return Ok(());
         }
@@ -1183,7 +1032,7 @@ impl Viewer {
                 Err(e) => self.toast(format!("screenshot failed: {e:#}"), true),
             }
         }
-        let Some(index) = self.next_image(size, &mut egui_cmd)? else {
+        let Some(index) = self.next_image(size)? else {
             return Ok(());
         };
         // The 3D view rectangle, clamped to the swapchain.
@@ -1209,7 +1058,7 @@ impl Viewer {
         let t0 = Instant::now();
         unsafe {
             let info =
-                vk::CommandBufferBeginInfo::builder().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+                vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             self.gpu
                 .device
                 .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
@@ -1224,10 +1073,12 @@ impl Viewer {
         if let (true, Some((_, w, h))) = (self.presenter.blit_ok, src) {
             self.presenter.ensure_internal(w, h)?;
         }
-        let bg = background(self.egui_ctx.style().visuals.dark_mode);
+        let bg = background(self.egui_ctx.global_style().visuals.dark_mode);
         self.presenter.record_view(cmd, index, src, self.view_rect, bg);
         split.record = laps.lap();
-        egui_cmd.record(cmd, index as usize);
+        self.presenter
+            .ui
+            .record(cmd, index, ui.pixels_per_point, &ui.primitives)?;
         split.egui_record = laps.lap();
         let readback = self.record_ui_capture(cmd, index)?;
         unsafe {

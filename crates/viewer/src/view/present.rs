@@ -4,11 +4,13 @@
 use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Context, Result};
-use ash::extensions::khr;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use hrtao_core::Gpu;
+use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+
+use super::ui_layer::UiLayer;
 
 /// The internal (render-resolution) image the output buffer is copied into before the scaled blit.
 struct Internal {
@@ -20,8 +22,8 @@ struct Internal {
 
 pub struct Presenter {
     gpu: Arc<Gpu>,
-    pub surface_loader: khr::Surface,
-    pub swapchain_loader: khr::Swapchain,
+    surface_loader: ash::khr::surface::Instance,
+    swapchain_loader: ash::khr::swapchain::Device,
     surface: vk::SurfaceKHR,
     swapchain: vk::SwapchainKHR,
     pub images: Vec<vk::Image>,
@@ -39,6 +41,8 @@ pub struct Presenter {
     pub pool: vk::CommandPool,
     pub cmd: vk::CommandBuffer,
     internal: Option<Internal>,
+    /// egui over the view, with a framebuffer per swapchain image.
+    pub ui: UiLayer,
 }
 
 impl Presenter {
@@ -52,18 +56,19 @@ impl Presenter {
         rect
     }
 
-    pub fn new(gpu: &Arc<Gpu>, window: &egui_ash::winit::window::Window) -> Result<Presenter> {
-        use egui_ash::raw_window_handle::{HasRawDisplayHandle, HasRawWindowHandle};
+    pub fn new(gpu: &Arc<Gpu>, window: &winit::window::Window) -> Result<Presenter> {
+        let display = window
+            .display_handle()
+            .context("the window has no display handle")?
+            .as_raw();
+        let handle = window
+            .window_handle()
+            .context("the window has no handle")?
+            .as_raw();
         unsafe {
-            let surface = ash_window::create_surface(
-                &gpu.entry,
-                &gpu.instance,
-                window.raw_display_handle(),
-                window.raw_window_handle(),
-                None,
-            )
-            .context("cannot create the window surface")?;
-            let surface_loader = khr::Surface::new(&gpu.entry, &gpu.instance);
+            let surface = ash_window::create_surface(&gpu.entry, &gpu.instance, display, handle, None)
+                .context("cannot create the window surface")?;
+            let surface_loader = ash::khr::surface::Instance::new(&gpu.entry, &gpu.instance);
             let supported = surface_loader
                 .get_physical_device_surface_support(gpu.physical, gpu.queue_family, surface)
                 .unwrap_or(false);
@@ -71,15 +76,29 @@ impl Presenter {
                 surface_loader.destroy_surface(surface, None);
                 bail!("the device's queue cannot present to this window");
             }
-            let swapchain_loader = khr::Swapchain::new(&gpu.instance, &gpu.device);
+            let format = match surface_format(&surface_loader, gpu.physical, surface) {
+                Ok(f) => f.format,
+                Err(e) => {
+                    surface_loader.destroy_surface(surface, None);
+                    return Err(e);
+                }
+            };
+            let ui = match UiLayer::new(gpu, format) {
+                Ok(ui) => ui,
+                Err(e) => {
+                    surface_loader.destroy_surface(surface, None);
+                    return Err(e);
+                }
+            };
+            let swapchain_loader = ash::khr::swapchain::Device::new(&gpu.instance, &gpu.device);
             let pool = gpu.device.create_command_pool(
-                &vk::CommandPoolCreateInfo::builder()
+                &vk::CommandPoolCreateInfo::default()
                     .queue_family_index(gpu.queue_family)
                     .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
                 None,
             )?;
             let cmd = gpu.device.allocate_command_buffers(
-                &vk::CommandBufferAllocateInfo::builder()
+                &vk::CommandBufferAllocateInfo::default()
                     .command_pool(pool)
                     .command_buffer_count(1),
             )?[0];
@@ -106,6 +125,7 @@ impl Presenter {
                 pool,
                 cmd,
                 internal: None,
+                ui,
             })
         }
     }
@@ -130,18 +150,7 @@ impl Presenter {
             if extent.width == 0 || extent.height == 0 {
                 return Ok(false);
             }
-            let formats = self
-                .surface_loader
-                .get_physical_device_surface_formats(gpu.physical, self.surface)?;
-            let chosen = formats
-                .iter()
-                .find(|f| {
-                    matches!(f.format, vk::Format::B8G8R8A8_UNORM | vk::Format::R8G8B8A8_UNORM)
-                        && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR
-                })
-                .or(formats.first())
-                .copied()
-                .ok_or_else(|| anyhow!("the surface reports no formats"))?;
+            let chosen = surface_format(&self.surface_loader, gpu.physical, self.surface)?;
             let props = gpu
                 .instance
                 .get_physical_device_format_properties(gpu.physical, chosen.format);
@@ -178,7 +187,7 @@ impl Presenter {
                 count = count.min(caps.max_image_count);
             }
             let old = self.swapchain;
-            let info = vk::SwapchainCreateInfoKHR::builder()
+            let info = vk::SwapchainCreateInfoKHR::default()
                 .surface(self.surface)
                 .min_image_count(count)
                 .image_format(chosen.format)
@@ -200,6 +209,7 @@ impl Presenter {
             self.images = self.swapchain_loader.get_swapchain_images(swapchain)?;
             self.format = chosen.format;
             self.extent = extent;
+            self.ui.resize(&self.images, self.format, extent)?;
             for s in self.render_done.drain(..) {
                 gpu.device.destroy_semaphore(s, None);
             }
@@ -267,7 +277,7 @@ impl Presenter {
         let gpu = self.gpu.clone();
         unsafe {
             let image = gpu.device.create_image(
-                &vk::ImageCreateInfo::builder()
+                &vk::ImageCreateInfo::default()
                     .image_type(vk::ImageType::TYPE_2D)
                     .format(vk::Format::R8G8B8A8_UNORM)
                     .extent(vk::Extent3D {
@@ -349,7 +359,7 @@ impl Presenter {
             layer_count: 1,
         };
         let barrier = |image, old, new, src_access, dst_access| {
-            vk::ImageMemoryBarrier::builder()
+            vk::ImageMemoryBarrier::default()
                 .image(image)
                 .old_layout(old)
                 .new_layout(new)
@@ -358,14 +368,12 @@ impl Presenter {
                 .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .subresource_range(range)
-                .build()
         };
         unsafe {
             // The renderer's compute writes → transfer reads of the output buffer.
-            let mem = [vk::MemoryBarrier::builder()
+            let mem = [vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE)
-                .build()];
+                .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE)];
             let mut images = vec![barrier(
                 target,
                 vk::ImageLayout::UNDEFINED,
@@ -400,10 +408,9 @@ impl Presenter {
                 &color,
                 &[range],
             );
-            let after_clear = [vk::MemoryBarrier::builder()
+            let after_clear = [vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ)
-                .build()];
+                .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ)];
             d.cmd_pipeline_barrier(
                 cmd,
                 vk::PipelineStageFlags::TRANSFER,
@@ -544,7 +551,7 @@ impl Presenter {
             layer_count: 1,
         };
         let b = |old, new, sa, da| {
-            [vk::ImageMemoryBarrier::builder()
+            [vk::ImageMemoryBarrier::default()
                 .image(image)
                 .old_layout(old)
                 .new_layout(new)
@@ -552,8 +559,7 @@ impl Presenter {
                 .dst_access_mask(da)
                 .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .subresource_range(range)
-                .build()]
+                .subresource_range(range)]
         };
         unsafe {
             d.cmd_pipeline_barrier(
@@ -606,12 +612,11 @@ impl Presenter {
             let stages = [vk::PipelineStageFlags::TRANSFER];
             let signals = [self.render_done[index as usize]];
             let cmds = [self.cmd];
-            let submit = [vk::SubmitInfo::builder()
+            let submit = [vk::SubmitInfo::default()
                 .wait_semaphores(&waits)
                 .wait_dst_stage_mask(&stages)
                 .command_buffers(&cmds)
-                .signal_semaphores(&signals)
-                .build()];
+                .signal_semaphores(&signals)];
             d.queue_submit(self.gpu.queue, &submit, self.fence)
                 .map_err(|e| anyhow!("vkQueueSubmit: {e}"))?;
             d.wait_for_fences(&[self.fence], true, 600_000_000_000)
@@ -627,7 +632,7 @@ impl Presenter {
             let signals = [self.render_done[index as usize]];
             let swapchains = [self.swapchain];
             let indices = [index];
-            let present = vk::PresentInfoKHR::builder()
+            let present = vk::PresentInfoKHR::default()
                 .wait_semaphores(&signals)
                 .swapchains(&swapchains)
                 .image_indices(&indices);
@@ -645,6 +650,7 @@ impl Presenter {
         let gpu = self.gpu.clone();
         gpu.wait_idle();
         self.destroy_internal();
+        self.ui.destroy();
         unsafe {
             for s in self.render_done.drain(..) {
                 gpu.device.destroy_semaphore(s, None);
@@ -671,6 +677,24 @@ impl Presenter {
             }
         }
     }
+}
+
+/// The swapchain's format: 8-bit UNORM (blit and copy targets, sRGB-encoded values) where offered.
+fn surface_format(
+    loader: &ash::khr::surface::Instance,
+    physical: vk::PhysicalDevice,
+    surface: vk::SurfaceKHR,
+) -> Result<vk::SurfaceFormatKHR> {
+    let formats = unsafe { loader.get_physical_device_surface_formats(physical, surface)? };
+    formats
+        .iter()
+        .find(|f| {
+            matches!(f.format, vk::Format::B8G8R8A8_UNORM | vk::Format::R8G8B8A8_UNORM)
+                && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR
+        })
+        .or(formats.first())
+        .copied()
+        .ok_or_else(|| anyhow!("the surface reports no formats"))
 }
 
 impl Drop for Presenter {

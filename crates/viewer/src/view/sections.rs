@@ -146,7 +146,7 @@ impl SectionState {
                 ui.horizontal(|ui| {
                     let slider = egui::Slider::new(&mut d, range)
                         .text("offset")
-                        .clamp_to_range(false);
+                        .clamping(egui::SliderClamping::Never);
                     ui.add(slider)
                         .on_hover_text("Plane offset d in the file's coordinates (type a value, or drag)");
                 });

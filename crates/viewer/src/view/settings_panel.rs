@@ -63,7 +63,7 @@ impl SettingsPanel {
             ui.add_enabled(
                 prefs.auto_budget,
                 egui::DragValue::new(&mut prefs.target_ms)
-                    .clamp_range(5.0..=2000.0)
+                    .range(5.0..=2000.0)
                     .suffix(" ms target"),
             );
         });

@@ -307,7 +307,7 @@ impl TreeView {
         let query = self.search.trim();
         let revealing = !rows.reveal_path.is_empty();
         let area = egui::ScrollArea::vertical()
-            .id_source("model-tree")
+            .id_salt("model-tree")
             .max_height(320.0)
             .min_scrolled_height(240.0)
             .auto_shrink([false, true])

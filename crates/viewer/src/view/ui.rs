@@ -139,29 +139,30 @@ impl Panels {
     }
 
     /// The whole UI of a frame: global keys, the side panel, the 3D view's input and overlays, the keyboard.
-    pub fn ui(&mut self, ctx: &egui::Context, state: &ViewState) -> Vec<Command> {
+    pub fn ui(&mut self, root: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
+        let ctx = &root.ctx().clone();
         let mut out = self.global_keys(ctx);
         // Dropped files open like the Open button.
         let dropped: Vec<_> = ctx.input(|i| {
             i.raw
                 .dropped_files
                 .iter()
-                .filter_map(|f| f.path.clone())
+                .map(|f| f.path().to_path_buf())
                 .collect()
         });
         out.extend(FilesPanel::dropped(&dropped));
         out.extend(self.files.poll_dialog(state.loading.is_some()));
         if self.show {
-            egui::SidePanel::right("panel")
+            egui::Panel::right("panel")
                 .resizable(true)
-                .default_width(480.0)
-                .show(ctx, |ui| {
+                .default_size(480.0)
+                .show(root, |ui| {
                     egui::ScrollArea::vertical().show(ui, |ui| out.extend(self.panel(ui, state)));
                 });
         }
         egui::CentralPanel::default()
-            .frame(egui::Frame::none())
-            .show(ctx, |ui| out.extend(self.view(ctx, ui, state)));
+            .frame(egui::Frame::NONE)
+            .show(root, |ui| out.extend(self.view(ctx, ui, state)));
         let mut tools = Tools {
             measure: &mut self.measure,
             sections: &mut self.sections,
@@ -213,7 +214,7 @@ impl Panels {
             let text = format!("Loading {} … {} ({:.0} s)", l.spec, l.progress, l.seconds);
             let area = egui::Rect::from_center_size(rect.center(), egui::vec2(400.0, 80.0));
             let cancel = ui
-                .allocate_ui_at_rect(area, |ui| {
+                .scope_builder(egui::UiBuilder::new().max_rect(area), |ui| {
                     ui.vertical_centered(|ui| {
                         ui.label(egui::RichText::new(text).heading());
                         ui.button("Cancel").clicked()
@@ -302,7 +303,7 @@ impl Panels {
     fn shot_overlay(&mut self, ctx: &egui::Context, state: &ViewState) -> Option<Command> {
         let (fraction, status, cancellable) = state.shot.clone().filter(|_| !self.show)?;
         let mut cancel = false;
-        egui::Area::new("screenshot progress")
+        egui::Area::new(egui::Id::new("screenshot progress"))
             .anchor(egui::Align2::RIGHT_TOP, [-10.0, 10.0])
             .show(ctx, |ui| {
                 egui::Frame::popup(ui.style()).show(ui, |ui| {
@@ -323,7 +324,7 @@ pub(crate) fn draw_toasts(ctx: &egui::Context, toasts: &mut Vec<Toast>) {
     };
     // Repaint when the first toast expires (the loop rests otherwise).
     ctx.request_repaint_after(first_expiry - now);
-    egui::Area::new("toasts")
+    egui::Area::new(egui::Id::new("toasts"))
         .anchor(egui::Align2::LEFT_BOTTOM, [10.0, -10.0])
         .interactable(false)
         .show(ctx, |ui| {
@@ -535,7 +536,7 @@ impl CameraPanel {
             ui.add(
                 egui::DragValue::new(&mut cam.ortho_height)
                     .speed(h * 0.01)
-                    .clamp_range(h * 1e-3..=h * 1e3)
+                    .range(h * 1e-3..=h * 1e3)
                     .prefix("view height "),
             );
         } else {
@@ -591,7 +592,7 @@ impl CameraPanel {
         if ui.button("Copy camera JSON").clicked() {
             let cam = state.view_cam();
             let text = serde_json::to_string_pretty(&cam).unwrap_or_default();
-            ui.output_mut(|o| o.copied_text = text);
+            ui.ctx().copy_text(text);
         }
         out
     }
@@ -629,9 +630,9 @@ impl ScreenshotPanel {
             );
         ui.add_enabled_ui(prefs.screenshot_custom, |ui| {
             ui.horizontal(|ui| {
-                ui.add(egui::DragValue::new(&mut prefs.screenshot_width).clamp_range(16..=16384));
+                ui.add(egui::DragValue::new(&mut prefs.screenshot_width).range(16..=16384));
                 ui.label("×");
-                ui.add(egui::DragValue::new(&mut prefs.screenshot_height).clamp_range(16..=16384));
+                ui.add(egui::DragValue::new(&mut prefs.screenshot_height).range(16..=16384));
             });
         });
         ui.add_enabled_ui(!prefs.screenshot_custom, |ui| {
