@@ -695,8 +695,13 @@ impl Viewer {
                 self.exit_signal.send(ExitCode::SUCCESS);
             }
             Command::ViewRect(rect) => {
+                // Laid out once two UI passes agree: the side panel grows to fit its content over the first
+                // passes, and the first scene is framed and rendered at the size the view keeps.
+                if !self.laid_out {
+                    self.laid_out = rect == self.view_rect;
+                    self.egui_ctx.request_repaint();
+                }
                 self.view_rect = rect;
-                self.laid_out = true;
             }
             Command::Toast { text, error } => self.toast(text, error),
         }
