@@ -1,48 +1,14 @@
-//! `hrtao bench --report DIR`: every bench JSON of DIR → `docs/benchmarks.md`-style markdown and PNG plots in DIR.
+//! `bench-report DIR`: every bench JSON of DIR → `docs/benchmarks.md`-style markdown and PNG plots in DIR.
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use hrtao_core::bench_json::{BenchResult, MatchKind, NON_RAY_PASSES, SCHEMA};
+use hrtao_core::stats::{fit_slope, median};
 
-use super::plot::{Plot, Series, COLORS};
-use super::stats::{fit_slope, median, MatchKind};
-use super::{BenchResult, SCHEMA};
-
-/// Loads the bench results of `dir` (files with another schema are skipped), scenes first, then by size.
-pub fn load_results(dir: &Path) -> Result<Vec<(PathBuf, BenchResult)>> {
-    let mut out = Vec::new();
-    let entries = std::fs::read_dir(dir).with_context(|| format!("cannot read {}", dir.display()))?;
-    for e in entries {
-        let path = e?.path();
-        if path.extension().and_then(|x| x.to_str()) != Some("json") {
-            continue;
-        }
-        let text = std::fs::read_to_string(&path)?;
-        let v: serde_json::Value = match serde_json::from_str(&text) {
-            Ok(v) => v,
-            Err(_) => continue,
-        };
-        if v.get("schema").and_then(|s| s.as_str()) != Some(SCHEMA) {
-            continue;
-        }
-        let r: BenchResult =
-            serde_json::from_value(v).with_context(|| format!("{}: bad bench result", path.display()))?;
-        out.push((path, r));
-    }
-    out.sort_by(|a, b| {
-        (
-            a.1.scene.group != "scenes",
-            a.1.scene.instanced_triangles,
-            &a.1.scene.label,
-        )
-            .cmp(&(
-                b.1.scene.group != "scenes",
-                b.1.scene.instanced_triangles,
-                &b.1.scene.label,
-            ))
-    });
-    Ok(out)
-}
+use crate::plot::{Plot, Series, COLORS};
+use crate::results::load_results;
+use crate::{first_frame_report, latency_report};
 
 fn f(v: f64, digits: usize) -> String {
     if v.is_finite() {
@@ -339,7 +305,7 @@ fn render_markdown(
         let floor: Vec<f64> = all
             .iter()
             .map(|r| {
-                super::stats::NON_RAY_PASSES
+                NON_RAY_PASSES
                     .iter()
                     .map(|p| r.hrtao.nav_stats.pass(p))
                     .sum::<f64>()
@@ -867,11 +833,8 @@ fn render_markdown(
         )?;
     }
     step_table(&mut m, &load_step_results(dir)?)?;
-    super::first_frame_report::section(
-        &mut m,
-        &super::first_frame_report::load(&dir.join("first_frame"))?,
-    )?;
-    super::latency_report::section(&mut m, &super::latency_report::load(&dir.join("latency"))?)?;
+    first_frame_report::section(&mut m, &first_frame_report::load(&dir.join("first_frame"))?)?;
+    latency_report::section(&mut m, &latency_report::load(&dir.join("latency"))?)?;
     Ok(m)
 }
 
