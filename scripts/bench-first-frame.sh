@@ -4,7 +4,7 @@
 # `examples/ablation.rs --configs`), on the shared scenes' reference views at 640x360, 8 rays per pixel. Each run
 # is `hrtao bench --repeat 5 --settle 0`, which renders the first frame from an empty map with ours and the
 # paper's mode alternating, so that the paired ratios see the same load. One JSON per configuration and scene in
-# docs/bench/first_frame/<config>_<key>.json; `hrtao bench --report docs/bench` tabulates them.
+# docs/bench/first_frame/<config>_<key>.json; `cargo run -p bench-report -- docs/bench` tabulates them.
 #
 #   HRTAO_SHARED=DIR scripts/bench-first-frame.sh [NAME...]   (default: every configuration; KEYS="sf duplex")
 #

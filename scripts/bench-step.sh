@@ -2,8 +2,8 @@
 # STEP/IGES against F3D: wall time from process start to a PNG, hrtao (`hrtao render`) and Debian's F3D
 # (`f3d FILE --output`, the same OpenCASCADE kernel), run in turn (one warm-up each, then RUNS pairs), and the
 # triangles each draws. Writes docs/bench/step_<file>_<quality>.json, which
-# `hrtao bench --report docs/bench --markdown docs/benchmarks.md` renders as the "STEP/IGES: load to image against
-# F3D" table. Two tessellations per file: F3D's (goal: triangles within ±20 % and wall time <= 1.5x F3D's) and
+# `cargo run -p bench-report -- docs/bench --markdown docs/benchmarks.md` renders as the "STEP/IGES: load to image
+# against F3D" table. Two tessellations per file: F3D's (goal: triangles within ±20 % and wall time <= 1.5x F3D's) and
 # hrtao's default (goal <= 3x). F3D 1.3 meshes with OpenCASCADE's per-edge relative deflection 0.1 and 0.5 rad;
 # the nearest of hrtao's flags is one deflection of 1 mm and 28.65 degrees (the same triangles on AS1).
 #

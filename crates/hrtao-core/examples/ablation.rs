@@ -17,6 +17,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use hrtao_core::stats::median;
 use hrtao_core::{metrics, AoSettings, Camera, ContextOptions, FrameDesc, Gpu, Mode, Renderer, SceneGpu};
 use serde::{Deserialize, Serialize};
 
@@ -75,20 +76,6 @@ fn shared_root() -> anyhow::Result<PathBuf> {
     std::env::var_os("HRTAO_SHARED")
         .map(PathBuf::from)
         .context("set HRTAO_SHARED=DIR, the folder of scenes/ and refs/index.json")
-}
-
-fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
 }
 
 /// `cam` with its eye turned about `cam.up` through its target by `deg` degrees.
@@ -728,9 +715,7 @@ mod tests {
     }
 
     #[test]
-    fn the_median_and_the_orbit_are_right() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+    fn the_orbit_turns_about_the_up_axis() {
         let cam = Camera {
             eye: [1.0, 0.0, 0.0],
             target: [0.0; 3],

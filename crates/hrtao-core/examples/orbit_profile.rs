@@ -9,16 +9,8 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use glam::{Quat, Vec3};
+use hrtao_core::stats::median;
 use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Renderer, SceneGpu};
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    if v.is_empty() {
-        0.0
-    } else {
-        v[v.len() / 2]
-    }
-}
 
 fn main() -> anyhow::Result<()> {
     let mut args = cli_args::Args::from_env();
@@ -83,11 +75,11 @@ fn main() -> anyhow::Result<()> {
     println!(
         "{w}x{h}, {} frames after 4: median wall {:.1} ms, {:.0} rays/frame",
         walls.len(),
-        median(&mut walls),
+        median(&walls),
         rays_sum as f64 / n as f64
     );
-    for (k, mut v) in per_pass {
-        println!("  {k:>20}: {:7.1} ms", median(&mut v));
+    for (k, v) in per_pass {
+        println!("  {k:>20}: {:7.1} ms", median(&v));
     }
     Ok(())
 }

@@ -9,6 +9,7 @@
 //! - `hash`: CPU mirror of the shaders' hash functions (paper eq. 1-6).
 //! - `tile`: a window of a larger image (large screenshots rendered tile by tile).
 //! - `camera`, `settings`, `imageio`, `headless`: inputs and outputs.
+//! - `stats`, `bench_json`: medians and ratios of measurements; the results `hrtao bench` writes.
 // The test helpers the integration tests share (tests/common), also for the unit tests of a module that keeps its
 // GPU tests beside its code (each of `additions`): they name this crate as the integration tests do.
 #[cfg(test)]
@@ -20,6 +21,7 @@ pub(crate) mod testkit;
 pub mod accel;
 pub mod additions;
 pub mod barrier;
+pub mod bench_json;
 pub mod buffer;
 pub mod camera;
 pub mod clip;
@@ -40,6 +42,7 @@ pub mod renderer;
 pub mod section;
 pub mod settings;
 pub mod slice_order;
+pub mod stats;
 pub mod tile;
 pub mod timer;
 

@@ -450,7 +450,7 @@ pub struct ViewArgs {
 pub struct BenchArgs {
     /// Scene: .step/.stp, .iges/.igs, .gltf, .glb, .obj, .stl, .ply, or a generator spec such as
     /// gen:racks?rows=10&cols=10.
-    #[arg(long, required_unless_present = "report")]
+    #[arg(long, required = true)]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
     /// "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's
@@ -516,15 +516,10 @@ pub struct BenchArgs {
     /// Group in reports.
     #[arg(long, value_enum, default_value_t = Group::Scenes)]
     pub group: Group,
-    /// Write the results here (schema hrtao-bench/1).
+    /// Write the results here (schema hrtao-bench/1; `cargo run -p bench-report -- DIR` renders a directory of
+    /// them as docs/benchmarks.md).
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// Report mode: read every *.json bench result in this directory and write --markdown and plots beside it.
-    #[arg(long)]
-    pub report: Option<PathBuf>,
-    /// Report mode: markdown output (default: DIR/../benchmarks.md).
-    #[arg(long)]
-    pub markdown: Option<PathBuf>,
     /// AO settings (--mode is ignored: the bench runs both HRTAO and per-pixel RTAO).
     #[command(flatten)]
     pub ao: AoArgs,

@@ -1,34 +1,12 @@
-//! The bench's reference / error / interpolation maths and plot helpers (pure code, no GPU).
+//! The bench's reference / error / interpolation maths (pure code, no GPU; medians and slopes are tested in
+//! `hrtao_core::stats`).
 #![allow(dead_code)]
 
 #[path = "../src/bench/stats.rs"]
 mod stats;
 
-#[path = "../src/bench/plot.rs"]
-mod plot;
-
+use hrtao_core::bench_json::MatchKind;
 use stats::*;
-
-#[test]
-fn median_of_odd_even_and_nan() {
-    assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-    assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
-    assert_eq!(median(&[f64::NAN, 5.0]), 5.0);
-    assert!(median(&[]).is_nan());
-}
-
-#[test]
-fn paired_ratio_is_the_median_of_frame_by_frame_ratios() {
-    // The load triples the cost of the second pair (both frames of it) and the third pair is a noisy one: the
-    // pairs say 0.9, the medians of the two runs, taken over unrelated frames, say 0.95.
-    let ours = [90.0, 270.0, 95.0];
-    let paper = [100.0, 300.0, 90.0];
-    assert!((paired_ratio(&ours, &paper) - 0.9).abs() < 1e-12);
-    assert!((median(&ours) / median(&paper) - 0.95).abs() < 1e-12);
-    // Pairs without a positive base are skipped; none at all gives NaN.
-    assert!((paired_ratio(&[1.0, 5.0], &[0.0, 10.0]) - 0.5).abs() < 1e-12);
-    assert!(paired_ratio(&[1.0], &[0.0]).is_nan());
-}
 
 #[test]
 fn segment_mean_recovers_the_disjoint_average() {
@@ -95,13 +73,6 @@ fn error_at_interpolates_log_log_and_refuses_to_extrapolate() {
 }
 
 #[test]
-fn fit_slope_of_a_line() {
-    let pts = [(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)];
-    assert!((fit_slope(&pts) - 2.0).abs() < 1e-12);
-    assert!(fit_slope(&pts[..1]).is_nan());
-}
-
-#[test]
 fn orbit_keeps_distance_and_height() {
     let eye = [10.0, 0.0, 3.0];
     let e = orbit_eye(eye, [0.0; 3], [0.0, 0.0, 1.0], 90.0);
@@ -114,42 +85,4 @@ fn utc_dates() {
     assert_eq!(utc_date(0), "1970-01-01 00:00 UTC");
     assert_eq!(utc_date(1_700_000_000), "2023-11-14 22:13 UTC");
     assert_eq!(utc_date(951_782_400), "2000-02-29 00:00 UTC");
-}
-
-#[test]
-fn section_sums() {
-    let s = vec![
-        ("cell finder".to_string(), 1.0),
-        ("ray-tracing update".to_string(), 2.0),
-        ("primary visibility".to_string(), 4.0),
-    ];
-    assert_eq!(section_sum(&s, &HRTAO_PASSES), 3.0);
-    assert_eq!(section_sum(&s, &NON_RAY_PASSES), 1.0);
-}
-
-#[test]
-fn plot_ticks_labels_and_image() {
-    assert_eq!(plot::ticks(1.0, 1000.0, true), vec![1.0, 10.0, 100.0, 1000.0]);
-    assert_eq!(plot::ticks(0.0, 10.0, false), vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
-    assert_eq!(plot::tick_label(1e9), "1e9");
-    assert_eq!(plot::tick_label(0.05), "0.05");
-    assert_eq!(plot::tick_label(100.0), "100");
-    let p = plot::Plot {
-        width: 200,
-        height: 120,
-        log_x: true,
-        log_y: true,
-        series: vec![plot::Series {
-            points: vec![(1.0, 0.1), (10.0, 0.01), (f64::NAN, 1.0)],
-            color: plot::COLORS[0],
-            dashed: false,
-            markers: true,
-        }],
-    };
-    let img = p.render();
-    assert_eq!(img.dimensions(), (200, 120));
-    assert!(
-        img.pixels().any(|px| px.0 == plot::COLORS[0]),
-        "the series is drawn"
-    );
 }

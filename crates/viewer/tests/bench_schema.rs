@@ -1,5 +1,6 @@
 //! `hrtao bench` end to end on a tiny run (64×36, 3 navigation frames, validation on): the JSON schema, the
-//! self-consistency of its numbers (no timing assertion), and the `--report` markdown + plots.
+//! self-consistency of its numbers (no timing assertion), and that the report's reader (`hrtao_core::bench_json`,
+//! what `bench-report` loads) parses it.
 /// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
 #[path = "../../scene/tests/common/mod.rs"]
 mod common;
@@ -47,7 +48,7 @@ fn num(v: &serde_json::Value, path: &str) -> f64 {
 }
 
 #[test]
-fn tiny_bench_writes_the_schema_and_a_report() {
+fn tiny_bench_writes_the_schema_the_report_reads() {
     let dir = tmp_dir("schema");
     let json = dir.join("tiny.json");
     let scene = scene();
@@ -188,28 +189,13 @@ fn tiny_bench_writes_the_schema_and_a_report() {
     assert!(num(&v, "memory.host_peak_bytes") > 0.0);
     assert!(num(&v, "memory.device_total_bytes") >= num(&v, "memory.device_scene_bytes"));
 
-    // Report mode: markdown with the tables and plots beside it.
-    let md = dir.join("bench.md");
-    hrtao(&[
-        "bench",
-        "--report",
-        dir.to_str().unwrap(),
-        "--markdown",
-        md.to_str().unwrap(),
-    ]);
-    let text = std::fs::read_to_string(&md).unwrap();
-    for needle in [
-        "# Benchmarks",
-        "Table 1",
-        "Table 2",
-        "## Targets",
-        "beside the paper's behaviour",
-        "tiny",
-        "error_tiny.png",
-    ] {
-        assert!(text.contains(needle), "report lacks {needle}");
-    }
-    assert!(dir.join("error_tiny.png").exists());
+    // The report's reader takes the file as written: the run's label, frames and curves come back.
+    let read: hrtao_core::bench_json::BenchResult = serde_json::from_value(v.clone()).unwrap();
+    assert_eq!(read.schema, hrtao_core::bench_json::SCHEMA);
+    assert_eq!(read.scene.label, "tiny");
+    assert_eq!(read.hrtao.nav.len(), 3);
+    assert_eq!(read.paper.as_ref().map(|p| p.nav.len()), Some(3));
+    assert_eq!(read.quality.as_ref().unwrap().hrtao_curve.len(), 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -220,9 +206,22 @@ fn bench_rejects_bad_arguments() {
         .output()
         .unwrap();
     assert!(!out.status.success(), "--orbit and --path together must fail");
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(["bench", "--report", "/nonexistent-hrtao-dir"])
+    // The report is `bench-report`'s: the user's binary takes no --report, and measures nothing without --scene.
+    for args in [&["bench", "--report", "docs/bench"][..], &["bench"][..]] {
+        let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "hrtao {args:?} succeeded");
+    }
+    let help = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(["bench", "--help"])
         .output()
         .unwrap();
-    assert!(!out.status.success());
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("--scene"), "{help}");
+    assert!(
+        !help.contains("--report") && !help.contains("--markdown"),
+        "{help}"
+    );
 }

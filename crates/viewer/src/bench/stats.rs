@@ -1,33 +1,8 @@
-//! The bench's pure maths: medians, disjoint reference segments from progressive averages, error-curve
-//! interpolation, orbit cameras, dates. No GPU here (unit-tested in `tests/bench_math.rs`).
-
-/// Median of the finite values (NaN when there are none).
-pub fn median(values: &[f64]) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-/// Median of the per-frame ratios `a[i] / b[i]` of two runs over the same frames, interleaved (NaN when no
-/// pair has a positive `b`). A change of load on the machine hits both frames of a pair alike, so this is the
-/// cost ratio that noise moves least; the ratio of the two medians pairs unrelated frames.
-pub fn paired_ratio(a: &[f64], b: &[f64]) -> f64 {
-    let ratios: Vec<f64> = a
-        .iter()
-        .zip(b)
-        .filter(|(_, &y)| y > 0.0)
-        .map(|(x, y)| x / y)
-        .collect();
-    median(&ratios)
-}
+//! The bench's pure maths: disjoint reference segments from progressive averages, error-curve interpolation,
+//! orbit cameras, dates (medians and slopes: `hrtao_core::stats`). No GPU here (unit-tested in
+//! `tests/bench_math.rs`).
+use hrtao_core::bench_json::{Match, MatchKind};
+use hrtao_core::stats::fit_slope;
 
 /// Mean over samples `n_a..n_b` of a sequence, given the running means `avg_a` of its first `n_a` samples and
 /// `avg_b` of its first `n_b` samples (per pixel). This turns one progressive per-pixel RTAO run into estimates
@@ -44,36 +19,6 @@ pub fn segment_mean(avg_a: &[f32], n_a: u64, avg_b: &[f32], n_b: u64) -> Vec<f32
             m.clamp(0.0, 1.0) as f32
         })
         .collect()
-}
-
-/// One point of an error-versus-rays curve.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct CurvePoint {
-    /// Rays traced per covered pixel, cumulated.
-    pub rays_per_pixel: f64,
-    pub mae: f64,
-    pub rmse: f64,
-}
-
-/// Where a target error falls on a curve.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MatchKind {
-    /// Between two measured points (log-log interpolation).
-    Interpolated,
-    /// Already reached at the first point: the number is an upper bound (extrapolated below it).
-    BelowFirst,
-    /// Not reached within the measured range: extrapolated along the power-law tail (a lower bound at least
-    /// equal to the last measured rays).
-    BeyondLast,
-    /// The curve has fewer than two usable points.
-    Unknown,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Match {
-    pub rays_per_pixel: f64,
-    pub kind: MatchKind,
 }
 
 /// Rays per pixel at which a decreasing error curve `(rays, err)` reaches `target`: the first crossing,
@@ -136,23 +81,6 @@ pub fn rays_to_reach(curve: &[(f64, f64)], target: f64) -> Match {
     }
 }
 
-/// Least-squares slope of y over x.
-pub fn fit_slope(pts: &[(f64, f64)]) -> f64 {
-    let n = pts.len() as f64;
-    if pts.len() < 2 {
-        return f64::NAN;
-    }
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
-    if sxx == 0.0 {
-        f64::NAN
-    } else {
-        sxy / sxx
-    }
-}
-
 /// Rays within this fraction past either end of a curve take that end's error: HRTAO's adaptive sampling rounds
 /// its rays stochastically, so a run meant to match the curve's last point can land a few rays beyond it.
 pub const CURVE_END_SLACK: f64 = 0.02;
@@ -209,17 +137,3 @@ pub fn utc_date(unix_secs: u64) -> String {
         .strftime("%Y-%m-%d %H:%M UTC")
         .to_string()
 }
-
-/// Sums the milliseconds of the named sections.
-pub fn section_sum(sections: &[(String, f64)], names: &[&str]) -> f64 {
-    sections
-        .iter()
-        .filter(|(n, _)| names.contains(&n.as_str()))
-        .map(|(_, ms)| ms)
-        .sum()
-}
-
-/// The paper's Table 2 columns (HRTAO's own passes; Table 1 times are their sum).
-pub const HRTAO_PASSES: [&str; 4] = ["cell finder", "ray-tracing update", "per-pixel AO", "filtering"];
-/// HRTAO passes that trace no ray.
-pub const NON_RAY_PASSES: [&str; 3] = ["cell finder", "per-pixel AO", "filtering"];

@@ -259,9 +259,9 @@ fn short_name(name: &str) -> String {
     }
 }
 
-/// The median of the finite values (the bench's), None when there are none.
+/// The median of the finite values (`hrtao_core::stats::median`), None when there are none.
 pub fn median(v: Vec<f64>) -> Option<f64> {
-    Some(crate::bench::stats::median(&v)).filter(|m| !m.is_nan())
+    Some(hrtao_core::stats::median(&v)).filter(|m| !m.is_nan())
 }
 
 #[cfg(test)]

@@ -1,15 +1,16 @@
 //! The "First frame against the paper's mode, per addition" section of docs/benchmarks.md, from
 //! `scripts/bench-first-frame.sh`'s results (`docs/bench/first_frame/<config>_<scene>.json`, `hrtao bench`'s
 //! schema): each configuration's first frame from an empty map against the paper's mode, the two renderers
-//! alternating in one run (`bench::time_hrtao`), as the median of the paired ratios.
+//! alternating in one run (`hrtao bench`'s `time_hrtao`), as the median of the paired ratios.
 use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Result;
 
-use super::report::load_results;
-use super::stats::{median, paired_ratio};
-use super::BenchResult;
+use hrtao_core::bench_json::BenchResult;
+use hrtao_core::stats::{median, paired_ratio};
+
+use crate::results::load_results;
 
 /// One configuration on one scene: the file name's prefix (`default` or an ablation row's name, `no-near-field`)
 /// and the run.
@@ -108,12 +109,12 @@ mod tests {
     #[test]
     fn the_ratio_is_the_median_of_the_paired_frames() {
         let mut run = committed().into_iter().next().expect("committed results").result;
-        let set = |frames: &mut Vec<super::super::FrameRecord>, ms: &[f64]| {
+        let set = |frames: &mut Vec<hrtao_core::bench_json::FrameRecord>, ms: &[f64]| {
             frames.truncate(1);
             let f = frames[0].clone();
             *frames = ms
                 .iter()
-                .map(|&gpu_total_ms| super::super::FrameRecord {
+                .map(|&gpu_total_ms| hrtao_core::bench_json::FrameRecord {
                     gpu_total_ms,
                     ..f.clone()
                 })

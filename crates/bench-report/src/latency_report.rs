@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde_json::Value;
 
-use super::stats::median;
+use hrtao_core::stats::median;
 
 pub const LATENCY_SCHEMA: &str = "hrtao-latency/1";
 

@@ -263,3 +263,32 @@ impl Plot {
             .with_context(|| format!("cannot write {}", path.display()))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_labels_and_image() {
+        assert_eq!(ticks(1.0, 1000.0, true), vec![1.0, 10.0, 100.0, 1000.0]);
+        assert_eq!(ticks(0.0, 10.0, false), vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
+        assert_eq!(tick_label(1e9), "1e9");
+        assert_eq!(tick_label(0.05), "0.05");
+        assert_eq!(tick_label(100.0), "100");
+        let p = Plot {
+            width: 200,
+            height: 120,
+            log_x: true,
+            log_y: true,
+            series: vec![Series {
+                points: vec![(1.0, 0.1), (10.0, 0.01), (f64::NAN, 1.0)],
+                color: COLORS[0],
+                dashed: false,
+                markers: true,
+            }],
+        };
+        let img = p.render();
+        assert_eq!(img.dimensions(), (200, 120));
+        assert!(img.pixels().any(|px| px.0 == COLORS[0]), "the series is drawn");
+    }
+}

@@ -1,0 +1,41 @@
+//! The `hrtao bench` results of a directory (schema `hrtao-bench/1`), read for the report and its sections.
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use hrtao_core::bench_json::{BenchResult, SCHEMA};
+
+/// Loads the bench results of `dir` (files with another schema are skipped), scenes first, then by size.
+pub fn load_results(dir: &Path) -> Result<Vec<(PathBuf, BenchResult)>> {
+    let mut out = Vec::new();
+    let entries = std::fs::read_dir(dir).with_context(|| format!("cannot read {}", dir.display()))?;
+    for e in entries {
+        let path = e?.path();
+        if path.extension().and_then(|x| x.to_str()) != Some("json") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path)?;
+        let v: serde_json::Value = match serde_json::from_str(&text) {
+            Ok(v) => v,
+            Err(_) => continue,
+        };
+        if v.get("schema").and_then(|s| s.as_str()) != Some(SCHEMA) {
+            continue;
+        }
+        let r: BenchResult =
+            serde_json::from_value(v).with_context(|| format!("{}: bad bench result", path.display()))?;
+        out.push((path, r));
+    }
+    out.sort_by(|a, b| {
+        (
+            a.1.scene.group != "scenes",
+            a.1.scene.instanced_triangles,
+            &a.1.scene.label,
+        )
+            .cmp(&(
+                b.1.scene.group != "scenes",
+                b.1.scene.instanced_triangles,
+                &b.1.scene.label,
+            ))
+    });
+    Ok(out)
+}
