@@ -157,6 +157,9 @@ impl Panels {
                 .resizable(true)
                 .default_size(480.0)
                 .show(root, |ui| {
+                    // Text wraps at the panel's edge, in rows and grids too: what a frame reports (statistics,
+                    // names) never widens the panel, so the 3D view keeps the size the user gave it.
+                    ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
                     egui::ScrollArea::vertical().show(ui, |ui| out.extend(self.panel(ui, state)));
                 });
         }
