@@ -56,9 +56,11 @@ pub fn view_input(
     let delta = view_drag_delta(ctx, resp) * ppp;
     // A drag in progress keeps the view "moving" (reduced resolution) even in frames without a new delta;
     // a press whose drag has not moved yet holds the view (`Motion::holds`).
+    // egui decides a press is a drag once the pointer has moved past the click distance (or stayed down past
+    // the click time): the press is held from the moment the button goes down on the view.
     let acted = delta != egui::Vec2::ZERO;
     let mut out = vec![Command::Drag {
-        dragging: resp.dragged(),
+        dragging: resp.dragged() || resp.is_pointer_button_down_on(),
         moved: acted,
     }];
     if state.scene.is_none() {
