@@ -19,6 +19,7 @@ pub mod nav;
 mod pacer;
 pub mod prefs;
 pub mod present;
+mod properties;
 mod sections;
 mod selection;
 mod settings_panel;
@@ -28,6 +29,7 @@ pub mod stats;
 pub mod tree;
 mod ui;
 mod ui_probe;
+mod view_cube;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

@@ -1,6 +1,6 @@
 //! The viewer's panels as one `Panels` value: the side panel (scene, load options, AO settings, statistics,
-//! section planes, model tree, selection, measure, camera, screenshot, bindings), the 3D view's area and
-//! overlays, and the toasts. Each panel owns its state and returns commands (view/command.rs).
+//! section planes, model tree, selection, properties, measure, camera, screenshot, bindings), the 3D view's area
+//! and overlays (the view cube), and the toasts. Each panel owns its state and returns commands (view/command.rs).
 use std::time::Instant;
 
 use egui::Key;
@@ -14,10 +14,12 @@ use super::load_options::LoadOptionsPanel;
 use super::measure::{Measure, Unit};
 use super::nav::{self, StdView};
 use super::prefs::Bookmark;
+use super::properties::PropertiesPanel;
 use super::sections::SectionState;
 use super::settings_panel::SettingsPanel;
 use super::tree::TreeView;
 use super::ui_probe;
+use super::view_cube::ViewCube;
 
 /// The key/mouse bindings, shown in the help section (and in the README).
 pub const BINDINGS: &[(&str, &str)] = &[
@@ -102,9 +104,11 @@ pub struct Panels {
     pub settings: SettingsPanel,
     pub sections: SectionState,
     pub tree: TreeView,
+    pub properties: PropertiesPanel,
     pub measure: Measure,
     pub camera: CameraPanel,
     pub screenshot: ScreenshotPanel,
+    pub view_cube: ViewCube,
     /// The side panel is shown (Tab).
     pub show: bool,
     fullscreen: bool,
@@ -118,9 +122,11 @@ impl Panels {
             settings: SettingsPanel,
             sections: SectionState::default(),
             tree: TreeView::default(),
+            properties: PropertiesPanel::default(),
             measure: Measure::for_spec(spec),
             camera: CameraPanel::default(),
             screenshot: ScreenshotPanel,
+            view_cube: ViewCube,
             show,
             fullscreen: false,
         }
@@ -131,6 +137,7 @@ impl Panels {
         self.files.opened(spec);
         self.sections = sections;
         self.tree = TreeView::default();
+        self.properties = PropertiesPanel { unit };
         self.measure = Measure::for_spec(spec);
         if let Some(u) = unit {
             self.measure.file_unit = u;
@@ -209,6 +216,7 @@ impl Panels {
         };
         out.extend(input::view_input(ctx, &resp, rect, state, &mut tools));
         self.measure.overlay(ui.painter(), rect, &state.view_cam());
+        out.extend(self.view_cube.ui(ui, state));
         if let Some(l) = &state.loading {
             let text = format!("Loading {} … {} ({:.0} s)", l.spec, l.progress, l.seconds);
             let area = egui::Rect::from_center_size(rect.center(), egui::vec2(400.0, 80.0));
@@ -275,6 +283,9 @@ impl Panels {
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
             .show(ui, |ui| out.extend(selection_section(ui, state)));
+        egui::CollapsingHeader::new("Properties")
+            .default_open(true)
+            .show(ui, |ui| out.extend(self.properties.ui(ui, state)));
         egui::CollapsingHeader::new("Measure")
             .default_open(true)
             .show(ui, |ui| self.measure.ui(ui));
