@@ -228,8 +228,8 @@ impl ViewCube {
             .show(ui.ctx(), |ui| {
                 let (rect, resp) = ui.allocate_exact_size(rect.size(), Sense::click());
                 let centre = rect.center();
-                // The cube's silhouette (√3 half-sizes at most) fits the square.
-                let scale = 0.5 * SIZE / 3f32.sqrt() * 0.92;
+                // The cube's silhouette (√3 half-sizes at most) fits the square, clear of the triad.
+                let scale = 0.5 * SIZE / 3f32.sqrt() * 0.82;
                 let to_cube = |p: Pos2| Vec2::new(p.x - centre.x, p.y - centre.y) / scale;
                 let to_screen = |v: Vec2| centre + egui::vec2(v.x, v.y) * scale;
                 let hovered = resp.hover_pos().and_then(|p| hit(&axes, up, to_cube(p)));
@@ -304,17 +304,17 @@ fn draw(
         }
     }
     // The world axes, from the square's bottom left corner.
-    let origin = rect.left_bottom() + egui::vec2(16.0, -16.0);
+    let origin = rect.left_bottom() + egui::vec2(13.0, -13.0);
     for (axis, name, color) in [
         (Vec3::X, "X", Color32::from_rgb(220, 50, 50)),
         (Vec3::Y, "Y", Color32::from_rgb(40, 170, 60)),
         (Vec3::Z, "Z", Color32::from_rgb(50, 100, 230)),
     ] {
         let d = a.project(axis);
-        let tip = origin + egui::vec2(d.x, d.y) * 13.0;
+        let tip = origin + egui::vec2(d.x, d.y) * 11.0;
         painter.line_segment([origin, tip], Stroke::new(2.0, color));
         painter.text(
-            origin + egui::vec2(d.x, d.y) * 20.0,
+            origin + egui::vec2(d.x, d.y) * 17.0,
             egui::Align2::CENTER_CENTER,
             name,
             egui::FontId::proportional(10.0),
