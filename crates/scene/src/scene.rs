@@ -91,9 +91,10 @@ pub struct Scene {
     pub tree: NodeTree,
     /// Metres per scene unit when the file says (STEP, IGES); `None` when the format carries no unit.
     pub unit_m: Option<f64>,
-    /// What the file says about itself, as (field, value) pairs, where the loader can read
-    /// it cheaply: glTF's `asset` (generator, copyright, version), PLY's comments then its obj_info lines, an ASCII
-    /// STL's solid name or a binary STL's header text. Empty when the format carries nothing (OBJ).
+    /// What the file says about itself, as (field, value) pairs, where the loader reads it cheaply: glTF's
+    /// `asset` (generator, copyright, version), PLY's comments then its obj_info lines, an ASCII STL's solid name
+    /// or a binary STL's header text, a STEP file's HEADER section, an IGES file's global section. Empty when the
+    /// format carries nothing (OBJ).
     pub metadata: Vec<(String, String)>,
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     f: u32,
