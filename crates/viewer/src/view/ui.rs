@@ -41,6 +41,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("Ctrl+1 / Ctrl+3 / Ctrl+7", "back / left / bottom view"),
     ("9", "opposite view: look from the other side of the pivot"),
     ("0", "isometric view"),
+    (
+        "Click on the view cube (top right of the view)",
+        "a face: that standard view; a corner: the isometric view from that corner",
+    ),
     ("5", "perspective / orthographic"),
     ("Enter", "reset to the initial camera"),
     ("Click", "select an instance (click background: deselect)"),
