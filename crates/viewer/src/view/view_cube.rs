@@ -19,6 +19,8 @@ use super::ui_probe;
 /// The cube's square, in egui points, and its distance from the view's top right corner.
 const SIZE: f32 = 116.0;
 const MARGIN: f32 = 10.0;
+/// The height of the background screenshot's overlay in the same corner (ui.rs `shot_overlay`).
+const SHOT_OVERLAY: f32 = 90.0;
 /// How close to a corner (in the cube's half-sizes, on screen) a point takes the corner rather than a face.
 const CORNER_RADIUS: f32 = 0.3;
 /// A face seen closer to edge-on than this is not drawn and cannot be clicked.
@@ -211,11 +213,14 @@ impl ViewCube {
     /// asks for.
     pub fn ui(&mut self, ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
         let view = ui.max_rect();
-        if state.scene.is_none() || view.width() < 2.0 * SIZE || view.height() < 1.5 * SIZE {
+        if state.scene.is_none() || view.width() < 2.0 * SIZE || view.height() < 2.0 * SIZE {
             return Vec::new();
         }
+        // Below the background screenshot's progress and Cancel, which take the same corner while the panel is
+        // hidden.
+        let below = if state.shot.is_some() { SHOT_OVERLAY } else { 0.0 };
         let rect = Rect::from_min_size(
-            Pos2::new(view.max.x - MARGIN - SIZE, view.min.y + MARGIN),
+            Pos2::new(view.max.x - MARGIN - SIZE, view.min.y + MARGIN + below),
             egui::vec2(SIZE, SIZE),
         );
         ui_probe::note("view cube", rect, ui.ctx().pixels_per_point());
