@@ -87,16 +87,19 @@ pub fn unit_text(scene: &Scene, known: Option<Unit>, spec: &str) -> (Option<Unit
     }
 }
 
-/// A length in the file's unit (`unit` None: a unit of ours it is not, the bare number).
-fn length(v: f64, unit: Option<Unit>) -> String {
+/// Three lengths in the file's unit (`unit` None: a unit of ours it is not, bare numbers), with the decimals
+/// a 4-5 significant digit reading of `scale` needs (the box's size: a zero coordinate is not written 0.00000).
+fn triple(v: DVec3, scale: f64, unit: Option<Unit>) -> String {
+    let decimals = format_len(scale, Unit::M)
+        .split_whitespace()
+        .next()
+        .and_then(|n| n.split_once('.'))
+        .map_or(0, |(_, d)| d.len());
+    let text = [v.x, v.y, v.z].map(|c| format!("{c:.decimals$}")).join(", ");
     match unit {
-        Some(u) => format_len(v, u),
-        None => format!("{v:.4}"),
+        Some(u) => format!("{text} {}", u.label()),
+        None => text,
     }
-}
-
-fn triple(v: DVec3, unit: Option<Unit>) -> String {
-    [v.x, v.y, v.z].map(|c| length(c, unit)).join(", ")
 }
 
 /// The "Properties" section.
@@ -136,9 +139,10 @@ impl PropertiesPanel {
                     row("triangles", triangles);
                     row("unit", unit_name);
                     if let Some((min, max)) = s.bounds {
-                        row("min", triple(min, unit));
-                        row("max", triple(max, unit));
-                        row("size", triple(max - min, unit));
+                        let scale = (max - min).max_element();
+                        row("min", triple(min, scale, unit));
+                        row("max", triple(max, scale, unit));
+                        row("size", triple(max - min, scale, unit));
                     }
                 });
                 ui_probe::note("properties", grid.response.rect, ppp);
@@ -250,8 +254,12 @@ mod tests {
         s.unit_m = Some(0.1);
         assert_eq!(unit_text(&s, None, "part.step"), (None, "0.1 m".to_string()));
         assert_eq!(
-            triple(DVec3::new(40.0, 20.0, 10.0), Some(Unit::Mm)),
-            "40.00 mm, 20.00 mm, 10.00 mm"
+            triple(DVec3::new(40.0, 0.0, 10.0), 40.0, Some(Unit::Mm)),
+            "40.00, 0.00, 10.00 mm"
+        );
+        assert_eq!(
+            triple(DVec3::new(0.5, 0.0, 1e-3), 0.5, None),
+            "0.500, 0.000, 0.001"
         );
     }
 }
