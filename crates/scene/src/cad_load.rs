@@ -61,6 +61,10 @@ pub fn load_cad(
         )));
     }
     budget.reserve(entities * CAD_ENTITY_BYTES, "the kernel's entities")?;
+    let metadata = match format {
+        CadFormat::Step => crate::cad_header::step_header(&bytes),
+        CadFormat::Iges => crate::cad_header::iges_header(&bytes),
+    };
     drop(bytes);
     opts.check_cancel(path)?;
     let mut stages = StageClock::new();
@@ -69,7 +73,8 @@ pub fn load_cad(
         WorkerError::Failed(m) => err(m),
     })?;
     let read_s = started.elapsed().as_secs_f64();
-    let scene = to_scene(path, model).map_err(err)?;
+    let mut scene = to_scene(path, model).map_err(err)?;
+    scene.metadata = metadata;
     stages.mark("scene");
     let instanced: u64 = scene.instanced_triangle_count();
     let shared = crate::cad::shared_meshes(&scene);

@@ -90,6 +90,7 @@ pub fn load_gltf(
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let mut scene = Scene::new(name);
+    scene.metadata = asset_metadata(&document);
 
     let total = document.meshes().len() as u64;
     for (mi, mesh) in document.meshes().enumerate() {
@@ -145,6 +146,20 @@ pub fn load_gltf(
         total: scene.instances.len() as u64,
     });
     Ok(scene)
+}
+
+/// The document's `asset`: generator, copyright, version and minimum version, where present.
+fn asset_metadata(doc: &gltf::Document) -> Vec<(String, String)> {
+    let asset = &doc.as_json().asset;
+    [
+        ("generator", asset.generator.as_deref()),
+        ("copyright", asset.copyright.as_deref()),
+        ("glTF version", Some(asset.version.as_str())),
+        ("minimum glTF version", asset.min_version.as_deref()),
+    ]
+    .into_iter()
+    .filter_map(|(k, v)| Some((k.to_string(), v?.trim().to_string())).filter(|(_, v)| !v.is_empty()))
+    .collect()
 }
 
 /// Runs the gltf crate's validation (index references must be in range: the document

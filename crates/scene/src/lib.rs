@@ -7,6 +7,8 @@
 mod aabb;
 pub mod cad;
 #[cfg(feature = "occt")]
+mod cad_header;
+#[cfg(feature = "occt")]
 mod cad_load;
 mod error;
 mod generate;

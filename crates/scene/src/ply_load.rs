@@ -164,9 +164,14 @@ pub fn load_ply(
             indices.extend([f.0[0] as u32, f.0[k] as u32, f.0[k + 1] as u32]);
         }
     }
-    Ok(Scene::single_mesh(
-        path,
-        vertices.into_iter().map(|v| v.0).collect(),
-        indices,
-    ))
+    let mut scene = Scene::single_mesh(path, vertices.into_iter().map(|v| v.0).collect(), indices);
+    scene.metadata = header
+        .comments
+        .iter()
+        .map(|c| ("comment", c))
+        .chain(header.obj_infos.iter().map(|c| ("obj_info", c)))
+        .map(|(k, v)| (k.to_string(), v.trim().to_string()))
+        .filter(|(_, v)| !v.is_empty())
+        .collect();
+    Ok(scene)
 }

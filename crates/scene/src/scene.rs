@@ -91,6 +91,11 @@ pub struct Scene {
     pub tree: NodeTree,
     /// Metres per scene unit when the file says (STEP, IGES); `None` when the format carries no unit.
     pub unit_m: Option<f64>,
+    /// What the file says about itself, as (field, value) pairs, where the loader reads it cheaply: glTF's
+    /// `asset` (generator, copyright, version), PLY's comments then its obj_info lines, an ASCII STL's solid name
+    /// or a binary STL's header text, a STEP file's HEADER section, an IGES file's global section. Empty when the
+    /// format carries nothing (OBJ).
+    pub metadata: Vec<(String, String)>,
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     f: u32,
     /// The world bounds each recent edit changed, with the F it produced (newest last, at most
@@ -162,6 +167,7 @@ impl Scene {
             origin: [0.0; 3],
             tree: NodeTree::default(),
             unit_m: None,
+            metadata: Vec::new(),
             f: 0,
             changes: Default::default(),
         }

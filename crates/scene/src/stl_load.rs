@@ -32,6 +32,7 @@ pub fn load_stl(
     let declared =
         (size >= HEADER).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64);
     let binary = declared.is_some_and(|n| HEADER + n * RECORD == size);
+    let metadata = header_text(&bytes, binary);
     let triangles = if binary {
         // A binary header may begin with "solid": hide it so the ASCII probe does not take it.
         if bytes.starts_with(b"solid") {
@@ -71,7 +72,30 @@ pub fn load_stl(
         positions.extend(t.vertices.iter().map(|v| v.0));
     }
     let n = u32::try_from(positions.len()).map_err(|_| err("more than 2^32 vertices".into()))?;
-    Ok(Scene::single_mesh(path, positions, (0..n).collect()))
+    let mut scene = Scene::single_mesh(path, positions, (0..n).collect());
+    scene.metadata = metadata.into_iter().collect();
+    Ok(scene)
+}
+
+/// What an STL says about itself: an ASCII file's solid name (the rest of its first line), a binary file's
+/// 80-byte header as text (printable ASCII, trimmed; nothing if it is blank or binary data).
+fn header_text(bytes: &[u8], binary: bool) -> Option<(String, String)> {
+    let (key, raw) = if binary {
+        ("header", &bytes[..80])
+    } else {
+        let start = bytes.trim_ascii_start();
+        let line = start.split(|&b| b == b'\n').next().unwrap_or_default();
+        ("solid name", line.strip_prefix(b"solid").unwrap_or_default())
+    };
+    let text = raw.strip_suffix(b"\r").unwrap_or(raw);
+    let text: &[u8] = match text.iter().position(|&b| b == 0) {
+        Some(end) if binary => &text[..end],
+        _ => text,
+    };
+    let text = text.trim_ascii();
+    let printable = text.iter().all(|b| b.is_ascii_graphic() || *b == b' ');
+    (printable && !text.is_empty() && text.len() <= 256)
+        .then(|| (key.to_string(), String::from_utf8_lossy(text).into_owned()))
 }
 
 /// Facets of an ASCII STL (lines starting with `facet`).

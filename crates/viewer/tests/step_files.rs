@@ -105,6 +105,17 @@ fn as1_opens_with_its_tree_names_and_shared_meshes() {
     );
     assert_eq!(s.tree.instance_counts()[0], 18);
     assert_eq!(s.unit_m, Some(1e-3));
+    // The HEADER section's fields, as the Properties section shows them.
+    let meta = |k: &str| {
+        s.metadata
+            .iter()
+            .find(|(key, _)| key == k)
+            .map(|(_, v)| v.as_str())
+    };
+    assert_eq!(meta("description"), Some("AS1 with extended valprops"));
+    assert_eq!(meta("author"), Some("A P Ranger"));
+    assert_eq!(meta("organization"), Some("Theorem Solutions Ltd"));
+    assert_eq!(meta("originating system"), Some("UG"));
     // Colours come through as base colours: more than one.
     let mut colours: Vec<[u32; 4]> = s
         .meshes

@@ -311,39 +311,6 @@ fn a_viewer_left_alone_rests() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// PNG widths of the screenshots in `dir`, oldest first, once there are `count` of them.
-fn wait_for_screenshots(dir: &Path, count: usize, v: &mut Running) -> Vec<u32> {
-    let t0 = std::time::Instant::now();
-    loop {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-            .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
-            .unwrap_or_default();
-        files.retain(|p| p.extension().is_some_and(|e| e == "png"));
-        if files.len() >= count {
-            // Oldest first (names share the second: `MODEL-…-SS.png`, then `-2`, `-3`).
-            files.sort_by_key(|f| std::fs::metadata(f).and_then(|m| m.modified()).ok());
-            // The PNG is written in one go after rendering; a partly written file fails to decode: retry.
-            let widths: Option<Vec<u32>> = files
-                .iter()
-                .map(|f| image::image_dimensions(f).ok().map(|d| d.0))
-                .collect();
-            if let Some(w) = widths {
-                return w;
-            }
-        }
-        assert!(
-            t0.elapsed() < std::time::Duration::from_secs(60),
-            "{} of {count} screenshots after 60 s\n{}",
-            files.len(),
-            v.log_text()
-        );
-        if let Ok(Some(status)) = v.child.try_wait() {
-            panic!("the viewer exited ({status}):\n{}", v.log_text());
-        }
-        std::thread::sleep(std::time::Duration::from_millis(100));
-    }
-}
-
 /// Real X key events (xdotool: press and release at once, as a quick tap): F12 saves a screenshot of the 3D view,
 /// Tab hides the panel (the screenshot then spans the whole window) and shows it again, whether the viewer is
 /// busy refining or at rest, and Tab never leaves a panel widget with the focus that would swallow later keys.
@@ -763,42 +730,6 @@ fn ctrl_shift_drag_moves_a_section_plane() {
     v.validation_clean();
     drop(v);
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// Writes an ASCII STL of the box from `min` to `max` (12 triangles).
-fn write_box_stl(path: &Path, min: [f32; 3], max: [f32; 3]) {
-    let c = |i: usize| {
-        [
-            if i & 1 == 0 { min[0] } else { max[0] },
-            if i & 2 == 0 { min[1] } else { max[1] },
-            if i & 4 == 0 { min[2] } else { max[2] },
-        ]
-    };
-    let tris = [
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    let mut s = String::from("solid box\n");
-    for t in tris {
-        s += " facet normal 0 0 0\n  outer loop\n";
-        for v in t {
-            let p = c(v);
-            s += &format!("   vertex {} {} {}\n", p[0], p[1], p[2]);
-        }
-        s += "  endloop\n endfacet\n";
-    }
-    s += "endsolid box\n";
-    std::fs::write(path, s).unwrap();
 }
 
 /// The pixel (row 0 at the top) where a world point appears for a pinhole camera (eye, target, up, fov).

@@ -21,6 +21,7 @@ pub mod nav;
 mod pacer;
 pub mod prefs;
 pub mod present;
+mod properties;
 mod sections;
 mod selection;
 mod settings_panel;
@@ -31,6 +32,7 @@ pub mod tree;
 mod ui;
 mod ui_layer;
 mod ui_probe;
+mod view_cube;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

@@ -1,6 +1,6 @@
 //! The viewer's panels as one `Panels` value: the side panel (scene, load options, AO settings, statistics,
-//! section planes, model tree, selection, measure, camera, screenshot, bindings), the 3D view's area and
-//! overlays, and the toasts. Each panel owns its state and returns commands (view/command.rs).
+//! section planes, model tree, selection, properties, measure, camera, screenshot, bindings), the 3D view's area
+//! and overlays (the view cube), and the toasts. Each panel owns its state and returns commands (view/command.rs).
 use std::time::Instant;
 
 use egui::Key;
@@ -14,10 +14,12 @@ use super::load_options::LoadOptionsPanel;
 use super::measure::{Measure, Unit};
 use super::nav::{self, StdView};
 use super::prefs::Bookmark;
+use super::properties::PropertiesPanel;
 use super::sections::SectionState;
 use super::settings_panel::SettingsPanel;
 use super::tree::TreeView;
 use super::ui_probe;
+use super::view_cube::ViewCube;
 
 /// The key/mouse bindings, shown in the help section (and in the README).
 pub const BINDINGS: &[(&str, &str)] = &[
@@ -39,6 +41,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("Ctrl+1 / Ctrl+3 / Ctrl+7", "back / left / bottom view"),
     ("9", "opposite view: look from the other side of the pivot"),
     ("0", "isometric view"),
+    (
+        "Click on the view cube (top right of the view)",
+        "a face: that standard view; a corner: the isometric view from that corner",
+    ),
     ("5", "perspective / orthographic"),
     ("Enter", "reset to the initial camera"),
     ("Click", "select an instance (click background: deselect)"),
@@ -102,9 +108,11 @@ pub struct Panels {
     pub settings: SettingsPanel,
     pub sections: SectionState,
     pub tree: TreeView,
+    pub properties: PropertiesPanel,
     pub measure: Measure,
     pub camera: CameraPanel,
     pub screenshot: ScreenshotPanel,
+    pub view_cube: ViewCube,
     /// The side panel is shown (Tab).
     pub show: bool,
     fullscreen: bool,
@@ -118,9 +126,11 @@ impl Panels {
             settings: SettingsPanel,
             sections: SectionState::default(),
             tree: TreeView::default(),
+            properties: PropertiesPanel::default(),
             measure: Measure::for_spec(spec),
             camera: CameraPanel::default(),
             screenshot: ScreenshotPanel,
+            view_cube: ViewCube,
             show,
             fullscreen: false,
         }
@@ -131,6 +141,7 @@ impl Panels {
         self.files.opened(spec);
         self.sections = sections;
         self.tree = TreeView::default();
+        self.properties = PropertiesPanel { unit };
         self.measure = Measure::for_spec(spec);
         if let Some(u) = unit {
             self.measure.file_unit = u;
@@ -213,6 +224,7 @@ impl Panels {
         };
         out.extend(input::view_input(ctx, &resp, rect, state, &mut tools));
         self.measure.overlay(ui.painter(), rect, &state.view_cam());
+        out.extend(self.view_cube.ui(ui, state));
         if let Some(l) = &state.loading {
             let text = format!("Loading {} … {} ({:.0} s)", l.spec, l.progress, l.seconds);
             let area = egui::Rect::from_center_size(rect.center(), egui::vec2(400.0, 80.0));
@@ -279,6 +291,9 @@ impl Panels {
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
             .show(ui, |ui| out.extend(selection_section(ui, state)));
+        egui::CollapsingHeader::new("Properties")
+            .default_open(true)
+            .show(ui, |ui| out.extend(self.properties.ui(ui, state)));
         egui::CollapsingHeader::new("Measure")
             .default_open(true)
             .show(ui, |ui| self.measure.ui(ui));

@@ -141,11 +141,7 @@ impl UiLayer {
 
     /// Uploads the textures egui changed (before recording the frame that uses them) and remembers those it
     /// released, freed by `frame_done`. Takes everything out of `delta` (egui checks that it was applied). Takes everything out of `delta` (egui checks that it was applied).
-    pub fn update_textures(
-        &mut self,
-        pool: vk::CommandPool,
-        delta: &mut egui::TexturesDelta,
-    ) -> Result<()> {
+    pub fn update_textures(&mut self, pool: vk::CommandPool, delta: &mut egui::TexturesDelta) -> Result<()> {
         let Some(r) = self.renderer.as_mut() else {
             delta.clear();
             return Ok(());
