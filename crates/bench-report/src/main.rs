@@ -9,6 +9,7 @@ mod latency_report;
 mod plot;
 mod report;
 mod results;
+mod viewer_report;
 
 use std::path::PathBuf;
 

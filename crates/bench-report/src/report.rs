@@ -8,7 +8,7 @@ use hrtao_core::stats::{fit_slope, median};
 
 use crate::plot::{Plot, Series, COLORS};
 use crate::results::load_results;
-use crate::{first_frame_report, latency_report};
+use crate::{first_frame_report, latency_report, viewer_report};
 
 fn f(v: f64, digits: usize) -> String {
     if v.is_finite() {
@@ -835,6 +835,7 @@ fn render_markdown(
     step_table(&mut m, &load_step_results(dir)?)?;
     first_frame_report::section(&mut m, &first_frame_report::load(&dir.join("first_frame"))?)?;
     latency_report::section(&mut m, &latency_report::load(&dir.join("latency"))?)?;
+    viewer_report::section(&mut m, &viewer_report::load(&dir.join("viewer"))?)?;
     Ok(m)
 }
 
