@@ -92,7 +92,7 @@ fn clicking_the_cube_top_face_gives_the_top_view_and_properties_count_the_select
             "--up",
             "z",
             "--size",
-            "1000x560",
+            "820x420",
         ],
         &dir,
         &[("HRTAO_UI_PROBE", Some("1"))],
