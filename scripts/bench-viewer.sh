@@ -22,7 +22,7 @@ done
 if [ ${#scenes[@]} -eq 0 ]; then
     scenes=(bundled "${HRTAO_SHARED:-../shared}/scenes/san_francisco/san_francisco.glb")
 fi
-: "${BEFORE:?BEFORE=path of the old build's hrtao}"
+: "${BEFORE:?BEFORE=the path of the older hrtao binary}"
 AFTER=${AFTER:-target/debug/hrtao}
 
 if [ -z "${DISPLAY:-}" ]; then
@@ -51,7 +51,6 @@ for run in $(seq 1 "$runs"); do
             "$bin" view --no-config --size 1280x800 --orbit 40 --exit --stats "$stats" ${file[@]+"${file[@]}"} \
                 >"$tmp/log" 2>&1 || { cat "$tmp/log" >&2; exit 1; }
             python3 scripts/viewer_run_summary.py "$stats" "$out/${version}_${label}_$run.json" "$version" "$label" "$run"
-            echo "$version $label run $run: $(python3 -c "import json,sys;d=json.load(open(sys.argv[1]));print(round(d['median_moving_wall_ms'],1),'ms moving,',d['converge_s'],'s to converge')" "$out/${version}_${label}_$run.json")"
         done
     done
 done

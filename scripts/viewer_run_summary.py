@@ -33,3 +33,5 @@ json.dump(
     open(dst, "w"),
     indent=1,
 )
+converge = f"{(t[conv] - t[0]) / 1e3:.1f} s" if conv is not None else "never"
+print(f"{version} {scene} run {run}: {s['median_moving_wall_ms']:.1f} ms moving, converged after {converge}")

@@ -94,6 +94,9 @@ struct Running {
     viewer: Viewer,
     egui: egui_winit::State,
     info: egui::ViewportInfo,
+    /// The window changed (size, position, focus, scale, visibility): `info` is read again before the next UI
+    /// pass. Reading it costs synchronous round trips to the window system (on X11 a dozen), so not every frame.
+    info_stale: bool,
     window: Window,
 }
 
@@ -192,6 +195,7 @@ impl App {
             viewer,
             egui,
             info,
+            info_stale: false,
             window,
         })
     }
@@ -203,7 +207,9 @@ impl App {
         let Some(r) = self.running.as_mut() else {
             return;
         };
-        egui_winit::update_viewport_info(&mut r.info, &self.ctx, &r.window, false);
+        if std::mem::take(&mut r.info_stale) {
+            egui_winit::update_viewport_info(&mut r.info, &self.ctx, &r.window, false);
+        }
         let mut raw = r.egui.take_egui_input(&r.window);
         raw.viewports = std::iter::once((egui::ViewportId::ROOT, r.info.clone())).collect();
         let viewer = &mut r.viewer;
@@ -212,6 +218,7 @@ impl App {
         r.egui.handle_platform_output(&r.window, output.platform_output);
         if let Some(vp) = output.viewport_output.get(&egui::ViewportId::ROOT) {
             let mut actions = Vec::new();
+            r.info_stale |= !vp.commands.is_empty();
             egui_winit::process_viewport_commands(
                 &self.ctx,
                 &mut r.info,
@@ -286,7 +293,9 @@ impl ApplicationHandler<Wake> for App {
             }
             WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } => {
                 r.viewer.presenter.dirty = true;
+                r.info_stale = true;
             }
+            WindowEvent::Moved(_) | WindowEvent::Focused(_) | WindowEvent::Occluded(_) => r.info_stale = true,
             _ => {}
         }
         let response = r.egui.on_window_event(&r.window, &event);
