@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde_json::Value;
 
 use hrtao_core::stats::median;
@@ -21,27 +21,11 @@ pub struct LatencyResult {
 /// Every `<version>_<scene>.json` of `dir` with [`LATENCY_SCHEMA`], by scene then version (`before` first).
 pub fn load(dir: &Path) -> Result<Vec<LatencyResult>> {
     let mut out = Vec::new();
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return Ok(out);
-    };
-    for e in entries {
-        let path = e?.path();
-        let name = path
-            .file_stem()
-            .and_then(|n| n.to_str())
-            .unwrap_or("")
-            .to_string();
-        if path.extension().and_then(|x| x.to_str()) != Some("json") {
-            continue;
-        }
+    for (path, json) in crate::results::load_schema(dir, LATENCY_SCHEMA)? {
+        let name = path.file_stem().and_then(|n| n.to_str()).unwrap_or("");
         let Some((version, _)) = name.split_once('_') else {
             continue;
         };
-        let json: Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
-            .with_context(|| format!("{}: not JSON", path.display()))?;
-        if json["schema"].as_str() != Some(LATENCY_SCHEMA) {
-            continue;
-        }
         let scene = json["scene"].as_str().unwrap_or("?").to_string();
         out.push(LatencyResult {
             version: version.to_string(),

@@ -39,3 +39,24 @@ pub fn load_results(dir: &Path) -> Result<Vec<(PathBuf, BenchResult)>> {
     });
     Ok(out)
 }
+
+/// Every JSON file of `dir` whose `schema` is `schema`, with its path (none when `dir` does not exist): the
+/// results of the scripts' sections (latency, viewer runs).
+pub fn load_schema(dir: &Path, schema: &str) -> Result<Vec<(PathBuf, serde_json::Value)>> {
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(out);
+    };
+    for e in entries {
+        let path = e?.path();
+        if path.extension().and_then(|x| x.to_str()) != Some("json") {
+            continue;
+        }
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
+            .with_context(|| format!("{}: not JSON", path.display()))?;
+        if json["schema"].as_str() == Some(schema) {
+            out.push((path, json));
+        }
+    }
+    Ok(out)
+}

@@ -44,23 +44,12 @@ pub struct ViewerRun {
 
 /// Every result of `dir` with [`VIEWER_SCHEMA`] (none when the directory does not exist).
 pub fn load(dir: &Path) -> Result<Vec<ViewerRun>> {
-    let mut out = Vec::new();
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return Ok(out);
-    };
-    for e in entries {
-        let path = e?.path();
-        if path.extension().and_then(|x| x.to_str()) != Some("json") {
-            continue;
-        }
-        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
-            .with_context(|| format!("{}: not JSON", path.display()))?;
-        if v["schema"].as_str() != Some(VIEWER_SCHEMA) {
-            continue;
-        }
-        out.push(serde_json::from_value(v).with_context(|| format!("{}: bad viewer run", path.display()))?);
-    }
-    Ok(out)
+    crate::results::load_schema(dir, VIEWER_SCHEMA)?
+        .into_iter()
+        .map(|(path, v)| {
+            serde_json::from_value(v).with_context(|| format!("{}: bad viewer run", path.display()))
+        })
+        .collect()
 }
 
 /// The medians over one build's runs of a scene.
