@@ -29,6 +29,7 @@ pub mod shot;
 mod shots;
 pub mod stats;
 pub mod tree;
+mod tree_panel;
 mod ui;
 mod ui_layer;
 mod ui_probe;

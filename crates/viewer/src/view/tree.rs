@@ -1,16 +1,10 @@
 //! The model tree: the selection it shares with the 3D view (a node selects its subtree's instances, a pick
 //! selects one instance and reveals its node), the hide / isolate / show-all edits (one undo step each, through
-//! the edit stack, so F increments and the AO follows), and the panel that shows it with a name search.
-use egui::collapsing_header::CollapsingState;
+//! the edit stack, so F increments and the AO follows). The panel that shows it is `tree_panel.rs`.
 use hrtao_scene::{NodeTree, Scene};
 
 use super::command::{Command, ViewState};
-use super::edits::{Action, Edit};
-
-/// Children listed under one node before "… N more" (a search finds the rest).
-const MAX_ROWS_PER_NODE: usize = 200;
-/// Search results listed.
-const MAX_SEARCH_ROWS: usize = 200;
+use super::edits::Edit;
 
 /// What is selected and highlighted.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -129,231 +123,6 @@ pub fn isolate(scene: &Scene, instances: &[u32], what: String) -> Option<Edit> {
 /// Shows every instance.
 pub fn show_all(scene: &Scene) -> Option<Edit> {
     visibility_edit(scene, "show all".into(), |_| Some(true))
-}
-
-/// Panel state: the search text, the node to reveal, and per-node counts cached per scene version.
-#[derive(Default)]
-pub struct TreeView {
-    pub search: String,
-    /// Open this node's ancestors and scroll to it (after a pick in the view), for a few frames so the
-    /// opening animation has laid the row out.
-    reveal: Option<(u32, u8)>,
-    cache_key: Option<(u32, usize)>,
-    counts: Vec<u64>,
-    visible: Vec<u64>,
-}
-
-/// Frames during which a revealed node is scrolled to.
-const REVEAL_FRAMES: u8 = 8;
-
-impl TreeView {
-    /// Opens the path to `node` and scrolls to it (None: nothing to reveal).
-    pub fn reveal(&mut self, node: Option<u32>) {
-        self.reveal = node.map(|n| (n, REVEAL_FRAMES));
-    }
-
-    /// The node to reveal this frame, counting the frames down.
-    fn reveal_now(&mut self) -> Option<u32> {
-        let (node, left) = self.reveal?;
-        self.reveal = (left > 1).then_some((node, left - 1));
-        Some(node)
-    }
-
-    fn refresh(&mut self, scene: &Scene) {
-        let key = (scene.f(), scene.instances.len());
-        if self.cache_key != Some(key) || self.counts.len() != scene.tree.len() {
-            self.counts = scene.tree.instance_counts();
-            self.visible = scene
-                .tree
-                .counts_where(|i| scene.instances.get(i as usize).is_some_and(|x| x.visible));
-            self.cache_key = Some(key);
-        }
-    }
-}
-
-/// What a click in the tree asks for (applied after drawing, when the scene is no longer borrowed).
-enum TreeAction {
-    Select(u32),
-    /// Shift/Ctrl+click: add the node's instances to the selection or remove them.
-    Toggle(u32),
-    Visible(u32, bool),
-}
-
-impl TreeAction {
-    /// A click on a node's row: Shift or Ctrl toggles it in the selection, a plain click selects it.
-    fn click(ui: &egui::Ui, node: u32) -> Self {
-        if super::selection::click_toggles(ui.ctx()) {
-            TreeAction::Toggle(node)
-        } else {
-            TreeAction::Select(node)
-        }
-    }
-}
-
-/// Draws the rows of the tree; clicks go to `actions`.
-struct Rows<'a> {
-    tree: &'a NodeTree,
-    view: &'a TreeView,
-    selected: Option<u32>,
-    reveal_path: Vec<u32>,
-    actions: Vec<TreeAction>,
-}
-
-impl Rows<'_> {
-    fn row(&mut self, ui: &mut egui::Ui, id: u32) {
-        let i = id as usize;
-        let node = &self.tree.nodes[i];
-        let (count, visible) = (self.view.counts[i], self.view.visible[i]);
-        let text = format!(
-            "{}  ({count}{})",
-            node.name,
-            if visible < count {
-                format!(", {} hidden", count - visible)
-            } else {
-                String::new()
-            }
-        );
-        let header = |ui: &mut egui::Ui, rows: &mut Self| {
-            let all_visible = visible == count;
-            if ui
-                .small_button(if all_visible { "hide" } else { "show" })
-                .clicked()
-            {
-                rows.actions.push(TreeAction::Visible(id, !all_visible));
-            }
-            let label = ui.selectable_label(rows.selected == Some(id), text.clone());
-            if label.clicked() {
-                rows.actions.push(TreeAction::click(ui, id));
-            }
-            if rows.reveal_path.last() == Some(&id) {
-                label.scroll_to_me(Some(egui::Align::Center));
-            }
-        };
-        if node.children.is_empty() {
-            ui.horizontal(|ui| {
-                ui.add_space(ui.spacing().indent);
-                header(ui, self)
-            });
-            return;
-        }
-        let key = ui.make_persistent_id(("tree-node", id));
-        let mut state = CollapsingState::load_with_default_open(ui.ctx(), key, node.parent.is_none());
-        if self.reveal_path[..self.reveal_path.len().saturating_sub(1)].contains(&id) {
-            state.set_open(true);
-        }
-        state.show_header(ui, |ui| header(ui, self)).body(|ui| {
-            let children = &self.tree.nodes[i].children;
-            for &c in children.iter().take(MAX_ROWS_PER_NODE) {
-                self.row(ui, c);
-            }
-            if children.len() > MAX_ROWS_PER_NODE {
-                ui.weak(format!(
-                    "… {} more (search by name)",
-                    children.len() - MAX_ROWS_PER_NODE
-                ));
-            }
-        });
-    }
-}
-
-impl TreeView {
-    /// The "Model tree" section: search, hide/isolate/show all, and the rows; clicks become commands.
-    pub fn ui(&mut self, ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
-        let Some(scene) = state.scene else {
-            ui.label("no scene");
-            return Vec::new();
-        };
-        self.refresh(scene);
-        let selection = state.selection;
-        let mut out = Vec::new();
-        ui.horizontal(|ui| {
-            ui.label("Search");
-            ui.add(egui::TextEdit::singleline(&mut self.search).desired_width(160.0));
-        });
-        ui.horizontal(|ui| {
-            let has = !selection.instances.is_empty();
-            let mut edit = None;
-            if ui
-                .add_enabled(has, egui::Button::new("Hide"))
-                .on_hover_text("Hide the selection (H)")
-                .clicked()
-            {
-                edit = hide_selection_edit(scene, selection);
-            }
-            if ui
-                .add_enabled(has, egui::Button::new("Isolate"))
-                .on_hover_text("Show only the selection (I)")
-                .clicked()
-            {
-                edit = isolate_edit(scene, selection);
-            }
-            if ui
-                .button("Show all")
-                .on_hover_text("Show every instance (U)")
-                .clicked()
-            {
-                edit = show_all(scene);
-            }
-            out.extend(edit.map(|e| Command::Edit(Action::Apply(e))));
-        });
-        let reveal_path = self.reveal_now().map(|n| scene.tree.path(n)).unwrap_or_default();
-        let mut rows = Rows {
-            tree: &scene.tree,
-            view: self,
-            selected: selection.node,
-            reveal_path,
-            actions: Vec::new(),
-        };
-        let query = self.search.trim();
-        let revealing = !rows.reveal_path.is_empty();
-        let area = egui::ScrollArea::vertical()
-            .id_salt("model-tree")
-            .max_height(320.0)
-            .min_scrolled_height(240.0)
-            .auto_shrink([false, true])
-            .show(ui, |ui| {
-                if query.is_empty() {
-                    let roots: Vec<u32> = rows.tree.roots().collect();
-                    for r in roots {
-                        rows.row(ui, r);
-                    }
-                } else {
-                    let hits = rows.tree.search(query);
-                    if hits.is_empty() {
-                        ui.weak("no node matches");
-                    }
-                    for &h in hits.iter().take(MAX_SEARCH_ROWS) {
-                        let n = &rows.tree.nodes[h as usize];
-                        let label = ui.selectable_label(
-                            rows.selected == Some(h),
-                            format!("{}  ({})", n.name, rows.view.counts[h as usize]),
-                        );
-                        if label.clicked() {
-                            rows.actions.push(TreeAction::click(ui, h));
-                        }
-                    }
-                    if hits.len() > MAX_SEARCH_ROWS {
-                        ui.weak(format!("… {} more", hits.len() - MAX_SEARCH_ROWS));
-                    }
-                }
-            });
-        if revealing {
-            // The tree's own scroll area took the row's scroll request; the panel scrolls to the tree.
-            ui.scroll_to_rect(area.inner_rect, Some(egui::Align::Center));
-        }
-        for action in rows.actions {
-            out.push(match action {
-                // A node's subtree is highlighted; a node of one instance is also what move and delete act on.
-                TreeAction::Select(n) => Command::Select(Selection::of_node(&scene.tree, n)),
-                TreeAction::Toggle(n) => Command::Select(selection.toggled_node(&scene.tree, n)),
-                TreeAction::Visible(n, v) => match set_node_visible(scene, n, v) {
-                    Some(e) => Command::Edit(Action::Apply(e)),
-                    None => continue,
-                },
-            });
-        }
-        out
-    }
 }
 
 /// A line naming a multi-instance selection (a tree node, or instances added with Shift/Ctrl+click) and a
@@ -552,7 +321,7 @@ mod tests {
 #[cfg(test)]
 mod gpu_tests {
     use super::*;
-    use crate::view::edits::{run_action, EditStack};
+    use crate::view::edits::{run_action, Action, EditStack};
     use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Renderer, SceneGpu};
 
     /// Hiding a tree node through the UI's edit path rebuilds the TLAS: its instances vanish from the next

@@ -17,7 +17,7 @@ use super::prefs::Bookmark;
 use super::properties::PropertiesPanel;
 use super::sections::SectionState;
 use super::settings_panel::SettingsPanel;
-use super::tree::TreeView;
+use super::tree_panel::TreeView;
 use super::ui_probe;
 use super::view_cube::ViewCube;
 
@@ -287,7 +287,9 @@ impl Panels {
             .show(ui, |ui| out.extend(self.sections.ui(ui, state)));
         egui::CollapsingHeader::new("Model tree")
             .default_open(true)
-            .show(ui, |ui| out.extend(self.tree.ui(ui, state)));
+            .show(ui, |ui| {
+                out.extend(self.tree.ui(ui, state.scene, state.selection))
+            });
         egui::CollapsingHeader::new("Selection")
             .default_open(true)
             .show(ui, |ui| out.extend(selection_section(ui, state)));
