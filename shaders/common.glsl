@@ -21,6 +21,7 @@ layout(set = 0, binding = 1, scalar) readonly buffer GlobalsBlock { FrameGlobals
 layout(push_constant) uniform Push { uvec4 push; };
 
 #include "section.glsl"
+#include "normal_pack.glsl"
 
 layout(buffer_reference, scalar) buffer GBufferRef { GPixel px[]; };
 layout(buffer_reference, scalar) readonly buffer InstanceRef { InstanceInfo v[]; };

@@ -70,7 +70,8 @@ vec3 shade(uvec2 pix, GPixel px) {
     vec3 view = view_dir(px.position);
     // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
     vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
-    float diffuse = max(dot(px.normal, key), 0.0);
+    // The shading normal: curved surfaces shade smoothly across their triangles.
+    float diffuse = max(dot(unpack_normal(px.shading), key), 0.0);
     float light = 0.4 + 0.6 * diffuse;
     // Section caps keep their colour in the clay look too.
     vec3 base = (g.flags & FLAG_SHADED) != 0u || (px.flags & GPIXEL_SECTION) != 0u ? px.color : vec3(0.8);
@@ -88,12 +89,14 @@ int edge_steps() {
 }
 
 // Feature edges (CAD look): 1 where a neighbour along the 4 axes, up to edge_steps() pixels away, shows a miss,
-// another instance, a surface off this pixel's tangent plane (a silhouette within one part) or a normal beyond
-// the crease angle. Drawn on the nearer side, edge_width view pixels wide at any render scale.
+// another instance, a surface off this pixel's tangent plane (a silhouette within one part) or a shading normal
+// beyond the crease angle (a crease the model's normals draw, not the facets of a curved surface). Drawn on the
+// nearer side, edge_width view pixels wide at any render scale.
 // `spacing`: the pixels between the neighbours tested (the lattice while only its pixels show this view).
 float edge_spaced(uvec2 pix, GPixel px, int spacing) {
     if ((g.flags & FLAG_EDGES) == 0u || px.t < 0.0) return 0.0;
     float pixel_size = pixel_world_size(px.t) * float(spacing);
+    vec3 shading = unpack_normal(px.shading);
     int steps = edge_steps();
     const ivec2 OFFSETS[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
     for (int k = 1; k <= steps; ++k) {
@@ -108,7 +111,7 @@ float edge_spaced(uvec2 pix, GPixel px, int spacing) {
             float off_plane = abs(dot(o.position - px.position, px.normal));
             if (o.instance != px.instance && off_plane > 0.5 * size) return 1.0;
             if (off_plane > 4.0 * size) return 1.0;
-            if (dot(o.normal, px.normal) < g.crease_cos) return 1.0;
+            if (dot(unpack_normal(o.shading), shading) < g.crease_cos) return 1.0;
         }
     }
     return 0.0;

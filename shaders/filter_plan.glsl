@@ -35,18 +35,6 @@ layout(buffer_reference, scalar) buffer GuideRef { FilterGuide v[]; };
 // What each pixel resolved when last drawn (SlicePrior, `filter_full_taps`).
 layout(buffer_reference, scalar) buffer SlicePriorRef { SlicePrior v[]; };
 
-vec2 oct_wrap(vec2 v) { return (1.0 - abs(v.yx)) * mix(vec2(-1.0), vec2(1.0), greaterThanEqual(v, vec2(0.0))); }
-uint pack_normal(vec3 n) {
-    n /= abs(n.x) + abs(n.y) + abs(n.z);
-    vec2 e = n.z >= 0.0 ? n.xy : oct_wrap(n.xy);
-    return packSnorm2x16(e);
-}
-vec3 unpack_normal(uint u) {
-    vec2 e = unpackSnorm2x16(u);
-    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    if (n.z < 0.0) n.xy = oct_wrap(n.xy);
-    return normalize(n);
-}
 FilterGuide make_guide(GPixel px, bool has_ao) {
     FilterGuide guide;
     guide.position = px.position;

@@ -39,7 +39,9 @@ void main() {
             vec3 q = cross(s, e1);
             vec2 bary = vec2(dot(s, p), dot(dir, q)) * inv;
             float t = dot(e2, q) * inv;
-            if (t >= 0.0) px = gpixel_hit(a, b, c, bary, t, dir, vis.x, geo.color.rgb);
+            // The instance's rows are the object-to-world matrix's rows.
+            mat3 m = transpose(mat3(inst.row0.xyz, inst.row1.xyz, inst.row2.xyz));
+            if (t >= 0.0) px = gpixel_hit(a, b, c, bary, t, dir, vis.x, geo, tri, m);
         }
     }
     GBufferRef(g.gbuffer).px[index] = px;

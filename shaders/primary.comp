@@ -1,6 +1,6 @@
 #version 460
 // Primary visibility: one ray per pixel into the G-buffer (position, geometric normal facing the camera,
-// instance id, base colour). The ray is clipped to the region the section planes keep.
+// shading normal, instance id, base colour). The ray is clipped to the region the section planes keep.
 #include "common.glsl"
 #include "gpixel.glsl"
 #include "clear.glsl"
@@ -32,7 +32,7 @@ void main() {
         vec3 b = to_world * vec4(verts.v[tri.y], 1.0);
         vec3 c = to_world * vec4(verts.v[tri.z], 1.0);
         px = gpixel_hit(a, b, c, rayQueryGetIntersectionBarycentricsEXT(rq, true), rayQueryGetIntersectionTEXT(rq, true),
-                        dir, instance, geo.color.rgb);
+                        dir, instance, geo, tri, mat3(to_world));
     }
     GBufferRef(g.gbuffer).px[index] = px;
 }

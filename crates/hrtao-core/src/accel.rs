@@ -110,6 +110,7 @@ pub struct SceneGpu {
     gpu: Arc<Gpu>,
     _vertices: Buffer,
     _indices: Buffer,
+    _normals: Option<Buffer>,
     pub geometries: Buffer,
     /// Per mesh: index of its first geometry in `geometries`, or None when the mesh has no triangles.
     geometry_base: Vec<Option<u32>>,
@@ -203,12 +204,15 @@ impl SceneGpu {
                 scene.instances.len()
             )));
         }
-        // 1. Geometry: all primitives' vertices and indices packed into two buffers.
+        // 1. Geometry: all primitives' vertices, indices and shading normals packed into three buffers.
         let mut vertices: Vec<[f32; 3]> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
+        let mut normals: Vec<u32> = Vec::new();
         struct Geo {
             vertex_offset: u64,
             index_offset: u64,
+            /// Byte offset of its packed normals; None: it shades flat.
+            normal_offset: Option<u64>,
             vertex_count: u32,
             triangles: u32,
             color: [f32; 4],
@@ -222,9 +226,11 @@ impl SceneGpu {
                 if tris == 0 || p.positions.is_empty() {
                     continue;
                 }
+                let has_normals = p.normals.len() == p.positions.len();
                 geos.push(Geo {
                     vertex_offset: (vertices.len() * 12) as u64,
                     index_offset: (indices.len() * 4) as u64,
+                    normal_offset: has_normals.then_some((normals.len() * 4) as u64),
                     vertex_count: p.positions.len() as u32,
                     triangles: tris,
                     color: p.base_color,
@@ -232,6 +238,9 @@ impl SceneGpu {
                 });
                 vertices.extend_from_slice(&p.positions);
                 indices.extend_from_slice(&p.indices[..tris as usize * 3]);
+                if has_normals {
+                    normals.extend(p.normals.iter().map(|&n| crate::gpu::pack_normal(n)));
+                }
             }
             per_mesh.push(geos);
         }
@@ -243,9 +252,14 @@ impl SceneGpu {
             &indices,
             input | vk::BufferUsageFlags::INDEX_BUFFER,
         )?;
-        let geometry_bytes = (vertices.len() * 12 + indices.len() * 4) as u64;
+        // A scene without normals has no normal buffer (Vulkan has no empty buffers).
+        let nbuf = (!normals.is_empty())
+            .then(|| Buffer::device_local_from_slice(gpu, "normals", &normals, vk::BufferUsageFlags::empty()))
+            .transpose()?;
+        let geometry_bytes = (vertices.len() * 12 + indices.len() * 4 + normals.len() * 4) as u64;
         drop(vertices);
         drop(indices);
+        drop(normals);
 
         let mut table = Vec::new();
         let mut geometry_base = Vec::with_capacity(per_mesh.len());
@@ -259,6 +273,10 @@ impl SceneGpu {
                 table.push(GeometryInfo {
                     vertices: vbuf.address + g.vertex_offset,
                     indices: ibuf.address + g.index_offset,
+                    normals: match (&nbuf, g.normal_offset) {
+                        (Some(n), Some(offset)) => n.address + offset,
+                        _ => 0,
+                    },
                     color: g.color,
                 });
             }
@@ -471,6 +489,7 @@ impl SceneGpu {
             gpu: gpu.clone(),
             _vertices: vbuf,
             _indices: ibuf,
+            _normals: nbuf,
             geometries,
             geometry_base,
             blas,

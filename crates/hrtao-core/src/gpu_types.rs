@@ -262,6 +262,9 @@ gpu_structs! {
         color: [f32; 3],
         /// `GPIXEL_*` bits.
         flags: u32,
+        /// Shading normal (interpolated vertex normals, or `normal` where the geometry has none), unit length,
+        /// on `normal`'s side, octahedral-packed (`pack_normal` in normal_pack.glsl, `gpu::pack_normal`).
+        shading: u32,
     }
 
     /// Per scene instance: where its mesh's geometries start in the geometry table.
@@ -270,10 +273,12 @@ gpu_structs! {
         flags: u32,
     }
 
-    /// Per BLAS geometry (a glTF primitive): its vertex and index buffers and base colour.
+    /// Per BLAS geometry (a glTF primitive): its vertex, index and shading-normal buffers and base colour.
     struct GeometryInfo {
         vertices: u64,
         indices: u64,
+        /// Per-vertex shading normals, `gpu::pack_normal`-packed in object space; 0: the geometry shades flat.
+        normals: u64,
         color: [f32; 4],
     }
 

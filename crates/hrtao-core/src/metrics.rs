@@ -111,6 +111,7 @@ mod tests {
             instance: 0,
             color: [0.5; 3],
             flags: 0,
+            shading: crate::gpu::pack_normal(normal),
         }
     }
 

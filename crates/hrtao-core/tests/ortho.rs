@@ -92,6 +92,7 @@ fn orthographic_feature_size_does_not_depend_on_distance() {
         instance: 0,
         color: [1.0; 3],
         flags: 0,
+        shading: hrtao_core::gpu::pack_normal([0.0, 0.0, 1.0]),
     };
     // Orthographic: the same cell at 1 and 1000 units from the eye plane; its size is s_p ortho_height / R_y.
     let cam = ortho_top_down(10.0, 4.0, 64, 64);

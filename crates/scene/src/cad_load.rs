@@ -381,6 +381,7 @@ fn to_scene(path: &Path, model: CadModel) -> Result<Scene, String> {
                     _ => DEFAULT_BASE_COLOR,
                 },
                 double_sided: true,
+                normals: Vec::new(),
             })
             .collect(),
     };

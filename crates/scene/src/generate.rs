@@ -207,6 +207,7 @@ impl MeshBuilder {
                 indices: self.indices,
                 base_color: [color[0], color[1], color[2], 1.0],
                 double_sided: true,
+                normals: Vec::new(),
             }],
         }
     }

@@ -298,6 +298,7 @@ fn load_primitive(
         indices,
         base_color,
         double_sided: prim.material().double_sided(),
+        normals: Vec::new(),
     }))
 }
 

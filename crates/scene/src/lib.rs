@@ -182,6 +182,20 @@ fn load_cad(
 
 /// Validates and rejects scenes without any triangle; errors name the source.
 fn finish(mut scene: Scene, source: &str) -> Result<Scene, SceneError> {
+    // Unusable shading normals fall back to face normals, with one warning per load.
+    let mut bad = 0usize;
+    let mut first = None;
+    for (mi, mesh) in scene.meshes.iter_mut().enumerate() {
+        for (pi, prim) in mesh.primitives.iter_mut().enumerate() {
+            if let Some(why) = prim.check_normals() {
+                bad += 1;
+                first.get_or_insert(format!("mesh {mi} ({}) primitive {pi}: {why}", mesh.name));
+            }
+        }
+    }
+    if let Some(first) = first {
+        log::warn!("{source}: {bad} primitive(s) shade flat, their normals are unusable (first: {first})");
+    }
     scene.validate().map_err(|e| match e {
         SceneError::Invalid(m) => SceneError::Invalid(format!("{source}: {m}")),
         other => other,

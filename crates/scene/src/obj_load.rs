@@ -124,6 +124,7 @@ pub fn load_obj(
                 indices: m.indices,
                 base_color,
                 double_sided: true,
+                normals: Vec::new(),
             }],
         });
         scene.instances.push(Instance {

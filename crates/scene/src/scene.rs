@@ -24,11 +24,45 @@ pub struct Primitive {
     /// faces never show (glTF's default), so a rasteriser may cull them; formats that say nothing (OBJ, STL, PLY)
     /// are double-sided.
     pub double_sided: bool,
+    /// Shading normals, one per position, in the primitive's space (unit length, pointing out of the surface's
+    /// front), interpolated across each triangle; empty: the triangles shade flat (their face normals).
+    /// [`Primitive::check_normals`] empties a set that is unusable.
+    pub normals: Vec<[f32; 3]>,
 }
 
 impl Primitive {
     pub fn triangle_count(&self) -> u64 {
         (self.indices.len() / 3) as u64
+    }
+
+    /// Why the shading normals cannot be used (a count other than one per position, a non-finite or
+    /// zero-length normal), or None when they can (or there are none). Normals of length other than 1 are
+    /// made unit length.
+    pub fn check_normals(&mut self) -> Option<String> {
+        if self.normals.is_empty() {
+            return None;
+        }
+        let why = if self.normals.len() != self.positions.len() {
+            Some(format!(
+                "{} normals for {} vertices",
+                self.normals.len(),
+                self.positions.len()
+            ))
+        } else {
+            self.normals.iter_mut().enumerate().find_map(|(k, n)| {
+                let v = Vec3::from(*n);
+                let len = v.length();
+                if !len.is_finite() || len < 1e-12 {
+                    return Some(format!("normal {k} is {n:?}"));
+                }
+                *n = (v / len).to_array();
+                None
+            })
+        };
+        if why.is_some() {
+            self.normals.clear();
+        }
+        why
     }
 
     /// Bounds of all vertex positions (also unreferenced ones).
@@ -188,6 +222,7 @@ impl Scene {
                 indices,
                 base_color: DEFAULT_BASE_COLOR,
                 double_sided: true,
+                normals: Vec::new(),
             }],
         });
         scene.instances.push(Instance {
@@ -504,6 +539,40 @@ fn check_transform(m: &Mat4) -> Result<(), SceneError> {
 mod tests {
     use super::*;
 
+    /// Usable normals come out unit length; a wrong count, a NaN or a zero normal empties the set (face
+    /// normals) and says why.
+    #[test]
+    fn unusable_normals_fall_back_to_face_normals() {
+        let prim = |normals: Vec<[f32; 3]>| Primitive {
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            indices: vec![0, 1, 2],
+            base_color: DEFAULT_BASE_COLOR,
+            double_sided: true,
+            normals,
+        };
+        let mut ok = prim(vec![[0.0, 0.0, 2.0], [0.0, 3.0, 4.0], [0.0, 0.0, -0.5]]);
+        assert_eq!(ok.check_normals(), None);
+        assert_eq!(
+            ok.normals,
+            vec![[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [0.0, 0.0, -1.0]]
+        );
+        for (bad, why) in [
+            (vec![[0.0, 0.0, 1.0]; 2], "2 normals for 3 vertices"),
+            (
+                vec![[0.0, 0.0, 1.0], [f32::NAN, 0.0, 1.0], [0.0, 0.0, 1.0]],
+                "normal 1",
+            ),
+            (vec![[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0; 3]], "normal 2"),
+        ] {
+            let mut p = prim(bad);
+            let msg = p.check_normals().expect("unusable");
+            assert!(msg.contains(why), "{msg}");
+            assert!(p.normals.is_empty());
+        }
+        let mut none = prim(Vec::new());
+        assert_eq!(none.check_normals(), None);
+    }
+
     fn tri_scene() -> Scene {
         let mut s = Scene::new("t");
         s.meshes.push(Mesh {
@@ -513,6 +582,7 @@ mod tests {
                 indices: vec![0, 1, 2],
                 base_color: DEFAULT_BASE_COLOR,
                 double_sided: true,
+                normals: Vec::new(),
             }],
         });
         for x in 0..3 {

@@ -36,6 +36,7 @@ pub fn quad(center: Vec3, a: Vec3, b: Vec3) -> Primitive {
         indices: vec![0, 1, 2, 0, 2, 3],
         base_color: [0.8, 0.8, 0.8, 1.0],
         double_sided: true,
+        normals: Vec::new(),
     }
 }
 
@@ -62,6 +63,7 @@ pub fn cube(h: Vec3) -> Primitive {
         indices,
         base_color: [0.8, 0.8, 0.8, 1.0],
         double_sided: true,
+        normals: Vec::new(),
     }
 }
 

@@ -402,6 +402,7 @@ mod gpu_tests {
                 indices,
                 base_color: DEFAULT_BASE_COLOR,
                 double_sided: true,
+                normals: Vec::new(),
             }],
         });
         s.instances.push(Instance {

@@ -176,6 +176,7 @@ mod tests {
             indices,
             base_color: [1.0; 4],
             double_sided: true,
+            normals: Vec::new(),
         };
         s.meshes.push(Mesh {
             name: "square".into(),
