@@ -31,6 +31,7 @@ pub mod stats;
 pub mod tree;
 mod tree_panel;
 mod ui;
+mod ui_colors;
 mod ui_layer;
 mod ui_probe;
 mod view_cube;
@@ -1007,7 +1008,7 @@ impl Viewer {
         if let Err(e) = self
             .presenter
             .ui
-            .update_textures(pool, &mut ui.textures)
+            .prepare(pool, &mut ui.textures, &mut ui.primitives)
             .and_then(|()| self.draw(size, &ui))
         {
             self.fatal(format!("{e:#}"));

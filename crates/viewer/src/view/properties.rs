@@ -7,6 +7,7 @@ use hrtao_scene::{Aabb, Scene};
 use super::command::{Command, ViewState};
 use super::measure::{format_len, Unit};
 use super::tree::Selection;
+use super::ui::{kv_grid, kv_row};
 use super::ui_probe;
 
 /// What the panel shows of a selection.
@@ -125,12 +126,8 @@ impl PropertiesPanel {
             Some(s) => {
                 let triangles = s.triangles.to_string();
                 ui_probe::note_text("properties: triangles", &triangles);
-                let grid = egui::Grid::new("properties").striped(true).show(ui, |ui| {
-                    let mut row = |k: &str, v: String| {
-                        ui.label(k);
-                        ui.label(v);
-                        ui.end_row();
-                    };
+                let grid = kv_grid("properties").show(ui, |ui| {
+                    let mut row = |k: &str, v: String| kv_row(ui, k, v);
                     row("name", s.name.clone());
                     if !s.path.is_empty() {
                         row("path", s.path.join(" / "));
@@ -150,11 +147,9 @@ impl PropertiesPanel {
         }
         if !scene.metadata.is_empty() {
             ui.label(egui::RichText::new("file").strong());
-            egui::Grid::new("file metadata").striped(true).show(ui, |ui| {
+            kv_grid("file metadata").show(ui, |ui| {
                 for (k, v) in &scene.metadata {
-                    ui.label(k);
-                    ui.label(v);
-                    ui.end_row();
+                    kv_row(ui, k, v);
                 }
             });
         }

@@ -308,11 +308,9 @@ impl Panels {
         egui::CollapsingHeader::new("Keys and mouse")
             .default_open(false)
             .show(ui, |ui| {
-                egui::Grid::new("bindings").striped(true).show(ui, |ui| {
+                kv_grid("bindings").show(ui, |ui| {
                     for (k, v) in BINDINGS {
-                        ui.label(*k);
-                        ui.label(*v);
-                        ui.end_row();
+                        kv_row(ui, k, *v);
                     }
                 });
             });
@@ -361,6 +359,19 @@ pub(crate) fn draw_toasts(ctx: &egui::Context, toasts: &mut Vec<Toast>) {
         });
 }
 
+/// A grid of named values in the panel: names on one line, values wrapped at the panel's edge (the last column
+/// takes the rest of the width), so a long value never widens the panel nor squeezes the names.
+pub(crate) fn kv_grid(id: &str) -> egui::Grid {
+    egui::Grid::new(id).num_columns(2).striped(true)
+}
+
+/// One row of a `kv_grid`.
+pub(crate) fn kv_row(ui: &mut egui::Ui, key: &str, value: impl Into<egui::WidgetText>) {
+    ui.add(egui::Label::new(key).extend());
+    ui.label(value);
+    ui.end_row();
+}
+
 fn stats_section(ui: &mut egui::Ui, state: &ViewState) {
     let Some(rep) = state.report else {
         ui.label("no frame yet");
@@ -368,12 +379,8 @@ fn stats_section(ui: &mut egui::Ui, state: &ViewState) {
     };
     let (iw, ih) = state.internal;
     let settings = &state.prefs.settings;
-    egui::Grid::new("stats").striped(true).show(ui, |ui| {
-        let mut row = |k: &str, v: String| {
-            ui.label(k);
-            ui.label(v);
-            ui.end_row();
-        };
+    kv_grid("stats").show(ui, |ui| {
+        let mut row = |k: &str, v: String| kv_row(ui, k, v);
         let (frame_ms, interval_ms) = state.frame_ms;
         row(
             "frame",
@@ -704,6 +711,63 @@ fn key_taps(events: &[egui::Event], key: Key) -> usize {
 
 #[cfg(test)]
 mod tests {
+    /// In a narrow panel that wraps text (as the side panel does), a named-value grid keeps its names on one
+    /// line and wraps a long value at the panel's edge, over the frames after the first (egui measures the
+    /// columns in the first).
+    #[test]
+    fn a_value_grid_keeps_names_whole_and_wraps_values_at_the_edge() {
+        let ctx = egui::Context::default();
+        let value = "141.4 ms render, 193.8 ms interval (5.2 fps) and more words to wrap past the edge";
+        let mut texts = Vec::new();
+        for _ in 0..3 {
+            let input = egui::RawInput {
+                screen_rect: Some(egui::Rect::from_min_size(
+                    egui::Pos2::ZERO,
+                    egui::vec2(300.0, 400.0),
+                )),
+                ..Default::default()
+            };
+            let out = ctx.run_ui(input, |root| {
+                egui::CentralPanel::default().show(root, |ui| {
+                    ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                    super::kv_grid("test").show(ui, |ui| {
+                        super::kv_row(ui, "resolution", value);
+                        super::kv_row(ui, "GPU passes", "3 ms");
+                    });
+                });
+            });
+            texts = out
+                .shapes
+                .iter()
+                .filter_map(|c| match &c.shape {
+                    egui::Shape::Text(t) => Some((
+                        t.galley.text().to_owned(),
+                        t.galley.rows.len(),
+                        t.visual_bounding_rect(),
+                    )),
+                    _ => None,
+                })
+                .collect::<Vec<_>>();
+            out.drop_without_applying_deltas();
+        }
+        let find = |k: &str| {
+            texts
+                .iter()
+                .find(|(t, _, _)| t == k)
+                .unwrap_or_else(|| panic!("{k}: {texts:?}"))
+        };
+        assert_eq!(find("resolution").1, 1);
+        assert_eq!(find("GPU passes").1, 1);
+        let (_, rows, rect) = find(value);
+        assert!(
+            *rows >= 2 && rect.right() <= 300.0,
+            "{rows} rows, right edge {}",
+            rect.right()
+        );
+        // The value column starts right after the names, not after a squeezed first column.
+        assert!(rect.left() < 120.0, "{rect:?}");
+    }
+
     /// A Tab tapped as the window gains the focus comes as a press and a repeat: one tap. Two taps are two.
     #[test]
     fn a_key_repeat_is_not_a_tap() {

@@ -9,6 +9,8 @@ use egui_ash_renderer::allocator::GpuAllocator;
 use egui_ash_renderer::{Options, RenderMode, Renderer};
 use hrtao_core::Gpu;
 
+use super::ui_colors;
+
 pub struct UiLayer {
     gpu: Arc<Gpu>,
     format: vk::Format,
@@ -62,11 +64,12 @@ impl UiLayer {
             gpu.allocator_arc(),
             gpu.device.clone(),
             RenderMode::RenderPass(render_pass),
-            // UNORM swapchain images hold sRGB-encoded values: the shader encodes (srgb_framebuffer: false).
+            // The swapchain's UNORM images hold sRGB-encoded values; `prepare` hands the renderer colours that
+            // its decoding turns back into egui's, so its fragments need no encoding (ui_colors.rs).
             // One frame in flight: every frame waits for its fence (present.rs).
             Options {
                 in_flight_frames: 1,
-                srgb_framebuffer: false,
+                srgb_framebuffer: true,
                 ..Options::default()
             },
         );
@@ -139,9 +142,16 @@ impl UiLayer {
         Ok(())
     }
 
-    /// Uploads the textures egui changed (before recording the frame that uses them) and remembers those it
-    /// released, freed by `frame_done`. Takes everything out of `delta` (egui checks that it was applied). Takes everything out of `delta` (egui checks that it was applied).
-    pub fn update_textures(&mut self, pool: vk::CommandPool, delta: &mut egui::TexturesDelta) -> Result<()> {
+    /// Before recording a frame: encodes its vertex colours for the renderer (ui_colors.rs), uploads the
+    /// textures egui changed, and remembers those it released, freed by `frame_done`. Takes everything out of
+    /// `delta` (egui checks that it was applied).
+    pub fn prepare(
+        &mut self,
+        pool: vk::CommandPool,
+        delta: &mut egui::TexturesDelta,
+        primitives: &mut [egui::ClippedPrimitive],
+    ) -> Result<()> {
+        ui_colors::encode_vertices(primitives);
         let Some(r) = self.renderer.as_mut() else {
             delta.clear();
             return Ok(());
@@ -149,7 +159,7 @@ impl UiLayer {
         self.to_free.extend(delta.free.drain());
         for (id, deltas) in delta.set.drain() {
             for d in deltas {
-                r.set_texture(self.gpu.queue, pool, id, &d)
+                r.set_texture(self.gpu.queue, pool, id, &ui_colors::encode_texture(&d))
                     .context("cannot upload an egui texture")?;
             }
         }
