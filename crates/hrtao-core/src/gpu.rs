@@ -22,7 +22,8 @@ include!("gpu_types.rs");
 
 /// A unit normal in one u32: octahedral mapping to 16-bit signed-normalised coordinates, x in the low half
 /// (GLSL's `packSnorm2x16`); `shaders/normal_pack.glsl` is the GPU side (`unpack_normal`), and the GPU tests of
-/// tests/shading_normals.rs (normals packed here, unpacked there) hold the two to agree. A zero or non-finite normal packs as +z.
+/// tests/shading_normals.rs (normals packed here, unpacked there) hold the two to agree. A zero or non-finite
+/// normal packs as +z.
 pub fn pack_normal(n: [f32; 3]) -> u32 {
     let l1 = n[0].abs() + n[1].abs() + n[2].abs();
     if !(l1.is_finite() && l1 > 0.0) {
