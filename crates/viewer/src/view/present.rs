@@ -168,10 +168,21 @@ impl Presenter {
             {
                 bail!("the surface does not support transfer destinations");
             }
+            if self.format != chosen.format {
+                // The internal image's format follows the swapchain's.
+                self.destroy_internal();
+            }
+            self.format = chosen.format;
             self.blit_ok = feats.contains(vk::FormatFeatureFlags::BLIT_DST);
+            if !self.blit_ok && !is_copy_format(chosen.format) {
+                bail!(
+                    "the swapchain's format {:?} takes neither blits nor 8-bit copies",
+                    chosen.format
+                );
+            }
             let rgba_props = gpu
                 .instance
-                .get_physical_device_format_properties(gpu.physical, vk::Format::R8G8B8A8_UNORM);
+                .get_physical_device_format_properties(gpu.physical, self.internal_format());
             self.linear_filter = rgba_props
                 .optimal_tiling_features
                 .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
@@ -233,6 +244,16 @@ impl Presenter {
     }
 
     /// True when the swapchain stores blue first (the renderer can write BGRA directly for 1:1 copies).
+    /// The internal image's format: the composite's bytes, read by the blit as the swapchain reads its own (an
+    /// `_SRGB` swapchain gets an `_SRGB` image, so the blit decodes and encodes again: the values pass unchanged).
+    fn internal_format(&self) -> vk::Format {
+        if is_srgb_format(self.format) {
+            vk::Format::R8G8B8A8_SRGB
+        } else {
+            vk::Format::R8G8B8A8_UNORM
+        }
+    }
+
     pub fn is_bgra(&self) -> bool {
         matches!(
             self.format,
@@ -279,7 +300,7 @@ impl Presenter {
             let image = gpu.device.create_image(
                 &vk::ImageCreateInfo::default()
                     .image_type(vk::ImageType::TYPE_2D)
-                    .format(vk::Format::R8G8B8A8_UNORM)
+                    .format(self.internal_format())
                     .extent(vk::Extent3D {
                         width,
                         height,
@@ -679,26 +700,142 @@ impl Presenter {
     }
 }
 
-/// The swapchain's format: 8-bit UNORM (blit and copy targets, sRGB-encoded values) where offered.
+/// The swapchain's format, by [`choose_surface_format`] over what the surface offers (`HRTAO_SWAPCHAIN_FORMAT`
+/// = `unorm` or `srgb` keeps only that kind, for tests of both paths).
 fn surface_format(
     loader: &ash::khr::surface::Instance,
     physical: vk::PhysicalDevice,
     surface: vk::SurfaceKHR,
 ) -> Result<vk::SurfaceFormatKHR> {
-    let formats = unsafe { loader.get_physical_device_surface_formats(physical, surface)? };
-    formats
+    let mut formats = unsafe { loader.get_physical_device_surface_formats(physical, surface)? };
+    match std::env::var("HRTAO_SWAPCHAIN_FORMAT").as_deref() {
+        Ok("srgb") => formats.retain(|f| is_srgb_format(f.format)),
+        Ok("unorm") => formats.retain(|f| !is_srgb_format(f.format)),
+        _ => {}
+    }
+    let chosen = choose_surface_format(&formats).ok_or_else(|| anyhow!("the surface reports no formats"))?;
+    if chosen.color_space != vk::ColorSpaceKHR::SRGB_NONLINEAR || !is_copy_format(chosen.format) {
+        log::info!("swapchain format {:?} in {:?}", chosen.format, chosen.color_space);
+    }
+    Ok(chosen)
+}
+
+/// The swapchain format for the composite's sRGB-encoded 8-bit colours, from the formats a surface offers. In
+/// the sRGB colour space: an 8-bit UNORM format first (it stores the composite's bytes as they are); then an
+/// 8-bit `_SRGB` one, written as such (the view's internal image is `_SRGB` too, so the blit decodes and
+/// encodes again, and egui draws in linear light); then any other UNORM format (10 bits: the blit converts the
+/// values); only then whatever the surface lists first. None when it offers nothing.
+pub fn choose_surface_format(offered: &[vk::SurfaceFormatKHR]) -> Option<vk::SurfaceFormatKHR> {
+    let srgb_space = |f: &&vk::SurfaceFormatKHR| f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR;
+    let rules: [&dyn Fn(vk::Format) -> bool; 3] = [
+        &|f| is_copy_format(f) && !is_srgb_format(f),
+        &|f| is_copy_format(f) && is_srgb_format(f),
+        &|f| is_unorm_format(f),
+    ];
+    rules
         .iter()
-        .find(|f| {
-            matches!(f.format, vk::Format::B8G8R8A8_UNORM | vk::Format::R8G8B8A8_UNORM)
-                && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR
-        })
-        .or(formats.first())
+        .find_map(|rule| offered.iter().filter(srgb_space).find(|f| rule(f.format)))
+        .or(offered.first())
         .copied()
-        .ok_or_else(|| anyhow!("the surface reports no formats"))
+}
+
+/// 8-bit RGBA or BGRA: the renderer's bytes can be copied into it 1:1 (no blit).
+pub fn is_copy_format(f: vk::Format) -> bool {
+    matches!(
+        f,
+        vk::Format::B8G8R8A8_UNORM
+            | vk::Format::R8G8B8A8_UNORM
+            | vk::Format::B8G8R8A8_SRGB
+            | vk::Format::R8G8B8A8_SRGB
+    )
+}
+
+/// The device encodes what is written to it (and decodes what is read) by the sRGB curve.
+pub fn is_srgb_format(f: vk::Format) -> bool {
+    matches!(
+        f,
+        vk::Format::B8G8R8A8_SRGB
+            | vk::Format::R8G8B8A8_SRGB
+            | vk::Format::A8B8G8R8_SRGB_PACK32
+            | vk::Format::R8G8B8_SRGB
+            | vk::Format::B8G8R8_SRGB
+    )
+}
+
+/// Unsigned normalised colour formats a blit writes values into.
+fn is_unorm_format(f: vk::Format) -> bool {
+    matches!(
+        f,
+        vk::Format::B8G8R8A8_UNORM
+            | vk::Format::R8G8B8A8_UNORM
+            | vk::Format::A8B8G8R8_UNORM_PACK32
+            | vk::Format::A2B10G10R10_UNORM_PACK32
+            | vk::Format::A2R10G10B10_UNORM_PACK32
+            | vk::Format::R16G16B16A16_UNORM
+            | vk::Format::R5G6B5_UNORM_PACK16
+    )
 }
 
 impl Drop for Presenter {
     fn drop(&mut self) {
         self.destroy();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vk::ColorSpaceKHR as Cs;
+    use vk::Format as F;
+
+    fn offered(list: &[(F, Cs)]) -> Vec<vk::SurfaceFormatKHR> {
+        list.iter()
+            .map(|&(format, color_space)| vk::SurfaceFormatKHR { format, color_space })
+            .collect()
+    }
+
+    fn chosen(list: &[(F, Cs)]) -> Option<(F, Cs)> {
+        choose_surface_format(&offered(list)).map(|f| (f.format, f.color_space))
+    }
+
+    const SRGB: Cs = Cs::SRGB_NONLINEAR;
+
+    /// The rule over offered lists: 8-bit UNORM wherever it is listed, an `_SRGB` one written as such, a 10-bit
+    /// UNORM one, formats outside the sRGB colour space last, the first offered when nothing fits.
+    #[test]
+    fn the_swapchain_format_follows_the_rule() {
+        // An `_SRGB` format first (Mesa, NVIDIA on X11): the UNORM one after it is taken.
+        assert_eq!(
+            chosen(&[(F::B8G8R8A8_SRGB, SRGB), (F::B8G8R8A8_UNORM, SRGB)]),
+            Some((F::B8G8R8A8_UNORM, SRGB))
+        );
+        // Only `_SRGB`: taken, written as such.
+        assert_eq!(
+            chosen(&[(F::B8G8R8A8_SRGB, SRGB)]),
+            Some((F::B8G8R8A8_SRGB, SRGB))
+        );
+        // 10-bit only: a UNORM format the blit converts into, before an HDR one listed first.
+        assert_eq!(
+            chosen(&[
+                (F::R16G16B16A16_SFLOAT, Cs::EXTENDED_SRGB_LINEAR_EXT),
+                (F::A2B10G10R10_UNORM_PACK32, SRGB)
+            ]),
+            Some((F::A2B10G10R10_UNORM_PACK32, SRGB))
+        );
+        // 8-bit `_SRGB` before 10-bit UNORM; UNORM in another colour space after both.
+        assert_eq!(
+            chosen(&[
+                (F::B8G8R8A8_UNORM, Cs::DISPLAY_P3_NONLINEAR_EXT),
+                (F::A2R10G10B10_UNORM_PACK32, SRGB),
+                (F::R8G8B8A8_SRGB, SRGB)
+            ]),
+            Some((F::R8G8B8A8_SRGB, SRGB))
+        );
+        // Nothing fits: the first offered; nothing offered: none.
+        assert_eq!(
+            chosen(&[(F::R16G16B16A16_SFLOAT, Cs::EXTENDED_SRGB_LINEAR_EXT)]),
+            Some((F::R16G16B16A16_SFLOAT, Cs::EXTENDED_SRGB_LINEAR_EXT))
+        );
+        assert_eq!(chosen(&[]), None);
     }
 }

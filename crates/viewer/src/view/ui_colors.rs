@@ -7,15 +7,36 @@
 //! On a CPU rasteriser that last `pow` costs more than the rest of egui's drawing. So the layer tells the renderer
 //! its target is sRGB (no encoding per fragment) and hands it colours encoded once more, by the inverse of each
 //! decoding: the shader's decode then gives back egui's own values, and fragments are egui's values blended as egui
-//! blends them (which is what the vendored egui-ash drew).
+//! blends them (which is what the vendored egui-ash drew). On an `_SRGB` swapchain the target encodes, and only the
+//! vertex shader's gamma 2.2 (not the sRGB curve) needs undoing.
 use std::sync::OnceLock;
 
-/// 8-bit tables of the two encodings (the inverses of the renderer's two decodings).
+/// 8-bit tables of the encodings (the inverses of the renderer's decodings, per kind of target).
 struct Tables {
-    /// `round(255 (c / 255)^(1 / 2.2))`: undone by the vertex shader's `pow(c, 2.2)`.
+    /// UNORM target: `round(255 (c / 255)^(1 / 2.2))`, undone by the vertex shader's `pow(c, 2.2)`.
     vertex: [u8; 256],
-    /// The sRGB curve: undone by sampling an `_SRGB` texture.
+    /// UNORM target: the sRGB curve, undone by sampling an `_SRGB` texture.
     texel: [u8; 256],
+    /// `_SRGB` target: the vertex shader's `pow(c, 2.2)` is not the sRGB curve the target encodes by (egui's
+    /// dark panel fill would come out 7 levels darker); `(srgb_decode(c))^(1 / 2.2)` makes the two cancel.
+    /// Textures need nothing there: the sampler decodes and the target encodes by the same curve.
+    vertex_srgb: [u8; 256],
+}
+
+fn srgb_encode(c: f64) -> f64 {
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn srgb_decode(c: f64) -> f64 {
+    if c <= 0.040_45 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 fn tables() -> &'static Tables {
@@ -24,13 +45,8 @@ fn tables() -> &'static Tables {
         let table = |f: fn(f64) -> f64| std::array::from_fn(|i| (f(i as f64 / 255.0) * 255.0).round() as u8);
         Tables {
             vertex: table(|c| c.powf(1.0 / 2.2)),
-            texel: table(|c| {
-                if c <= 0.003_130_8 {
-                    12.92 * c
-                } else {
-                    1.055 * c.powf(1.0 / 2.4) - 0.055
-                }
-            }),
+            texel: table(srgb_encode),
+            vertex_srgb: table(|c| srgb_decode(c).powf(1.0 / 2.2)),
         }
     })
 }
@@ -40,9 +56,14 @@ fn encode(c: egui::Color32, table: &[u8; 256]) -> egui::Color32 {
     egui::Color32::from_rgba_premultiplied(table[r as usize], table[g as usize], table[b as usize], a)
 }
 
-/// Encodes the meshes' vertex colours for the renderer's vertex shader (alpha unchanged).
-pub fn encode_vertices(primitives: &mut [egui::ClippedPrimitive]) {
-    let t = &tables().vertex;
+/// Encodes the meshes' vertex colours for the renderer's vertex shader (alpha unchanged), for a UNORM target or
+/// an `_SRGB` one (`srgb_target`).
+pub fn encode_vertices(primitives: &mut [egui::ClippedPrimitive], srgb_target: bool) {
+    let t = if srgb_target {
+        &tables().vertex_srgb
+    } else {
+        &tables().vertex
+    };
     for p in primitives {
         if let egui::epaint::Primitive::Mesh(mesh) = &mut p.primitive {
             for v in &mut mesh.vertices {
@@ -52,7 +73,8 @@ pub fn encode_vertices(primitives: &mut [egui::ClippedPrimitive]) {
     }
 }
 
-/// The image of a texture change, its texels encoded for an `_SRGB` upload (alpha unchanged).
+/// The image of a texture change, its texels encoded for an `_SRGB` upload (alpha unchanged), for a UNORM
+/// target (an `_SRGB` target takes egui's texels as they are).
 pub fn encode_texture(delta: &egui::epaint::ImageDelta) -> egui::epaint::ImageDelta {
     let t = &tables().texel;
     let egui::ImageData::Color(image) = &delta.image;
@@ -75,14 +97,13 @@ mod tests {
         (c as f64 / 255.0).powf(2.2) * 255.0
     }
 
-    fn srgb_decode(c: u8) -> f64 {
-        let c = c as f64 / 255.0;
-        255.0
-            * if c <= 0.040_45 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
+    fn sampler_decode(c: u8) -> f64 {
+        255.0 * srgb_decode(c as f64 / 255.0)
+    }
+
+    /// What an `_SRGB` target stores of a vertex colour: the shader's decoding, then the sRGB curve.
+    fn srgb_target(c: u8) -> f64 {
+        255.0 * srgb_encode((c as f64 / 255.0).powf(2.2))
     }
 
     /// Every 8-bit value comes back from the renderer's decoding within 1.25 levels (half a step of the encoded
@@ -93,7 +114,8 @@ mod tests {
         for c in 0..=255u8 {
             for (back, name) in [
                 (shader_decode(t.vertex[c as usize]), "vertex"),
-                (srgb_decode(t.texel[c as usize]), "texel"),
+                (sampler_decode(t.texel[c as usize]), "texel"),
+                (srgb_target(t.vertex_srgb[c as usize]), "vertex on an sRGB target"),
             ] {
                 let err = (back - c as f64).abs();
                 assert!(err <= 1.25, "{name} {c}: back as {back:.2}");
@@ -102,6 +124,7 @@ mod tests {
         for c in [0u8, 255] {
             assert_eq!(t.vertex[c as usize], c);
             assert_eq!(t.texel[c as usize], c);
+            assert_eq!(t.vertex_srgb[c as usize], c);
         }
     }
 
@@ -116,7 +139,7 @@ mod tests {
             clip_rect: egui::Rect::EVERYTHING,
             primitive: egui::epaint::Primitive::Mesh(mesh),
         }];
-        encode_vertices(&mut prims);
+        encode_vertices(&mut prims, false);
         let egui::epaint::Primitive::Mesh(m) = &prims[0].primitive else {
             unreachable!()
         };

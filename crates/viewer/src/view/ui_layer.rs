@@ -64,8 +64,9 @@ impl UiLayer {
             gpu.allocator_arc(),
             gpu.device.clone(),
             RenderMode::RenderPass(render_pass),
-            // The swapchain's UNORM images hold sRGB-encoded values; `prepare` hands the renderer colours that
-            // its decoding turns back into egui's, so its fragments need no encoding (ui_colors.rs).
+            // A UNORM swapchain's images hold sRGB-encoded values: `prepare` hands the renderer colours that
+            // its decoding turns back into egui's, so its fragments need no encoding (ui_colors.rs). An `_SRGB`
+            // swapchain encodes the renderer's linear output itself.
             // One frame in flight: every frame waits for its fence (present.rs).
             Options {
                 in_flight_frames: 1,
@@ -151,7 +152,9 @@ impl UiLayer {
         delta: &mut egui::TexturesDelta,
         primitives: &mut [egui::ClippedPrimitive],
     ) -> Result<()> {
-        ui_colors::encode_vertices(primitives);
+        // A UNORM swapchain takes egui's values; an `_SRGB` one encodes the renderer's linear output itself.
+        let srgb_target = super::present::is_srgb_format(self.format);
+        ui_colors::encode_vertices(primitives, srgb_target);
         let Some(r) = self.renderer.as_mut() else {
             delta.clear();
             return Ok(());
@@ -159,7 +162,12 @@ impl UiLayer {
         self.to_free.extend(delta.free.drain());
         for (id, deltas) in delta.set.drain() {
             for d in deltas {
-                r.set_texture(self.gpu.queue, pool, id, &ui_colors::encode_texture(&d))
+                let d = if srgb_target {
+                    d
+                } else {
+                    ui_colors::encode_texture(&d)
+                };
+                r.set_texture(self.gpu.queue, pool, id, &d)
                     .context("cannot upload an egui texture")?;
             }
         }
