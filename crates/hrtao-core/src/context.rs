@@ -79,6 +79,9 @@ pub struct DeviceInfo {
     pub is_software: bool,
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
+    /// Valid bits of the queue's timestamps (`timestampValidBits`, 36 to 64): higher bits are undefined and
+    /// the counter wraps at 2^bits.
+    pub timestamp_valid_bits: u32,
     pub validation: bool,
     /// The device has `geometryShader` (enabled): fragment shaders may read `gl_PrimitiveID`, which the
     /// rasterised primary visibility needs for its indexed draws.
@@ -468,7 +471,8 @@ impl Gpu {
             CStr::from_ptr(driver_props.driver_info.as_ptr()).to_string_lossy()
         );
         let families = instance.get_physical_device_queue_family_properties(physical);
-        let timestamps = families[queue_family as usize].timestamp_valid_bits > 0;
+        let timestamp_valid_bits = families[queue_family as usize].timestamp_valid_bits;
+        let timestamps = timestamp_valid_bits > 0;
 
         // Features: ray queries, acceleration structures, buffer device address, scalar layout, int64 (+ atomics).
         let mut supported_v11 = vk::PhysicalDeviceVulkan11Features::default();
@@ -561,6 +565,7 @@ impl Gpu {
             is_software,
             timestamp_period_ns: props.limits.timestamp_period,
             timestamps,
+            timestamp_valid_bits,
             validation,
             primitive_id_in_fragment,
             multi_draw_indirect,
