@@ -584,3 +584,47 @@ fn smoothing_ten_million_triangles() {
     );
     assert_eq!(n.len(), pos.len());
 }
+
+/// An OBJ model whose faces mix corners with and without `vn`: tobj cannot line the given normals up with the
+/// positions, so the whole model is smoothed (with a warning) instead of shading with misplaced normals.
+#[test]
+fn obj_with_some_vn_is_smoothed_whole() {
+    capture_warnings();
+    let dir = temp_dir("normals-obj-mixed");
+    let (p, ix, n) = cylinder(12);
+    let mut s = String::new();
+    for v in &p {
+        s += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+    }
+    for v in &n {
+        s += &format!("vn {} {} {}\n", v[0], v[1], v[2]);
+    }
+    for (t, c) in ix.chunks(3).enumerate() {
+        // The side with `vn`, the caps without.
+        if t < 24 {
+            s += &format!("f {0}//{0} {1}//{1} {2}//{2}\n", c[0] + 1, c[1] + 1, c[2] + 1);
+        } else {
+            s += &format!("f {} {} {}\n", c[0] + 1, c[1] + 1, c[2] + 1);
+        }
+    }
+    let path = dir.join("mixed_vn.obj");
+    std::fs::write(&path, s).unwrap();
+    let prim = load(&path, Some(40.0)).unwrap();
+    assert_eq!(
+        prim.positions.len(),
+        50,
+        "smoothed: side and caps split at the rim"
+    );
+    for (pos, nrm) in prim.positions.iter().zip(&prim.normals) {
+        let radial = Vec3::new(pos[0], pos[1], 0.0).normalize().to_array();
+        assert!(
+            near(*nrm, radial, 1e-3) || near(*nrm, [0.0, 0.0, pos[2]], 1e-6),
+            "{pos:?}: {nrm:?}"
+        );
+    }
+    let w = warnings_about("mixed_vn.obj");
+    assert!(
+        w.len() == 1 && w[0].contains("smoothing the whole model"),
+        "{w:?}"
+    );
+}
