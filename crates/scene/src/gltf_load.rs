@@ -278,6 +278,10 @@ fn load_primitive(
         }
     };
     let indices = to_triangle_list(mode, raw_indices);
+    let normals = match prim.get(&Semantic::Normals) {
+        Some(acc) => read_normals(&acc, buffers)?,
+        None => Vec::new(),
+    };
 
     let factor = prim
         .material()
@@ -298,8 +302,34 @@ fn load_primitive(
         indices,
         base_color,
         double_sided: prim.material().double_sided(),
-        normals: Vec::new(),
+        normals,
     }))
+}
+
+/// The NORMAL attribute, one per vertex (strips and fans become lists by their indices only, so the normals
+/// stay as they are): float, or normalized signed byte/short (KHR_mesh_quantization), sparse accessors
+/// included. A type other than VEC3 or a non-normalized integer is a warning and face normals; counts and
+/// values are checked for every load by [`Primitive::check_normals`].
+fn read_normals(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Vec<[f32; 3]>, String> {
+    let quantized = matches!(acc.data_type(), DataType::I8 | DataType::I16) && acc.normalized();
+    if acc.dimensions() != Dimensions::Vec3 || !(acc.data_type() == DataType::F32 || quantized) {
+        log::warn!(
+            "NORMAL accessor {} is {:?} {:?}{}, expected VEC3 float or normalized byte/short; shading flat",
+            acc.index(),
+            acc.dimensions(),
+            acc.data_type(),
+            if acc.normalized() { " normalized" } else { "" }
+        );
+        return Ok(Vec::new());
+    }
+    read_accessor(acc, buffers, "NORMAL", |dt, norm, b| {
+        let s = dt.size();
+        [
+            comp_f32(dt, norm, &b[..s]),
+            comp_f32(dt, norm, &b[s..2 * s]),
+            comp_f32(dt, norm, &b[2 * s..3 * s]),
+        ]
+    })
 }
 
 /// Converts strips/fans to a list; drops a trailing partial triangle of a list.
@@ -712,7 +742,7 @@ fn tree_node_count(doc: &gltf::Document, post_order: &[usize], mesh_below: &[boo
 }
 
 /// Bytes the decoded triangle primitives will take, from the accessor counts the file declares
-/// (positions, raw and converted indices, colours), before any of it is read.
+/// (positions, normals, raw and converted indices, colours), before any of it is read.
 fn geometry_bytes(doc: &gltf::Document) -> u64 {
     let mut total = 0u64;
     for prim in doc.meshes().flat_map(|m| m.primitives()) {
@@ -729,8 +759,10 @@ fn geometry_bytes(doc: &gltf::Document) -> u64 {
             indices.saturating_sub(2).saturating_mul(3)
         };
         let colors = count(&Semantic::Colors(0));
+        let normals = count(&Semantic::Normals);
         total = total
             .saturating_add(vertices.saturating_mul(12))
+            .saturating_add(normals.saturating_mul(12))
             .saturating_add(indices.saturating_add(converted).saturating_mul(4))
             .saturating_add(colors.saturating_mul(16));
     }

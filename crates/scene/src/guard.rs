@@ -34,6 +34,11 @@ pub struct LoadOptions {
     pub max_memory: u64,
     /// STEP and IGES: the kernel's worker process and the tessellation.
     pub cad: CadOptions,
+    /// Meshes without normals of their own (STL; OBJ without `vn`, PLY without nx/ny/nz): smooth normals by this
+    /// crease angle in degrees (within 0..=180, [`crate::normals::smooth`]); `None` shades them with face normals.
+    /// Files with their own normals, and glTF (whose spec says flat without NORMAL), ignore it. Default: the
+    /// command line's (`--smooth-angle`/`--flat-normals`), else 40°, the renderer's feature-edge crease.
+    pub crease_deg: Option<f32>,
 }
 
 impl Default for LoadOptions {
@@ -42,6 +47,7 @@ impl Default for LoadOptions {
             cancel: Arc::new(AtomicBool::new(false)),
             max_memory: default_max_memory(),
             cad: CadOptions::default(),
+            crease_deg: crate::normals::default_crease_deg(),
         }
     }
 }

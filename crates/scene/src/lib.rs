@@ -16,6 +16,7 @@ mod gltf_load;
 mod guard;
 #[cfg(feature = "hostile-corpus")]
 pub mod hostile;
+pub mod normals;
 mod obj_groups;
 mod obj_load;
 mod ply_load;

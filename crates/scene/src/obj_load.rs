@@ -1,5 +1,11 @@
 //! Wavefront OBJ loader (via tobj). Each OBJ model becomes one mesh with one primitive and
 //! one identity instance; the colour is the `.mtl` diffuse colour if available.
+//!
+//! Shading normals: a model whose every face corner has a `vn` keeps them (tobj's `single_index` gives one
+//! normal per vertex, lined up with the positions); a model without `vn` gets smooth normals by the load's crease
+//! angle ([`crate::normals::smooth`]). tobj drops the missing normals of a model whose faces mix corners with and
+//! without `vn` (what is left no longer lines up with the positions): such a model is smoothed whole, with a
+//! warning.
 
 use std::cell::RefCell;
 use std::path::Path;
@@ -112,6 +118,38 @@ pub fn load_obj(
             .and_then(|mat| mat.diffuse)
             .map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 1.0])
             .unwrap_or(DEFAULT_BASE_COLOR);
+        let mut prim = Primitive {
+            positions,
+            indices: m.indices,
+            base_color,
+            double_sided: true,
+            normals: Vec::new(),
+        };
+        if !m.normals.is_empty() && m.normals.len() != m.positions.len() {
+            log::warn!(
+                "{}: model {mi} ({}): {} of its {} vertices have a `vn`; smoothing the whole model instead",
+                path.display(),
+                model.name,
+                m.normals.len() / 3,
+                m.positions.len() / 3
+            );
+        }
+        if m.normals.len() == m.positions.len() {
+            prim.normals = m
+                .normals
+                .chunks_exact(3)
+                .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+                .collect();
+        } else {
+            if opts.crease_deg.is_some() {
+                budget.borrow_mut().reserve(
+                    prim.triangle_count()
+                        .saturating_mul(crate::normals::SMOOTH_BYTES_PER_TRIANGLE),
+                    "smoothing the normals",
+                )?;
+            }
+            crate::normals::smooth_primitive(&mut prim, opts.crease_deg, path)?;
+        }
         let mesh_id = scene.meshes.len() as u32;
         let (node, name) = tagged.node_of(&model.name);
         tagged.tree.nodes[node as usize]
@@ -119,13 +157,7 @@ pub fn load_obj(
             .push(scene.instances.len() as u32);
         scene.meshes.push(Mesh {
             name: name.clone(),
-            primitives: vec![Primitive {
-                positions,
-                indices: m.indices,
-                base_color,
-                double_sided: true,
-                normals: Vec::new(),
-            }],
+            primitives: vec![prim],
         });
         scene.instances.push(Instance {
             mesh: mesh_id,

@@ -2,6 +2,9 @@
 //! vertex_index) become one mesh with one identity instance, coordinates as in the file; polygons are
 //! fanned into triangles. The file goes through the guard; the element counts the header declares must
 //! fit in the file's size, and the memory they imply is checked before the payload is read.
+//!
+//! Shading normals: the vertices' nx/ny/nz (float or double) when the `vertex` element declares all three; else
+//! smooth normals by the load's crease angle ([`crate::normals::smooth`]).
 
 use std::path::Path;
 
@@ -16,25 +19,29 @@ use crate::error::SceneError;
 use crate::guard::{read_model, LoadOptions};
 use crate::scene::{LoadProgress, Scene};
 
-/// Memory per vertex (position) and per face (index list, ~3 triangle indices) while decoding.
-const VERTEX_BYTES: u64 = 12 + 16;
+/// Memory per vertex (position, normal) and per face (index list, ~3 triangle indices) while decoding.
+const VERTEX_BYTES: u64 = 12 + 12 + 16;
 const FACE_BYTES: u64 = 24 + 16 + 12;
 
+/// A vertex's position and normal (zero unless the file has nx/ny/nz).
 #[derive(Default)]
-struct Vertex([f32; 3]);
+struct Vertex([f32; 3], [f32; 3]);
 
 impl PropertyAccess for Vertex {
     fn new() -> Self {
         Vertex::default()
     }
     fn set_property(&mut self, name: &str, p: Property) -> PropertyAccessResult {
-        let k = match name {
-            "x" => 0,
-            "y" => 1,
-            "z" => 2,
+        let slot = match name {
+            "x" => &mut self.0[0],
+            "y" => &mut self.0[1],
+            "z" => &mut self.0[2],
+            "nx" => &mut self.1[0],
+            "ny" => &mut self.1[1],
+            "nz" => &mut self.1[2],
             _ => return PropertyAccessResult::Ignored,
         };
-        self.0[k] = match p {
+        *slot = match p {
             Property::Float(v) => v,
             Property::Double(v) => v as f32,
             Property::Char(v) => v as f32,
@@ -164,7 +171,32 @@ pub fn load_ply(
             indices.extend([f.0[0] as u32, f.0[k] as u32, f.0[k + 1] as u32]);
         }
     }
+    // Normals only when the file declares all three components (a lone `nx` is not a normal).
+    let has_normals = header.elements.get("vertex").is_some_and(|e| {
+        ["nx", "ny", "nz"].iter().all(|k| {
+            matches!(
+                e.properties.get(*k).map(|p| &p.data_type),
+                Some(PropertyType::Scalar(_))
+            )
+        })
+    });
+    if !has_normals && opts.crease_deg.is_some() {
+        budget.reserve(
+            (indices.len() as u64 / 3).saturating_mul(crate::normals::SMOOTH_BYTES_PER_TRIANGLE),
+            "smoothing the normals",
+        )?;
+    }
+    let normals = if has_normals {
+        vertices.iter().map(|v| v.1).collect()
+    } else {
+        Vec::new()
+    };
     let mut scene = Scene::single_mesh(path, vertices.into_iter().map(|v| v.0).collect(), indices);
+    let prim = &mut scene.meshes[0].primitives[0];
+    prim.normals = normals;
+    if !has_normals {
+        crate::normals::smooth_primitive(prim, opts.crease_deg, path)?;
+    }
     scene.metadata = header
         .comments
         .iter()

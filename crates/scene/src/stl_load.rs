@@ -1,6 +1,11 @@
 //! STL loader (binary and ASCII, via stl_io): one mesh, one identity instance, coordinates as in the file.
 //! The file goes through the guard; the triangle count a binary file declares must match its size, and
 //! the memory it implies is checked before decoding.
+//!
+//! Shading normals: STL's stored facet normals are not trusted (exporters often write zeros, or normals that
+//! disagree with the winding), and they are per facet anyway; the mesh gets smooth normals by the load's crease
+//! angle ([`crate::normals::smooth`], which also welds the file's separate triangle corners), or face normals
+//! when [`LoadOptions::crease_deg`] is `None`.
 
 use std::path::Path;
 
@@ -51,6 +56,12 @@ pub fn load_stl(
         }));
     };
     budget.reserve(triangles.saturating_mul(TRIANGLE_BYTES), "the declared triangles")?;
+    if opts.crease_deg.is_some() {
+        budget.reserve(
+            triangles.saturating_mul(crate::normals::SMOOTH_BYTES_PER_TRIANGLE),
+            "smoothing the normals",
+        )?;
+    }
     opts.check_cancel(path)?;
     let mut cursor = std::io::Cursor::new(bytes);
     let reader: Box<dyn TriangleIterator<Item = std::io::Result<stl_io::Triangle>>> =
@@ -73,6 +84,8 @@ pub fn load_stl(
     }
     let n = u32::try_from(positions.len()).map_err(|_| err("more than 2^32 vertices".into()))?;
     let mut scene = Scene::single_mesh(path, positions, (0..n).collect());
+    opts.check_cancel(path)?;
+    crate::normals::smooth_primitive(&mut scene.meshes[0].primitives[0], opts.crease_deg, path)?;
     scene.metadata = metadata.into_iter().collect();
     Ok(scene)
 }

@@ -50,6 +50,31 @@ pub struct Cli {
     /// STEP/IGES tessellation: angular deflection in degrees [default: 10].
     #[arg(long, global = true, value_name = "DEGREES")]
     pub angular_deflection: Option<f64>,
+    /// Meshes without normals of their own (STL; OBJ without `vn`, PLY without nx/ny/nz): smooth shading across
+    /// edges whose faces meet at up to this angle, 0..=180 [default: 40, the feature edges' --crease]. Sharper
+    /// edges stay creases.
+    #[arg(long, global = true, value_name = "DEGREES", conflicts_with = "flat_normals")]
+    pub smooth_angle: Option<f32>,
+    /// Meshes without normals of their own shade with face normals (no smoothing). Files with normals and glTF
+    /// (flat without NORMAL, as its spec says) are not affected by either flag.
+    #[arg(long, global = true)]
+    pub flat_normals: bool,
+}
+
+impl Cli {
+    /// Makes `--smooth-angle`/`--flat-normals` the smoothing of every load with default options (`hrtao render`,
+    /// `bench`, and the viewer's panel); an angle outside 0..=180 is an error.
+    pub fn set_mesh_smoothing(&self) -> Result<(), String> {
+        let crease = match (self.smooth_angle, self.flat_normals) {
+            (_, true) => None,
+            (Some(deg), false) => {
+                Some(hrtao_scene::normals::check_crease(deg).map_err(|e| format!("--smooth-angle: {e}"))?)
+            }
+            (None, false) => return Ok(()),
+        };
+        hrtao_scene::normals::set_default_crease_deg(crease);
+        Ok(())
+    }
 }
 
 #[derive(Subcommand, Debug)]

@@ -119,6 +119,7 @@ fn main() {
         .init();
     if let Err(e) =
         occt_worker::set_tessellation(args.deflection, args.deflection_mm, args.angular_deflection)
+            .and_then(|()| args.set_mesh_smoothing())
     {
         eprintln!("hrtao: error: {e}");
         std::process::exit(2);

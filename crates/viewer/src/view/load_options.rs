@@ -1,6 +1,8 @@
 //! The panel's load options: how OpenCASCADE turns a STEP or IGES file's B-rep faces into triangles, as the
 //! command line's `--deflection`, `--deflection-mm` and `--angular-deflection` do. Kept in the preferences and
 //! applied when a STEP/IGES file is opened or reopened (the scene on screen keeps its triangles until then).
+//! Also the smoothing of meshes without normals of their own (STL, OBJ/PLY without normals), as the command line's
+//! `--smooth-angle`/`--flat-normals` do, applied to files opened after it changes.
 use hrtao_scene::CadTessellation;
 use serde::{Deserialize, Serialize};
 
@@ -82,6 +84,51 @@ impl CadLoadOptions {
     }
 }
 
+/// How meshes without normals of their own are shaded, as kept in the preferences (the angle is kept while
+/// smoothing is off).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MeshLoadOptions {
+    /// Smooth normals by `crease_deg` (else face normals).
+    pub smooth: bool,
+    /// Faces meeting at up to this angle (degrees) share a normal; sharper edges stay creases.
+    pub crease_deg: f32,
+}
+
+impl Default for MeshLoadOptions {
+    fn default() -> Self {
+        MeshLoadOptions::from_crease(Some(hrtao_scene::normals::DEFAULT_CREASE_DEG))
+    }
+}
+
+impl MeshLoadOptions {
+    /// The options showing a crease angle (`None`: face normals; the command line's flags).
+    pub fn from_crease(crease_deg: Option<f32>) -> MeshLoadOptions {
+        MeshLoadOptions {
+            smooth: crease_deg.is_some(),
+            crease_deg: crease_deg.unwrap_or(hrtao_scene::normals::DEFAULT_CREASE_DEG),
+        }
+    }
+
+    /// What the loader gets: the angle within 0..=180 (a value that is not a number, as a hand-edited preferences
+    /// file may hold, gives the default), or `None` when smoothing is off.
+    pub fn crease_deg(&self) -> Option<f32> {
+        let deg = if self.crease_deg.is_finite() {
+            self.crease_deg.clamp(0.0, 180.0)
+        } else {
+            hrtao_scene::normals::DEFAULT_CREASE_DEG
+        };
+        self.smooth.then_some(deg)
+    }
+}
+
+/// The load options of a file opened with the preferences' tessellation and smoothing.
+pub fn load_options(prefs: &super::prefs::Prefs) -> hrtao_scene::LoadOptions {
+    let mut opts = prefs.cad_load.load_options();
+    opts.crease_deg = prefs.mesh_load.crease_deg();
+    opts
+}
+
 /// Whether `spec` names a file the tessellation applies to (STEP or IGES, any case).
 pub fn is_cad_file(spec: &str) -> bool {
     std::path::Path::new(spec)
@@ -154,20 +201,53 @@ impl LoadOptionsPanel {
         if ui.button("Defaults").clicked() {
             *o = CadLoadOptions::default();
         }
+        ui.separator();
+        let m = &mut prefs.mesh_load;
+        let r = ui
+            .checkbox(&mut m.smooth, "Smooth meshes without normals")
+            .on_hover_text(
+                "STL, and OBJ/PLY files without normals: shade smoothly across edges whose faces meet at up to \
+                 the angle (--smooth-angle); off: face normals (--flat-normals). Files with their own normals and \
+                 glTF are shaded as they say. Applies to files opened from now on.",
+            );
+        ui_probe::note("Smooth meshes without normals", r.rect, ppp);
+        let r = ui
+            .add_enabled(
+                m.smooth,
+                egui::Slider::new(&mut m.crease_deg, 0.0..=180.0)
+                    .step_by(1.0)
+                    .suffix("°")
+                    .text("smoothing angle"),
+            )
+            .on_hover_text(
+                "Faces meeting at up to this angle share a normal; sharper edges stay creases. At the feature \
+                 edges' crease angle (40° by default) smoothed surfaces get no crease lines.",
+            );
+        ui_probe::note("smoothing angle", r.rect, ppp);
         let mut out = Vec::new();
         if prefs != *state.prefs {
             out.push(Command::Prefs(Box::new(prefs)));
         }
-        let reopen = is_cad_file(state.spec) && state.loading.is_none();
+        let reopen = (is_cad_file(state.spec) || is_mesh_file(state.spec)) && state.loading.is_none();
         let r = ui
             .add_enabled(reopen, egui::Button::new("Reopen with these options"))
-            .on_hover_text("Opens the current STEP/IGES file again; new files open with them too");
+            .on_hover_text(
+                "Opens the current STEP/IGES, STL, OBJ or PLY file again; new files open with them too",
+            );
         ui_probe::note("Reopen with these options", r.rect, ppp);
         if r.clicked() {
             out.push(Command::Open(state.spec.to_string()));
         }
         out
     }
+}
+
+/// Whether `spec` names a mesh file the smoothing may apply to (STL, OBJ, PLY, any case).
+pub fn is_mesh_file(spec: &str) -> bool {
+    std::path::Path::new(spec)
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| ["stl", "obj", "ply"].contains(&e.to_ascii_lowercase().as_str()))
 }
 
 #[cfg(test)]
@@ -263,6 +343,41 @@ mod tests {
         assert_eq!(old.cad_load, CadLoadOptions::default());
     }
 
+    /// The smoothing option: the loader's angle (default 40°, the renderer's feature-edge crease), None when off,
+    /// clamped or the default from a hand-edited file, and the command line's flags shown in the panel.
+    #[test]
+    fn smoothing_becomes_the_loaders_crease_angle() {
+        let d = MeshLoadOptions::default();
+        assert_eq!(d.crease_deg(), Some(40.0));
+        assert_eq!(
+            d.crease_deg(),
+            Some(hrtao_core::AoSettings::default().display.crease_deg),
+            "the smoothing default is the feature edges' crease"
+        );
+        let mut p = super::super::prefs::Prefs::default();
+        assert_eq!(load_options(&p).crease_deg, Some(40.0));
+        p.mesh_load = MeshLoadOptions::from_crease(None);
+        assert_eq!(load_options(&p).crease_deg, None);
+        assert_eq!(p.mesh_load.crease_deg, 40.0, "the angle is kept while off");
+        p.mesh_load = MeshLoadOptions::from_crease(Some(25.0));
+        assert_eq!(load_options(&p).crease_deg, Some(25.0));
+        for (wild, want) in [(f32::NAN, 40.0), (500.0, 180.0), (-3.0, 0.0)] {
+            let o = MeshLoadOptions {
+                smooth: true,
+                crease_deg: wild,
+            };
+            assert_eq!(o.crease_deg(), Some(want), "{wild}");
+        }
+        // Kept in the preferences; a file from before the option gives the default.
+        let json = serde_json::to_string(&p).unwrap();
+        let back: super::super::prefs::Prefs = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.mesh_load, p.mesh_load);
+        let mut v: serde_json::Value = serde_json::from_str(&json).unwrap();
+        v.as_object_mut().unwrap().remove("mesh_load");
+        let old: super::super::prefs::Prefs = serde_json::from_value(v).unwrap();
+        assert_eq!(old.mesh_load, MeshLoadOptions::default());
+    }
+
     #[test]
     fn step_and_iges_files_are_recognised() {
         for f in ["a.step", "b.STP", "dir/c.Iges", "d.igs"] {
@@ -271,5 +386,9 @@ mod tests {
         for f in ["a.glb", "gen:box", "step", "x.step.gz"] {
             assert!(!is_cad_file(f), "{f}");
         }
+        for f in ["a.stl", "b.OBJ", "c.Ply"] {
+            assert!(is_mesh_file(f) && !is_cad_file(f), "{f}");
+        }
+        assert!(!is_mesh_file("a.gltf") && !is_mesh_file("a.step"));
     }
 }

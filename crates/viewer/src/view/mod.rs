@@ -251,9 +251,12 @@ impl Viewer {
         if args.no_auto_budget {
             prefs.auto_budget = false;
         }
-        // The command line's tessellation flags become the panel's load options.
+        // The command line's tessellation and smoothing flags become the panel's load options.
         if let Some(t) = hrtao_scene::command_line_cad_tessellation() {
             prefs.cad_load = load_options::CadLoadOptions::from_tessellation(t);
+        }
+        if let Some(c) = hrtao_scene::normals::command_line_crease_deg() {
+            prefs.mesh_load = load_options::MeshLoadOptions::from_crease(c);
         }
         // The user's render scale caps the internal resolution; a still image is rendered at it.
         let render_scale = args
@@ -375,7 +378,7 @@ impl Viewer {
     /// Starts loading `spec` on a background thread (the window keeps running; the old scene stays).
     /// A load still running is cancelled.
     fn start_loading(&mut self, spec: String) {
-        self.loader.start(spec, self.prefs.cad_load.load_options());
+        self.loader.start(spec, load_options::load_options(&self.prefs));
     }
 
     /// Cancel button: stops the running load; the current scene stays.

@@ -42,6 +42,8 @@ pub struct Prefs {
     pub dark_theme: bool,
     /// How STEP/IGES files are tessellated when opened (the panel's load options).
     pub cad_load: super::load_options::CadLoadOptions,
+    /// How meshes without normals of their own are smoothed when opened (the panel's load options).
+    pub mesh_load: super::load_options::MeshLoadOptions,
 }
 
 impl Default for Prefs {
@@ -60,6 +62,7 @@ impl Default for Prefs {
             bookmarks: Vec::new(),
             dark_theme: true,
             cad_load: Default::default(),
+            mesh_load: Default::default(),
         }
     }
 }
