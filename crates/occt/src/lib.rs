@@ -109,13 +109,14 @@ pub struct Tessellation {
 }
 
 impl Default for Tessellation {
-    /// 0.1 % of each part's size and 10°: curved faces shade smoothly with geometric normals (the
-    /// renderer's crease angle is larger) and feature edges stay on real creases.
+    /// 0.5 % of each part's size and 35°, the loader's default (`hrtao_scene::CadTessellation`): the surface
+    /// normals handed back with the nodes shade curved faces smoothly, so the triangles need only keep
+    /// silhouettes and AO true.
     fn default() -> Self {
         Tessellation {
-            relative: 1e-3,
+            relative: 5e-3,
             absolute: 0.0,
-            angular: 10f64.to_radians(),
+            angular: 35f64.to_radians(),
         }
     }
 }
