@@ -3,9 +3,11 @@
 # (`f3d FILE --output`, the same OpenCASCADE kernel), run in turn (one warm-up each, then RUNS pairs), and the
 # triangles each draws. Writes docs/bench/step_<file>_<quality>.json, which
 # `cargo run -p bench-report -- docs/bench --markdown docs/benchmarks.md` renders as the "STEP/IGES: load to image
-# against F3D" table. Two tessellations per file: F3D's (goal: triangles within ±20 % and wall time <= 1.5x F3D's) and
-# hrtao's default (goal <= 3x). F3D 1.3 meshes with OpenCASCADE's per-edge relative deflection 0.1 and 0.5 rad;
-# the nearest of hrtao's flags is one deflection of 1 mm and 28.65 degrees (the same triangles on AS1).
+# against F3D" table. Three tessellations per file: F3D's (goal: triangles within ±20 % and wall time <= 1.5x F3D's),
+# hrtao's default (0.5 % of each part's size and 35 degrees; goal <= 3x) and hrtao's fine one (CadTessellation::FINE,
+# 0.1 % and 10 degrees, the default before B-rep faces carried surface normals; goal <= 3x). F3D 1.3 meshes with
+# OpenCASCADE's per-edge relative deflection 0.1 and 0.5 rad; the nearest of hrtao's flags is one deflection of 1 mm
+# and 28.65 degrees (the same triangles on AS1).
 #
 # Needs f3d (scripts/install-deps.sh --bench), the files of scripts/fetch-step-data.sh, and Xvfb when no DISPLAY
 # is set (F3D opens an X window even for --output). Environment: RUNS (default 5), OUT (default docs/bench),
@@ -96,5 +98,6 @@ EOF
 
 for file in as1-tu-203.stp t20_data.step step_boundary_colors.stp; do
   bench f3d 1.5 "$file" --deflection-mm 1 --angular-deflection 28.65
-  bench default 3 "$file" --deflection 0.001 --angular-deflection 10
+  bench default 3 "$file" --deflection 0.005 --angular-deflection 35
+  bench fine 3 "$file" --deflection 0.001 --angular-deflection 10
 done

@@ -11,6 +11,9 @@
 #include <BRepToIGES_BREntity.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
+#include <GeomLib.hxx>
+#include <Geom_Surface.hxx>
+#include <Precision.hxx>
 #include <Bnd_Box.hxx>
 #include <IGESBasic_Group.hxx>
 #include <IGESBasic_Name.hxx>
@@ -128,6 +131,47 @@ bool label_color(const Handle(XCAFDoc_ColorTool)& ct, const TDF_Label& l, std::a
   return false;
 }
 
+// The surface normal at each node of `face`'s triangulation, in the triangulation's frame (the face's location
+// not applied), along the surface's own orientation (dU x dV), which is the side the triangles wind toward: the
+// caller reverses both for a reversed face. Normals the triangulation carries are used as they are; otherwise the
+// surface is evaluated at the node's UV. Where it has no normal there (a cone's apex, a sphere's pole, a
+// degenerate patch) or the face has no UV nodes, the node gets the mean of the unit normals of its triangles.
+std::vector<gp_Dir> node_normals(const TopoDS_Face& face, const Handle(Poly_Triangulation)& tri) {
+  const Standard_Integer n = tri->NbNodes();
+  std::vector<gp_Dir> out(n, gp::DZ());
+  if (tri->HasNormals()) {
+    for (Standard_Integer i = 1; i <= n; i++) out[i - 1] = tri->Normal(i);
+    return out;
+  }
+  // Mean unit normal of the triangles around each node (the fallback).
+  std::vector<gp_XYZ> mean(n, gp_XYZ(0, 0, 0));
+  for (Standard_Integer k = 1; k <= tri->NbTriangles(); k++) {
+    Standard_Integer a, b, c;
+    tri->Triangle(k).Get(a, b, c);
+    if (a < 1 || b < 1 || c < 1 || a > n || b > n || c > n) continue;
+    gp_XYZ e = (tri->Node(b).XYZ() - tri->Node(a).XYZ()) ^ (tri->Node(c).XYZ() - tri->Node(a).XYZ());
+    Standard_Real m = e.Modulus();
+    if (!(m > Precision::Confusion() * Precision::Confusion())) continue;
+    e /= m;
+    mean[a - 1] += e;
+    mean[b - 1] += e;
+    mean[c - 1] += e;
+  }
+  // The surface in the triangulation's frame: the face without its own location (the TFace's surface location
+  // stays, as for the triangulation).
+  Handle(Geom_Surface) surf;
+  if (tri->HasUVNodes()) surf = BRep_Tool::Surface(TopoDS::Face(face.Located(TopLoc_Location())));
+  for (Standard_Integer i = 1; i <= n; i++) {
+    gp_Dir d;
+    if (!surf.IsNull() && GeomLib::NormEstim(surf, tri->UVNode(i), Precision::Confusion(), d) <= 1) {
+      out[i - 1] = d;
+    } else if (mean[i - 1].Modulus() > 1e-9) {
+      out[i - 1] = gp_Dir(mean[i - 1]);
+    }
+  }
+  return out;
+}
+
 struct Walker {
   const hr_callbacks* cb;
   Progress* progress;
@@ -179,6 +223,7 @@ struct Walker {
 
     struct Prim {
       std::vector<float> pos;
+      std::vector<float> nrm;
       std::vector<uint32_t> idx;
       std::array<float, 4> rgba;
       bool colored, face;
@@ -203,13 +248,20 @@ struct Walker {
       p.face = p.face || face_colored;
       gp_Trsf t = loc.Transformation();
       uint32_t base = (uint32_t)(p.pos.size() / 3);
+      bool reversed = face.Orientation() == TopAbs_REVERSED;
+      std::vector<gp_Dir> normals = node_normals(face, tri);
       for (Standard_Integer i = 1; i <= tri->NbNodes(); i++) {
         gp_Pnt q = tri->Node(i).Transformed(t);
         p.pos.push_back((float)q.X());
         p.pos.push_back((float)q.Y());
         p.pos.push_back((float)q.Z());
+        // The face's location is rigid (OCCT refuses scaled or mirrored ones), so a normal turns like a vector.
+        gp_Dir n = normals[i - 1].Transformed(t);
+        if (reversed) n.Reverse();
+        p.nrm.push_back((float)n.X());
+        p.nrm.push_back((float)n.Y());
+        p.nrm.push_back((float)n.Z());
       }
-      bool reversed = face.Orientation() == TopAbs_REVERSED;
       for (Standard_Integer i = 1; i <= tri->NbTriangles(); i++) {
         Standard_Integer a, b, c;
         tri->Triangle(i).Get(a, b, c);
@@ -224,7 +276,7 @@ struct Walker {
     cb->part(cb->ctx, id, name.c_str());
     for (auto& kv : by_color) {
       Prim& p = kv.second;
-      cb->primitive(cb->ctx, id, p.pos.data(), p.pos.size() / 3, p.idx.data(), p.idx.size(),
+      cb->primitive(cb->ctx, id, p.pos.data(), p.nrm.data(), p.pos.size() / 3, p.idx.data(), p.idx.size(),
                     p.colored ? p.rgba.data() : nullptr, p.face ? 1 : 0);
     }
     return id;
@@ -942,6 +994,18 @@ int write_impl(const char* path, int32_t format, int32_t kind, int32_t count) {
     TDataStd_Name::Set(hidden, "hidden_occurrence");
     ct->SetColor(hidden, Quantity_Color(1, 1, 0, Quantity_TOC_RGB), XCAFDoc_ColorSurf);
     ct->SetVisibility(hidden, Standard_False);
+    st->UpdateAssemblies();
+  } else if (kind == 5) {
+    // One cylinder (radius 10, height 20, axis z) placed as is and turned upside down 50 mm along x.
+    TDF_Label asm_ = st->NewShape();
+    TDataStd_Name::Set(asm_, "cylinders");
+    TDF_Label cyl = st->AddShape(BRepPrimAPI_MakeCylinder(10.0, 20.0).Shape(), false);
+    TDataStd_Name::Set(cyl, "cylinder");
+    TDataStd_Name::Set(st->AddComponent(asm_, cyl, TopLoc_Location()), "upright");
+    gp_Trsf flip;
+    flip.SetRotation(gp::OX(), M_PI);
+    flip.SetTranslationPart(gp_Vec(50, 0, 20));
+    TDataStd_Name::Set(st->AddComponent(asm_, cyl, TopLoc_Location(flip)), "upside_down");
     st->UpdateAssemblies();
   } else if (kind == 3) {
     BRep_Builder b;

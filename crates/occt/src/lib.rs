@@ -29,7 +29,17 @@ mod ffi {
         pub ctx: *mut c_void,
         pub progress: extern "C" fn(*mut c_void, f64, *const c_char) -> c_int,
         pub part: extern "C" fn(*mut c_void, i32, *const c_char),
-        pub primitive: extern "C" fn(*mut c_void, i32, *const f32, usize, *const u32, usize, *const f32, i32),
+        pub primitive: extern "C" fn(
+            *mut c_void,
+            i32,
+            *const f32,
+            *const f32,
+            usize,
+            *const u32,
+            usize,
+            *const f32,
+            i32,
+        ),
         pub node: extern "C" fn(*mut c_void, i32, *const c_char, i32, *const f64, *const f32, i32) -> i32,
     }
 
@@ -99,13 +109,14 @@ pub struct Tessellation {
 }
 
 impl Default for Tessellation {
-    /// 0.1 % of each part's size and 10°: curved faces shade smoothly with geometric normals (the
-    /// renderer's crease angle is larger) and feature edges stay on real creases.
+    /// 0.5 % of each part's size and 35°, the loader's default (`hrtao_scene::CadTessellation`): the surface
+    /// normals handed back with the nodes shade curved faces smoothly, so the triangles need only keep
+    /// silhouettes and AO true.
     fn default() -> Self {
         Tessellation {
-            relative: 1e-3,
+            relative: 5e-3,
             absolute: 0.0,
-            angular: 10f64.to_radians(),
+            angular: 35f64.to_radians(),
         }
     }
 }
@@ -159,24 +170,39 @@ extern "C" fn on_part(ctx: *mut c_void, id: i32, name: *const c_char) {
     });
 }
 
+/// The `n` items at `p` (none when `n` is 0, where an empty C++ vector's pointer may be null).
+///
+/// # Safety
+/// `p` points at `n` valid items when `n` > 0.
+unsafe fn copied<T: Copy>(p: *const T, n: usize) -> Vec<T> {
+    if n == 0 || p.is_null() {
+        return Vec::new();
+    }
+    // SAFETY: the caller's promise.
+    unsafe { std::slice::from_raw_parts(p, n) }.to_vec()
+}
+
 #[allow(clippy::too_many_arguments)]
 extern "C" fn on_primitive(
     ctx: *mut c_void,
     part: i32,
     pos: *const f32,
+    nrm: *const f32,
     nverts: usize,
     idx: *const u32,
     nidx: usize,
     color: *const f32,
     face: i32,
 ) {
-    // SAFETY: as above; the arrays hold nverts*3 floats and nidx indices.
+    // SAFETY: as above; the arrays hold nverts*3 floats (positions, normals) and nidx indices.
     let ctx = unsafe { &mut *(ctx as *mut Ctx) };
-    let positions = unsafe { std::slice::from_raw_parts(pos as *const [f32; 3], nverts) }.to_vec();
-    let indices = unsafe { std::slice::from_raw_parts(idx, nidx) }.to_vec();
+    let positions = unsafe { copied(pos as *const [f32; 3], nverts) };
+    let normals = unsafe { copied(nrm as *const [f32; 3], nverts) };
+    let indices = unsafe { copied(idx, nidx) };
     match ctx.model.parts.get_mut(part as usize) {
         Some(p) => p.primitives.push(Primitive {
             positions,
+            normals,
             indices,
             color: rgba(color),
             face_color: face != 0,
@@ -294,6 +320,9 @@ pub enum TestModel {
     /// The bolt pattern of `n` bolts as a sub-assembly placed twice ("left" and "right", 200 mm apart) in an
     /// assembly "two_patterns".
     BoltPatternPair(u32),
+    /// A cylinder "cylinder" (radius 10 mm, height 20 mm, axis z from the origin) placed twice in an assembly
+    /// "cylinders": "upright" where it is, "upside_down" turned 180° about x and moved to (50, 0, 20).
+    Cylinder,
 }
 
 /// Writes a [`TestModel`] as STEP or IGES (tests only), with OCCT's writers. OCCT's IGES writer keeps no
@@ -318,6 +347,7 @@ fn write_test(path: &Path, format: i32, model: TestModel) -> Result<(), Error> {
         TestModel::Coloured => (2, 0),
         TestModel::ManySolids(n) => (3, n),
         TestModel::BoltPatternPair(n) => (4, n),
+        TestModel::Cylinder => (5, 0),
     };
     let mut err = vec![0 as c_char; 2048];
     let _kernel = kernel_lock();
@@ -336,5 +366,67 @@ fn write_test(path: &Path, format: i32, model: TestModel) -> Result<(), Error> {
         Ok(())
     } else {
         Err(Error::Kernel(cstr(err.as_ptr())))
+    }
+}
+
+/// Checks for tests of this crate and of the loader on [`TestModel::Cylinder`] (tests only).
+pub mod testing {
+    /// The kernel's normals on a cylinder (radius 10, height 20, axis z) in the part's coordinates: each triangle is
+    /// a side triangle (its face normal across the axis) or a cap triangle; side vertices get the radial direction,
+    /// cap vertices the axis out of the solid (-z at the bottom, +z at the top, one of the caps a reversed face), and
+    /// every vertex normal lies on the side its triangle winds toward. Returns (side, cap) vertices checked.
+    pub fn check_cylinder_normals(
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        indices: &[u32],
+    ) -> (usize, usize) {
+        assert_eq!(normals.len(), positions.len(), "one normal per vertex");
+        let v = |a: [f32; 3]| [a[0] as f64, a[1] as f64, a[2] as f64];
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let (mut side, mut cap) = (0, 0);
+        for t in indices.chunks(3) {
+            let p: Vec<[f64; 3]> = t.iter().map(|&i| v(positions[i as usize])).collect();
+            let face = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+            let len = dot(face, face).sqrt();
+            assert!(len > 0.0, "a degenerate triangle");
+            let is_cap = face[2].abs() / len > 0.99;
+            for (k, &i) in t.iter().enumerate() {
+                let n = v(normals[i as usize]);
+                assert!((dot(n, n).sqrt() - 1.0).abs() < 1e-5, "unit length: {n:?}");
+                assert!(
+                    dot(n, face) > 0.0,
+                    "normal {n:?} against its triangle's winding {face:?}"
+                );
+                let want = if is_cap {
+                    let z = p[k][2];
+                    assert!(z.abs() < 1e-6 || (z - 20.0).abs() < 1e-6, "a cap vertex at z {z}");
+                    [0.0, 0.0, if z < 10.0 { -1.0 } else { 1.0 }]
+                } else {
+                    let r = (p[k][0] * p[k][0] + p[k][1] * p[k][1]).sqrt();
+                    assert!((r - 10.0).abs() < 1e-4, "a side vertex at radius {r}");
+                    [p[k][0] / r, p[k][1] / r, 0.0]
+                };
+                assert!(
+                    dot(n, want) > 0.9999,
+                    "{} vertex {:?}: normal {n:?}, want {want:?}",
+                    if is_cap { "cap" } else { "side" },
+                    p[k]
+                );
+                if is_cap {
+                    cap += 1;
+                } else {
+                    side += 1;
+                }
+            }
+        }
+        (side, cap)
     }
 }

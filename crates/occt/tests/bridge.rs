@@ -288,3 +288,27 @@ fn concurrent_reads_and_writes_each_get_their_own_model() {
         t.join().unwrap();
     }
 }
+
+/// A STEP cylinder placed twice: one part, its side normals radial and its caps' axial and outward; the upside-down
+/// occurrence is the same part under a 180° turn (normals are the part's; the placement turns them).
+#[test]
+fn cylinder_normals_are_radial_on_the_side_and_axial_on_the_caps() {
+    let m = roundtrip("cylinder.step", Format::Step, TestModel::Cylinder);
+    assert_eq!(
+        m.parts.len(),
+        1,
+        "{:?}",
+        m.parts.iter().map(|p| &p.name).collect::<Vec<_>>()
+    );
+    assert_eq!(m.nodes.iter().filter(|n| n.part == Some(0)).count(), 2);
+    let (mut side, mut cap) = (0, 0);
+    for q in &m.parts[0].primitives {
+        let (s, c) = hrtao_occt::testing::check_cylinder_normals(&q.positions, &q.normals, &q.indices);
+        side += s;
+        cap += c;
+    }
+    assert!(
+        side >= 60 && cap >= 30,
+        "{side} side and {cap} cap vertices checked"
+    );
+}

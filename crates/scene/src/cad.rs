@@ -2,9 +2,10 @@
 //! nodes, units), and the framing that carries it from the kernel's worker process to the loader.
 //!
 //! The worker writes frames to its stdout; each frame is a tag byte, a little-endian `u64` payload length and the
-//! payload: `P` progress (stage, fraction), `M` the model, `E` an error message. The reader checks every count
-//! against the bytes the frame holds before allocating, so a truncated or corrupt stream is an error, never a
-//! huge allocation.
+//! payload: `P` progress (stage, fraction), `M` the model, `E` an error message. The model's payload starts with
+//! its layout's version ([`MODEL_FRAME_VERSION`]): a worker of another hrtao build is a clear error, not a
+//! misread. The reader checks every count against the bytes the frame holds before allocating, so a truncated or
+//! corrupt stream is an error, never a huge allocation.
 
 use std::io::{Read, Write};
 
@@ -15,10 +16,16 @@ pub const MAX_CAD_ENTITIES: u64 = 2_000_000;
 /// transferred by OpenCASCADE takes about 1 KiB).
 pub const CAD_ENTITY_BYTES: u64 = 1024;
 
+/// The layout of the model frame: 2 added the per-vertex normals.
+pub const MODEL_FRAME_VERSION: u32 = 2;
+
 /// Triangles of one colour of a part, in the part's coordinates (the model unit).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CadPrimitive {
     pub positions: Vec<[f32; 3]>,
+    /// The B-rep surface's unit normal at each position (out of the face's front, the side its triangles wind
+    /// toward), or empty: the triangles shade flat. Normals are per face, so an edge between faces is a crease.
+    pub normals: Vec<[f32; 3]>,
     pub indices: Vec<u32>,
     /// Linear RGBA, `None` without colour.
     pub color: Option<[f32; 4]>,
@@ -114,6 +121,7 @@ pub fn write_error(w: &mut impl Write, message: &str) -> std::io::Result<()> {
 /// Writes the model frame.
 pub fn write_model(w: &mut impl Write, m: &CadModel) -> std::io::Result<()> {
     let mut p = Vec::new();
+    p.extend_from_slice(&MODEL_FRAME_VERSION.to_le_bytes());
     p.extend_from_slice(&m.model_unit_m.to_le_bytes());
     p.extend_from_slice(&m.file_unit_m.unwrap_or(0.0).to_le_bytes());
     p.extend_from_slice(&(m.parts.len() as u64).to_le_bytes());
@@ -125,6 +133,12 @@ pub fn write_model(w: &mut impl Write, m: &CadModel) -> std::io::Result<()> {
             p.push(q.face_color as u8);
             p.extend_from_slice(&(q.positions.len() as u64).to_le_bytes());
             for v in &q.positions {
+                for c in v {
+                    p.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+            p.extend_from_slice(&(q.normals.len() as u64).to_le_bytes());
+            for v in &q.normals {
                 for c in v {
                     p.extend_from_slice(&c.to_le_bytes());
                 }
@@ -274,22 +288,45 @@ impl Cursor<'_> {
         let c = [self.f32()?, self.f32()?, self.f32()?, self.f32()?];
         Ok(some.then_some(c))
     }
+    fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
+    }
+    fn vec3s(&mut self) -> Result<Vec<[f32; 3]>, String> {
+        let n = self.count(12)?;
+        let mut v = Vec::with_capacity(n);
+        for _ in 0..n {
+            v.push([self.f32()?, self.f32()?, self.f32()?]);
+        }
+        Ok(v)
+    }
     fn model(&mut self) -> Result<CadModel, String> {
+        let version = self.u32()?;
+        if version != MODEL_FRAME_VERSION {
+            return Err(format!(
+                "a model frame of layout version {version}, this loader reads version {MODEL_FRAME_VERSION} \
+                 (the worker is another hrtao build)"
+            ));
+        }
         let model_unit_m = self.f64()?;
         let file_unit_m = Some(self.f64()?).filter(|&u| u > 0.0 && u.is_finite());
         let nparts = self.count(16)?;
         let mut parts = Vec::with_capacity(nparts);
         for _ in 0..nparts {
             let name = self.str()?;
-            let nprims = self.count(34)?;
+            // Colour 17 bytes, face flag 1, three counts of 8.
+            let nprims = self.count(42)?;
             let mut primitives = Vec::with_capacity(nprims);
             for _ in 0..nprims {
                 let color = self.color()?;
                 let face_color = self.u8()? != 0;
-                let nv = self.count(12)?;
-                let mut positions = Vec::with_capacity(nv);
-                for _ in 0..nv {
-                    positions.push([self.f32()?, self.f32()?, self.f32()?]);
+                let positions = self.vec3s()?;
+                let normals = self.vec3s()?;
+                if !normals.is_empty() && normals.len() != positions.len() {
+                    return Err(format!(
+                        "a model frame with {} normals for {} vertices",
+                        normals.len(),
+                        positions.len()
+                    ));
                 }
                 let ni = self.count(4)?;
                 let mut indices = Vec::with_capacity(ni);
@@ -298,6 +335,7 @@ impl Cursor<'_> {
                 }
                 primitives.push(CadPrimitive {
                     positions,
+                    normals,
                     indices,
                     color,
                     face_color,
@@ -348,6 +386,7 @@ mod tests {
                 name: "bolt".into(),
                 primitives: vec![CadPrimitive {
                     positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                    normals: vec![[0.0, 0.0, 1.0]; 3],
                     indices: vec![0, 1, 2],
                     color: Some([1.0, 0.0, 0.0, 1.0]),
                     face_color: true,
@@ -389,6 +428,26 @@ mod tests {
         assert_eq!(read_frame(&mut r, &mut ok).unwrap(), None);
     }
 
+    /// Normals are all or nothing per primitive: none (flat) round-trips, a count other than the vertices' is an
+    /// error naming both counts.
+    #[test]
+    fn normals_are_one_per_vertex_or_none() {
+        let mut flat = sample();
+        flat.parts[0].primitives[0].normals.clear();
+        let mut buf = Vec::new();
+        write_model(&mut buf, &flat).unwrap();
+        assert_eq!(
+            read_frame(&mut &buf[..], &mut |_| Ok(())).unwrap(),
+            Some(Frame::Model(flat))
+        );
+        let mut short = sample();
+        short.parts[0].primitives[0].normals.pop();
+        let mut buf = Vec::new();
+        write_model(&mut buf, &short).unwrap();
+        let e = read_frame(&mut &buf[..], &mut |_| Ok(())).unwrap_err();
+        assert!(e.contains("2 normals for 3 vertices"), "{e}");
+    }
+
     #[test]
     fn every_truncation_is_an_error() {
         let mut buf = Vec::new();
@@ -399,10 +458,19 @@ mod tests {
         }
         // A count that claims more than the frame holds is refused before allocating.
         let mut bad = buf.clone();
-        bad[9 + 16..9 + 24].copy_from_slice(&u64::MAX.to_le_bytes());
+        let parts = 9 + 4 + 16;
+        bad[parts..parts + 8].copy_from_slice(&u64::MAX.to_le_bytes());
         assert!(read_frame(&mut &bad[..], &mut |_| Ok(()))
             .unwrap_err()
             .contains("items"));
+        // Another layout version is named as such.
+        let mut other = buf.clone();
+        other[9..13].copy_from_slice(&1u32.to_le_bytes());
+        let e = read_frame(&mut &other[..], &mut |_| Ok(())).unwrap_err();
+        assert!(
+            e.contains("layout version 1") && e.contains("another hrtao build"),
+            "{e}"
+        );
         // The reserve callback sees the size first.
         let e = read_frame(&mut &buf[..], &mut |n| Err(format!("{n} over"))).unwrap_err();
         assert!(e.ends_with("over"), "{e}");

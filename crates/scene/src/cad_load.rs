@@ -381,7 +381,8 @@ fn to_scene(path: &Path, model: CadModel) -> Result<Scene, String> {
                     _ => DEFAULT_BASE_COLOR,
                 },
                 double_sided: true,
-                normals: Vec::new(),
+                // The unit scale is uniform: directions stay as the kernel gave them.
+                normals: q.normals.clone(),
             })
             .collect(),
     };
@@ -465,6 +466,134 @@ mod tests {
         assert!(step_entities(header).unwrap_err().contains("no DATA"));
         let ok = b"ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=A();\n#2=B(#1);\n#3=C();\nENDSEC;\nEND-ISO-10303-21;\n";
         assert_eq!(step_entities(ok).unwrap(), 5);
+    }
+
+    /// A closed cylinder (radius 10, height 20 mm, axis z) as the kernel hands it back: the side with radial
+    /// normals, the caps with axial ones, every triangle wound toward its normals' side (out of the solid).
+    fn cylinder_part(segments: u32) -> crate::cad::CadPart {
+        use crate::cad::CadPrimitive;
+        let ring = |z: f32| -> Vec<[f32; 3]> {
+            (0..segments)
+                .map(|k| {
+                    let a = std::f32::consts::TAU * k as f32 / segments as f32;
+                    [10.0 * a.cos(), 10.0 * a.sin(), z]
+                })
+                .collect()
+        };
+        let mut side = CadPrimitive::default();
+        for z in [0.0, 20.0] {
+            for p in ring(z) {
+                side.positions.push(p);
+                side.normals
+                    .push(Vec3::new(p[0], p[1], 0.0).normalize().to_array());
+            }
+        }
+        for k in 0..segments {
+            let (a, b) = (k, (k + 1) % segments);
+            let (c, d) = (a + segments, b + segments);
+            side.indices.extend([a, b, d, a, d, c]);
+        }
+        let cap = |z: f32, up: bool| {
+            let mut q = CadPrimitive {
+                positions: ring(z),
+                ..Default::default()
+            };
+            q.normals = vec![[0.0, 0.0, if up { 1.0 } else { -1.0 }]; q.positions.len()];
+            for k in 1..segments - 1 {
+                q.indices.extend(if up { [0, k, k + 1] } else { [0, k + 1, k] });
+            }
+            q
+        };
+        crate::cad::CadPart {
+            name: "cylinder".into(),
+            primitives: vec![side, cap(0.0, false), cap(20.0, true)],
+        }
+    }
+
+    /// The kernel's normals reach the scene unscaled (an inch file scales positions by 1/25.4) and unit length, and
+    /// a part placed mirrored still shades outward: with the instance transform applied as the renderer does it
+    /// (the cofactor matrix, the normal turned to the side of the face normal that faces the camera), every
+    /// vertex normal seen from outside points out of the solid, radial on the side and axial on the caps.
+    #[test]
+    fn normals_survive_units_and_mirrored_placement() {
+        use crate::cad::{CadModel, CadNode};
+        let node = |name: &str, world: DMat4| CadNode {
+            name: name.into(),
+            parent: None,
+            part: Some(0),
+            world: world.to_cols_array(),
+            color: None,
+            visible: true,
+        };
+        let mirrored = DMat4::from_translation(DVec3::new(60.0, 0.0, 0.0))
+            * DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0))
+            * DMat4::from_rotation_x(0.7);
+        let model = CadModel {
+            parts: vec![cylinder_part(24)],
+            nodes: vec![node("plain", DMat4::IDENTITY), node("mirrored", mirrored)],
+            model_unit_m: 1e-3,
+            file_unit_m: Some(0.0254),
+        };
+        let scene = to_scene(Path::new("cyl.step"), model.clone()).unwrap();
+        let mesh = &scene.meshes[0];
+        for (q, k) in mesh.primitives.iter().zip(&model.parts[0].primitives) {
+            assert_eq!(q.normals, k.normals, "normals unscaled");
+            assert!(
+                (q.positions[0][0] - k.positions[0][0] / 25.4).abs() < 1e-5,
+                "positions in inches"
+            );
+        }
+        assert_eq!(scene.instances.len(), 2);
+        for inst in &scene.instances {
+            let m = inst.transform;
+            let (c0, c1, c2) = (m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate());
+            let cof = glam::Mat3::from_cols(c1.cross(c2), c2.cross(c0), c0.cross(c1));
+            let axis = m.transform_vector3(Vec3::Z).normalize();
+            let base = m.transform_point3(Vec3::ZERO);
+            let mut checked = 0;
+            for (pi, q) in mesh.primitives.iter().enumerate() {
+                for t in q.indices.chunks(3) {
+                    let w: Vec<Vec3> = t
+                        .iter()
+                        .map(|&i| m.transform_point3(Vec3::from(q.positions[i as usize])))
+                        .collect();
+                    let mut face = (w[1] - w[0]).cross(w[2] - w[0]).normalize();
+                    // A camera outside the solid, on the triangle's outer side (the centroid pushed away from
+                    // the axis or past the cap).
+                    let centre = (w[0] + w[1] + w[2]) / 3.0;
+                    let from_axis = centre - base - axis * (centre - base).dot(axis);
+                    let outward = match pi {
+                        0 => from_axis.normalize(),
+                        1 => -axis,
+                        _ => axis,
+                    };
+                    let eye = centre + outward * 100.0;
+                    if face.dot(eye - centre) < 0.0 {
+                        face = -face;
+                    }
+                    for (&i, p) in t.iter().zip(&w) {
+                        let s = (cof * Vec3::from(q.normals[i as usize])).normalize();
+                        let s = if s.dot(face) < 0.0 { -s } else { s };
+                        let want = match pi {
+                            0 => (*p - base - axis * (*p - base).dot(axis)).normalize(),
+                            1 => -axis,
+                            _ => axis,
+                        };
+                        assert!(
+                            s.dot(want) > 0.999,
+                            "{}: primitive {pi}, vertex {i}: {s} instead of {want}",
+                            inst.name
+                        );
+                        // Not merely turned to the camera: the raw cofactor normal agrees with the winding.
+                        let raw = cof * Vec3::from(q.normals[i as usize]);
+                        let wound = (w[1] - w[0]).cross(w[2] - w[0]);
+                        assert!(raw.dot(wound) > 0.0, "{}: normal against the winding", inst.name);
+                        checked += 1;
+                    }
+                }
+            }
+            assert!(checked > 100);
+        }
     }
 
     #[test]

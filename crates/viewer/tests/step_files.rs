@@ -187,6 +187,31 @@ fn models_written_by_occt_load_and_render() {
 }
 
 /// Worker processes (ours) alive now, reading a file under `dir`.
+/// The kernel's surface normals reach the scene through the worker's frames: a STEP cylinder placed upright and
+/// upside down is one mesh whose every primitive has one normal per vertex, radial on the side and axial out of the
+/// caps; the upside-down instance turns them with its transform (a 180° turn about x).
+#[test]
+fn step_cylinder_has_the_kernels_normals() {
+    let dir = tmp("cylinder");
+    let p = dir.join("cylinder.step");
+    write_test_model(&p, Format::Step, TestModel::Cylinder).unwrap();
+    let s = load(&p).unwrap();
+    assert_eq!((s.meshes.len(), s.instances.len()), (1, 2));
+    let (mut side, mut cap) = (0, 0);
+    for q in &s.meshes[0].primitives {
+        let (a, b) = hrtao_occt::testing::check_cylinder_normals(&q.positions, &q.normals, &q.indices);
+        side += a;
+        cap += b;
+    }
+    assert!(side >= 60 && cap >= 30, "{side} side and {cap} cap vertices");
+    let turn = s.instances[1].transform.transform_vector3(glam::Vec3::Z);
+    assert!(
+        (turn - glam::Vec3::NEG_Z).length() < 1e-5,
+        "upside down: +z goes to {turn}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 fn workers(dir: &Path) -> Vec<u32> {
     let me = std::process::id().to_string();
     std::fs::read_dir("/proc")

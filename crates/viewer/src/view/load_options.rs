@@ -295,7 +295,10 @@ mod tests {
             angular_deg: f64::INFINITY,
         };
         let t = wild.tessellation();
-        assert_eq!((t.relative, t.angular_deg), (0.1, 10.0));
+        assert_eq!(
+            (t.relative, t.angular_deg),
+            (0.1, CadTessellation::default().angular_deg)
+        );
         let t = CadLoadOptions {
             relative: false,
             ..wild
