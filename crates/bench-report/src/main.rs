@@ -9,6 +9,7 @@ mod latency_report;
 mod plot;
 mod report;
 mod results;
+mod step_sweep_report;
 mod viewer_report;
 
 use std::path::PathBuf;

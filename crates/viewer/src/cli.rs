@@ -40,14 +40,15 @@ pub struct Cli {
     /// Quiet: warnings and errors only, no progress bars.
     #[arg(long, short, global = true)]
     pub quiet: bool,
-    /// STEP/IGES tessellation: linear deflection as a fraction of each part's size [default: 0.001].
+    /// STEP/IGES tessellation: linear deflection as a fraction of each part's size [default: 0.005; the fine
+    /// choice: 0.001].
     #[arg(long, global = true, value_name = "FRACTION")]
     pub deflection: Option<f64>,
     /// STEP/IGES tessellation: linear deflection in millimetres for every part (F3D's way), instead of
     /// --deflection.
     #[arg(long, global = true, value_name = "MM", conflicts_with = "deflection")]
     pub deflection_mm: Option<f64>,
-    /// STEP/IGES tessellation: angular deflection in degrees [default: 10].
+    /// STEP/IGES tessellation: angular deflection in degrees [default: 35; the fine choice: 10].
     #[arg(long, global = true, value_name = "DEGREES")]
     pub angular_deflection: Option<f64>,
     /// Meshes without normals of their own (STL; OBJ without `vn`, PLY without nx/ny/nz): smooth shading across
