@@ -74,7 +74,7 @@ vec3 shade(uvec2 pix, GPixel px) {
     float diffuse = max(dot(unpack_normal(px.shading), key), 0.0);
     float light = 0.4 + 0.6 * diffuse;
     // Section caps keep their colour in the clay look too.
-    vec3 base = (g.flags & FLAG_SHADED) != 0u || (px.flags & GPIXEL_SECTION) != 0u ? px.color : vec3(0.8);
+    vec3 base = (g.flags & FLAG_SHADED) != 0u || (px.flags & GPIXEL_SECTION) != 0u ? unpack_base_color(px.color) : vec3(0.8);
     vec3 color = base * light;
     if ((InstanceRef(g.instances).v[px.instance].flags & INSTANCE_SELECTED) != 0u) {
         color = mix(color, vec3(1.0, 0.55, 0.1), 0.45);

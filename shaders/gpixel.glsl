@@ -11,7 +11,7 @@ GPixel gpixel_miss() {
     px.t = -1.0;
     px.normal = vec3(0.0, 0.0, 1.0);
     px.instance = NO_INSTANCE;
-    px.color = vec3(0.0);
+    px.color = pack_base_color(vec3(0.0));
     px.flags = 0u;
     px.shading = pack_normal(px.normal);
     return px;
@@ -51,7 +51,7 @@ GPixel gpixel_hit(vec3 a, vec3 b, vec3 c, vec2 bary, float t, vec3 dir, uint ins
     px.t = t;
     px.normal = n;
     px.instance = instance;
-    px.color = geo.color.rgb;
+    px.color = pack_base_color(geo.color.rgb);
     px.flags = 0u;
     px.shading = pack_normal(shading_normal(geo, tri, bary, m, n));
     if (back && g.section_count > 0u) {
@@ -63,7 +63,7 @@ GPixel gpixel_hit(vec3 a, vec3 b, vec3 c, vec2 bary, float t, vec3 dir, uint ins
             px.t = entry;
             px.normal = section_plane(plane).xyz;
             px.shading = pack_normal(px.normal);
-            px.color = SECTION_COLOR;
+            px.color = pack_base_color(SECTION_COLOR);
             px.flags = GPIXEL_SECTION;
         }
     }

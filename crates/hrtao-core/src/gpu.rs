@@ -91,7 +91,7 @@ mod tests {
     #[test]
     fn layouts_are_scalar_compatible() {
         // Scalar block layout: a u64 field must sit at an 8-byte offset.
-        assert_eq!(std::mem::size_of::<GPixel>(), 52);
+        assert_eq!(std::mem::size_of::<GPixel>(), 44);
         assert_eq!(std::mem::size_of::<HashCell>(), 32);
         assert_eq!(std::mem::size_of::<HashTestCase>(), 56);
         assert_eq!(std::mem::size_of::<GeometryInfo>(), 40);

@@ -258,8 +258,9 @@ gpu_structs! {
         normal: [f32; 3],
         /// Scene instance id (`NO_INSTANCE` on a miss).
         instance: u32,
-        /// Linear base colour.
-        color: [f32; 3],
+        /// Base colour, sRGB-encoded RGBA8 (`pack_base_color` in normal_pack.glsl): the 8 bits the output has,
+        /// in 4 bytes instead of 12 (every pass that reads the G-buffer reads less).
+        color: u32,
         /// `GPIXEL_*` bits.
         flags: u32,
         /// Shading normal (interpolated vertex normals, or `normal` where the geometry has none), unit length,

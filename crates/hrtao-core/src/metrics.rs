@@ -109,7 +109,7 @@ mod tests {
             t: 1.0,
             normal,
             instance: 0,
-            color: [0.5; 3],
+            color: 0xff80_8080,
             flags: 0,
             shading: crate::gpu::pack_normal(normal),
         }

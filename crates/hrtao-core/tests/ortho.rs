@@ -90,7 +90,7 @@ fn orthographic_feature_size_does_not_depend_on_distance() {
         t,
         normal: [0.0, 0.0, 1.0],
         instance: 0,
-        color: [1.0; 3],
+        color: 0xffff_ffff,
         flags: 0,
         shading: hrtao_core::gpu::pack_normal([0.0, 0.0, 1.0]),
     };
