@@ -7,7 +7,7 @@
 #   BEFORE=path/to/old/hrtao AFTER=target/debug/hrtao scripts/bench-viewer.sh [--runs 3] [SCENE...]
 #
 # SCENE: `bundled` (the default scene) or a model file; default: bundled and $HRTAO_SHARED's san_francisco.
-# Run it on an otherwise idle machine.
+# Run it on an otherwise idle machine. KEEP=dir keeps each run's raw `--stats` file there (per-frame times).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -51,6 +51,7 @@ for run in $(seq 1 "$runs"); do
             "$bin" view --no-config --size 1280x800 --orbit 40 --exit --stats "$stats" ${file[@]+"${file[@]}"} \
                 >"$tmp/log" 2>&1 || { cat "$tmp/log" >&2; exit 1; }
             python3 scripts/viewer_run_summary.py "$stats" "$out/${version}_${label}_$run.json" "$version" "$label" "$run"
+            if [ -n "${KEEP:-}" ]; then mkdir -p "$KEEP" && cp "$stats" "$KEEP/"; fi
         done
     done
 done

@@ -1,6 +1,6 @@
 //! Acceleration structures: one BLAS per unique mesh (one geometry per primitive, built for fast trace and
 //! compacted), one TLAS over the scene's visible instances, rebuilt after instance edits.
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use ash::vk;
@@ -8,11 +8,14 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use hrtao_scene::{Aabb, Scene};
 
+use crate::barrier::{Stage, Use};
 use crate::buffer::{full_barrier, Buffer};
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::gpu::{GeometryInfo, InstanceInfo};
+use crate::pass::Resource;
 use crate::raster::{RasterGeometry, RasterScene};
+use crate::recorder::Recorder;
 use crate::section::{Sections, Side};
 
 /// An acceleration structure with its backing buffer; destroyed on drop.
@@ -116,15 +119,27 @@ pub struct SceneGpu {
     geometry_base: Vec<Option<u32>>,
     blas: Vec<Option<AccelStruct>>,
     pub instance_info: Buffer,
+    /// The instance table as last written or queued (`InstanceInfo` per scene instance): a highlight change
+    /// rewrites only its flags.
+    infos: Vec<InstanceInfo>,
+    /// The instance table's new contents waiting for the next frame's commands (`record_uploads`): a highlight
+    /// change goes to the device in the queue, after the frames before it, with no host wait.
+    pending_infos: Mutex<Option<Vec<InstanceInfo>>>,
+    /// Bumped by every highlight change (`set_highlight`): the composite shows it, the AO does not depend on it.
+    highlight_version: u64,
     tlas_instances: Buffer,
     pub tlas: AccelStruct,
+    /// The TLAS's storage size and its build scratch, kept for the next build: a section-plane drag rebuilds
+    /// the TLAS every step and reuses both while they fit.
+    tlas_capacity: u64,
+    tlas_scratch: Option<(u64, Scratch)>,
     /// The build `tlas` is, unique over every scene of the process: a descriptor must be written again for
     /// every new generation, whatever the handle value (a freed handle value may come back).
     tlas_generation: u64,
     /// Draw list of the rasterised primary visibility (the TLAS's instances), updated with the TLAS.
     pub raster: RasterScene,
     pub stats: BuildStats,
-    /// Bumped by every `update_instances` (edits, visibility, selection): an image of an older version is stale.
+    /// Bumped by every `update_instances` (edits, visibility, sections): an image of an older version is stale.
     version: u64,
     /// The scene's F at the last `update_instances`, and the located changes between synced F values
     /// (from, to, world boxes or None when unknown), newest last: see `changes_between`.
@@ -494,8 +509,13 @@ impl SceneGpu {
             geometry_base,
             blas,
             instance_info,
+            infos: Vec::new(),
+            pending_infos: Mutex::new(None),
+            highlight_version: 0,
             tlas_instances,
             tlas: placeholder,
+            tlas_capacity: 0,
+            tlas_scratch: None,
             tlas_generation: 0,
             raster,
             version: 0,
@@ -726,6 +746,9 @@ impl SceneGpu {
             infos.push(InstanceInfo::default());
         }
         self.instance_info.write(&infos)?;
+        // The host write holds the highlight too: a queued one is superseded.
+        *self.pending_infos.lock().unwrap_or_else(|p| p.into_inner()) = None;
+        self.infos = infos;
         self.raster.update(&gpu, scene, &drawn)?;
         self.section_sides = sides;
         self.tlas_instances.write_bytes(0, &raw)?;
@@ -755,17 +778,29 @@ impl SceneGpu {
                 &mut sizes,
             )
         };
-        let tlas = AccelStruct::new(
-            &gpu,
-            "TLAS",
-            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
-            sizes.acceleration_structure_size.max(256),
-        )?;
-        let scratch = Scratch::new(&gpu, sizes.build_scratch_size.max(256))?;
+        // A section-plane drag rebuilds the TLAS every step: its storage and scratch are reused while they fit
+        // (no frame reading the TLAS is in flight: see the method's contract), and grow by half when not.
+        let size = sizes.acceleration_structure_size.max(256);
+        if size > self.tlas_capacity {
+            let capacity = size + size / 2;
+            self.tlas = AccelStruct::new(
+                &gpu,
+                "TLAS",
+                vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+                capacity,
+            )?;
+            self.tlas_capacity = capacity;
+        }
+        let scratch_size = sizes.build_scratch_size.max(256);
+        if self.tlas_scratch.as_ref().is_none_or(|(s, _)| *s < scratch_size) {
+            let capacity = scratch_size + scratch_size / 2;
+            self.tlas_scratch = Some((capacity, Scratch::new(&gpu, capacity)?));
+        }
+        let scratch = self.tlas_scratch.as_ref().map_or(0, |(_, s)| s.base);
         let info = info
-            .dst_acceleration_structure(tlas.raw)
+            .dst_acceleration_structure(self.tlas.raw)
             .scratch_data(vk::DeviceOrHostAddressKHR {
-                device_address: scratch.base,
+                device_address: scratch,
             });
         let range = [vk::AccelerationStructureBuildRangeInfoKHR {
             primitive_count: count,
@@ -779,14 +814,68 @@ impl SceneGpu {
                 .cmd_build_acceleration_structures(cmd, &[info], &[&range]);
             full_barrier(&gpu, cmd);
         })?;
-        drop(scratch);
-        self.tlas = tlas;
         self.tlas_generation = TLAS_BUILDS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         self.stats.tlas_ms = t0.elapsed().as_secs_f64() * 1e3;
         self.stats.tlas_instances = count as usize;
         Ok(())
     }
 }
+
+impl SceneGpu {
+    /// Highlights `selected` (a selection change): rewrites the instance table's flags, the only thing a
+    /// highlight changes (composite.comp reads them; the TLAS, the raster draws and the AO do not). No TLAS is
+    /// built and the host waits for nothing: the new table is queued for the next frame's commands
+    /// (`record_uploads`), so it reaches the device after every frame submitted before it. Returns whether
+    /// anything changed.
+    pub fn set_highlight(&mut self, selected: impl Highlight) -> bool {
+        let mut infos = self.infos.clone();
+        for (i, info) in infos.iter_mut().enumerate() {
+            info.flags = if selected.contains(i as u32) {
+                crate::gpu::INSTANCE_SELECTED
+            } else {
+                0
+            };
+        }
+        if bytemuck::cast_slice::<_, u8>(&infos) == bytemuck::cast_slice::<_, u8>(&self.infos) {
+            return false;
+        }
+        self.infos = infos.clone();
+        *self.pending_infos.lock().unwrap_or_else(|p| p.into_inner()) = Some(infos);
+        self.highlight_version += 1;
+        true
+    }
+
+    /// Bumped by every highlight change: a frame's output shows one version (`FrameKey::highlight`).
+    pub fn highlight_version(&self) -> u64 {
+        self.highlight_version
+    }
+
+    /// Records the queued instance-table write (`set_highlight`), if any, as the frame's first command:
+    /// `vkCmdUpdateBuffer` carries the data in the command buffer itself, so nothing must outlive the frame, and
+    /// the recorder orders it after the reads of earlier frames and before this frame's.
+    pub(crate) fn record_uploads(&self, rec: &mut Recorder) {
+        let Some(infos) = self
+            .pending_infos
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take()
+        else {
+            return;
+        };
+        let bytes: &[u8] = bytemuck::cast_slice(&infos);
+        let buffer = self.instance_info.raw;
+        let uses = vec![Use::write(Resource::Instances, Stage::Transfer)];
+        rec.commands("instance flags", None, uses, |d, cmd| {
+            // vkCmdUpdateBuffer takes at most 65,536 bytes a call, a multiple of 4 (InstanceInfo is 8 bytes).
+            for (k, chunk) in bytes.chunks(UPDATE_BUFFER_MAX).enumerate() {
+                unsafe { d.cmd_update_buffer(cmd, buffer, (k * UPDATE_BUFFER_MAX) as u64, chunk) };
+            }
+        });
+    }
+}
+
+/// The most bytes one `vkCmdUpdateBuffer` may write.
+const UPDATE_BUFFER_MAX: usize = 65_536;
 
 /// The instances `SceneGpu::update_instances` highlights.
 pub trait Highlight {

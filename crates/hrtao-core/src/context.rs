@@ -106,6 +106,8 @@ pub struct Gpu {
     pub validation: Arc<ValidationCounters>,
     /// Bytes currently allocated by `Buffer`s (kept by buffer.rs).
     pub(crate) device_bytes: std::sync::atomic::AtomicU64,
+    /// `wait_idle` calls so far: every one stalls the CPU and the device together (tests count them).
+    idle_waits: std::sync::atomic::AtomicU64,
     pub(crate) memory_limit: Option<u64>,
     allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
     command_pool: Mutex<vk::CommandPool>,
@@ -592,6 +594,7 @@ impl Gpu {
                 .max(1) as u64,
             validation: counters,
             device_bytes: Default::default(),
+            idle_waits: Default::default(),
             memory_limit: options.memory_limit.or_else(memory_limit_from_env),
             allocator: ManuallyDrop::new(Arc::new(Mutex::new(allocator))),
             command_pool: Mutex::new(pool),
@@ -672,9 +675,15 @@ impl Gpu {
     }
 
     pub fn wait_idle(&self) {
+        self.idle_waits.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         unsafe {
             let _ = self.device.device_wait_idle();
         }
+    }
+
+    /// `wait_idle` calls so far.
+    pub fn idle_waits(&self) -> u64 {
+        self.idle_waits.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Errors and warnings reported by the validation layer so far.

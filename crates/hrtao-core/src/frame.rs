@@ -152,6 +152,7 @@ impl<'a> FrameDesc<'a> {
             section_changes: self.scene.section_changes(),
             tlas_generation: self.scene.tlas_generation(),
             scene_version: self.scene.version(),
+            highlight: self.scene.highlight_version(),
         }
     }
 }
@@ -171,6 +172,8 @@ pub struct FrameKey {
     pub section_changes: u32,
     pub tlas_generation: u64,
     pub scene_version: u64,
+    /// The highlighted instances' version (`SceneGpu::set_highlight`): only the composite shows it.
+    pub highlight: u64,
 }
 
 /// What happens to the hash map's cells.
@@ -228,6 +231,7 @@ impl Change {
             section_changes,
             tlas_generation,
             scene_version,
+            highlight,
         } = prev;
         let settings_class = settings.invalidates(&next.settings);
         // What is shown: the view, the render size, the frame's budget, primary visibility, the instances.
@@ -238,9 +242,12 @@ impl Change {
             || *jitter != next.jitter
             || *output != next.output
             || *primary != next.primary;
-        // A new TLAS or instance table: the instances changed (or were rebuilt for the same content).
-        let instances_changed =
-            *tlas_generation != next.tlas_generation || *scene_version != next.scene_version;
+        // A new TLAS or instance table: the instances changed (or were rebuilt for the same content). A new
+        // highlight too: the composite accumulates each pixel's shade with its AO over the still frames, so the
+        // pixels' accumulations restart (the map keeps its cells).
+        let instances_changed = *tlas_generation != next.tlas_generation
+            || *scene_version != next.scene_version
+            || *highlight != next.highlight;
         let edited = (*scene_f, *section_changes) != (next.scene_f, next.section_changes);
         let map = if settings_class == Invalidates::WholeMap {
             MapChange::Whole
@@ -291,6 +298,7 @@ mod tests {
             section_changes: 0,
             tlas_generation: 1,
             scene_version: 1,
+            highlight: 0,
         }
     }
 
@@ -339,6 +347,10 @@ mod tests {
             },
             FrameKey {
                 scene_version: 2,
+                ..key()
+            },
+            FrameKey {
+                highlight: 1,
                 ..key()
             },
         ] {

@@ -606,6 +606,7 @@ impl Renderer {
         let cell_levels = self.map.cell_levels(self.pixel_count() as u32, self.frame_index);
         let young_frame = self.young_frame(frame);
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
+        scene.record_uploads(&mut rec);
         match (primary, &mut self.raster) {
             (Primary::Raster, Some(raster)) => {
                 // A perspective tile is an off-axis part of the full image's frustum: the full image's axis,

@@ -264,10 +264,10 @@ fn a_plane_change_is_a_scene_change() {
     let mut r = Headless::new(&gpu, cam.width, cam.height, paper).unwrap();
     let f0 = r.render(&sg, s.f(), &cam).unwrap().scene_f;
     assert_eq!(r.render(&sg, s.f(), &cam).unwrap().accumulated_frames, 2);
-    let tlas = sg.tlas.raw;
+    let tlas = sg.tlas_generation();
     sg.set_sections(&s, &plane([1.0, 0.0, 0.0], 0.0), u32::MAX)
         .unwrap();
-    assert_ne!(sg.tlas.raw, tlas, "the TLAS is rebuilt for the planes");
+    assert_ne!(sg.tlas_generation(), tlas, "the TLAS is rebuilt for the planes");
     assert_eq!(sg.section_sides, [1, 0, 1]);
     let report = r.render(&sg, s.f(), &cam).unwrap();
     assert_eq!(report.scene_f, f0 + 1, "a plane change bumps F");

@@ -560,15 +560,12 @@ impl Viewer {
         self.apply_selection(selection);
     }
 
-    /// Makes `selection` current and updates the highlight (TLAS instance flags).
+    /// Makes `selection` current and updates the highlight: the instance table's flags, written by the next
+    /// frame's commands (no TLAS build, no wait for the device, the still image keeps refining).
     fn apply_selection(&mut self, selection: tree::Selection) {
         self.selection = selection;
-        if let (Some(sg), Some(scene)) = (&mut self.scene_gpu, &self.scene) {
-            self.gpu.wait_idle();
-            if let Err(e) = sg.update_instances(scene, self.selection.instances.as_slice()) {
-                let msg = format!("selection: {e}");
-                self.toast(msg, true);
-            }
+        if let Some(sg) = &mut self.scene_gpu {
+            sg.set_highlight(self.selection.instances.as_slice());
         }
     }
 
