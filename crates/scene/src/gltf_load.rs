@@ -4,6 +4,7 @@
 //! with bounds-checked arithmetic instead of `gltf::mesh::Reader`, which can panic on
 //! malformed accessors (zero counts, short strides, wrong component types).
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use glam::{DMat4, DVec3, Mat4};
@@ -12,6 +13,7 @@ use gltf::mesh::Mode;
 use gltf::Semantic;
 
 use crate::error::SceneError;
+use crate::gltf_compressed;
 use crate::guard::{read_model, resolve_reference, Budget, Fetch, LoadOptions, Target};
 use crate::scene::{
     recentre_origin, relative_transform, transform_ok, Instance, LoadProgress, Mesh, Primitive, Scene,
@@ -49,20 +51,6 @@ pub fn load_gltf(
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(format!("cannot parse: {e}")))?;
     drop(bytes);
-    // Compressed geometry: no kept Rust crate decodes Draco, and the meshopt buffer views are not decoded here;
-    // the error names the extension and the way out.
-    for ext in document.extensions_required() {
-        let what = match ext {
-            "KHR_draco_mesh_compression" => "Draco-compressed meshes",
-            "EXT_meshopt_compression" | "KHR_meshopt_compression" => "meshoptimizer-compressed buffers",
-            _ => continue,
-        };
-        return Err(err(format!(
-            "requires the glTF extension {ext} ({what}), which hrtao cannot decode: export the model without \
-             mesh compression (e.g. `gltf-transform copy` with no compression, or Blender's glTF exporter with \
-             compression off)"
-        )));
-    }
     validate_document(&document).map_err(err)?;
     let post_order = check_acyclic(&document).map_err(err)?;
     budget.reserve(
@@ -78,7 +66,15 @@ pub fn load_gltf(
         tree_node_count(&document, &post_order, &mesh_below).saturating_mul(TREE_NODE_BYTES),
         "the model tree",
     )?;
-    let buffers = load_buffers(&document, path, blob, opts, &mut budget, progress)?;
+    let data = load_buffers(&document, path, blob, opts, &mut budget, progress)?;
+    // Compressed buffer views (meshopt) decode to their plain bytes up front; Draco primitives decode in
+    // `load_primitive` (gltf_compressed.rs).
+    budget.reserve(
+        gltf_compressed::meshopt_bytes(&document),
+        "the meshopt-compressed buffer views",
+    )?;
+    let views = gltf_compressed::decode_meshopt_views(&document, &data).map_err(err)?;
+    let buffers = Buffers { data, views };
     progress(LoadProgress {
         stage: "buffers",
         done: 1,
@@ -98,7 +94,9 @@ pub fn load_gltf(
         let mut primitives = Vec::new();
         for (pi, prim) in mesh.primitives().enumerate() {
             let at = format!("mesh {mi} primitive {pi}");
-            if let Some(p) = load_primitive(&prim, &buffers).map_err(|m| err(format!("{at}: {m}")))? {
+            if let Some(p) =
+                load_primitive(&prim, &document, &buffers).map_err(|m| err(format!("{at}: {m}")))?
+            {
                 primitives.push(p);
             } else {
                 log::warn!(
@@ -172,7 +170,12 @@ fn validate_document(doc: &gltf::Document) -> Result<(), String> {
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, e| {
         let p = path().as_str().to_owned();
-        let harmless = (e == VError::Missing && (p.ends_with(".min") || p.ends_with(".max")))
+        // An accessor without a bufferView is zeros (glTF 2.0 §3.6.2.1), which sparse data or an extension
+        // (Draco) may replace: the gltf crate requires one unless sparse.
+        let harmless = (e == VError::Missing
+            && (p.ends_with(".min")
+                || p.ends_with(".max")
+                || (p.starts_with("accessors[") && p.ends_with(".bufferView"))))
             || (e == VError::Unsupported && p.starts_with("extensionsRequired"));
         if harmless {
             log::warn!("ignoring glTF validation issue {p}: {e}");
@@ -234,11 +237,32 @@ fn check_glb_header(bytes: &[u8], is_glb_ext: bool) -> Result<(), String> {
 /// Decodes one primitive into a triangle list; `Ok(None)` for points/lines.
 fn load_primitive(
     prim: &gltf::Primitive,
-    buffers: &[gltf::buffer::Data],
+    doc: &gltf::Document,
+    buffers: &Buffers,
 ) -> Result<Option<Primitive>, String> {
     let mode = prim.mode();
     if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
         return Ok(None);
+    }
+    if gltf_compressed::is_draco(prim) {
+        let bytes = |v: &gltf::buffer::View| view_bytes(v, buffers).map(<[u8]>::to_vec);
+        match gltf_compressed::decode_draco(prim, doc, &bytes) {
+            Ok(Some(g)) => {
+                return Ok(Some(Primitive {
+                    positions: g.positions,
+                    indices: to_triangle_list(mode, g.indices),
+                    base_color: base_color(prim, g.mean_color),
+                    double_sided: prim.material().double_sided(),
+                    normals: g.normals.unwrap_or_default(),
+                }))
+            }
+            Ok(None) => {}
+            // Used but not required: the uncompressed accessors stand in (glTF 2.0 §3.12).
+            Err(m) if !doc.extensions_required().any(|e| e == gltf_compressed::DRACO) => {
+                log::warn!("{m}; reading the primitive's uncompressed data instead");
+            }
+            Err(m) => return Err(m),
+        }
     }
     let pos_acc = prim.get(&Semantic::Positions).ok_or("no POSITION attribute")?;
     if pos_acc.dimensions() != Dimensions::Vec3 {
@@ -283,34 +307,38 @@ fn load_primitive(
         None => Vec::new(),
     };
 
-    let factor = prim
-        .material()
-        .index()
-        .map(|_| prim.material().pbr_metallic_roughness().base_color_factor());
     let mean = match prim.get(&Semantic::Colors(0)) {
         Some(acc) => mean_color(&acc, buffers)?,
         None => None,
     };
-    let base_color = match (factor, mean) {
+    Ok(Some(Primitive {
+        positions,
+        indices,
+        base_color: base_color(prim, mean),
+        double_sided: prim.material().double_sided(),
+        normals,
+    }))
+}
+
+/// The material's base colour factor times the mean vertex colour, either alone, or the default.
+fn base_color(prim: &gltf::Primitive, mean: Option<[f32; 4]>) -> [f32; 4] {
+    let factor = prim
+        .material()
+        .index()
+        .map(|_| prim.material().pbr_metallic_roughness().base_color_factor());
+    match (factor, mean) {
         (Some(f), Some(c)) => [f[0] * c[0], f[1] * c[1], f[2] * c[2], f[3] * c[3]],
         (Some(f), None) => f,
         (None, Some(c)) => c,
         (None, None) => DEFAULT_BASE_COLOR,
-    };
-    Ok(Some(Primitive {
-        positions,
-        indices,
-        base_color,
-        double_sided: prim.material().double_sided(),
-        normals,
-    }))
+    }
 }
 
 /// The NORMAL attribute, one per vertex (strips and fans become lists by their indices only, so the normals
 /// stay as they are): float, or normalized signed byte/short (KHR_mesh_quantization), sparse accessors
 /// included. A type other than VEC3 or a non-normalized integer is a warning and face normals; counts and
 /// values are checked for every load by [`Primitive::check_normals`].
-fn read_normals(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Vec<[f32; 3]>, String> {
+fn read_normals(acc: &gltf::Accessor, buffers: &Buffers) -> Result<Vec<[f32; 3]>, String> {
     let quantized = matches!(acc.data_type(), DataType::I8 | DataType::I16) && acc.normalized();
     if acc.dimensions() != Dimensions::Vec3 || !(acc.data_type() == DataType::F32 || quantized) {
         log::warn!(
@@ -361,7 +389,7 @@ fn to_triangle_list(mode: Mode, idx: Vec<u32>) -> Vec<u32> {
 }
 
 /// Mean RGBA of a COLOR_n accessor (float, or normalized u8/u16; RGB gets alpha 1).
-fn mean_color(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Option<[f32; 4]>, String> {
+fn mean_color(acc: &gltf::Accessor, buffers: &Buffers) -> Result<Option<[f32; 4]>, String> {
     let dims = match acc.dimensions() {
         Dimensions::Vec3 => 3,
         Dimensions::Vec4 => 4,
@@ -448,9 +476,20 @@ fn comp_u32(dt: DataType, b: &[u8]) -> u32 {
     }
 }
 
-/// Byte range `offset..offset+len` of a buffer view, checked against the loaded data.
-fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [gltf::buffer::Data]) -> Result<&'b [u8], String> {
+/// The file's buffers as loaded, and the buffer views that meshopt compression decoded (by view index).
+struct Buffers {
+    data: Vec<gltf::buffer::Data>,
+    views: HashMap<usize, Vec<u8>>,
+}
+
+/// A buffer view's bytes: decoded, or the range `offset..offset+len` of its buffer, checked against the loaded
+/// data.
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b Buffers) -> Result<&'b [u8], String> {
+    if let Some(decoded) = buffers.views.get(&view.index()) {
+        return Ok(decoded);
+    }
     let data = buffers
+        .data
         .get(view.buffer().index())
         .ok_or_else(|| format!("bufferView {} references missing buffer", view.index()))?;
     let end = view
@@ -501,7 +540,7 @@ fn elements<'b>(
 /// which gets the component type, normalized flag and the element's bytes.
 fn read_accessor<T: Copy>(
     acc: &gltf::Accessor,
-    buffers: &[gltf::buffer::Data],
+    buffers: &Buffers,
     what: &str,
     decode: impl Fn(DataType, bool, &[u8]) -> T,
 ) -> Result<Vec<T>, String> {
@@ -787,6 +826,11 @@ fn load_buffers(
     for buffer in doc.buffers() {
         opts.check_cancel(path)?;
         let i = buffer.index();
+        if gltf_compressed::is_fallback(&buffer) {
+            // Stands in for meshopt-compressed views, which are decoded instead: nothing reads it.
+            out.push(gltf::buffer::Data(Vec::new()));
+            continue;
+        }
         let declared = buffer.length() as u64;
         let mut data = match buffer.source() {
             gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {

@@ -12,6 +12,7 @@ mod cad_header;
 mod cad_load;
 mod error;
 mod generate;
+mod gltf_compressed;
 mod gltf_load;
 mod guard;
 #[cfg(feature = "hostile-corpus")]
