@@ -23,6 +23,7 @@ mod obj_load;
 mod ply_load;
 mod scene;
 mod stl_load;
+mod threemf_load;
 mod tree;
 
 use std::path::Path;
@@ -75,8 +76,9 @@ pub fn generate(spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Sc
 }
 
 /// The extensions [`load_with`] reads (lower case; any case is accepted).
-pub const SUPPORTED_EXTENSIONS: [&str; 9] =
-    ["gltf", "glb", "obj", "stl", "ply", "step", "stp", "iges", "igs"];
+pub const SUPPORTED_EXTENSIONS: [&str; 10] = [
+    "gltf", "glb", "obj", "stl", "ply", "3mf", "step", "stp", "iges", "igs",
+];
 
 static DEFAULT_CAD_TESSELLATION: std::sync::RwLock<Option<CadTessellation>> = std::sync::RwLock::new(None);
 static DEFAULT_CAD_WORKER: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
@@ -116,7 +118,7 @@ pub fn load(path_or_spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Resul
     load_with(path_or_spec, &LoadOptions::default(), progress)
 }
 
-/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl`, `*.ply`, `*.step`/`*.stp` or
+/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl`, `*.ply`, `*.3mf`, `*.step`/`*.stp` or
 /// `*.iges`/`*.igs` (any case; STEP and IGES through OpenCASCADE in a worker process, with the `occt` feature);
 /// `opts` can cancel the load from another
 /// thread and bounds its memory. Files and their references are read through a guard: references stay
@@ -140,6 +142,7 @@ pub fn load_with(
         "obj" => obj_load::load_obj(path, opts, progress)?,
         "stl" => stl_load::load_stl(path, opts, progress)?,
         "ply" => ply_load::load_ply(path, opts, progress)?,
+        "3mf" => threemf_load::load_3mf(path, opts, progress)?,
         "step" | "stp" | "iges" | "igs" => {
             let format = if ext.starts_with('s') {
                 CadFormat::Step
@@ -150,7 +153,7 @@ pub fn load_with(
         }
         _ => {
             return Err(SceneError::UnsupportedFormat(format!(
-                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply, .step, .stp, .iges, .igs or gen:..."
+                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply, .3mf, .step, .stp, .iges, .igs or gen:..."
             )))
         }
     };

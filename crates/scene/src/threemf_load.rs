@@ -1,0 +1,211 @@
+//! 3MF loader (the 3D-printing and CAD exchange format: a zip of XML model parts), through the `threemf` crate:
+//! each object with a mesh becomes one mesh, each build item (and each component of a composed object, through
+//! any depth) one instance of it with the composed transform, so a part placed many times is stored once.
+//! The model's unit is kept. Colours are not read yet: the threemf crate parses no core `<basematerials>`
+//! (objects shade in the default colour).
+//! Shading normals: 3MF stores none; meshes get smooth normals by the load's crease angle, as STL and PLY.
+//!
+//! The archive is read through the guard like every model file, and the decompressed size of its model parts
+//! (as the zip's directory declares them) is taken from the memory budget before any XML is parsed.
+use std::collections::HashMap;
+use std::io::Cursor;
+use std::path::Path;
+
+use glam::{DMat4, DVec4};
+
+use crate::error::SceneError;
+use crate::guard::{read_model, LoadOptions};
+use crate::scene::{recentre_origin, relative_transform, Instance, LoadProgress, Mesh, Primitive, Scene};
+use crate::tree::NodeTree;
+
+/// Memory per byte of model XML while it is parsed and kept (the text, then vertices and triangles).
+const XML_MEMORY_FACTOR: u64 = 3;
+/// Components nested deeper than this are refused (a cycle would never end).
+const MAX_DEPTH: usize = 32;
+/// Instances a file may place (components multiply: a small file could ask for billions).
+const MAX_INSTANCES: usize = 1 << 22;
+
+pub fn load_3mf(
+    path: &Path,
+    opts: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<Scene, SceneError> {
+    let err = |message: String| SceneError::Cad {
+        format: "3MF",
+        path: path.to_path_buf(),
+        message,
+    };
+    let (bytes, mut budget) = read_model(path, opts, progress)?;
+    {
+        let mut zip =
+            zip::ZipArchive::new(Cursor::new(&bytes)).map_err(|e| err(format!("not a 3MF archive: {e}")))?;
+        let mut declared = 0u64;
+        for i in 0..zip.len() {
+            let entry = zip
+                .by_index_raw(i)
+                .map_err(|e| err(format!("archive entry {i}: {e}")))?;
+            if entry.name().is_ok_and(|n| n.ends_with(".model")) {
+                declared = declared.saturating_add(entry.size());
+            }
+        }
+        if declared == 0 {
+            return Err(err("the archive holds no model part (3D/3dmodel.model)".into()));
+        }
+        budget.reserve(declared.saturating_mul(XML_MEMORY_FACTOR), "the 3MF model parts")?;
+    }
+    opts.check_cancel(path)?;
+    let models = threemf::read(Cursor::new(bytes)).map_err(|e| err(format!("cannot read: {e}")))?;
+    opts.check_cancel(path)?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut scene = Scene::new(name.clone());
+    // The parts' objects by id: the root model part's (it has the build items) and any other part's.
+    let objects: HashMap<usize, &threemf::model::Object> = models
+        .iter()
+        .flat_map(|m| m.resources.object.iter().map(|o| (o.id, o)))
+        .collect();
+    let root = models
+        .iter()
+        .find(|m| !m.build.item.is_empty())
+        .ok_or_else(|| err("the model has no build item".into()))?;
+    scene.unit_m = Some(unit_m(&root.unit));
+
+    // One mesh per object with a mesh, made the first time an instance needs it.
+    let mut mesh_of: HashMap<usize, u32> = HashMap::new();
+    let mut placed: Vec<(u32, DMat4, String)> = Vec::new();
+    let mut tree = NodeTree::default();
+    let top = tree.add(name.clone(), None);
+    let mut owner: Vec<u32> = Vec::new();
+    for (k, item) in root.build.item.iter().enumerate() {
+        let item_name = objects
+            .get(&item.objectid)
+            .and_then(|o| o.name.clone())
+            .unwrap_or_else(|| format!("item {k}"));
+        let node = tree.add(item_name, Some(top));
+        let t = item.transform.map_or(DMat4::IDENTITY, matrix);
+        let mut stack = vec![(item.objectid, t, 0usize)];
+        while let Some((id, t, depth)) = stack.pop() {
+            let object = objects
+                .get(&id)
+                .ok_or_else(|| err(format!("build item {k} names object {id}, which does not exist")))?;
+            if depth > MAX_DEPTH {
+                return Err(err(format!(
+                    "components nest deeper than {MAX_DEPTH} (a cycle?) at object {id}"
+                )));
+            }
+            if let Some(mesh) = &object.mesh {
+                let m = match mesh_of.get(&id) {
+                    Some(&m) => m,
+                    None => {
+                        let prim = primitive(mesh).map_err(|m| err(format!("object {id}: {m}")))?;
+                        let m = scene.meshes.len() as u32;
+                        scene.meshes.push(Mesh {
+                            name: object.name.clone().unwrap_or_else(|| format!("object {id}")),
+                            primitives: vec![prim],
+                        });
+                        mesh_of.insert(id, m);
+                        m
+                    }
+                };
+                if placed.len() >= MAX_INSTANCES {
+                    return Err(SceneError::TooLarge(format!(
+                        "{}: more than {MAX_INSTANCES} instances",
+                        path.display()
+                    )));
+                }
+                let label = object.name.clone().unwrap_or_else(|| format!("object {id}"));
+                placed.push((m, t, label));
+                owner.push(node);
+            }
+            for c in object.components.iter().flat_map(|c| &c.component) {
+                stack.push((
+                    c.objectid,
+                    t * c.transform.map_or(DMat4::IDENTITY, matrix),
+                    depth + 1,
+                ));
+            }
+        }
+        opts.check_cancel(path)?;
+    }
+    // Positions far from the origin: the instances are re-centred as the glTF loader does.
+    let centre = placed
+        .iter()
+        .map(|(_, t, _)| t.w_axis.truncate())
+        .fold(glam::DVec3::ZERO, |s, p| s + p)
+        / placed.len().max(1) as f64;
+    let origin = recentre_origin(centre);
+    scene.origin = origin.to_array();
+    for (i, ((mesh, t, label), node)) in placed.into_iter().zip(owner).enumerate() {
+        tree.nodes[node as usize].instances.push(i as u32);
+        scene.instances.push(Instance {
+            mesh,
+            transform: relative_transform(&t, origin),
+            name: label,
+            visible: true,
+        });
+    }
+    scene.tree = tree;
+    for m in &mut scene.meshes {
+        crate::normals::smooth_primitive(&mut m.primitives[0], opts.crease_deg, path)?;
+    }
+    scene.metadata = root
+        .metadata
+        .iter()
+        .filter_map(|m| m.value.clone().map(|v| (m.name.clone(), v)))
+        .collect();
+    Ok(scene)
+}
+
+/// A 3MF transform (`m00 m01 m02 m10 ... m32`: row vectors, the translation last) as a column-vector matrix.
+fn matrix(t: [f64; 12]) -> DMat4 {
+    DMat4::from_cols(
+        DVec4::new(t[0], t[1], t[2], 0.0),
+        DVec4::new(t[3], t[4], t[5], 0.0),
+        DVec4::new(t[6], t[7], t[8], 0.0),
+        DVec4::new(t[9], t[10], t[11], 1.0),
+    )
+}
+
+fn unit_m(u: &threemf::model::Unit) -> f64 {
+    use threemf::model::Unit;
+    match u {
+        Unit::Micron => 1e-6,
+        Unit::Millimeter => 1e-3,
+        Unit::Centimeter => 1e-2,
+        Unit::Inch => 0.0254,
+        Unit::Foot => 0.3048,
+        Unit::Meter => 1.0,
+    }
+}
+
+/// An object's mesh: every triangle's corners must name a vertex, every coordinate be finite.
+fn primitive(mesh: &threemf::model::Mesh) -> Result<Primitive, String> {
+    let positions: Vec<[f32; 3]> = mesh
+        .vertices
+        .vertex
+        .iter()
+        .map(|v| [v.x as f32, v.y as f32, v.z as f32])
+        .collect();
+    if let Some(k) = positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        return Err(format!("vertex {k} is not finite"));
+    }
+    let n = positions.len();
+    let mut indices = Vec::with_capacity(mesh.triangles.triangle.len() * 3);
+    for (k, t) in mesh.triangles.triangle.iter().enumerate() {
+        for v in [t.v1, t.v2, t.v3] {
+            if v >= n {
+                return Err(format!("triangle {k} names vertex {v} of {n}"));
+            }
+            indices.push(v as u32);
+        }
+    }
+    Ok(Primitive {
+        positions,
+        indices,
+        base_color: crate::scene::DEFAULT_BASE_COLOR,
+        double_sided: false,
+        normals: Vec::new(),
+    })
+}
