@@ -1,0 +1,145 @@
+//! How full the hash map's table is, as its owner knows it between frames, and the two decisions made from it:
+//! whether an insert takes the free slot that ends its probe run before a stale one met on the way
+//! (`has_room`, hash_map.glsl `find_or_insert`), and whether the cell finder runs level by level (`cell_levels`).
+use crate::gpu;
+use crate::settings::MAX_PROBE;
+
+/// The table has room while at most 1/this of its slots are taken. Linear probing (§1) stays short there: an
+/// unsuccessful search at load a reads about (1 + 1/(1 - a)²) / 2 slots, 2.5 at a half, 8.5 at three quarters.
+pub const ROOM_DEN: u64 = 2;
+/// Frames the cell finder stays level by level after a failed insert (`cell_levels`).
+pub const LEVELWISE_FRAMES: u32 = 64;
+
+/// The table's size and use at the end of the last frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TableLoad {
+    pub capacity: u32,
+    /// Slots that hold a cell, live or stale (`STAT_OCCUPIED`): slots are reclaimed but never emptied, so this
+    /// only grows until the map is emptied.
+    pub occupied: u32,
+    /// The longest probe run of the last frame (`STAT_MAX_PROBE`): how close its inserts came to failing.
+    pub longest_probe: u32,
+    /// Until this frame the cell finder runs level by level (an insert failed, see `cell_levels`).
+    levelwise_until: Option<u32>,
+}
+
+impl TableLoad {
+    /// An empty table of `capacity` slots.
+    pub fn empty(capacity: u32) -> TableLoad {
+        TableLoad {
+            capacity,
+            ..TableLoad::default()
+        }
+    }
+
+    /// Whether inserts take the free slot ending their probe run rather than a stale slot met before it
+    /// (`FLAG_MAP_HAS_ROOM`): while at most 1/ROOM_DEN of the table is taken, a stale cell (older than the
+    /// cache lifetime) keeps its AO for a later revisit and probes stay short; past it, stale slots are
+    /// recycled first so the table still fills slowly.
+    pub fn has_room(&self) -> bool {
+        (self.occupied as u64) * ROOM_DEN < self.capacity as u64
+    }
+
+    /// The frame `frame_index` (counted after it) ended with `occupied` slots taken, its longest probe run
+    /// `longest_probe` slots long; `failed_inserts`: an insert found its probe run full of live cells.
+    pub fn finish_frame(
+        &mut self,
+        frame_index: u32,
+        occupied: u32,
+        longest_probe: u32,
+        failed_inserts: bool,
+    ) {
+        self.occupied = occupied;
+        self.longest_probe = longest_probe;
+        if failed_inserts {
+            self.levelwise_until = Some(frame_index.wrapping_add(LEVELWISE_FRAMES));
+        }
+    }
+
+    /// Whether the frame `frame_index` may find probe runs full of live cells: an insert failed in the last
+    /// LEVELWISE_FRAMES frames (real contention), or the table is past its room and the last frame's longest
+    /// probe run reached half of MAX_PROBE. Past its room an insert takes the first stale slot of its run, so
+    /// a run is long only where live cells (used within the cache lifetime) crowd it: the host counts no live
+    /// cells (stale ones are known only to the probes, and `occupied` only grows), the probes measure them where
+    /// the frame's keys live. A table with room takes any frame in one pass: a 1080p view claims some 4·10^5
+    /// cells (0.18 per pixel on racks_5x5), which the default 2^20 slots hold with short runs.
+    pub fn crowded(&self, frame_index: u32) -> bool {
+        // Frame numbers wrap: compare their difference.
+        let failed_recently = self
+            .levelwise_until
+            .is_some_and(|until| (until.wrapping_sub(frame_index) as i32) > 0);
+        let long_runs = 2 * self.longest_probe >= MAX_PROBE;
+        failed_recently || (!self.has_room() && long_runs)
+    }
+
+    /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4): every level in one pass over
+    /// the pixels, or, when the frame is `crowded`, one dispatch per level, coarsest first: the coarse cells,
+    /// shared by many pixels, then take the free slots before any finer one, and pixels whose fine cells fail
+    /// fall back to them.
+    pub fn cell_levels(&self, frame_index: u32) -> Vec<(u32, u32)> {
+        let top = gpu::LOD_COUNT - 1;
+        if self.crowded(frame_index) {
+            (0..=top).rev().map(|l| (l, l)).collect()
+        } else {
+            vec![(top, 0)]
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DEFAULT_CAPACITY: u32 = 1 << 20;
+
+    fn passes(load: &TableLoad, frame: u32) -> usize {
+        load.cell_levels(frame).len()
+    }
+
+    /// The default table: one pass while it has room, whatever the frame's size (a 1080p frame has more pixels
+    /// than half the slots, which the old rule `pixels > capacity / 2` took for crowded: 4 passes on every 1080p
+    /// frame), even when its runs are long; past its room, one pass while the last frame's runs were short and
+    /// one per level once they reach half of MAX_PROBE. Catches the old rule, a rule on occupancy alone
+    /// (`!self.has_room()`: every frame of a session whose table once filled would take 4 passes, occupancy
+    /// only grows) and one on probe lengths alone (`long_runs`: a table with room would go level by level).
+    #[test]
+    fn the_cell_finder_goes_level_by_level_only_when_runs_crowd_past_the_room() {
+        let mut load = TableLoad::empty(DEFAULT_CAPACITY);
+        assert_eq!(passes(&load, 0), 1, "empty table");
+        load.finish_frame(1, 400_000, MAX_PROBE, false);
+        assert!(load.has_room());
+        assert_eq!(passes(&load, 1), 1, "a 1080p view in the table, one long run");
+        load.finish_frame(2, DEFAULT_CAPACITY - 1000, 3, false);
+        assert!(!load.has_room());
+        assert_eq!(passes(&load, 2), 1, "full of stale cells: short runs");
+        load.finish_frame(3, DEFAULT_CAPACITY - 1000, MAX_PROBE / 2, false);
+        assert_eq!(passes(&load, 3), 4, "past the room, runs half of MAX_PROBE");
+        load.finish_frame(4, DEFAULT_CAPACITY - 1000, MAX_PROBE / 2 - 1, false);
+        assert_eq!(passes(&load, 4), 1, "the runs got shorter again");
+    }
+
+    /// After a failed insert, LEVELWISE_FRAMES frames go level by level whatever the occupancy, also across
+    /// the wrap of frame numbers. Catches a failure that is forgotten (`levelwise_until` not set) and a window
+    /// compared without wrapping (`until > frame_index`: one pass right after a failure near the wrap).
+    #[test]
+    fn a_failed_insert_makes_the_next_frames_level_by_level() {
+        for start in [10u32, u32::MAX - 20] {
+            let mut load = TableLoad::empty(1 << 12);
+            load.finish_frame(start, 100, 1, true);
+            for f in 0..LEVELWISE_FRAMES {
+                assert_eq!(passes(&load, start.wrapping_add(f)), 4, "frame {f} after");
+            }
+            assert_eq!(passes(&load, start.wrapping_add(LEVELWISE_FRAMES)), 1);
+            assert_eq!(passes(&load, start.wrapping_add(1 << 20)), 1);
+        }
+    }
+
+    #[test]
+    fn room_is_half_the_table() {
+        let mut load = TableLoad::empty(4096);
+        load.finish_frame(1, 2047, 1, false);
+        assert!(load.has_room());
+        load.finish_frame(2, 2048, 1, false);
+        assert!(!load.has_room());
+    }
+}
