@@ -204,10 +204,12 @@ impl WorldHashMap {
         self.load.has_room()
     }
 
-    /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4): one pass over every level,
-    /// or one per level, coarsest first, when probe runs may be full (`TableLoad::crowded`).
-    pub fn cell_levels(&self, frame_index: u32) -> Vec<(u32, u32)> {
-        self.load.cell_levels(frame_index)
+    /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4) for a frame of `pixels`
+    /// pixels with feature size `s_p` (eq. 2): one pass over every level, or one per level, coarsest first,
+    /// when probe runs may be full (`TableLoad::crowded`).
+    pub fn cell_levels(&self, frame_index: u32, pixels: u32, s_p: f32) -> Vec<(u32, u32)> {
+        let first_of_f = self.f_start_frame == frame_index;
+        self.load.cell_levels(frame_index, first_of_f, pixels, s_p)
     }
 
     /// What the finished frame `frame_index` (counted after it) did to the map: the rays its cells took of its

@@ -609,7 +609,9 @@ impl Renderer {
             raster.prepare(w, h)?;
         }
         let mode = settings.display.mode;
-        let cell_levels = self.map.cell_levels(self.frame_index);
+        let cell_levels = self
+            .map
+            .cell_levels(self.frame_index, self.pixel_count() as u32, settings.map.s_p);
         let young_frame = self.young_frame(frame);
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         match (primary, &mut self.raster) {

@@ -10,6 +10,14 @@ pub const ROOM_DEN: u64 = 2;
 /// Frames the cell finder stays level by level after a failed insert (`cell_levels`).
 pub const LEVELWISE_FRAMES: u32 = 64;
 
+/// New cells a frame claims per pixel at most, about: a finest cell spans s_p/2 to s_p view pixels (eq. 2-3),
+/// so a pixel holds at most (2/s_p)² of them (and never more than one), and the three coarser levels add a
+/// third (1/4 + 1/16 + 1/64). The cell cap (`MapSettings::cell_cap`) can make far cells smaller: such a frame may
+/// still overflow, and its failed inserts make the next frames level by level. With the default s_p = 4: 1/3.
+pub fn claims_per_pixel(s_p: f32) -> f64 {
+    (2.0 / s_p as f64).powi(2).min(1.0) * 4.0 / 3.0
+}
+
 /// The table's size and use at the end of the last frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TableLoad {
@@ -56,29 +64,35 @@ impl TableLoad {
         }
     }
 
-    /// Whether the frame `frame_index` may find probe runs full of live cells: an insert failed in the last
-    /// LEVELWISE_FRAMES frames (real contention), or the table is past its room and the last frame's longest
-    /// probe run reached half of MAX_PROBE. Past its room an insert takes the first stale slot of its run, so
-    /// a run is long only where live cells (used within the cache lifetime) crowd it: the host counts no live
-    /// cells (stale ones are known only to the probes, and `occupied` only grows), the probes measure them where
-    /// the frame's keys live. A table with room takes any frame in one pass: a 1080p view claims some 4·10^5
-    /// cells (0.18 per pixel on racks_5x5), which the default 2^20 slots hold with short runs.
-    pub fn crowded(&self, frame_index: u32) -> bool {
+    /// Whether the frame `frame_index` of `pixels` pixels may find probe runs full of live cells: an insert
+    /// failed in the last LEVELWISE_FRAMES frames (real contention); or it is the first frame of the map's F
+    /// (`first_of_f`: a new or emptied map, or eq. 6's new F) and its cells may not fit in the table: every slot
+    /// is then free or reclaimable, and the cells it claims stay live for the cache lifetime, so the first frame
+    /// decides which levels hold the slots (`claims_per_pixel`); or the table is past its room and the last
+    /// frame's longest probe run reached half of MAX_PROBE. Past its room an insert takes the first stale slot
+    /// of its run, so a run is long only where live cells (used within the cache lifetime) crowd it: the host
+    /// counts no live cells (stale ones are known only to the probes, and `occupied` only grows), the probes
+    /// measure them where the frame's keys live. Otherwise one pass: a 1080p view at the default s_p claims
+    /// about 4·10^5 cells (0.18 per pixel measured on racks_5x5; at most 7·10^5), which the default 2^20 slots
+    /// hold.
+    pub fn crowded(&self, frame_index: u32, first_of_f: bool, pixels: u32, s_p: f32) -> bool {
         // Frame numbers wrap: compare their difference.
         let failed_recently = self
             .levelwise_until
             .is_some_and(|until| (until.wrapping_sub(frame_index) as i32) > 0);
+        let first_of_f = first_of_f || self.occupied == 0;
+        let may_overflow = first_of_f && pixels as f64 * claims_per_pixel(s_p) > self.capacity as f64;
         let long_runs = 2 * self.longest_probe >= MAX_PROBE;
-        failed_recently || (!self.has_room() && long_runs)
+        failed_recently || may_overflow || (!self.has_room() && long_runs)
     }
 
     /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4): every level in one pass over
     /// the pixels, or, when the frame is `crowded`, one dispatch per level, coarsest first: the coarse cells,
     /// shared by many pixels, then take the free slots before any finer one, and pixels whose fine cells fail
     /// fall back to them.
-    pub fn cell_levels(&self, frame_index: u32) -> Vec<(u32, u32)> {
+    pub fn cell_levels(&self, frame_index: u32, first_of_f: bool, pixels: u32, s_p: f32) -> Vec<(u32, u32)> {
         let top = gpu::LOD_COUNT - 1;
-        if self.crowded(frame_index) {
+        if self.crowded(frame_index, first_of_f, pixels, s_p) {
             (0..=top).rev().map(|l| (l, l)).collect()
         } else {
             vec![(top, 0)]
@@ -92,8 +106,32 @@ mod tests {
 
     const DEFAULT_CAPACITY: u32 = 1 << 20;
 
+    /// Passes of a frame after the first of its F, 1080p at the default s_p.
     fn passes(load: &TableLoad, frame: u32) -> usize {
-        load.cell_levels(frame).len()
+        load.cell_levels(frame, false, HD, 4.0).len()
+    }
+
+    const HD: u32 = 1920 * 1080;
+
+    /// The first frame of a map's F: level by level when its cells may not fit in the table. 1080p at s_p = 4
+    /// (~7·10^5 cells at most, 0.18 per pixel measured on racks_5x5) fits the default table: one pass, where
+    /// the old rule `pixels > capacity / 2` took 4. 320x180 at s_p = 1.5 (the overloaded map test: 38,530 cells
+    /// for 2048 slots) does not. Catches a first frame that is not checked (`may_overflow` dropped: the
+    /// overloaded map's first frame claims the slots for its fine cells, which stay live, and its MAE doubles).
+    #[test]
+    fn a_first_frame_goes_level_by_level_when_its_cells_may_not_fit() {
+        let empty = TableLoad::empty(DEFAULT_CAPACITY);
+        assert_eq!(empty.cell_levels(0, true, HD, 4.0).len(), 1);
+        assert_eq!(empty.cell_levels(0, true, 4 * HD, 4.0).len(), 4, "4K");
+        let small = TableLoad::empty(2048);
+        assert_eq!(small.cell_levels(0, true, 320 * 180, 1.5).len(), 4);
+        assert_eq!(small.cell_levels(0, true, 64 * 36, 4.0).len(), 1);
+        // A later frame of the same F: the measured table decides (`occupied` > 0, not the first of its F).
+        let mut used = small;
+        used.finish_frame(1, 1500, 3, false);
+        assert_eq!(used.cell_levels(1, false, 320 * 180, 1.5).len(), 1);
+        // A new F (an edit, eq. 6): every slot is reclaimable again, the first frame is checked again.
+        assert_eq!(used.cell_levels(1, true, 320 * 180, 1.5).len(), 4);
     }
 
     /// The default table: one pass while it has room, whatever the frame's size (a 1080p frame has more pixels
@@ -126,11 +164,12 @@ mod tests {
         for start in [10u32, u32::MAX - 20] {
             let mut load = TableLoad::empty(1 << 12);
             load.finish_frame(start, 100, 1, true);
+            let passes = |f: u32| load.cell_levels(start.wrapping_add(f), false, 64, 4.0).len();
             for f in 0..LEVELWISE_FRAMES {
-                assert_eq!(passes(&load, start.wrapping_add(f)), 4, "frame {f} after");
+                assert_eq!(passes(f), 4, "frame {f} after");
             }
-            assert_eq!(passes(&load, start.wrapping_add(LEVELWISE_FRAMES)), 1);
-            assert_eq!(passes(&load, start.wrapping_add(1 << 20)), 1);
+            assert_eq!(passes(LEVELWISE_FRAMES), 1);
+            assert_eq!(passes(1 << 20), 1);
         }
     }
 
