@@ -185,12 +185,19 @@ impl WorldHashMap {
 
     /// Frame `frame_index` starts at `time` (`FrameDesc::time`; None: now on the monotonic clock): the cells
     /// it may reclaim for their age are those last used more than `lifetime_s` seconds before it (eq. 6's lazy
-    /// removal, in time: `lifetime`).
+    /// removal, in time: `lifetime`), or a fraction of it while inserts fail (`TableLoad::lifetime_fraction`).
     pub fn begin_frame(&mut self, frame_index: u32, time: Option<Duration>, lifetime_s: f32) {
         let time = time.unwrap_or_else(|| self.started.elapsed());
-        self.lifetime_frames = self
+        let lifetime_s = lifetime_s as f64;
+        let full = self
             .clock
-            .lifetime_frames(frame_index, time.as_secs_f64(), lifetime_s as f64);
+            .lifetime_frames(frame_index, time.as_secs_f64(), lifetime_s);
+        let fraction = self.load.lifetime_fraction();
+        self.lifetime_frames = if fraction < 1.0 {
+            self.clock.frames_within(frame_index, lifetime_s * fraction)
+        } else {
+            full
+        };
     }
 
     /// This frame's age in frames past which a cell may be reclaimed (`begin_frame`).

@@ -59,7 +59,12 @@ struct Revisit {
     a_cells: usize,
     lost: usize,
     claimed: u32,
-    failed_during_b: u64,
+    /// Failed inserts of each frame of the detour.
+    failed_during_b: Vec<u32>,
+    /// Cells the detour's frames after the 240th claimed (inserted or reclaimed).
+    claimed_after_240: u64,
+    /// Slots taken at the end of the detour.
+    occupied: u32,
     ao_change: f32,
 }
 
@@ -77,12 +82,16 @@ fn detour(fps: f64, lifetime_s: f32, b_frames: u32, step: f32) -> Revisit {
     }
     let before = cells_in_use(&r);
     let ao_before = r.read_ao().unwrap();
-    let mut failed_during_b = 0u64;
+    let (mut failed_during_b, mut claimed_after_240, mut occupied) = (Vec::new(), 0u64, 0);
     for i in 0..b_frames {
         let rep = r
             .render(&sg, scene.f(), &view_at(60.0 + step * i as f32))
             .unwrap();
-        failed_during_b += rep.failed_inserts as u64;
+        failed_during_b.push(rep.failed_inserts);
+        occupied = rep.occupied_cells;
+        if i >= 240 {
+            claimed_after_240 += (rep.cells_inserted + rep.reclaimed) as u64;
+        }
     }
     let back = r.render(&sg, scene.f(), &a).unwrap();
     let cells = r.read_hash_cells().unwrap();
@@ -98,32 +107,62 @@ fn detour(fps: f64, lifetime_s: f32, b_frames: u32, step: f32) -> Revisit {
         lost,
         claimed: back.cells_inserted + back.reclaimed,
         failed_during_b,
+        claimed_after_240,
+        occupied,
         ao_change,
     }
 }
 
 /// View A, then 300 frames (2.1 s) of view B at a simulated 144 fps, then A again: within the default 30 s
-/// lifetime, A's cells are all found, none claimed again, and A's AO is what it was. B fills the table (its
-/// inserts fail once it is full of live cells), yet reclaims none of A's. Fails on the frame-counted rule (A's
-/// cells stale after 240 frames, recycled first by B's inserts): mutations `lifetime_frames` returning 240 in
-/// `FrameClock::lifetime_frames` with `take_free = free_slot != INVALID_CELL && stale == INVALID_CELL` in
-/// hash_map.glsl (stale slots first, as before).
+/// lifetime, A's cells are all found, none claimed again, and A's AO is what it was. B pans slowly enough for
+/// the table to hold everything (no failed insert, so the lifetime holds whole) but takes it past its room
+/// (stale slots are recycled first), and claims cells after its 240th frame. Fails on the frame-counted rule
+/// (A's cells stale after 240 frames, recycled by B's inserts): mutation `FrameClock::lifetime_frames`
+/// returning 240 (72 of A's cells lost); with `take_free = free_slot != INVALID_CELL && stale == INVALID_CELL`
+/// in hash_map.glsl too (the code before this change) it fails as well.
 #[test]
 fn a_view_revisited_within_the_lifetime_at_144_fps_is_found_not_retraced() {
-    let v = detour(144.0, AoSettings::default().map.cache_lifetime_s, 300, 2.0);
+    let v = detour(144.0, AoSettings::default().map.cache_lifetime_s, 300, 0.75);
+    let failed: u32 = v.failed_during_b.iter().sum();
     println!(
-        "144 fps, 300 frames away: {} cells of A, {} lost, {} claimed on return, {} failed inserts during B, \
-         AO change {:.4}",
-        v.a_cells, v.lost, v.claimed, v.failed_during_b, v.ao_change
+        "144 fps, 300 frames away: {} cells of A, {} lost, {} claimed on return, {} claimed by B after its 240th \
+         frame, {failed} failed inserts during B, {} of {CAPACITY} slots taken, AO change {:.4}",
+        v.a_cells, v.lost, v.claimed, v.claimed_after_240, v.occupied, v.ao_change
     );
     assert!(v.a_cells > 200, "A uses {} cells", v.a_cells);
+    assert_eq!(failed, 0, "the table holds the detour");
     assert!(
-        v.failed_during_b > 0,
-        "the detour fills the table (else it proves nothing)"
+        v.occupied > CAPACITY / 2,
+        "past its room: only the lifetime keeps A's cells"
     );
+    assert!(v.claimed_after_240 > 100, "B claims cells after its 240th frame");
     assert_eq!(v.lost, 0, "A's cells were reclaimed");
     assert_eq!(v.claimed, 0, "A's return claimed cells");
     assert!(v.ao_change < 0.02, "A's AO changed by {}", v.ao_change);
+}
+
+/// A detour that overflows the table (a fast pan at 144 fps: the table fills with cells used within the 30 s
+/// lifetime): the lifetime yields (`TableLoad::lifetime_fraction`), the least recently used cells are recycled,
+/// and the view's inserts stop failing: over the 300 frames fewer inserts fail than one frame has pixels.
+/// Fails when the lifetime never yields (`self.halvings = ...` removed from `TableLoad::finish_frame`: every
+/// frame after the table fills fails about half its inserts).
+#[test]
+fn a_detour_that_overflows_the_table_recycles_its_oldest_cells() {
+    let v = detour(144.0, AoSettings::default().map.cache_lifetime_s, 300, 2.0);
+    let first_full = v
+        .failed_during_b
+        .iter()
+        .position(|&f| f > 0)
+        .expect("the table overflows");
+    let total: u32 = v.failed_during_b.iter().sum();
+    let last: u32 = v.failed_during_b[200..].iter().sum();
+    println!(
+        "144 fps, fast pan: table full at frame {first_full}, {total} failed inserts in all, {last} in the last \
+         100 frames; {} of A's {} cells recycled",
+        v.lost, v.a_cells
+    );
+    assert!(total < 64 * 36, "inserts keep failing: {total}");
+    assert!(last < 100, "inserts keep failing: {last} in the last 100 frames");
 }
 
 /// Past the lifetime, while the table has room: a 1 s lifetime, view A, then 3 s of view B at a simulated
@@ -139,7 +178,7 @@ fn a_view_revisited_after_the_lifetime_is_found_while_the_table_has_room() {
         v.a_cells, v.lost, v.claimed, v.ao_change
     );
     assert!(v.a_cells > 200, "A uses {} cells", v.a_cells);
-    assert_eq!(v.failed_during_b, 0);
+    assert_eq!(v.failed_during_b.iter().sum::<u32>(), 0);
     assert_eq!(
         v.lost, 0,
         "A's stale cells were reclaimed although the table had room"

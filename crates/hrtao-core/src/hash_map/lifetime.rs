@@ -51,18 +51,26 @@ impl FrameClock {
             Some(last) if now - last.1 < interval => {}
             _ => self.checkpoints.push_back((frame, now)),
         }
-        // Older than the lifetime: an age (not a time compared with now - lifetime, which rounds differently).
-        let expired = |t: f64| now - t > lifetime_s;
         // Keep the newest checkpoint that is older than the lifetime at the front: it names the last frame that
         // may be reclaimed.
         while self.checkpoints.len() > MAX_CHECKPOINTS
-            || self.checkpoints.get(1).is_some_and(|c| expired(c.1))
+            || self.checkpoints.get(1).is_some_and(|c| now - c.1 > lifetime_s)
         {
             self.checkpoints.pop_front();
         }
-        match self.checkpoints.front() {
-            Some(&(old, t)) if expired(t) => frame.wrapping_sub(old).wrapping_sub(1),
-            _ => NO_AGE_LIMIT,
+        self.frames_within(frame, lifetime_s)
+    }
+
+    /// After `lifetime_frames` for `frame`: the age in frames past which a cell was last used more than
+    /// `seconds` ago, for `seconds` up to that call's lifetime (a shorter one under pressure, `TableLoad`).
+    /// Frames between two checkpoints are kept: a cell outlives `seconds` by less than a checkpoint interval
+    /// of that lifetime and a frame.
+    pub fn frames_within(&self, frame: u32, seconds: f64) -> u32 {
+        // Older than `seconds`: an age (not a time compared with now - seconds, which rounds differently).
+        let now = self.last_seconds;
+        match self.checkpoints.iter().rev().find(|c| now - c.1 > seconds) {
+            Some(&(old, _)) => frame.wrapping_sub(old).wrapping_sub(1),
+            None => NO_AGE_LIMIT,
         }
     }
 }
@@ -147,6 +155,27 @@ mod tests {
         // A NaN time: held too.
         let nan = clock.lifetime_frames(103, f64::NAN, 0.5);
         assert!(reclaimable(103, 96, nan) && !reclaimable(103, 97, nan), "{nan}");
+    }
+
+    /// A shorter lifetime read from the ring of a longer one (pressure): a cell is kept for it, and reclaimable
+    /// after it plus one checkpoint interval of the longer lifetime and a frame.
+    #[test]
+    fn a_shorter_lifetime_from_the_same_ring() {
+        let mut clock = FrameClock::new();
+        let fps = 144.0;
+        let (long, short) = (4.0, 0.5);
+        let slack = long / CHECKPOINTS_PER_LIFETIME + 1.0 / fps;
+        for f in 0..(2.0 * long * fps) as u32 {
+            let now = f as f64 / fps;
+            clock.lifetime_frames(f, now, long);
+            let lf = clock.frames_within(f, short);
+            for back in 0..=f {
+                let age = now - (f - back) as f64 / fps;
+                let r = reclaimable(f, f - back, lf);
+                assert!(!(r && age <= short), "reclaimed {age:.3} s after use");
+                assert!(r || age <= short + slack, "kept {age:.3} s after use");
+            }
+        }
     }
 
     /// The ring stays small however many frames and whatever the frame rate.

@@ -1,6 +1,7 @@
-//! How full the hash map's table is, as its owner knows it between frames, and the two decisions made from it:
-//! whether an insert takes the free slot that ends its probe run before a stale one met on the way
-//! (`has_room`, hash_map.glsl `find_or_insert`), and whether the cell finder runs level by level (`cell_levels`).
+//! How full the hash map's table is, as its owner knows it between frames, and the three decisions made from
+//! it: whether an insert takes the free slot that ends its probe run before a stale one met on the way
+//! (`has_room`, hash_map.glsl `find_or_insert`), whether the cell finder runs level by level (`cell_levels`),
+//! and how much of the cache lifetime the table can keep (`lifetime_fraction`).
 use crate::gpu;
 use crate::settings::MAX_PROBE;
 
@@ -9,6 +10,11 @@ use crate::settings::MAX_PROBE;
 pub const ROOM_DEN: u64 = 2;
 /// Frames the cell finder stays level by level after a failed insert (`cell_levels`).
 pub const LEVELWISE_FRAMES: u32 = 64;
+/// Halvings of the cache lifetime at most under pressure (`lifetime_fraction`): down to 1/64 of it, the frame
+/// clock's checkpoint interval (`hash_map::lifetime`), below which its ring cannot tell frames apart.
+pub const MAX_LIFETIME_HALVINGS: u32 = 6;
+/// Frames without a failed insert after which a halved lifetime doubles back.
+pub const CALM_FRAMES: u32 = 16;
 
 /// New cells a frame claims per pixel at most, about: a finest cell spans s_p/2 to s_p view pixels (eq. 2-3),
 /// so a pixel holds at most (2/s_p)² of them (and never more than one), and the three coarser levels add a
@@ -29,6 +35,10 @@ pub struct TableLoad {
     pub longest_probe: u32,
     /// Until this frame the cell finder runs level by level (an insert failed, see `cell_levels`).
     levelwise_until: Option<u32>,
+    /// Times the cache lifetime is halved (`lifetime_fraction`), and frames without a failed insert since the
+    /// last change.
+    halvings: u32,
+    calm_frames: u32,
 }
 
 impl TableLoad {
@@ -61,7 +71,25 @@ impl TableLoad {
         self.longest_probe = longest_probe;
         if failed_inserts {
             self.levelwise_until = Some(frame_index.wrapping_add(LEVELWISE_FRAMES));
+            self.halvings = (self.halvings + 1).min(MAX_LIFETIME_HALVINGS);
+            self.calm_frames = 0;
+        } else if self.halvings > 0 {
+            self.calm_frames += 1;
+            if self.calm_frames >= CALM_FRAMES {
+                self.halvings -= 1;
+                self.calm_frames = 0;
+            }
         }
+    }
+
+    /// The fraction of the cache lifetime the table keeps this frame. The lifetime holds while the table can
+    /// hold every cell used within it; when an insert fails, every slot of its run held a cell used within the
+    /// lifetime, so the cells the view needs now would wait for older ones to expire (up to the whole lifetime:
+    /// AO = 1, or coarse cells, on newly seen surfaces meanwhile). Each frame with a failed insert halves the
+    /// lifetime (down to 1/2^MAX_LIFETIME_HALVINGS): the least recently used cells become reclaimable first, and
+    /// a frame's own cells are never among them. CALM_FRAMES frames without one double it back.
+    pub fn lifetime_fraction(&self) -> f64 {
+        0.5f64.powi(self.halvings as i32)
     }
 
     /// Whether the frame `frame_index` of `pixels` pixels may find probe runs full of live cells: an insert
@@ -171,6 +199,29 @@ mod tests {
             assert_eq!(passes(LEVELWISE_FRAMES), 1);
             assert_eq!(passes(1 << 20), 1);
         }
+    }
+
+    /// Failed inserts halve the lifetime, down to 1/64; frames without one double it back, CALM_FRAMES at a
+    /// time. Catches a lifetime that never yields (`halvings` not raised: a table full of live cells fails the
+    /// view's inserts for a whole lifetime) and one that never recovers (not lowered).
+    #[test]
+    fn failed_inserts_shorten_the_lifetime_until_the_table_copes() {
+        let mut load = TableLoad::empty(4096);
+        assert_eq!(load.lifetime_fraction(), 1.0);
+        for f in 0..10 {
+            load.finish_frame(f, 4096, MAX_PROBE, true);
+        }
+        assert_eq!(load.lifetime_fraction(), 1.0 / 64.0);
+        for f in 10..10 + CALM_FRAMES - 1 {
+            load.finish_frame(f, 4096, 3, false);
+        }
+        assert_eq!(load.lifetime_fraction(), 1.0 / 64.0);
+        load.finish_frame(10 + CALM_FRAMES, 4096, 3, false);
+        assert_eq!(load.lifetime_fraction(), 1.0 / 32.0);
+        for f in 0..10 * CALM_FRAMES {
+            load.finish_frame(100 + f, 4096, 3, false);
+        }
+        assert_eq!(load.lifetime_fraction(), 1.0);
     }
 
     #[test]
