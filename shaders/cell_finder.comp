@@ -1,10 +1,10 @@
 #version 460
 // Cell finder (paper §4, Fig. 3): for each pixel, the hash cell at the target s_wd (level 0) and at the
 // LOD_COUNT - 1 successively coarser sizes (x2, x4, x8), found or inserted in the persistent world-space map.
-// Levels push.x down to push.y (coarsest first): all of them in one pass while the map has room, one dispatch
-// per level after an overload (Renderer::cell_levels), so that the coarse cells, shared by many pixels, get the
-// free slots first. A failed level means the table is full here: finer cells would fail too, and the pixel
-// falls back to the coarser cells it has (§4) instead of losing AO. The dispatch that ends at level 0 also
+// Levels push.x down to push.y (coarsest first): all of them in one pass, one dispatch per level while the table
+// is crowded (TableLoad::cell_levels), so that the coarse cells, shared by many pixels, get the free slots first.
+// A failed level means the table is full here: finer cells would fail too, and the pixel falls back to the
+// coarser cells it has (§4) instead of losing AO. The dispatch that ends at level 0 also
 // queues the pixel for the ray-tracing update (ray_target.glsl `queue_for_rays`).
 #include "common.glsl"
 #include "hash_map.glsl"

@@ -1,5 +1,6 @@
 // The world-space hash map (paper §1): find-or-insert with linear probing, bounded probe length, every slot
-// wrapped into the table, lazy removal of cells of an old F (eq. 6) or untouched for `stale_frames` frames.
+// wrapped into the table, lazy removal of cells of an old F (eq. 6) or unused for the cache lifetime (in seconds,
+// turned into `lifetime_frames` frames by the host: hash_map/lifetime.rs).
 //
 // A cell's checksum and its "last used" frame share one 64-bit word (`HashCell::stamp`), so claiming a cell
 // (free or reclaimable) and re-stamping a found one are each a single atomicCompSwap: no thread can take over
@@ -28,11 +29,12 @@ uint64_t load_stamp(CellRef cells, uint slot) {
 }
 
 // eq. (6)'s lazy removal: a cell may go to another key when it was last used before the first frame of the
-// current F (its F is old: no key of the current F can reach it) or more than `stale_frames` frames ago.
+// current F (its F is old: no key of the current F can reach it) or longer than the cache lifetime ago (more than
+// `lifetime_frames` frames: the host counts the frames of the last `cache_lifetime_s` seconds).
 // Frame numbers wrap: ages are unsigned differences.
 bool stamp_reclaimable(uint64_t s) {
     uint age = g.frame_index - stamp_frame(s);
-    return age > g.frame_index - g.f_start_frame || age > g.stale_frames;
+    return age > g.frame_index - g.f_start_frame || age > g.lifetime_frames;
 }
 
 // Local edits (ours): the epoch of the region holding cell `c`, and the cell's key with it.
@@ -112,15 +114,23 @@ const uint PROBE_ATTEMPTS = 4u;
 
 // Returns the slot holding `key`, inserting it when absent; INVALID_CELL when the probe limit is reached.
 // The whole probe run is scanned first (to a free slot or max_probe): a key that lives further down the run
-// is found and kept, and a reclaimable slot met on the way is taken over only when the key is absent.
+// is found and kept, and a slot is claimed only when the key is absent. While the table has room
+// (FLAG_MAP_HAS_ROOM) the claim takes the free slot that ends the run, and a reclaimable cell met before it keeps
+// its key and AO (a revisit past the cache lifetime still finds it); past the room, or when the run has no free
+// slot within max_probe, it takes the first reclaimable slot, so the table recycles. Either way the key lands
+// within its run, before its first free slot: lookups, which scan to the first free slot, find it.
 uint find_or_insert(CellKey key) {
     CellRef cells = CellRef(g.hash_cells);
     uint mask = g.hash_capacity - 1u;
     uint64_t mine = make_stamp(key.checksum, g.frame_index);
+    bool room = (g.flags & FLAG_MAP_HAS_ROOM) != 0u;
     for (uint attempt = 0u; attempt < PROBE_ATTEMPTS; ++attempt) {
-        uint candidate = INVALID_CELL;   // first reclaimable slot, else the free slot ending the run
-        uint64_t expected = uint64_t(0);
-        uint length = 0u;
+        uint stale = INVALID_CELL;   // the first reclaimable slot of the run
+        uint free_slot = INVALID_CELL;   // the free slot ending the run
+        uint64_t stale_stamp = uint64_t(0);
+        uint64_t free_stamp = uint64_t(0);
+        uint stale_length = 0u;
+        uint free_length = 0u;
         bool lost = false;
         for (uint i = 0u; i < g.max_probe; ++i) {
             uint slot = (key.slot + i) & mask;
@@ -142,20 +152,22 @@ uint find_or_insert(CellKey key) {
                 break;
             }
             if (c == EMPTY_CELL) {
-                if (candidate == INVALID_CELL) {
-                    candidate = slot;
-                    expected = s;
-                    length = i + 1u;
-                }
+                free_slot = slot;
+                free_stamp = s;
+                free_length = i + 1u;
                 break;   // no deletions: a free slot ends the key's probe run
             }
-            if (candidate == INVALID_CELL && stamp_reclaimable(s)) {
-                candidate = slot;
-                expected = s;
-                length = i + 1u;
+            if (stale == INVALID_CELL && stamp_reclaimable(s)) {
+                stale = slot;
+                stale_stamp = s;
+                stale_length = i + 1u;
             }
         }
         if (lost) continue;
+        bool take_free = free_slot != INVALID_CELL && (room || stale == INVALID_CELL);
+        uint candidate = take_free ? free_slot : stale;
+        uint64_t expected = take_free ? free_stamp : stale_stamp;
+        uint length = take_free ? free_length : stale_length;
         if (candidate == INVALID_CELL) break;
         uint64_t prev = atomicCompSwap(cells.v[candidate].stamp, expected, mine);
         if (prev == expected) {

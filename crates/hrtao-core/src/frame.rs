@@ -2,6 +2,8 @@
 //! previous frame invalidates (`Change::between`): nothing, the still image, the cells of a region, or the whole
 //! map. The renderer takes a `FrameDesc` whole; the viewer, `hrtao render`, `hrtao bench` and the screenshot
 //! tiles each build one per frame.
+use std::time::Duration;
+
 use glam::Vec3;
 
 use crate::accel::SceneGpu;
@@ -70,6 +72,11 @@ pub struct FrameDesc<'a> {
     /// accumulates as one whole frame would (1 = whole frames). Changing it changes nothing that was drawn:
     /// it takes effect at the next round, except that a larger one restarts a still image's first round.
     pub lattice: u32,
+    /// When the frame starts, from an origin fixed for the renderer (None: now on the renderer's monotonic
+    /// clock). Only the cache lifetime reads it (`MapSettings::cache_lifetime_s`): tests and replays give
+    /// simulated times (`at`), so a run at 10 or 144 frames per second is reproducible. Not part of what the
+    /// frame shows: a new time changes nothing that was drawn.
+    pub time: Option<Duration>,
 }
 
 impl<'a> FrameDesc<'a> {
@@ -86,6 +93,15 @@ impl<'a> FrameDesc<'a> {
             jitter: false,
             output: Output::default(),
             lattice: 1,
+            time: None,
+        }
+    }
+
+    /// This frame at time `time` (simulated: see `time`).
+    pub fn at(self, time: Duration) -> FrameDesc<'a> {
+        FrameDesc {
+            time: Some(time),
+            ..self
         }
     }
 
@@ -362,7 +378,7 @@ mod tests {
     #[test]
     fn settings_classify_themselves() {
         let mut s = AoSettings::default();
-        s.map.stale_frames = 7;
+        s.map.cache_lifetime_s = 7.0;
         let c = Change::between(&key(), &FrameKey { settings: s, ..key() }, |_, _| None);
         assert_eq!((c.still_image, c.map), (false, MapChange::Keep));
         let mut s = AoSettings::default();

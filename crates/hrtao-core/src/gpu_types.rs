@@ -39,6 +39,10 @@ gpu_consts! {
     /// The map is young this frame (`WorldHashMap::young`). A moving frame without it is a navigation frame
     /// (`navigation_frame` in common.glsl), which resolves and filters as the paper does.
     FLAG_YOUNG_MAP: u32 = 256;
+    /// The hash map's table has room (`TableLoad::has_room`): an insert takes the free slot ending its probe run
+    /// rather than a stale slot met before it, so cells older than the cache lifetime keep their AO until the
+    /// table needs their slots (hash_map.glsl `find_or_insert`).
+    FLAG_MAP_HAS_ROOM: u32 = 512;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
     /// `FilterGuide::normal` of a pixel without AO (a miss, or no cell): never a packed normal (packSnorm2x16
@@ -150,7 +154,10 @@ gpu_structs! {
         max_samples: u32,
         min_samples: u32,
         max_probe: u32,
-        stale_frames: u32,
+        /// eq. (6)'s lazy removal: a cell last used more than this many frames ago is older than the cache
+        /// lifetime (`MapSettings::cache_lifetime_s`, turned into frames by `hash_map::FrameClock`) and may be
+        /// reclaimed; u32::MAX: none is.
+        lifetime_frames: u32,
         filter_iterations: u32,
         /// Still-camera refinement: the cell estimate counts as this many of the pixel's own rays.
         prior_rays: f32,

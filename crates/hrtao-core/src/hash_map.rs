@@ -1,8 +1,9 @@
 //! The world-space hash map (paper §1) and everything that decides what its cells mean, in one owner: the cells
 //! buffer and its capacity, the F its keys carry (eq. 6), the local-edit region epochs (ours, `regions.rs`),
-//! emptying it, whether it is young, how the cell finder fills it, and its occupancy. The renderer asks it; the
-//! shaders reach it through `FrameGlobals::hash_cells`.
+//! emptying it, whether it is young, how the cell finder fills it, its occupancy (`load`) and how long its cells
+//! live (`lifetime`). The renderer asks it; the shaders reach it through `FrameGlobals::hash_cells`.
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -10,16 +11,20 @@ use gpu_allocator::MemoryLocation;
 use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::Result;
-use crate::gpu::{self, HashCell};
+use crate::gpu::HashCell;
 use crate::regions::RegionTable;
 use crate::settings::AoSettings;
+
+pub mod lifetime;
+pub mod load;
+
+pub use lifetime::{FrameClock, NO_AGE_LIMIT};
+pub use load::TableLoad;
 
 /// The map counts as young in frames after one whose cells took at least 1/this of its budget (`young`).
 const YOUNG_CELL_RAYS_DEN: u64 = 4;
 /// `last_cell_rays` of an empty map: its next frame is young.
 const NEW_MAP: (u64, u64) = (u64::MAX, 0);
-/// Frames the cell finder stays level by level after a failed insert (`cell_levels`).
-const LEVELWISE_FRAMES: u32 = 64;
 
 pub struct WorldHashMap {
     gpu: Arc<Gpu>,
@@ -34,8 +39,15 @@ pub struct WorldHashMap {
     /// with, so that key F values only ever grow and a key never reverts to one of before such a change.
     settings_f: u32,
     pub(crate) regions: RegionTable,
-    /// Until this frame the cell finder runs level by level (the map was full somewhere, see `cell_levels`).
-    levelwise_until: u32,
+    /// The table's use at the end of the last frame: free slots first or stale ones, one cell finder pass or
+    /// one per level.
+    load: TableLoad,
+    /// The times of recent frames, which turn the cache lifetime into a frame age (eq. 6's lazy removal).
+    clock: FrameClock,
+    /// The origin of frame times that a frame does not give (`FrameDesc::time`): the monotonic clock.
+    started: Instant,
+    /// This frame's age in frames past which a cell may be reclaimed (`FrameGlobals::lifetime_frames`).
+    lifetime_frames: u32,
     /// Rays the cells took in the last finished frame (u64::MAX before the first), and that frame's ray
     /// budget: see `young`.
     last_cell_rays: (u64, u64),
@@ -51,7 +63,10 @@ impl WorldHashMap {
             key_f: 0,
             settings_f: 0,
             regions: RegionTable::new(gpu)?,
-            levelwise_until: 0,
+            load: TableLoad::default(),
+            clock: FrameClock::new(),
+            started: Instant::now(),
+            lifetime_frames: NO_AGE_LIMIT,
             last_cell_rays: NEW_MAP,
         })
     }
@@ -101,6 +116,7 @@ impl WorldHashMap {
         )?;
         self.fill_zero(Some(cells.raw), stats)?;
         self.cells = Some((capacity, cells));
+        self.load = TableLoad::empty(capacity);
         self.last_cell_rays = NEW_MAP;
         Ok(())
     }
@@ -110,6 +126,7 @@ impl WorldHashMap {
         self.gpu.wait_idle();
         self.fill_zero(self.cells.as_ref().map(|(_, b)| b.raw), stats)?;
         self.regions.reset();
+        self.load = TableLoad::empty(self.capacity());
         self.last_cell_rays = NEW_MAP;
         Ok(())
     }
@@ -166,29 +183,56 @@ impl WorldHashMap {
         self.f_start_frame == frame_index || cell_rays.saturating_mul(YOUNG_CELL_RAYS_DEN) >= budget
     }
 
-    /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4) for `pixels` pixels. While the
-    /// map has room every level is found in one pass over the pixels. Where it may not (more pixels than half
-    /// the capacity: cells claimed in a frame stay live for `stale_frames`, so the first frame decides), and for
-    /// LEVELWISE_FRAMES frames after an insert failed, one dispatch per level, coarsest first: the coarse cells,
-    /// shared by many pixels, then take the free slots before any finer one, and pixels whose fine cells fail
-    /// fall back to them.
-    pub fn cell_levels(&self, pixels: u32, frame_index: u32) -> Vec<(u32, u32)> {
-        let top = gpu::LOD_COUNT - 1;
-        let crowded = pixels as u64 > self.capacity() as u64 / 2;
-        // Frame numbers wrap: compare their difference.
-        if crowded || (self.levelwise_until.wrapping_sub(frame_index) as i32) > 0 {
-            (0..=top).rev().map(|l| (l, l)).collect()
+    /// Frame `frame_index` starts at `time` (`FrameDesc::time`; None: now on the monotonic clock): the cells
+    /// it may reclaim for their age are those last used more than `lifetime_s` seconds before it (eq. 6's lazy
+    /// removal, in time: `lifetime`), or a fraction of it while inserts fail (`TableLoad::lifetime_fraction`).
+    pub fn begin_frame(&mut self, frame_index: u32, time: Option<Duration>, lifetime_s: f32) {
+        let time = time.unwrap_or_else(|| self.started.elapsed());
+        let lifetime_s = lifetime_s as f64;
+        let full = self
+            .clock
+            .lifetime_frames(frame_index, time.as_secs_f64(), lifetime_s);
+        let fraction = self.load.lifetime_fraction();
+        self.lifetime_frames = if fraction < 1.0 {
+            self.clock.frames_within(frame_index, lifetime_s * fraction)
         } else {
-            vec![(top, 0)]
-        }
+            full
+        };
+    }
+
+    /// This frame's age in frames past which a cell may be reclaimed (`begin_frame`).
+    pub fn lifetime_frames(&self) -> u32 {
+        self.lifetime_frames
+    }
+
+    /// Whether this frame's inserts take the free slot ending their probe run before a stale one
+    /// (`TableLoad::has_room`, `FLAG_MAP_HAS_ROOM`).
+    pub fn has_room(&self) -> bool {
+        self.load.has_room()
+    }
+
+    /// The cell finder's dispatches as (coarsest, finest) level ranges (paper §4) for a frame of `pixels`
+    /// pixels with feature size `s_p` (eq. 2): one pass over every level, or one per level, coarsest first,
+    /// when probe runs may be full (`TableLoad::crowded`).
+    pub fn cell_levels(&self, frame_index: u32, pixels: u32, s_p: f32) -> Vec<(u32, u32)> {
+        let first_of_f = self.f_start_frame == frame_index;
+        self.load.cell_levels(frame_index, first_of_f, pixels, s_p)
     }
 
     /// What the finished frame `frame_index` (counted after it) did to the map: the rays its cells took of its
-    /// budget (youth), and whether an insert failed (the cell finder goes level by level for a while).
-    pub fn finish_frame(&mut self, frame_index: u32, cell_rays: u64, budget: u64, failed_inserts: bool) {
-        if failed_inserts {
-            self.levelwise_until = frame_index.wrapping_add(LEVELWISE_FRAMES);
-        }
+    /// budget (youth), the slots taken at its end and its longest probe run, and whether an insert failed (the
+    /// cell finder goes level by level for a while).
+    pub fn finish_frame(
+        &mut self,
+        frame_index: u32,
+        cell_rays: u64,
+        budget: u64,
+        occupied: u32,
+        longest_probe: u32,
+        failed_inserts: bool,
+    ) {
+        self.load
+            .finish_frame(frame_index, occupied, longest_probe, failed_inserts);
         self.last_cell_rays = (cell_rays, budget);
     }
 }

@@ -333,6 +333,8 @@ impl Renderer {
             }
         }
         self.map.ensure(frame.settings.map.hash_capacity, &self.stats)?;
+        self.map
+            .begin_frame(self.frame_index, frame.time, frame.settings.map.cache_lifetime_s);
         let key = frame.key(self.primary);
         let change = self.change_to(frame, &key);
         let mut map = change.map;
@@ -476,6 +478,7 @@ impl Renderer {
             scene_f: key_f,
             frame_index: self.frame_index,
             f_start_frame: self.map.f_start_frame(),
+            lifetime_frames: self.map.lifetime_frames(),
             s_w_per_distance: feature_size.per_distance,
             s_w_base: feature_size.base,
             hash_capacity: self.map.capacity(),
@@ -533,6 +536,9 @@ impl Renderer {
         }
         if self.map.young(self.frame_index) {
             g.flags |= gpu::FLAG_YOUNG_MAP;
+        }
+        if self.map.has_room() {
+            g.flags |= gpu::FLAG_MAP_HAS_ROOM;
         }
         g.flags |= additions::flags(&self.young_frame(frame));
         g
@@ -603,7 +609,9 @@ impl Renderer {
             raster.prepare(w, h)?;
         }
         let mode = settings.display.mode;
-        let cell_levels = self.map.cell_levels(self.pixel_count() as u32, self.frame_index);
+        let cell_levels = self
+            .map
+            .cell_levels(self.frame_index, self.pixel_count() as u32, settings.map.s_p);
         let young_frame = self.young_frame(frame);
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
         scene.record_uploads(&mut rec);
@@ -860,6 +868,8 @@ impl Renderer {
             self.frame_index,
             rays(gpu::RAYS_CELL),
             budget.ceil() as u64,
+            occupied,
+            c[gpu::STAT_MAX_PROBE as usize],
             c[gpu::STAT_FAILED_INSERTS as usize] > 0,
         );
         let capacity = self.map.capacity().max(1);
@@ -1181,5 +1191,11 @@ impl Renderer {
     /// Frames rendered so far (the hash map's clock).
     pub fn frame_index(&self) -> u32 {
         self.frame_index
+    }
+
+    /// The last frame's cache lifetime in frames: a cell it did not use and last used more than this many
+    /// frames before it was older than `cache_lifetime_s` (`hash_map::FrameClock`).
+    pub fn lifetime_frames(&self) -> u32 {
+        self.map.lifetime_frames()
     }
 }

@@ -255,14 +255,16 @@ fn stale_cells_are_reclaimed_so_the_map_never_fills() {
     let gpu = gpu();
     let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
-    // A small map and a short staleness window; the camera visits new places every frame.
+    // A small map and a short cache lifetime (2 s, frames 1 s apart: 2 frames); the camera visits new places
+    // every frame.
     let settings = {
         let mut s = hrtao(1, radius);
         s.map.hash_capacity = 8192;
-        s.map.stale_frames = 2;
+        s.map.cache_lifetime_s = 2.0;
         s
     };
     let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
+    r.fps = Some(1.0);
     let (mut reclaimed, mut last_failed) = (0, 0);
     for i in 0..12 {
         let mut c = cam;
@@ -306,10 +308,12 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
     let mut r = Headless::new(&gpu, cam.width, cam.height, {
         let mut s = base;
         s.map.hash_capacity = capacity;
-        s.map.stale_frames = 3;
+        // 3 s, frames 1 s apart: 3 frames.
+        s.map.cache_lifetime_s = 3.0;
         s
     })
     .unwrap();
+    r.fps = Some(1.0);
     let start = scene.instances[0].transform;
     let (mut failed, mut reclaimed, mut live) = (0u64, 0u64, 0usize);
     for i in 0..16u32 {

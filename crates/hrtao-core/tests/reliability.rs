@@ -73,10 +73,12 @@ fn soak_with_edits_stays_bounded_and_clean() {
     let settings = {
         let mut s = hrtao(2, radius);
         s.map.hash_capacity = capacity;
-        s.map.stale_frames = 30;
+        // 1 s at 30 simulated frames per second: cells unused for 30 frames are stale.
+        s.map.cache_lifetime_s = 1.0;
         s
     };
     let mut r = Headless::new(&gpu, 64, 36, settings).unwrap();
+    r.fps = Some(30.0);
     r.set_check_bounds(true);
     let base = scene.instances[0].transform;
     let (mut mem_after_warmup, mut rss_after_warmup) = (0, 0);

@@ -128,7 +128,7 @@ fn changed_values() -> Vec<(&'static str, serde_json::Value)> {
         ("max_samples", json!(200)),
         ("min_samples", json!(0)),
         ("hash_capacity", json!(1 << 18)),
-        ("stale_frames", json!(100)),
+        ("cache_lifetime_s", json!(5.0)),
         ("filter_iterations", json!(2)),
         ("still_samples", json!(16)),
         ("crease_deg", json!(20.0)),

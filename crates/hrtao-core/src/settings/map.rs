@@ -15,6 +15,10 @@ pub const MAX_CELL_FRACTION: f32 = 0.25;
 /// Longest linear probe (§1) before an insert fails.
 pub const MAX_PROBE: u32 = 32;
 
+/// The longest cache lifetime accepted (`cache_lifetime_s`): a day. Longer, a cell's seconds would outgrow
+/// the frame clock's precision long before anyone revisits it.
+pub const MAX_CACHE_LIFETIME_S: f32 = 86_400.0;
+
 settings_group! {
     /// The paper's hash map and its sampling.
     pub struct MapSettings {
@@ -35,8 +39,11 @@ settings_group! {
         min_samples: u32 = 8, StillImage, paper keep;
         /// Hash map capacity in cells (a power of two).
         hash_capacity: u32 = 1 << 20, WholeMap, paper keep;
-        /// Cells untouched for this many frames may be reclaimed while probing (lazy removal, eq. 6).
-        stale_frames: u32 = 240, Nothing, paper keep;
+        /// Seconds a cell keeps its AO after its last use (eq. 6's lazy removal): older cells may be reclaimed
+        /// while probing, and while the table has room they are kept still. Counted in time, not frames, so a
+        /// region revisited within it is found, not traced again, at any frame rate. (Replaces `stale_frames`,
+        /// 240 frames: 24 s at 10 fps, 1.7 s at 144 fps.)
+        cache_lifetime_s: f32 = 30.0, Nothing, paper keep;
         /// Ours: eq. 5's normal bins shifted by a quarter bin (`NORMAL_BIN_OFFSET`), so axis-aligned faces and
         /// 30°/45°/60° chamfers never sit on a bin edge. Off: eq. 5 as published.
         offset_bins: bool = true, WholeMap, paper (false);
@@ -70,6 +77,13 @@ impl MapSettings {
         positive("s_p", self.s_p)?;
         positive("s_nd", self.s_nd)?;
         positive("s_min", self.s_min)?;
+        positive("cache lifetime", self.cache_lifetime_s)?;
+        if self.cache_lifetime_s > MAX_CACHE_LIFETIME_S {
+            return Err(format!(
+                "cache lifetime must be at most {MAX_CACHE_LIFETIME_S} s (a day), got {} s",
+                self.cache_lifetime_s
+            ));
+        }
         if !self.hash_capacity.is_power_of_two() || self.hash_capacity < 1024 || self.hash_capacity > 1 << 28
         {
             return Err(format!(
@@ -93,7 +107,8 @@ impl MapSettings {
         Ok(())
     }
 
-    /// The map's parameters (the capacity is the allocated table's, written by the map's owner).
+    /// The map's parameters (the capacity is the allocated table's, and the lifetime in frames is the frame
+    /// clock's: both written by the map's owner).
     pub fn write_gpu(&self, g: &mut FrameGlobals) {
         g.rays_per_pixel = self.rays_per_pixel;
         g.ao_radius = self.ao_radius;
@@ -104,7 +119,6 @@ impl MapSettings {
         g.max_samples = self.max_samples;
         g.min_samples = self.min_samples;
         g.max_probe = MAX_PROBE;
-        g.stale_frames = self.stale_frames;
     }
 }
 
@@ -145,10 +159,58 @@ mod tests {
                 },
                 "ray budget",
             ),
+            (
+                MapSettings {
+                    cache_lifetime_s: f32::NAN,
+                    ..ok.clone()
+                },
+                "cache lifetime",
+            ),
+            (
+                MapSettings {
+                    cache_lifetime_s: 0.0,
+                    ..ok.clone()
+                },
+                "cache lifetime",
+            ),
+            (
+                MapSettings {
+                    cache_lifetime_s: -1.0,
+                    ..ok.clone()
+                },
+                "cache lifetime",
+            ),
+            (
+                MapSettings {
+                    cache_lifetime_s: f32::INFINITY,
+                    ..ok.clone()
+                },
+                "cache lifetime",
+            ),
+            (
+                MapSettings {
+                    cache_lifetime_s: 1e9,
+                    ..ok.clone()
+                },
+                "cache lifetime",
+            ),
         ] {
             let e = bad.validate().unwrap_err();
             assert!(e.contains(name), "{e}");
         }
+    }
+
+    /// Settings saved before the lifetime was counted in seconds load: the old `stale_frames` is skipped (and
+    /// named), the rest kept, the lifetime at its default.
+    #[test]
+    fn saved_settings_with_stale_frames_still_load() {
+        let old = serde_json::json!({"stale_frames": 240, "ao_radius": 2.0});
+        let (s, skipped) = crate::settings::AoSettings::from_json_lenient(&old);
+        assert_eq!(skipped, ["stale_frames"]);
+        assert_eq!(s.map.ao_radius, 2.0);
+        assert_eq!(s.map.cache_lifetime_s, MapSettings::default().cache_lifetime_s);
+        let plain: crate::settings::AoSettings = serde_json::from_value(old).unwrap();
+        assert_eq!(plain.map.ao_radius, 2.0);
     }
 
     #[test]

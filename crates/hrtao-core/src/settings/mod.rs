@@ -22,7 +22,7 @@ mod young;
 pub use display::{DisplaySettings, CREASE_DEG_RANGE};
 pub use edits::EditSettings;
 pub use filter::{FilterSettings, FILTER_SIGMA, MAX_FILTER_ITERATIONS};
-pub use map::{MapSettings, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};
+pub use map::{MapSettings, MAX_CACHE_LIFETIME_S, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};
 pub use mode::Mode;
 pub use still::{frame_smoothing, StillSettings, PRIOR_RAYS, RESIDUAL_SIGMA, STILL_SMOOTHING};
 pub use young::YoungMapSettings;

@@ -140,6 +140,9 @@ pub struct Headless {
     pub output: Output,
     /// Slices: each frame draws every `lattice`-th pixel (`FrameDesc::lattice`).
     pub lattice: u32,
+    /// Simulated frames per second: frame n starts at n / fps seconds (`FrameDesc::at`); None: the renderer's
+    /// clock.
+    pub fps: Option<f64>,
 }
 
 #[allow(dead_code)]
@@ -161,6 +164,7 @@ impl Headless {
             budget: None,
             output: Output::default(),
             lattice: 1,
+            fps: None,
         })
     }
 
@@ -191,7 +195,7 @@ impl Headless {
             height: self.size.1,
             ..*cam
         };
-        FrameDesc {
+        let frame = FrameDesc {
             view_height: self.view_height,
             budget: self.budget,
             tile: self.tile,
@@ -199,6 +203,12 @@ impl Headless {
             output: self.output,
             lattice: self.lattice,
             ..FrameDesc::new(scene, scene_f, camera, settings)
+        };
+        match self.fps {
+            Some(fps) => frame.at(std::time::Duration::from_secs_f64(
+                self.r.frame_index() as f64 / fps,
+            )),
+            None => frame,
         }
     }
 
@@ -444,7 +454,8 @@ pub fn check_map(
         out.checked_pixels += 1;
     }
     // Duplicates: a cell stamped this frame and another slot of its probe window holding the same checksum
-    // that is still live (used within stale_frames; the checksum includes F, so both are of the current F):
+    // that is still live (used within the cache lifetime, `lifetime_frames` of the last frame; the checksum
+    // includes F, so both are of the current F):
     // the second copy's samples would be orphaned.
     let cap = s.hash_capacity as usize;
     for (i, a) in cells.iter().enumerate() {
@@ -494,7 +505,7 @@ pub fn check_map(
         for d in 1..hrtao_core::settings::MAX_PROBE as usize {
             for j in [(i + d) % cap, (i + cap - d) % cap] {
                 let b = &cells[j];
-                let live = now.wrapping_sub(b.last_frame()) <= s.stale_frames;
+                let live = now.wrapping_sub(b.last_frame()) <= r.lifetime_frames();
                 assert!(
                     !(b.checksum() == a.checksum() && live),
                     "key {:#x} held twice, in slots {i} and {j}",
