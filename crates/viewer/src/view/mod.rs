@@ -238,7 +238,6 @@ impl Viewer {
         exit_signal: app::ExitSignal,
         outcome: Arc<Mutex<Outcome>>,
         egui_ctx: egui::Context,
-        refresh_mhz: Option<u32>,
     ) -> Viewer {
         let prefs_path = (!args.no_config).then(|| args.config.clone().unwrap_or_else(prefs::default_path));
         let (prefs_file, mut prefs, prefs_msg) = prefs::PrefsFile::open(prefs_path);
@@ -265,9 +264,9 @@ impl Viewer {
             .or(prefs.max_render_scale)
             .unwrap_or(1.0)
             .clamp(0.05, 2.0);
-        // The device's class and display (the refresh of the window's monitor): the frame-time target,
+        // The device's class and display (`display_refresh`: the window's monitor): the frame-time target,
         // the first budget, the moving frames' filter and scale (0.35 on a software device, full on a GPU).
-        let device = pacer::DeviceModel::new(gpu.info.is_software, refresh_mhz);
+        let device = pacer::DeviceModel::new(gpu.info.is_software, None);
         let moving_scale = device.first_moving_scale();
         egui_ctx.set_theme(if prefs.dark_theme {
             egui::Theme::Dark
@@ -513,6 +512,11 @@ impl Viewer {
         self.egui_ctx
             .send_viewport_cmd(egui::ViewportCommand::Title(title));
         Ok(())
+    }
+
+    /// The window's monitor refreshes at `refresh_mhz` millihertz (None: unknown): a GPU's frame-time target.
+    pub(crate) fn display_refresh(&mut self, refresh_mhz: Option<u32>) {
+        self.pacer.display_refresh(refresh_mhz);
     }
 
     /// Internal resolution of a still image: the 3D view rectangle times the render scale.

@@ -63,22 +63,28 @@ impl DeviceModel {
     /// `software`: `DeviceInfo::is_software`; `refresh_mhz`: the window's monitor's refresh rate in millihertz
     /// (winit's `refresh_rate_millihertz`), None when unknown.
     pub fn new(software: bool, refresh_mhz: Option<u32>) -> DeviceModel {
-        let refresh_ms = refresh_mhz
-            .filter(|&m| m > 0)
-            .map(|m| 1e6 / m as f64)
-            .filter(|ms| (REFRESH_MS_RANGE.0..=REFRESH_MS_RANGE.1).contains(ms));
-        DeviceModel {
+        let mut model = DeviceModel {
             class: if software {
                 DeviceClass::Software
             } else {
                 DeviceClass::Gpu
             },
-            refresh_ms,
+            refresh_ms: None,
             ms_per_ray: None,
             floor_ms: None,
             recent: Vec::new(),
             recent_pixels: 0,
-        }
+        };
+        model.display_refresh(refresh_mhz);
+        model
+    }
+
+    /// The display's refresh rate in millihertz (None, 0 or out of range: unknown).
+    pub fn display_refresh(&mut self, refresh_mhz: Option<u32>) {
+        self.refresh_ms = refresh_mhz
+            .filter(|&m| m > 0)
+            .map(|m| 1e6 / m as f64)
+            .filter(|ms| (REFRESH_MS_RANGE.0..=REFRESH_MS_RANGE.1).contains(ms));
     }
 
     /// The frame-time target when the user set none: a frame per refresh on a GPU, 100 ms on a CPU.

@@ -28,7 +28,7 @@ use hrtao_core::{AoSettings, Camera, Mode, RayBudget};
 
 pub use budget::{DEFAULT_RAYS_PER_FRAME, MAX_RAYS_PER_FRAME, MIN_RAYS_PER_FRAME};
 pub use device::DeviceModel;
-pub use motion::{image_converged, MIN_MOVING_SCALE};
+pub use motion::image_converged;
 
 /// What the user set that pacing follows (preferences and the render scale), read each frame.
 #[derive(Clone, Copy)]
@@ -388,6 +388,11 @@ impl Pacer {
         }
     }
 
+    /// The display's refresh rate, in millihertz (the window's monitor; None: unknown): a GPU's target.
+    pub fn display_refresh(&mut self, refresh_mhz: Option<u32>) {
+        self.device.display_refresh(refresh_mhz);
+    }
+
     /// The frame-time target in force: the user's, or the device's (`DeviceModel::target_ms`).
     pub fn target_ms(&self, p: Pacing) -> f64 {
         p.target_ms
@@ -480,6 +485,7 @@ fn ema(avg: f64, x: f64) -> f64 {
 /// the tests choose.
 #[cfg(test)]
 mod tests {
+    use super::motion::MIN_MOVING_SCALE;
     use super::*;
 
     const VIEW: (f32, f32) = (1000.0, 800.0);

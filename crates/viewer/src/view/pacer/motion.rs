@@ -20,7 +20,7 @@ pub const MIN_MOVING_PIXELS: f64 = 0.35 * 0.35 * 1280.0 * 800.0;
 /// The smallest moving scale of a view of `view_pixels` at scale 1: `MIN_MOVING_SCALE`, or in a larger view
 /// the scale of `MIN_MOVING_PIXELS`.
 pub fn min_moving_scale(view_pixels: f64) -> f32 {
-    if !(view_pixels > MIN_MOVING_PIXELS) {
+    if view_pixels.is_nan() || view_pixels <= MIN_MOVING_PIXELS {
         return MIN_MOVING_SCALE;
     }
     ((MIN_MOVING_PIXELS / view_pixels).sqrt() as f32).min(MIN_MOVING_SCALE)
