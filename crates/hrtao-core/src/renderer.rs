@@ -911,8 +911,10 @@ impl Renderer {
     }
 
     /// Chooses the faster primary visibility for `frame`'s scene by measurement: a frame without AO with each,
-    /// timed on the wall clock (GPU timestamps after a render pass are unreliable on lavapipe), after a warm-up
-    /// frame each (the first dispatch compiles pipelines). Keeps the choice (`primary()`) and returns it with the
+    /// after a warm-up frame each (the first dispatch compiles pipelines), timed by the GPU timestamps where
+    /// both frames' timestamps measure their passes (on a GPU the wall clock of a frame this small measures the
+    /// submission's latency, not the passes), else both on the wall clock (timestamps after a render pass are
+    /// unreliable on lavapipe, `timestamps_measure`). Keeps the choice (`primary()`) and returns it with the
     /// two times in ms (ray queries, raster; NaN when a scene above `RASTER_TRIAL_TRIANGLES`, or a device that
     /// cannot rasterise it, is not tried). The hash map is untouched; the next frame starts a new still image.
     pub fn pick_primary(&mut self, frame: &FrameDesc) -> Result<(Primary, f64, f64)> {
@@ -931,14 +933,19 @@ impl Renderer {
             settings: &no_ao,
             ..*frame
         };
-        let time = |r: &mut Renderer, primary| -> Result<f64> {
+        let time = |r: &mut Renderer, primary| -> Result<(f64, Option<f64>)> {
             r.primary = primary;
             r.render(&probe)?;
-            Ok(r.render(&probe)?.wall_ms)
+            let report = r.render(&probe)?;
+            let gpu = (!report.gpu_ms.is_empty() && report.gpu_total_ms > 0.0).then_some(report.gpu_total_ms);
+            Ok((report.wall_ms, gpu))
         };
         let ray_query = time(self, Primary::RayQuery);
         let raster = time(self, Primary::Raster);
-        let (ray_query, raster) = (ray_query?, raster?);
+        let (ray_query, raster) = match (ray_query?, raster?) {
+            ((_, Some(rq)), (_, Some(ra))) => (rq, ra),
+            ((rq, _), (ra, _)) => (rq, ra),
+        };
         self.primary = if raster < ray_query {
             Primary::Raster
         } else {

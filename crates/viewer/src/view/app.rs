@@ -180,7 +180,7 @@ impl App {
             None,
             Some(max_texture_side),
         );
-        let viewer = Viewer::new(
+        let mut viewer = Viewer::new(
             gpu,
             presenter,
             &self.args,
@@ -189,6 +189,8 @@ impl App {
             self.outcome.clone(),
             self.ctx.clone(),
         );
+        // The display's refresh: a GPU's frame-time target (none under Xvfb: the pacer assumes 60 Hz).
+        viewer.display_refresh(window.current_monitor().and_then(|m| m.refresh_rate_millihertz()));
         let mut info = egui::ViewportInfo::default();
         egui_winit::update_viewport_info(&mut info, &self.ctx, &window, true);
         Ok(Running {

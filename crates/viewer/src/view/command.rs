@@ -112,6 +112,8 @@ pub struct ViewState<'a> {
     pub frame_ms: (f64, f64),
     /// The rays per frame in use (the frame-time target's, or the user's).
     pub rays_per_frame: u32,
+    /// The frame-time target in force (the user's, or the device's), milliseconds.
+    pub target_ms: f64,
     pub loading: Option<LoadingView<'a>>,
     pub load_error: Option<&'a str>,
     pub undo: Option<String>,

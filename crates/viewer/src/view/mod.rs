@@ -264,12 +264,10 @@ impl Viewer {
             .or(prefs.max_render_scale)
             .unwrap_or(1.0)
             .clamp(0.05, 2.0);
-        // While moving: today's 0.35 on software devices, adapted to the frame-time target from there.
-        let moving_scale = if gpu.info.is_software {
-            pacer::MIN_MOVING_SCALE
-        } else {
-            1.0
-        };
+        // The device's class and display (`display_refresh`: the window's monitor): the frame-time target,
+        // the first budget, the moving frames' filter and scale (0.35 on a software device, full on a GPU).
+        let device = pacer::DeviceModel::new(gpu.info.is_software, None);
+        let moving_scale = device.first_moving_scale();
         egui_ctx.set_theme(if prefs.dark_theme {
             egui::Theme::Dark
         } else {
@@ -289,6 +287,7 @@ impl Viewer {
             pacer: pacer::Pacer::new(
                 prefs.rays_per_frame,
                 moving_scale.min(render_scale),
+                device,
                 std::time::Duration::ZERO,
             ),
             nav: Nav {
@@ -515,6 +514,11 @@ impl Viewer {
         Ok(())
     }
 
+    /// The window's monitor refreshes at `refresh_mhz` millihertz (None: unknown): a GPU's frame-time target.
+    pub(crate) fn display_refresh(&mut self, refresh_mhz: Option<u32>) {
+        self.pacer.display_refresh(refresh_mhz);
+    }
+
     /// Internal resolution of a still image: the 3D view rectangle times the render scale.
     fn internal_size(&self) -> (u32, u32) {
         self.internal_size_at(self.render_scale)
@@ -631,6 +635,7 @@ impl Viewer {
             internal: self.renderer.as_ref().map_or((0, 0), |r| r.size()),
             frame_ms: self.pacer.averages(),
             rays_per_frame: self.pacer.rays_per_frame(),
+            target_ms: self.pacer.target_ms(pacing(&self.prefs, self.render_scale)),
             loading: self.loader.view(),
             load_error: self.loader.error.as_deref(),
             undo: self.edits.undo_label(),
@@ -1204,6 +1209,14 @@ impl Viewer {
                 ..self.nav.cam
             },
             view_ms: (wall_ms - shot_ms).max(0.0),
+            // The wait for the swapchain's image (a display's vsync) is not the frame's cost.
+            wait_ms: split.acquire,
+            rays: report.rays,
+            ray_ms: report
+                .gpu_ms
+                .iter()
+                .find(|(name, _)| name == hrtao_core::bench_json::HRTAO_PASSES[1])
+                .map(|&(_, ms)| ms),
             device_ms: split.gpu_wait,
             render_ms: gpu_wall,
             slices: report.slices,
@@ -1417,7 +1430,11 @@ impl Viewer {
         let Some(log) = self.script.stats.take() else {
             return;
         };
-        match log.write(&self.gpu.info.name, &self.scene_spec) {
+        match log.write(
+            &self.gpu.info,
+            self.pacer.target_ms(pacing(&self.prefs, self.render_scale)),
+            &self.scene_spec,
+        ) {
             Ok(()) => log::info!(
                 "stats written to {} ({} frames, median moving {:.1} ms, still {:.1} ms)",
                 log.path().display(),
@@ -1508,7 +1525,7 @@ fn background(dark: bool) -> [f32; 4] {
 fn pacing(prefs: &Prefs, render_scale: f32) -> pacer::Pacing<'_> {
     pacer::Pacing {
         auto_budget: prefs.auto_budget,
-        target_ms: prefs.target_ms,
+        target_ms: prefs.frame_target_ms,
         rays_per_frame: prefs.rays_per_frame,
         render_scale,
         settings: &prefs.settings,

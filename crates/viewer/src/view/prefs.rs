@@ -27,9 +27,16 @@ pub struct Prefs {
     /// Ray budget in rays per frame (converted to rays per pixel at the current internal resolution). With the
     /// frame-time target on, each scene opened starts from the default and the target moves it from there.
     pub rays_per_frame: u32,
-    /// Adapt the ray budget and the moving render scale to meet `target_ms`.
+    /// Adapt the ray budget and the moving render scale to meet the frame-time target.
     pub auto_budget: bool,
-    pub target_ms: f32,
+    /// The user's frame-time target; None: the device's (a frame per display refresh on a GPU, 100 ms on a
+    /// software device: `pacer::DeviceModel::target_ms`).
+    pub frame_target_ms: Option<f32>,
+    /// Files of older versions hold `target_ms`, always written, 100 unless the user changed it: read once by
+    /// `load` (100 was the default, not a choice: the device's target; another value is the user's), never
+    /// written.
+    #[serde(rename = "target_ms", skip_serializing)]
+    pub legacy_target_ms: Option<f32>,
     /// Where F12 saves (None: the pictures directory, see `pictures_dir`). Files of older versions name a
     /// `screenshot_dir` relative to the working directory: ignored.
     pub screenshot_folder: Option<PathBuf>,
@@ -53,7 +60,8 @@ impl Default for Prefs {
             max_render_scale: None,
             rays_per_frame: super::pacer::DEFAULT_RAYS_PER_FRAME,
             auto_budget: true,
-            target_ms: 100.0,
+            frame_target_ms: None,
+            legacy_target_ms: None,
             screenshot_folder: None,
             screenshot_custom: false,
             screenshot_width: 3840,
@@ -66,6 +74,9 @@ impl Default for Prefs {
         }
     }
 }
+
+/// The frame-time target every older version wrote by default.
+const LEGACY_DEFAULT_TARGET_MS: f32 = 100.0;
 
 /// The user's pictures directory: `$XDG_PICTURES_DIR`, else the XDG user directory (`user-dirs.dirs`), else
 /// `~/Pictures`; relative paths and a missing home give None.
@@ -114,6 +125,13 @@ pub fn load(path: &Path) -> (Prefs, Option<String>) {
                 );
             }
             p.bookmarks.retain(|b| b.camera.validate().is_ok());
+            // The older versions' default of 100 ms was written whether chosen or not: the device's target.
+            if let Some(t) = p.legacy_target_ms.take() {
+                if p.frame_target_ms.is_none() && t != LEGACY_DEFAULT_TARGET_MS {
+                    p.frame_target_ms = Some(t);
+                }
+            }
+            p.frame_target_ms = p.frame_target_ms.filter(|t| t.is_finite() && *t > 0.0);
             (p, None)
         }
         Err(e) => (
@@ -216,6 +234,22 @@ mod tests {
         let (d, msg) = load(&path);
         assert_eq!(d, Prefs::default());
         assert!(msg.unwrap().contains("corrupt"));
+        // An older file's target: its default 100 ms becomes the device's, another value stays the user's;
+        // a new file's choice is kept and the old key is not written again.
+        std::fs::write(&path, r#"{"target_ms": 100.0}"#).unwrap();
+        assert_eq!(load(&path).0.frame_target_ms, None);
+        std::fs::write(&path, r#"{"target_ms": 33.0}"#).unwrap();
+        let (chosen, _) = load(&path);
+        assert_eq!(
+            (chosen.frame_target_ms, chosen.legacy_target_ms),
+            (Some(33.0), None)
+        );
+        save(&path, &chosen).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(!text.contains("\"target_ms\""), "{text}");
+        assert_eq!(load(&path), (chosen, None));
+        std::fs::write(&path, r#"{"frame_target_ms": -5.0}"#).unwrap();
+        assert_eq!(load(&path).0.frame_target_ms, None);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -60,12 +60,29 @@ impl SettingsPanel {
                 "§6: \"the ray budget can be adjusted to match a target rendering speed\": while the camera \
                  moves, the ray budget and the render scale adapt to reach the target frame time.",
             );
-            ui.add_enabled(
-                prefs.auto_budget,
-                egui::DragValue::new(&mut prefs.target_ms)
-                    .range(5.0..=2000.0)
-                    .suffix(" ms target"),
-            );
+            // The device's target (a frame per refresh on a GPU, 100 ms on a CPU) until the user sets one.
+            let mut target = prefs.frame_target_ms.unwrap_or(state.target_ms as f32);
+            let edited = ui
+                .add_enabled(
+                    prefs.auto_budget,
+                    egui::DragValue::new(&mut target)
+                        .range(2.0..=2000.0)
+                        .suffix(" ms target"),
+                )
+                .changed();
+            if edited {
+                prefs.frame_target_ms = Some(target);
+            }
+            if prefs.frame_target_ms.is_some()
+                && ui
+                    .small_button("device")
+                    .on_hover_text(
+                        "The device's target: a frame per display refresh on a GPU, 100 ms on a CPU",
+                    )
+                    .clicked()
+            {
+                prefs.frame_target_ms = None;
+            }
         });
         ui.horizontal(|ui| {
             if ui

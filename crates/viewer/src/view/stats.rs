@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use hrtao_core::DeviceInfo;
 use serde::Serialize;
 
 use super::shot::ShotSummary;
@@ -158,6 +159,10 @@ impl FrameClock {
 #[derive(Serialize)]
 struct StatsFile<'a> {
     device: &'a str,
+    /// The device is a CPU rasteriser (`DeviceInfo::is_software`): tests branch on this, never on its name.
+    software: bool,
+    /// The frame-time target in force at the end of the run, milliseconds.
+    target_ms: f64,
     scene: &'a str,
     frames: &'a [FrameStat],
     median_moving_wall_ms: Option<f64>,
@@ -200,9 +205,11 @@ impl StatsLog {
         )
     }
 
-    pub fn write(&self, device: &str, scene: &str) -> Result<()> {
+    pub fn write(&self, device: &DeviceInfo, target_ms: f64, scene: &str) -> Result<()> {
         let file = StatsFile {
-            device,
+            device: &device.name,
+            software: device.is_software,
+            target_ms,
             scene,
             frames: &self.frames,
             median_moving_wall_ms: self.median_wall_ms(true),

@@ -41,19 +41,42 @@ pub fn first_rays_per_frame(probe_ms: f64, pixels: u64, target_ms: f64) -> u32 {
     (rays.round().min(u32::MAX as f64) as u32).clamp(MIN_RAYS_PER_FRAME, DEFAULT_RAYS_PER_FRAME)
 }
 
+/// A frame that traced at least this share of the rays it was granted used its budget: only then may the budget
+/// grow. Over cached geometry most cells take no rays, so a budget grown on such frames' slack (up to 64 M
+/// rays before this rule) would trace ~31 rays per pixel at 1080p at the next swing into unseen geometry.
+pub const USED_SHARE: f64 = 0.8;
+/// The most a budget grows in one frame, whatever the model says fits (its estimate may be young).
+pub const MAX_GROWTH: f64 = 2.0;
+
 /// One step of the frame-time controller (the paper, §6: "the ray budget can be adjusted to match a target
-/// rendering speed"): when a frame went over the target, a decrease in proportion to the excess (with a margin,
-/// as if the whole frame were rays: at most 0.9, at least 0.25 per frame), so a slow start settles within a few
-/// frames; a gentle increase when there is slack. Frames settle at or under the target (an upper bound).
-pub fn next_rays_per_frame(rays_per_frame: u32, frame_ms: f64, target_ms: f64) -> u32 {
+/// rendering speed") after a moving frame of `frame_ms` that traced `traced` of its `granted` rays; `fits`: the
+/// rays the device model says fit in the target (`DeviceModel::rays_that_fit`), None before it priced the
+/// rays. Over the target, a decrease in proportion to the excess (with a margin, as if the whole frame were
+/// rays: at most 0.9, at least 0.25 per frame), and never above what fits. Under 0.8 of the target, and only
+/// when the granted rays were used, an increase to what fits (at most `MAX_GROWTH`×; without a model, 10 %).
+/// Otherwise the budget holds, cut to what fits: frames settle at or under the target (an upper bound).
+pub fn next_rays_per_frame(
+    rays_per_frame: u32,
+    granted: f64,
+    traced: u64,
+    frame_ms: f64,
+    target_ms: f64,
+    fits: Option<u32>,
+) -> u32 {
     let b = rays_per_frame as f64;
+    let fits = fits.map(|f| f as f64);
+    let used = traced as f64 >= USED_SHARE * granted;
     let next = if frame_ms > target_ms {
-        b * (0.9 * target_ms / frame_ms).clamp(0.25, 0.9)
-    } else if frame_ms < target_ms * 0.8 {
-        b * 1.1 + 1.0
+        let cut = b * (0.9 * target_ms / frame_ms).clamp(0.25, 0.9);
+        fits.map_or(cut, |f| f.min(cut))
+    } else if frame_ms < target_ms * 0.8 && used {
+        fits.map_or(b * 1.1 + 1.0, |f| f.max(b)).min(b * MAX_GROWTH + 1.0)
     } else {
-        b
+        fits.map_or(b, |f| f.min(b))
     };
+    if next.is_nan() {
+        return rays_per_frame.clamp(MIN_RAYS_PER_FRAME, MAX_RAYS_PER_FRAME);
+    }
     (next.round() as u32).clamp(MIN_RAYS_PER_FRAME, MAX_RAYS_PER_FRAME)
 }
 
@@ -86,23 +109,62 @@ mod tests {
         assert_eq!(first_rays_per_frame(1e9, px, 100.0), MIN_RAYS_PER_FRAME);
     }
 
+    /// The old steps where the model has not priced the rays yet and the rays were used.
+    fn step(b: u32, frame_ms: f64, target_ms: f64) -> u32 {
+        next_rays_per_frame(b, b as f64, b as u64, frame_ms, target_ms, None)
+    }
+
     #[test]
     fn controller_settles_near_the_target() {
-        assert_eq!(next_rays_per_frame(100_000, 200.0, 100.0), 45_000);
-        assert_eq!(next_rays_per_frame(100_000, 1000.0, 100.0), 25_000);
-        assert_eq!(next_rays_per_frame(100_000, 100.0, 100.0), 100_000);
-        assert_eq!(next_rays_per_frame(100_000, 105.0, 100.0), 85_714);
-        assert!(next_rays_per_frame(100_000, 50.0, 100.0) > 100_000);
-        assert_eq!(
-            next_rays_per_frame(MIN_RAYS_PER_FRAME, 1e6, 100.0),
-            MIN_RAYS_PER_FRAME
-        );
+        assert_eq!(step(100_000, 200.0, 100.0), 45_000);
+        assert_eq!(step(100_000, 1000.0, 100.0), 25_000);
+        assert_eq!(step(100_000, 100.0, 100.0), 100_000);
+        assert_eq!(step(100_000, 105.0, 100.0), 85_714);
+        assert!(step(100_000, 50.0, 100.0) > 100_000);
+        assert_eq!(step(MIN_RAYS_PER_FRAME, 1e6, 100.0), MIN_RAYS_PER_FRAME);
+        assert_eq!(step(100_000, f64::NAN, 100.0), 100_000);
         // A frame time proportional to the budget settles within the dead band under the target.
         let mut b = 2_000_000;
         for _ in 0..200 {
-            b = next_rays_per_frame(b, 10.0 + b as f64 * 1e-4, 60.0);
+            b = step(b, 10.0 + b as f64 * 1e-4, 60.0);
         }
         let ms = 10.0 + b as f64 * 1e-4;
         assert!((60.0 * 0.8 * 0.8..=60.0 * 1.1).contains(&ms), "{b} rays: {ms} ms");
+    }
+
+    /// A fast frame that traced a tenth of its rays (cells over cached geometry take none) does not grow the
+    /// budget; one that used them grows it to what the model says fits, at most doubled; over the target the
+    /// cut never leaves more than fits. Fails with the `used` condition left out (the budget doubles on a
+    /// frame that used a tenth of it) and with `fits` ignored over the target.
+    #[test]
+    fn the_budget_grows_only_when_its_rays_were_used() {
+        let (b, target) = (1_000_000, 16.7);
+        assert_eq!(
+            next_rays_per_frame(b, 1e6, 100_000, 5.0, target, Some(8_000_000)),
+            b
+        );
+        assert_eq!(next_rays_per_frame(b, 1e6, 100_000, 5.0, target, None), b);
+        assert_eq!(
+            next_rays_per_frame(b, 1e6, 950_000, 5.0, target, Some(1_500_000)),
+            1_500_000
+        );
+        assert_eq!(
+            next_rays_per_frame(b, 1e6, 950_000, 5.0, target, Some(8_000_000)),
+            2_000_001
+        );
+        // Unused, and the model says less fits: cut to it.
+        assert_eq!(
+            next_rays_per_frame(b, 1e6, 100_000, 5.0, target, Some(600_000)),
+            600_000
+        );
+        // Over the target: the smaller of the proportional cut and what fits.
+        assert_eq!(
+            next_rays_per_frame(b, 1e6, 1_000_000, 33.4, target, Some(200_000)),
+            200_000
+        );
+        assert_eq!(
+            next_rays_per_frame(b, 1e6, 1_000_000, 33.4, target, Some(900_000)),
+            450_000
+        );
     }
 }

@@ -7,6 +7,8 @@
 //! time comes in as a `Duration` on the caller's monotonic clock, so tests replay event sequences with a clock
 //! they control.
 //!
+//! - `device`: what the device affords: its class and display, the per-class defaults (frame-time target,
+//!   first budget, moving filter and scale) and the moving frame's cost learned from the frames.
 //! - `budget`: rays per frame (the frame-time target's controller) and their conversion to rays per pixel.
 //! - `motion`: moving or still, the hold of a press, the settling after a stop, the moving render scale.
 //! - `slices`: still frames in slices of the frame-time target.
@@ -14,7 +16,10 @@
 //! The ray budget has one form here: rays per frame (the user's, or the frame-time target's), turned into the
 //! renderer's `RayBudget` of this frame by `plan` and nowhere else.
 mod budget;
+mod device;
 mod motion;
+#[cfg(test)]
+mod sim;
 mod slices;
 
 use std::time::Duration;
@@ -22,7 +27,8 @@ use std::time::Duration;
 use hrtao_core::{AoSettings, Camera, Mode, RayBudget};
 
 pub use budget::{DEFAULT_RAYS_PER_FRAME, MAX_RAYS_PER_FRAME, MIN_RAYS_PER_FRAME};
-pub use motion::{image_converged, MIN_MOVING_SCALE};
+pub use device::DeviceModel;
+pub use motion::image_converged;
 
 /// What the user set that pacing follows (preferences and the render scale), read each frame.
 #[derive(Clone, Copy)]
@@ -30,7 +36,8 @@ pub struct Pacing<'a> {
     /// The frame-time target is on: the ray budget and the moving scale adapt to `target_ms`, still images are
     /// refined in slices.
     pub auto_budget: bool,
-    pub target_ms: f32,
+    /// The user's frame-time target; None: the device's (`DeviceModel::target_ms`).
+    pub target_ms: Option<f32>,
     /// The user's rays per frame, used as they are with the frame-time target off.
     pub rays_per_frame: u32,
     /// The user's render scale: a still image's, and the cap of the moving scale.
@@ -72,12 +79,14 @@ pub struct FramePlan {
     pub budget: RayBudget,
     /// Slices of a still image: `lattice`² (1: whole frames).
     pub lattice: u32,
+    /// À-trous iterations of a moving frame (`DeviceModel::moving_filter_iterations`).
+    pub moving_filter: u32,
 }
 
 impl FramePlan {
     /// The renderer's settings for this frame: the user's, with the moving filter while moving.
     pub fn settings(&self, settings: &AoSettings) -> AoSettings {
-        motion::frame_settings(settings, self.moving)
+        motion::frame_settings(settings, self.moving, self.moving_filter)
     }
 }
 
@@ -88,6 +97,12 @@ pub struct FrameMeasurement {
     pub camera: Camera,
     /// The view's share of the frame's wall time (a background screenshot's tile left out), milliseconds.
     pub view_ms: f64,
+    /// The part of `view_ms` spent waiting for a swapchain image (a display's vsync), not the frame's cost.
+    pub wait_ms: f64,
+    /// AO rays the frame traced (`FrameReport::rays`).
+    pub rays: u64,
+    /// The ray-tracing update's GPU time, where the device's timestamps measure it.
+    pub ray_ms: Option<f64>,
     /// The frame's wait for the device, milliseconds: a scene install's first frame counts this alone.
     pub device_ms: f64,
     /// From the command buffer's start to the present, milliseconds (the panel's render time).
@@ -136,6 +151,8 @@ pub struct RepaintInputs {
 const LOADING_REPAINT: Duration = Duration::from_millis(100);
 
 pub struct Pacer {
+    /// What the device affords, learned from the moving frames.
+    device: DeviceModel,
     motion: motion::Motion,
     slicing: slices::Slicing,
     /// Rays per frame: the user's, or with the frame-time target on, the target's (from the scene's first
@@ -145,6 +162,8 @@ pub struct Pacer {
     plan: Option<FramePlan>,
     /// The last moving frame's wall time and work (`slices::frame_work`): the first estimate of a still frame.
     last_moving: Option<(f64, u64)>,
+    /// The last moving frame's pixels (the device model's floor was measured at them).
+    moving_pixels: u64,
     /// The next rendered frame counted a scene's install: the frame-time target skips it.
     installed: bool,
     /// The camera of the last rendered frame.
@@ -162,14 +181,17 @@ pub struct Pacer {
 }
 
 impl Pacer {
-    /// `rays_per_frame`: the user's; `moving_scale`: the first moving frames' render scale.
-    pub fn new(rays_per_frame: u32, moving_scale: f32, now: Duration) -> Pacer {
+    /// `rays_per_frame`: the user's; `moving_scale`: the first moving frames' render scale (the device's
+    /// `first_moving_scale` under the user's cap).
+    pub fn new(rays_per_frame: u32, moving_scale: f32, device: DeviceModel, now: Duration) -> Pacer {
         Pacer {
+            device,
             motion: motion::Motion::new(moving_scale, now),
             slicing: slices::Slicing::default(),
             rays_per_frame,
             plan: None,
             last_moving: None,
+            moving_pixels: 0,
             installed: false,
             last_camera: None,
             holding: false,
@@ -191,10 +213,18 @@ impl Pacer {
     /// target on, its rays per frame start from its own first budget (the old scene's, cut by a heavy scene or
     /// grown by a light one, would not fit), and its first frame's wall time, which counts the install, is not
     /// taken for the target.
+    /// `pixels` counts the view at the user's render scale; the first moving frames draw the moving scale's share.
     pub fn scene_installed(&mut self, probe_ms: f64, pixels: u64, p: Pacing) {
         if p.auto_budget {
-            self.rays_per_frame = budget::first_rays_per_frame(probe_ms, pixels, p.target_ms.max(1.0) as f64);
-            log::info!("first ray budget: {} rays per frame", self.rays_per_frame);
+            let share = (self.motion.moving_scale / p.render_scale.max(1e-3)).min(1.0) as f64;
+            let moving_pixels = (pixels as f64 * share * share) as u64;
+            let target = self.target_ms(p);
+            self.rays_per_frame = self.device.first_rays(probe_ms, pixels, moving_pixels, target);
+            log::info!(
+                "first ray budget: {} rays per frame ({:?} device, {target:.1} ms target)",
+                self.rays_per_frame,
+                self.device.class
+            );
         }
         self.installed = true;
     }
@@ -224,6 +254,8 @@ impl Pacer {
         // output no longer shows this view), and the loop wakes at the still deadline or on input.
         let settle =
             !hold && self.motion.settling(changed, i.now) && self.shows_moving && !i.shooting && i.has_image;
+        let (vw, vh) = (i.size_at)(1.0);
+        self.motion.view(vw as f64 * vh as f64);
         let size = match i.output {
             Some(size) if hold || settle => size,
             _ => (i.size_at)(self.motion.scale(p.render_scale, i.now)),
@@ -241,7 +273,7 @@ impl Pacer {
             self.slicing.moving();
             1
         } else {
-            let target = slices::slice_target_ms(p.target_ms);
+            let target = slices::slice_target_ms(self.target_ms(p) as f32);
             let s = p.settings;
             // Refining: the rays that complete the own rays with the anti-aliasing; else the ray budget.
             let rays_per_pixel = if s.accumulates() {
@@ -250,10 +282,24 @@ impl Pacer {
                 budget.rays_per_pixel
             };
             let work = slices::frame_work(size.0, size.1, rays_per_pixel as f64);
+            // A slice's cost by the device model: the moving frames' floor per pixel (all of it, conservatively)
+            // and their rays' cost.
+            let pixels = size.0 as f64 * size.1 as f64;
+            let priced = match (self.device.cost(), self.moving_pixels) {
+                ((Some(floor), Some(per_ray)), moving_pixels) if moving_pixels > 0 => {
+                    let per_pixel = floor / moving_pixels as f64;
+                    Some(move |l: u32, r: u32| pixels / (l * l) as f64 * (per_pixel + r as f64 * per_ray))
+                }
+                _ => None,
+            };
             budget = RayBudget {
-                rays_per_pixel: self
-                    .slicing
-                    .still_budget(rays_per_pixel, work, self.last_moving, target),
+                rays_per_pixel: self.slicing.still_budget_priced(
+                    rays_per_pixel,
+                    work,
+                    self.last_moving,
+                    target,
+                    priced,
+                ),
                 trace_fraction: 1.0,
             };
             self.slicing.lattice()
@@ -266,6 +312,9 @@ impl Pacer {
             size,
             budget,
             lattice,
+            moving_filter: self
+                .device
+                .moving_filter_iterations(p.settings.filter.filter_iterations),
         };
         self.plan = Some(plan);
         plan
@@ -295,6 +344,8 @@ impl Pacer {
         // skips it, and the first still image's lattice takes its device time alone (a young map's first frame:
         // at least a moving frame's cost).
         let installed = std::mem::take(&mut self.installed);
+        // The frame's cost: its view's wall time less the wait for the swapchain (a FIFO display's refresh).
+        let frame_ms = (m.view_ms - m.wait_ms.max(0.0)).max(0.0);
         if plan.moving {
             let b = plan.budget;
             let rays = b.rays_per_pixel as f64 * b.trace_fraction.clamp(0.0, 1.0) as f64;
@@ -302,28 +353,52 @@ impl Pacer {
             if installed {
                 self.last_moving = Some((m.device_ms, work));
             } else {
-                self.frame_time_target(m.view_ms, p);
-                self.last_moving = Some((m.view_ms, work));
+                let granted = rays * (plan.size.0 as f64 * plan.size.1 as f64);
+                self.device.observe(
+                    frame_ms,
+                    m.rays,
+                    m.ray_ms,
+                    plan.size.0 as u64 * plan.size.1 as u64,
+                );
+                self.frame_time_target(frame_ms, granted, m.rays, p);
+                self.last_moving = Some((frame_ms, work));
+                self.moving_pixels = plan.size.0 as u64 * plan.size.1 as u64;
             }
         } else if !installed && p.auto_budget && !m.shooting {
             // (A background screenshot's tiles share the frame: its cost is not the view's.)
-            let target = slices::slice_target_ms(p.target_ms);
-            self.slicing.observe(m.view_ms, m.slices, target);
+            let target = slices::slice_target_ms(self.target_ms(p) as f32);
+            self.slicing.observe(frame_ms, m.slices, target);
         }
     }
 
-    /// The frame-time target, after a moving frame: the moving render scale and, when the mode traces rays, the
-    /// rays per frame follow it.
-    fn frame_time_target(&mut self, frame_ms: f64, p: Pacing) {
+    /// The frame-time target, after a moving frame of `frame_ms` that traced `traced` of its `granted` rays:
+    /// the moving render scale and, when the mode traces rays, the rays per frame follow it, sized by what the
+    /// device model says fits.
+    fn frame_time_target(&mut self, frame_ms: f64, granted: f64, traced: u64, p: Pacing) {
         if !p.auto_budget {
             return;
         }
-        let target = p.target_ms.max(1.0) as f64;
+        let target = self.target_ms(p);
         self.motion.adapt(frame_ms, target, p.render_scale);
         let mode = p.settings.display.mode;
         if mode.uses_hash() || mode == Mode::Rtao {
-            self.rays_per_frame = budget::next_rays_per_frame(self.rays_per_frame, frame_ms, target);
+            let fits = self.device.rays_that_fit(target);
+            self.rays_per_frame =
+                budget::next_rays_per_frame(self.rays_per_frame, granted, traced, frame_ms, target, fits);
         }
+    }
+
+    /// The display's refresh rate, in millihertz (the window's monitor; None: unknown): a GPU's target.
+    pub fn display_refresh(&mut self, refresh_mhz: Option<u32>) {
+        self.device.display_refresh(refresh_mhz);
+    }
+
+    /// The frame-time target in force: the user's, or the device's (`DeviceModel::target_ms`).
+    pub fn target_ms(&self, p: Pacing) -> f64 {
+        p.target_ms
+            .filter(|t| t.is_finite())
+            .map_or(self.device.target_ms(), |t| t as f64)
+            .max(1.0)
     }
 
     /// Asks for another frame while something still changes: the camera moves or has just stopped, the image has
@@ -410,6 +485,7 @@ fn ema(avg: f64, x: f64) -> f64 {
 /// the tests choose.
 #[cfg(test)]
 mod tests {
+    use super::motion::MIN_MOVING_SCALE;
     use super::*;
 
     const VIEW: (f32, f32) = (1000.0, 800.0);
@@ -428,11 +504,17 @@ mod tests {
     fn pacing(s: &AoSettings, auto_budget: bool, rays_per_frame: u32) -> Pacing<'_> {
         Pacing {
             auto_budget,
-            target_ms: 100.0,
+            target_ms: Some(100.0),
             rays_per_frame,
             render_scale: 1.0,
             settings: s,
         }
+    }
+
+    /// The rays a plan grants: the renderer traces them all in these replays.
+    fn granted_rays(plan: &FramePlan) -> u64 {
+        let b = plan.budget;
+        (b.rays_per_pixel as f64 * b.trace_fraction as f64 * plan.size.0 as f64 * plan.size.1 as f64) as u64
     }
 
     /// A viewer's side of the pacer: its clock, the renderer's output, what it renders.
@@ -445,7 +527,12 @@ mod tests {
     impl Replay {
         fn new(rays_per_frame: u32) -> Replay {
             Replay {
-                pacer: Pacer::new(rays_per_frame, MIN_MOVING_SCALE, Duration::ZERO),
+                pacer: Pacer::new(
+                    rays_per_frame,
+                    MIN_MOVING_SCALE,
+                    DeviceModel::new(true, None),
+                    Duration::ZERO,
+                ),
                 now: Duration::ZERO,
                 output: None,
             }
@@ -482,6 +569,9 @@ mod tests {
                     now: self.now,
                     camera: *cam,
                     view_ms: wall_ms,
+                    wait_ms: 0.0,
+                    rays: granted_rays(plan),
+                    ray_ms: None,
                     device_ms,
                     render_ms: wall_ms,
                     slices: plan.lattice * plan.lattice,
@@ -644,6 +734,57 @@ mod tests {
         r.render(&m, &c, 900.0, on_no_ao);
         assert_eq!(r.pacer.rays_per_frame(), 2_000_000);
         assert!(r.pacer.moving_scale() < scale || scale == MIN_MOVING_SCALE);
+    }
+
+    /// On a GPU at 60 Hz with a FIFO display, a moving frame that cost 3 ms waits ~13.7 ms for the refresh: the
+    /// wait is not its cost, so the budget whose rays it used grows (to what the model says fits), and the
+    /// device's target is the refresh, not 100 ms. Fails with the wait counted (`frame_ms = m.view_ms`: every
+    /// frame looks as long as the target and the budget never grows).
+    #[test]
+    fn a_gpu_frame_waiting_for_the_display_is_not_its_cost() {
+        let s = AoSettings::default();
+        let p = Pacing {
+            target_ms: None,
+            ..pacing(&s, true, 300_000)
+        };
+        let mut pacer = Pacer::new(
+            300_000,
+            1.0,
+            DeviceModel::new(false, Some(60_000)),
+            Duration::ZERO,
+        );
+        assert!((pacer.target_ms(p) - 1000.0 / 60.0).abs() < 1e-9);
+        let mut now = Duration::ZERO;
+        for i in 0..2 {
+            let cam = camera(i as f32);
+            let plan = pacer.plan(PlanInputs {
+                now,
+                camera: &cam,
+                pacing: p,
+                output: Some(size_at(1.0)),
+                has_image: true,
+                scripted: false,
+                shooting: false,
+                size_at: &size_at,
+            });
+            now += Duration::from_micros(16_667);
+            pacer.observe(
+                FrameMeasurement {
+                    now,
+                    camera: cam,
+                    view_ms: 16.67,
+                    wait_ms: 13.67,
+                    rays: granted_rays(&plan),
+                    ray_ms: Some(1.0),
+                    device_ms: 3.0,
+                    render_ms: 3.0,
+                    slices: 1,
+                    shooting: false,
+                },
+                p,
+            );
+        }
+        assert!(pacer.rays_per_frame() > 300_000, "{}", pacer.rays_per_frame());
     }
 
     /// The first still image after a scene's install, with no moving frame after the install frame, is sliced

@@ -10,19 +10,33 @@ pub fn image_converged(report: &FrameReport) -> bool {
     report.converged
 }
 
-/// The smallest render scale while moving (the user's render-scale setting caps it from above).
+/// The smallest render scale while moving (the user's render-scale setting caps it from above), in views up to
+/// `MIN_MOVING_PIXELS / 0.35²` (1280×800).
 pub const MIN_MOVING_SCALE: f32 = 0.35;
-/// À-trous filter iterations while the camera moves (the user's setting caps it; still images get the setting).
-/// Each iteration is a full pass over the internal image: on lavapipe the filter's 3 default iterations were
-/// about a sixth of a moving frame (docs/benchmarks.md, viewer orbit), and a moving image is replaced a frame later.
+/// A larger view's moving frames may shrink to this many pixels (0.35 of 1280×800): a CPU's moving frame at
+/// 0.35 of a 1080p view costs twice the target in its pixels alone.
+pub const MIN_MOVING_PIXELS: f64 = 0.35 * 0.35 * 1280.0 * 800.0;
+
+/// The smallest moving scale of a view of `view_pixels` at scale 1: `MIN_MOVING_SCALE`, or in a larger view
+/// the scale of `MIN_MOVING_PIXELS`.
+pub fn min_moving_scale(view_pixels: f64) -> f32 {
+    if view_pixels.is_nan() || view_pixels <= MIN_MOVING_PIXELS {
+        return MIN_MOVING_SCALE;
+    }
+    ((MIN_MOVING_PIXELS / view_pixels).sqrt() as f32).min(MIN_MOVING_SCALE)
+}
+/// À-trous filter iterations while the camera moves on a CPU (`DeviceModel::moving_filter_iterations`; the
+/// user's setting caps it; still images get the setting). Each iteration is a full pass over the internal
+/// image: on lavapipe the filter's 3 default iterations were about a sixth of a moving frame
+/// (docs/benchmarks.md, viewer orbit), and a moving image is replaced a frame later.
 pub const MOVING_FILTER_ITERATIONS: u32 = 1;
 
-/// The renderer's settings for one frame: the user's `settings`, with the filter cut to
-/// `MOVING_FILTER_ITERATIONS` while `moving`.
-pub fn frame_settings(settings: &AoSettings, moving: bool) -> AoSettings {
+/// The renderer's settings for one frame: the user's `settings`, with the filter cut to `moving_filter`
+/// iterations while `moving`.
+pub fn frame_settings(settings: &AoSettings, moving: bool, moving_filter: u32) -> AoSettings {
     let mut s = settings.clone();
     if moving {
-        s.filter.filter_iterations = s.filter.filter_iterations.min(MOVING_FILTER_ITERATIONS);
+        s.filter.filter_iterations = s.filter.filter_iterations.min(moving_filter);
     }
     s
 }
@@ -39,6 +53,8 @@ pub struct Motion {
     frames_since_change: u32,
     /// Scale used while moving; adapted to the frame-time target within [MIN_MOVING_SCALE, cap].
     pub moving_scale: f32,
+    /// The smallest moving scale of the current view (`min_moving_scale`).
+    floor: f32,
     /// A pointer drag on the view is in progress (moving even when a frame brings no new delta).
     dragging: bool,
     /// The drag in progress has moved something (the camera, a section plane, a part).
@@ -51,6 +67,7 @@ impl Motion {
             last_change: now,
             frames_since_change: 0,
             moving_scale,
+            floor: MIN_MOVING_SCALE,
             dragging: false,
             drag_acted: false,
         }
@@ -104,10 +121,15 @@ impl Motion {
         })
     }
 
+    /// The view measures `view_pixels` at scale 1: the moving scale's floor follows it.
+    pub fn view(&mut self, view_pixels: f64) {
+        self.floor = min_moving_scale(view_pixels);
+    }
+
     /// The render scale for the next frame; `cap` is the user's render-scale setting.
     pub fn scale(&self, cap: f32, now: Duration) -> f32 {
         if self.moving(now) {
-            self.moving_scale.clamp(MIN_MOVING_SCALE.min(cap), cap)
+            self.moving_scale.clamp(self.floor.min(cap), cap)
         } else {
             cap
         }
@@ -124,7 +146,7 @@ impl Motion {
         } else {
             s
         };
-        self.moving_scale = next.clamp(MIN_MOVING_SCALE.min(cap), cap);
+        self.moving_scale = next.clamp(self.floor.min(cap), cap);
     }
 }
 
@@ -199,18 +221,21 @@ mod tests {
             s
         };
         assert_eq!(
-            frame_settings(&user, true).filter.filter_iterations,
+            frame_settings(&user, true, MOVING_FILTER_ITERATIONS)
+                .filter
+                .filter_iterations,
             MOVING_FILTER_ITERATIONS
         );
-        assert_eq!(frame_settings(&user, false), user);
+        assert_eq!(frame_settings(&user, false, 1), user);
+        assert_eq!(frame_settings(&user, true, 4), user);
         // Only the filter changes, and a setting below the moving one stays.
         let off = {
             let mut s = user.clone();
             s.filter.filter_iterations = 0;
             s
         };
-        assert_eq!(frame_settings(&off, true), off);
-        let moving = frame_settings(&user, true);
+        assert_eq!(frame_settings(&off, true, 1), off);
+        let moving = frame_settings(&user, true, MOVING_FILTER_ITERATIONS);
         assert_eq!(
             {
                 let mut s = moving.clone();
@@ -233,5 +258,22 @@ mod tests {
             m.adapt(10.0, 100.0, 0.8);
         }
         assert_eq!(m.moving_scale, 0.8);
+    }
+
+    /// Up to 1280×800 the moving scale stops at 0.35; a 1080p view's at the same pixel count (0.246). Fails
+    /// with the floor left at `MIN_MOVING_SCALE` for every view.
+    #[test]
+    fn a_larger_views_moving_frames_shrink_to_the_same_pixels() {
+        assert_eq!(min_moving_scale(862.0 * 800.0), MIN_MOVING_SCALE);
+        assert_eq!(min_moving_scale(1280.0 * 800.0), MIN_MOVING_SCALE);
+        assert_eq!(min_moving_scale(f64::NAN), MIN_MOVING_SCALE);
+        let hd = min_moving_scale(1920.0 * 1080.0);
+        assert!((hd - 0.2464).abs() < 1e-3, "{hd}");
+        let mut m = Motion::new(1.0, Duration::ZERO);
+        m.view(1920.0 * 1080.0);
+        for _ in 0..100 {
+            m.adapt(500.0, 100.0, 1.0);
+        }
+        assert_eq!(m.moving_scale, hd);
     }
 }

@@ -45,6 +45,11 @@ const MAX_RAYS_CUT: u32 = 2;
 /// each cut multiplies the slices, whose floor is paid per slice (the bundled scene, slices of 35-60 ms at
 /// lattice 8, converged in 33 s instead of 30 s when its rays were cut).
 const CUT_ABOVE: f64 = 1.5;
+/// A first still image whose slices the device model prices (`Slicing::price_first_image`) at more than this
+/// times the slice target (twice the frame-time target) takes a larger lattice, and fewer rays, at once: the
+/// work model of a moving frame weighs an AO ray like a pixel, and where the rays cost several pixels' time (a
+/// CPU at 1080p: a first slice of 566 ms at lattice 8) the first frames of the image would stall input.
+const PRICED_OVER: f64 = 4.0;
 /// Weight of a new measurement below a lattice's cost (one above it replaces it).
 const COST_EMA: f64 = 0.3;
 /// A lattice's cost measured more than this many still frames ago no longer counts: the device's load, the
@@ -199,6 +204,43 @@ impl Slicing {
         self.cut_checked = false;
         self.wanted_rays = wanted;
         self.still_rays = Some(rays);
+        rays
+    }
+
+    /// `still_budget`, and where this is a first still image (no slice measured yet), its lattice and rays
+    /// checked against `priced(lattice, rays)`, a slice's cost by the device model: where the chosen lattice's
+    /// slices would cost over `PRICED_OVER` times the target, the smallest lattice that meets it and, at the
+    /// largest, fewer rays (`rays_within`).
+    pub fn still_budget_priced(
+        &mut self,
+        rays_per_pixel: u32,
+        work: u64,
+        moving: Option<(f64, u64)>,
+        target_ms: f64,
+        priced: Option<impl Fn(u32, u32) -> f64>,
+    ) -> u32 {
+        let first = self.still_rays.is_none() && self.costs.is_empty();
+        let rays = self.still_budget(rays_per_pixel, work, moving, target_ms);
+        match priced {
+            Some(cost) if first => self.price_first_image(cost, target_ms),
+            _ => rays,
+        }
+    }
+
+    fn price_first_image(&mut self, cost: impl Fn(u32, u32) -> f64, target_ms: f64) -> u32 {
+        let wanted = self.wanted_rays;
+        let mut rays = self.rays();
+        if cost(self.lattice, rays) > PRICED_OVER * target_ms {
+            self.lattice = fit_lattice(|l| cost(l, wanted), self.lattice, target_ms);
+            if self.lattice == MAX_LATTICE {
+                rays = rays_within(wanted, |r| cost(MAX_LATTICE, r), target_ms);
+            }
+            log::debug!(
+                "slices: the first still image at lattice {} with {rays} rays per visit (priced)",
+                self.lattice
+            );
+            self.still_rays = Some(rays);
+        }
         rays
     }
 

@@ -1,0 +1,296 @@
+//! What the device affords: its class (a CPU rasteriser such as lavapipe, or a GPU), the display's refresh
+//! interval, and the cost of a moving frame learned from the frames measured, `frame = floor + rays × ms_per_ray`
+//! (the floor: every pass but the ray-tracing update, the UI, the submission). From it come the per-class
+//! defaults the pacer starts from: the frame-time target (the refresh on a GPU, 100 ms on a CPU), the first ray
+//! budget (the paper's 10 rays per pixel where the device affords them, §6 / Table 1), the moving frames' filter
+//! and render scale; and the rays that fit in the target, which size the budget (`budget::next_rays_per_frame`)
+//! instead of blind steps. Pure: measurements come in as numbers.
+use super::budget::{self, MAX_RAYS_PER_FRAME, MIN_RAYS_PER_FRAME};
+use super::motion::{MIN_MOVING_SCALE, MOVING_FILTER_ITERATIONS};
+
+/// The frame-time target of a software device: its frames take 50-150 ms at the reduced moving scale.
+pub const SOFTWARE_TARGET_MS: f64 = 100.0;
+/// A GPU whose display reports no refresh rate (Xvfb, some Wayland compositors) aims at 60 Hz.
+pub const DEFAULT_REFRESH_MS: f64 = 1000.0 / 60.0;
+/// Refresh rates outside 20-500 Hz are taken for a misreport.
+const REFRESH_MS_RANGE: (f64, f64) = (1000.0 / 500.0, 1000.0 / 20.0);
+/// The paper's budget (Table 1: 10 rays per pixel at 1080p): the first moving frame's rays per pixel at most.
+pub const PAPER_RAYS_PER_PIXEL: f64 = 10.0;
+/// An AO ray costs about twice a primary one (1.5-2.5× on lavapipe, bundled scene and san_francisco): the
+/// primary probe's rate halved is the first estimate of the AO rays' rate.
+pub const AO_RAY_COST: f64 = 2.0;
+/// The share of a GPU's frame-time target the first frame spends on AO rays, priced by the probe: the first
+/// frames trace a young map, whose rays reach unseen geometry and cost more than the probe's.
+pub const FIRST_FRAME_SHARE: f64 = 0.6;
+/// A GPU with no probe (no rasteriser to compare, or a scene too large for the trial) is priced at 1 Grays/s
+/// (the paper's slowest scene: Endeavor's 20.7 M rays in 26.1 ms on a Quadro RTX 8000).
+const GPU_PRIOR_MS_PER_RAY: f64 = 1e-6;
+/// The share of the target a moving frame's predicted cost aims at: a margin for the frames' noise.
+pub const FILL: f64 = 0.85;
+/// Weight of a measurement below the estimate (one above it replaces it: latency wins, a frame over the target
+/// must not wait for an average).
+const FALL_EMA: f64 = 0.3;
+/// Frames that trace fewer rays than this say nothing of the rays' cost (the pass's own overhead dominates).
+const MIN_PRICED_RAYS: u64 = 1_000;
+/// Moving frames fitted when the device has no per-pass times (the last ones: the view changes).
+const FIT_FRAMES: usize = 8;
+
+/// The kind of device, from `DeviceInfo::is_software`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeviceClass {
+    /// A CPU rasteriser (lavapipe): frames of tens of milliseconds at a fraction of the view.
+    Software,
+    Gpu,
+}
+
+/// A device's defaults and its learned moving-frame cost.
+#[derive(Clone, Debug)]
+pub struct DeviceModel {
+    pub class: DeviceClass,
+    /// The display's refresh interval, when it reports one in range.
+    refresh_ms: Option<f64>,
+    /// Milliseconds per AO ray: from the primary probe, then from the frames.
+    ms_per_ray: Option<f64>,
+    /// The non-ray cost of a moving frame, milliseconds.
+    floor_ms: Option<f64>,
+    /// (rays, frame ms) of the last moving frames, for frames without the ray pass's own time, all of
+    /// `recent_pixels` pixels (a frame of another size has another floor).
+    recent: Vec<(f64, f64)>,
+    recent_pixels: u64,
+}
+
+impl DeviceModel {
+    /// `software`: `DeviceInfo::is_software`; `refresh_mhz`: the window's monitor's refresh rate in millihertz
+    /// (winit's `refresh_rate_millihertz`), None when unknown.
+    pub fn new(software: bool, refresh_mhz: Option<u32>) -> DeviceModel {
+        let mut model = DeviceModel {
+            class: if software {
+                DeviceClass::Software
+            } else {
+                DeviceClass::Gpu
+            },
+            refresh_ms: None,
+            ms_per_ray: None,
+            floor_ms: None,
+            recent: Vec::new(),
+            recent_pixels: 0,
+        };
+        model.display_refresh(refresh_mhz);
+        model
+    }
+
+    /// The display's refresh rate in millihertz (None, 0 or out of range: unknown).
+    pub fn display_refresh(&mut self, refresh_mhz: Option<u32>) {
+        self.refresh_ms = refresh_mhz
+            .filter(|&m| m > 0)
+            .map(|m| 1e6 / m as f64)
+            .filter(|ms| (REFRESH_MS_RANGE.0..=REFRESH_MS_RANGE.1).contains(ms));
+    }
+
+    /// The frame-time target when the user set none: a frame per refresh on a GPU, 100 ms on a CPU.
+    pub fn target_ms(&self) -> f64 {
+        match self.class {
+            DeviceClass::Software => SOFTWARE_TARGET_MS,
+            DeviceClass::Gpu => self.refresh_ms.unwrap_or(DEFAULT_REFRESH_MS),
+        }
+    }
+
+    /// The first moving frames' render scale: a CPU starts at the smallest (its frames at full size take
+    /// seconds), a GPU at the full view.
+    pub fn first_moving_scale(&self) -> f32 {
+        match self.class {
+            DeviceClass::Software => MIN_MOVING_SCALE,
+            DeviceClass::Gpu => 1.0,
+        }
+    }
+
+    /// À-trous iterations of a moving frame for the user's `iterations`: all of them on a GPU (the paper's
+    /// filter costs 0.4-2.2 ms at 1080p, Table 2), one on a CPU (each iteration a full pass over the image).
+    pub fn moving_filter_iterations(&self, iterations: u32) -> u32 {
+        match self.class {
+            DeviceClass::Software => iterations.min(MOVING_FILTER_ITERATIONS),
+            DeviceClass::Gpu => iterations,
+        }
+    }
+
+    /// A scene's first ray budget from its primary probe (`pixels` ray-query primary rays in `probe_ms`, NaN
+    /// when it did not run) for moving frames of `moving_pixels`. A CPU: the rays the probe traced in a quarter
+    /// of the target, at most the default (`budget::first_rays_per_frame`). A GPU: the AO rays the probe's rate
+    /// prices in `FIRST_FRAME_SHARE` of the target, at most the paper's 10 rays per pixel.
+    pub fn first_rays(&mut self, probe_ms: f64, pixels: u64, moving_pixels: u64, target_ms: f64) -> u32 {
+        let probed = probe_ms.is_finite() && probe_ms > 0.0 && pixels > 0;
+        if probed {
+            self.ms_per_ray = Some(probe_ms * AO_RAY_COST / pixels as f64);
+        }
+        self.floor_ms = None;
+        self.recent.clear();
+        match self.class {
+            DeviceClass::Software => budget::first_rays_per_frame(probe_ms, pixels, target_ms),
+            DeviceClass::Gpu => {
+                let per_ray = self.ms_per_ray.filter(|_| probed).unwrap_or(GPU_PRIOR_MS_PER_RAY);
+                let affordable = FIRST_FRAME_SHARE * target_ms.max(0.0) / per_ray;
+                let paper = PAPER_RAYS_PER_PIXEL * moving_pixels.max(1) as f64;
+                clamp_rays(affordable.min(paper))
+            }
+        }
+    }
+
+    /// After a moving frame of `frame_ms` (its wait for the swapchain left out) that traced `rays`, `ray_ms` of
+    /// them in the ray-tracing update when the device's timestamps measure it, at `pixels`: the floor and the
+    /// rays' cost. Without the pass's time, a least-squares line through the last moving frames of the same
+    /// size, where their rays differ enough to tell the slope; else the floor under the last rays' cost.
+    pub fn observe(&mut self, frame_ms: f64, rays: u64, ray_ms: Option<f64>, pixels: u64) {
+        if !(frame_ms.is_finite() && frame_ms >= 0.0) {
+            return;
+        }
+        let priced = rays >= MIN_PRICED_RAYS;
+        match ray_ms.filter(|ms| ms.is_finite() && *ms >= 0.0 && *ms <= frame_ms) {
+            Some(ms) => {
+                if priced {
+                    self.ms_per_ray = Some(rise_or_fall(self.ms_per_ray, ms / rays as f64));
+                }
+                self.floor_ms = Some(rise_or_fall(self.floor_ms, frame_ms - ms));
+            }
+            None => {
+                if pixels != self.recent_pixels {
+                    self.recent.clear();
+                    self.recent_pixels = pixels;
+                }
+                self.recent.push((rays as f64, frame_ms));
+                if self.recent.len() > FIT_FRAMES {
+                    self.recent.remove(0);
+                }
+                if let Some((floor, per_ray)) = fit_line(&self.recent).filter(|_| priced) {
+                    self.ms_per_ray = Some(rise_or_fall(self.ms_per_ray, per_ray));
+                    self.floor_ms = Some(floor);
+                } else {
+                    let rays_ms = self.ms_per_ray.map_or(0.0, |c| c * rays as f64);
+                    self.floor_ms = Some(rise_or_fall(self.floor_ms, (frame_ms - rays_ms).max(0.0)));
+                }
+            }
+        }
+    }
+
+    /// The rays a moving frame can trace in `FILL` of `target_ms` over its floor; None before the device's
+    /// rays were priced. At least the minimum budget (a floor over the target leaves the scale to cut).
+    pub fn rays_that_fit(&self, target_ms: f64) -> Option<u32> {
+        let per_ray = self.ms_per_ray.filter(|c| *c > 0.0)?;
+        let floor = self.floor_ms?;
+        Some(clamp_rays((FILL * target_ms - floor).max(0.0) / per_ray))
+    }
+
+    /// The learned (floor ms, ms per ray), for the log and the tests.
+    pub fn cost(&self) -> (Option<f64>, Option<f64>) {
+        (self.floor_ms, self.ms_per_ray)
+    }
+}
+
+fn clamp_rays(rays: f64) -> u32 {
+    if rays.is_nan() {
+        return MIN_RAYS_PER_FRAME;
+    }
+    (rays.round().min(u32::MAX as f64) as u32).clamp(MIN_RAYS_PER_FRAME, MAX_RAYS_PER_FRAME)
+}
+
+/// A rise replaces the estimate, a fall is smoothed.
+fn rise_or_fall(estimate: Option<f64>, x: f64) -> f64 {
+    match estimate {
+        Some(e) if x < e => e + FALL_EMA * (x - e),
+        _ => x,
+    }
+}
+
+/// The least-squares line ms = floor + rays × per_ray through `points`, where the rays spread by at least a
+/// fifth of their mean (else the slope is noise) and the slope comes out positive.
+fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = points.len() as f64;
+    if n < 2.0 {
+        return None;
+    }
+    let (sx, sy) = points.iter().fold((0.0, 0.0), |(x, y), p| (x + p.0, y + p.1));
+    let (mx, my) = (sx / n, sy / n);
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    if mx <= 0.0 || (sxx / n).sqrt() < 0.2 * mx {
+        return None;
+    }
+    let per_ray = sxy / sxx;
+    (per_ray > 0.0).then(|| ((my - per_ray * mx).max(0.0), per_ray))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_target_is_the_refresh_on_a_gpu_and_100_ms_on_a_cpu() {
+        assert_eq!(
+            DeviceModel::new(true, Some(144_000)).target_ms(),
+            SOFTWARE_TARGET_MS
+        );
+        let rtx = DeviceModel::new(false, Some(144_000)).target_ms();
+        assert!((rtx - 6.944).abs() < 0.01, "{rtx}");
+        // No refresh reported, or a misreport: 60 Hz.
+        assert_eq!(DeviceModel::new(false, None).target_ms(), DEFAULT_REFRESH_MS);
+        assert_eq!(DeviceModel::new(false, Some(0)).target_ms(), DEFAULT_REFRESH_MS);
+        assert_eq!(DeviceModel::new(false, Some(5)).target_ms(), DEFAULT_REFRESH_MS);
+    }
+
+    #[test]
+    fn a_gpu_filters_moving_frames_fully_a_cpu_once() {
+        assert_eq!(DeviceModel::new(false, None).moving_filter_iterations(3), 3);
+        assert_eq!(DeviceModel::new(true, None).moving_filter_iterations(3), 1);
+        assert_eq!(DeviceModel::new(true, None).moving_filter_iterations(0), 0);
+        assert_eq!(DeviceModel::new(false, None).first_moving_scale(), 1.0);
+        assert_eq!(
+            DeviceModel::new(true, None).first_moving_scale(),
+            MIN_MOVING_SCALE
+        );
+    }
+
+    /// A GPU starts at the paper's 10 rays per pixel where its probe affords them, fewer where not; a CPU from
+    /// its probe as before. Fails with the paper's cap left out (an RTX's probe prices 28 rays per pixel).
+    #[test]
+    fn the_first_budget_follows_the_probe_up_to_the_papers_rays_per_pixel() {
+        let px = 1920 * 1080;
+        // An RTX-class probe: 2.07 M primary rays in 0.2 ms.
+        let rtx = DeviceModel::new(false, Some(144_000)).first_rays(0.2, px, px, 6.94);
+        assert_eq!(rtx as f64, (PAPER_RAYS_PER_PIXEL * px as f64).round());
+        // A mid-range one: 1 ms; priced to ~4.8 rays per pixel in 60 % of 16.7 ms.
+        let mid = DeviceModel::new(false, Some(60_000)).first_rays(1.04, px, px, 16.67) as f64 / px as f64;
+        assert!((4.0..6.0).contains(&mid), "{mid}");
+        // No probe: 1 Grays/s.
+        let none = DeviceModel::new(false, None).first_rays(f64::NAN, px, px, 16.67);
+        assert_eq!(none, 10_002_000);
+        // A CPU: the probe's rays in a quarter of the target, as before.
+        let cpu = DeviceModel::new(true, None).first_rays(459.0, 960 * 800, 960 * 800, 100.0);
+        assert_eq!(cpu, budget::first_rays_per_frame(459.0, 960 * 800, 100.0));
+    }
+
+    /// With the ray pass timed, the floor and the rays' cost come from it; without, from a line through frames
+    /// whose rays differ. A rise counts at once, a fall is smoothed; bad input changes nothing.
+    #[test]
+    fn the_model_learns_the_floor_and_the_rays_cost() {
+        let mut m = DeviceModel::new(false, None);
+        m.observe(5.0, 2_000_000, Some(4.0), 1);
+        assert_eq!(m.cost(), (Some(1.0), Some(2e-6)));
+        // 5.8 ms fit in 0.85 × 8 ms: 2.9 M rays.
+        assert_eq!(m.rays_that_fit(8.0), Some(2_900_000));
+        m.observe(9.0, 2_000_000, Some(8.0), 1);
+        assert_eq!(m.cost().1, Some(4e-6), "a rise counts at once");
+        m.observe(5.0, 2_000_000, Some(4.0), 1);
+        assert!((m.cost().1.unwrap() - 3.4e-6).abs() < 1e-12, "a fall is smoothed");
+        let before = m.cost();
+        m.observe(f64::NAN, 1, None, 1);
+        m.observe(-1.0, 1, Some(f64::INFINITY), 1);
+        assert_eq!(m.cost(), before);
+        // No pass times: 30 ms + rays × 4 µs, fitted.
+        let mut cpu = DeviceModel::new(true, None);
+        for rays in [10_000u64, 20_000, 5_000, 15_000] {
+            cpu.observe(30.0 + rays as f64 * 4e-3, rays, None, 1000);
+        }
+        let (floor, per_ray) = cpu.cost();
+        assert!((floor.unwrap() - 30.0).abs() < 1e-6 && (per_ray.unwrap() - 4e-3).abs() < 1e-9);
+        assert_eq!(cpu.rays_that_fit(100.0), Some(13_750));
+    }
+}
