@@ -111,6 +111,7 @@ fn differences(a: &[f32], b: &[f32]) -> (f32, f32) {
 /// - every pixel's claims interleaved, as a GPU's thousands of threads may order them (the update cut into one
 ///   ray per pixel per dispatch, `Renderer::set_max_rays_per_dispatch`), on one thread and on all: MAE up to
 ///   0.0054 (paper frame 1), 99th percentile up to 0.064.
+///
 /// The tolerances are twice the latter.
 #[test]
 fn barriers_leave_images_within_the_spread_of_qmc_assignment() {
