@@ -7,7 +7,11 @@
 // Results go to the target cell (up to max_samples) and propagate to the coarser cells (§4, up to SAMPLE_CAP).
 // Ours, each in its own file: the near-field control variate classifies the rays (near_field.glsl) and adaptive
 // sampling splits the budget of a young map's frame in three dispatches (adaptive_rays.glsl). Other frames trace
-// the paper's first-hit queries in one.
+// the paper's first-hit queries in one. Each of those dispatches may itself be cut into chunks so that none trips
+// a GPU watchdog (dispatch_plan.rs): push.y carries the chunk's rays of each pixel's budget, [push.y & 0xffff,
+// + push.y >> 16) (0xffff: to the end of the budget), and push.z, push.w the queue entries it takes (bands of
+// rows of the queue where one ray for every pixel is over the bound). A chunk claims its own rays from the
+// cell's sequence and adds its counts, so the chunks of a budget add up to the budget traced at once.
 #include "common.glsl"
 #include "ray_target.glsl"
 #include "near_field.glsl"
@@ -26,6 +30,7 @@ void add_rays(CellRef cells, uint c, uvec3 rays) {
 void main() {
     uint q;
     if (!queue_entry(StatsRef(g.stats).counters[STAT_RAY_QUEUE], q)) return;
+    if (q < push.z || q - push.z >= push.w) return;   // another chunk's band of the queue
     uint index = UintRef(g.ray_queue).v[q];
     if (index >= g.width * g.height) return;
     GPixel px = GBufferRef(g.gbuffer).px[index];
@@ -35,22 +40,28 @@ void main() {
     bool own = refine_frame();
     if (!cell_takes && !own) return;
     CellRef cells = CellRef(g.hash_cells);
-    // This dispatch's share of the budget (adaptive_rays.glsl: all of it, or a part of its split).
+    // This dispatch's share of the budget (adaptive_rays.glsl: all of it, or a part of its split), the same in
+    // every chunk of the dispatch (PHASE_WEIGH, which counts the pixel's weight, runs as one chunk).
     uint budget = adaptive_budget(push.x, own, index, own ? INVALID_CELL : pc.cells[first]);
-    if (budget == 0u) return;
-    // Rays claimed from the target cell's QMC sequence (a block of `budget`, cut at max_samples).
+    // This chunk's rays of it: [ray0, ray_end).
+    uint ray0 = push.y & 0xffffu;
+    uint ray_count = push.y >> 16;
+    uint ray_end = ray_count == 0xffffu ? budget : min(ray0 + ray_count, budget);
+    if (ray0 >= ray_end) return;
+    uint chunk = ray_end - ray0;
+    // Rays claimed from the target cell's QMC sequence (a block of the chunk's rays, cut at max_samples).
     uint qmc0 = 0u;
     uint claimed = 0u;
     if (cell_takes) {
-        qmc0 = atomicAdd(cells.v[pc.cells[first]].qmc_index, budget);
-        claimed = qmc0 < g.max_samples ? min(budget, g.max_samples - qmc0) : 0u;
+        qmc0 = atomicAdd(cells.v[pc.cells[first]].qmc_index, chunk);
+        claimed = qmc0 < g.max_samples ? min(chunk, g.max_samples - qmc0) : 0u;
     }
-    uint rays = own ? budget : claimed;
+    uint rays = own ? chunk : claimed;
     uvec2 shift;
     uint seq0;
     if (own) {
         shift = pixel_shift(index);
-        seq0 = g.still_index * g.rays_per_pixel;   // own rays: the whole budget in one dispatch
+        seq0 = g.still_index * g.rays_per_pixel + ray0;   // own rays: the whole budget in one phase
     } else {
         uint check = stamp_checksum(cells.v[pc.cells[first]].stamp);
         shift = uvec2(h_check(check), h_index(check ^ 0x5bd1e995u));
@@ -68,7 +79,8 @@ void main() {
     }
     if (rays == 0u) return;
     rays_add(RAYS_ALL, rays);
-    // Cleared by the cell finder (queue_for_rays) each frame; the two halves of a split budget add up.
+    // Cleared by the cell finder (queue_for_rays) each frame; the parts of a split budget (adaptive phases,
+    // chunks) add up.
     if ((g.flags & FLAG_YOUNG_MAP) != 0u) {
         // This frame's rays of the pixel, for a young map's additions (near_field.glsl, corrections.comp),
         // which run only then.
@@ -78,8 +90,10 @@ void main() {
     }
     if (own) {
         rays_add(RAYS_REFINE, rays);
-        PixelRaysRef(g.pixel_rays).v[index].traced = rays;
-        PixelRaysRef(g.pixel_rays).v[index].unoccluded = all_rays.y;
+        // The budget's first chunk sets the pixel's own rays of the frame, later chunks add theirs.
+        PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
+        PixelRaysRef(g.pixel_rays).v[index].traced = (ray0 == 0u ? 0u : pr.traced) + rays;
+        PixelRaysRef(g.pixel_rays).v[index].unoccluded = (ray0 == 0u ? 0u : pr.unoccluded) + all_rays.y;
     }
     if (first >= LOD_COUNT) return;
     // The target cell takes the rays it granted; bottom-up propagation (§4): every coarser level takes all of

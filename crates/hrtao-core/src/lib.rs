@@ -5,6 +5,7 @@
 //! - `gpu`: the GPU-visible structs shared with GLSL (generated header).
 //! - `pass`, `timer`: the one way to declare and record a compute pass, and its timing.
 //! - `raster`: rasterised primary visibility (the ray-query pass's G-buffer from instanced draws).
+//! - `dispatch_plan`: ray-tracing passes cut into dispatches no GPU watchdog stops.
 //! - `renderer`: the frame (primary visibility, per-pixel RTAO, HRTAO passes, composite).
 //! - `hash`: CPU mirror of the shaders' hash functions (paper eq. 1-6).
 //! - `tile`: a window of a larger image (large screenshots rendered tile by tile).
@@ -26,6 +27,7 @@ pub mod buffer;
 pub mod camera;
 pub mod clip;
 pub mod context;
+pub mod dispatch_plan;
 pub mod error;
 pub mod frame;
 pub mod gpu;

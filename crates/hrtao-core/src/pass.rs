@@ -73,7 +73,12 @@ impl Pass {
         &[Visibility, Geometries],
         &[GBuffer, Stats, DispatchArgs],
     );
-    pub const RTAO: Pass = Pass::new("rtao", "per-pixel RTAO", &[GBuffer, Stats], &[PixelRays, Stats]);
+    pub const RTAO: Pass = Pass::new(
+        "rtao",
+        "per-pixel RTAO",
+        &[GBuffer, PixelRays, Stats],
+        &[PixelRays, Stats],
+    );
     pub const CELL_FINDER: Pass = Pass::new(
         "cell_finder",
         "cell finder",

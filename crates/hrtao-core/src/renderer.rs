@@ -12,6 +12,7 @@ use crate::barrier::{Event, Stage, Use};
 use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
+use crate::dispatch_plan::{self, update_rays};
 use crate::error::{CoreError, Result};
 use crate::frame::{Change, FrameDesc, FrameKey, MapChange};
 use crate::gpu::{
@@ -209,6 +210,8 @@ pub struct Renderer {
     raster: Option<Rasterizer>,
     /// The commands and barriers the last `record_frame` recorded.
     last_events: Vec<Event>,
+    /// The most rays one dispatch of a ray-tracing pass traces (`set_max_rays_per_dispatch`).
+    max_rays_per_dispatch: u64,
 }
 
 impl Renderer {
@@ -268,6 +271,7 @@ impl Renderer {
             primary: Primary::default(),
             raster: None,
             last_events: Vec::new(),
+            max_rays_per_dispatch: dispatch_plan::MAX_RAYS_PER_DISPATCH,
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
@@ -646,8 +650,17 @@ impl Renderer {
             _ => rec.dispatch(Pass::PRIMARY, gw, gh, [0; 4]),
         }
         additions::record_after_primary(&mut rec, &young_frame, &self.targets.additions, gw, gh);
+        // Ray-tracing passes in dispatches of at most `max_rays_per_dispatch` rays (dispatch_plan.rs).
+        let rpp = settings.map.rays_per_pixel;
+        let bound = self.max_rays_per_dispatch;
         if mode == Mode::Rtao {
-            rec.dispatch(Pass::RTAO, gw, gh, [0; 4]);
+            for c in dispatch_plan::plan(gw, gh, rpp, bound) {
+                rec.dispatch(Pass::RTAO, gw, c.rows, [0, c.rays_word(), c.first_row, c.rows]);
+            }
+            if rpp == 0 {
+                // No ray: the pass still clears the pixels' counts.
+                rec.dispatch(Pass::RTAO, gw, gh, [0, 0, 0, gh]);
+            }
         } else if mode.uses_hash() {
             // The last cell-finder dispatch also queues the pixels whose cell still takes rays, packed densely
             // (the update then runs no idle lanes), and its last work group writes the update's dispatch size.
@@ -657,8 +670,12 @@ impl Renderer {
             let rays = gpu::RAY_ARGS_OFFSET;
             let args = self.dispatch_args.raw;
             // One dispatch, or three with adaptive sampling (ours) in a young map.
+            // Each cut into chunks over the queue's bands of gw pixels (at most gw x gh pixels are queued).
             for &phase in additions::update_phases(&young_frame) {
-                rec.dispatch_indirect(Pass::AO_UPDATE, args, rays, [phase, 0, 0, 0]);
+                for c in dispatch_plan::plan(gw, gh, update_rays(phase, rpp), bound) {
+                    let push = [phase, c.rays_word(), c.first_row * gw, c.rows * gw];
+                    rec.dispatch_indirect(Pass::AO_UPDATE, args, rays, push);
+                }
             }
             rec.dispatch(Pass::RESOLVE, gw, gh, [0; 4]);
             let iterations = settings.filter.filter_iterations;
@@ -1188,6 +1205,14 @@ impl Renderer {
     /// Descriptor writes of the TLAS binding so far (one per TLAS build a frame used).
     pub fn tlas_descriptor_writes(&self) -> u64 {
         self.passes.tlas_writes()
+    }
+
+    /// Bounds the rays one dispatch of a ray-tracing pass traces (default `dispatch_plan::MAX_RAYS_PER_DISPATCH`,
+    /// at least 1): the per-pixel RTAO and the ray-tracing update are cut into as many dispatches as it takes.
+    /// A per-pixel RTAO image does not depend on it; HRTAO's only through which pixel of a cell claims which of
+    /// its sequence's rays, as any run's atomics decide. Takes effect with the next recorded frame.
+    pub fn set_max_rays_per_dispatch(&mut self, rays: u64) {
+        self.max_rays_per_dispatch = rays.max(1);
     }
 
     /// The dispatches, other commands and barriers the last recorded frame consists of, in order.

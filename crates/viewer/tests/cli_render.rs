@@ -162,8 +162,31 @@ fn render_accepts_an_orthographic_camera_file() {
         .all(|&(x, y)| (16..48).contains(&x) && (16..48).contains(&y)));
 }
 
+fn worst_diff(a: &[f32], b: &[f32]) -> f32 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
+}
+
+/// |a - b| per pixel: its mean and its 99th percentile.
+fn differences(a: &[f32], b: &[f32]) -> (f32, f32) {
+    let mut d: Vec<f32> = a.iter().zip(b).map(|(x, y)| (x - y).abs()).collect();
+    d.sort_by(f32::total_cmp);
+    let mean = d.iter().sum::<f32>() / d.len() as f32;
+    (mean, d[(d.len() - 1) * 99 / 100])
+}
+
+/// How far the other files' AO may be from the glTF's on any device: MAE 1e-3, and at most 1% of the pixels
+/// off by more than 1e-2. Measured on lavapipe (LP_NUM_THREADS unset, 3 runs): 0 in both modes, and 0 too with
+/// every pixel's QMC claims interleaved (the update cut to one ray per pixel per dispatch through a temporary
+/// hook), as a GPU may order them: this model's cells come out the same whichever pixel traces which of their
+/// rays. What is left to a GPU is a hit that moves in the last bits in its BVH of another triangle list.
+const MAX_MAE: f32 = 1e-3;
+const MAX_P99: f32 = 1e-2;
+
 /// STL (binary and ASCII) and PLY (ASCII and binary) of the reference model render the same AO image as its glTF
-/// (`hrtao render`, the same auto-framed camera, HRTAO and per-pixel RTAO).
+/// (`hrtao render`, the same auto-framed camera, HRTAO and per-pixel RTAO): on any device within `MAX_MAE` and
+/// `MAX_P99`; on a CPU device (lavapipe) bit for bit (1e-5), HRTAO rendered again on one thread for that
+/// (LP_NUM_THREADS=1: which pixel of a cell claims which of its rays is then the same in every run; per-pixel
+/// RTAO has no such race).
 #[test]
 fn stl_and_ply_render_the_same_ao_as_gltf() {
     let dir = tmp("same-model");
@@ -171,51 +194,82 @@ fn stl_and_ply_render_the_same_ao_as_gltf() {
     std::fs::create_dir_all(&dir).unwrap();
     let cases = hrtao_scene::hostile::write_corpus(&dir).unwrap();
     let path = |name: &str| cases.iter().find(|c| c.name == name).unwrap().path.clone();
+    let stats = dir.join("stats.json");
+    // The AO of `file` in `mode`, with LP_NUM_THREADS=1 when `one_thread`.
+    let render = |file: &std::path::Path, mode: &str, one_thread: bool| {
+        let ao = dir.join(format!(
+            "{}.{mode}.pfm",
+            file.file_name().unwrap().to_string_lossy()
+        ));
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_hrtao"));
+        cmd.args([
+            "render",
+            "--scene",
+            file.to_str().unwrap(),
+            "--width",
+            "96",
+            "--height",
+            "64",
+            "--mode",
+            mode,
+            "--rays",
+            "4",
+            "--frames",
+            "2",
+            // One primary visibility for every file: measured (the default) it may differ between runs,
+            // and rasterised glTF culls its single-sided back faces where STL and PLY do not.
+            "--primary",
+            "ray-query",
+            "--out",
+            dir.join("x.png").to_str().unwrap(),
+            "--ao-out",
+            ao.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ])
+        .env("HRTAO_VALIDATION", "1");
+        if one_thread {
+            cmd.env("LP_NUM_THREADS", "1");
+        }
+        let out = cmd.output().expect("run hrtao");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        hrtao_core::imageio::read_pfm(&ao).unwrap().2
+    };
+    let others = ["stl_binary", "stl_ascii", "ply_ascii", "ply_binary"];
+    let mut cpu = false;
     for mode in ["hrtao", "rtao"] {
-        let render = |file: &std::path::Path| {
-            let ao = dir.join(format!(
-                "{}.{mode}.pfm",
-                file.file_name().unwrap().to_string_lossy()
-            ));
-            let out = hrtao(&[
-                "render",
-                "--scene",
-                file.to_str().unwrap(),
-                "--width",
-                "96",
-                "--height",
-                "64",
-                "--mode",
-                mode,
-                "--rays",
-                "4",
-                "--frames",
-                "2",
-                // One primary visibility for every file: measured (the default) it may differ between runs,
-                // and rasterised glTF culls its single-sided back faces where STL and PLY do not.
-                "--primary",
-                "ray-query",
-                "--out",
-                dir.join("x.png").to_str().unwrap(),
-                "--ao-out",
-                ao.to_str().unwrap(),
-            ]);
-            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-            hrtao_core::imageio::read_pfm(&ao).unwrap().2
-        };
-        let gltf = render(&path("valid_reference"));
+        let gltf = render(&path("valid_reference"), mode, false);
+        let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        cpu = s["device"]["is_software"].as_bool().unwrap();
         assert!(
             gltf.iter().any(|&a| a < 0.9),
             "{mode}: the reference model shows occlusion"
         );
-        for name in ["stl_binary", "stl_ascii", "ply_ascii", "ply_binary"] {
-            let other = render(&path(name));
-            let worst = gltf
-                .iter()
-                .zip(&other)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0f32, f32::max);
-            assert!(worst < 1e-5, "{mode} {name}: AO differs by up to {worst}");
+        for name in others {
+            let other = render(&path(name), mode, false);
+            let (mae, p99) = differences(&gltf, &other);
+            assert!(
+                mae <= MAX_MAE && p99 <= MAX_P99,
+                "{mode} {name}: MAE {mae}, 99th percentile {p99} from the glTF's image"
+            );
+            let worst = worst_diff(&gltf, &other);
+            if cpu && mode == "rtao" {
+                assert!(
+                    worst < 1e-5,
+                    "CPU device, {mode} {name}: AO differs by up to {worst}"
+                );
+            }
+        }
+    }
+    if cpu {
+        let gltf = render(&path("valid_reference"), "hrtao", true);
+        for name in others {
+            let other = render(&path(name), "hrtao", true);
+            let worst = worst_diff(&gltf, &other);
+            assert!(
+                worst < 1e-5,
+                "CPU device, one thread, hrtao {name}: AO differs by up to {worst}"
+            );
         }
     }
     let _ = std::fs::remove_dir_all(dir);
