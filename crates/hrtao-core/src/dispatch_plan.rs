@@ -43,20 +43,6 @@ impl Chunk {
     }
 }
 
-/// The most rays a queued pixel traces in the ray-tracing update's dispatch `phase` (adaptive_rays.glsl's
-/// PHASE_*, `additions::update_phases`) with a budget of `rays_per_pixel`: the budget, or a quarter of it in
-/// PHASE_FIRST; 1 for PHASE_WEIGH, which traces none but must run once per pixel (one chunk of rays, bands of
-/// rows still); PHASE_SECOND gives a pixel up to ADAPT_MAX_SHARE = 4 times its even share of the other three
-/// quarters, rounded up: at most 4 x the budget. An underestimate would cost only the bound: the last chunk
-/// traces to the end of the pixel's budget (`Chunk::last_rays`).
-pub fn update_rays(phase: u32, rays_per_pixel: u32) -> u32 {
-    match phase {
-        2 => 1,
-        3 => 4 * rays_per_pixel,
-        _ => rays_per_pixel,
-    }
-}
-
 /// Splits `width` x `height` pixels x `rays` rays per pixel into dispatches of at most `max_rays` rays: as few
 /// chunks of rays as the bound allows (every pixel's rays in one dispatch when the whole pass fits), and bands
 /// of rows only when one ray per pixel over the whole image is already over it. A single row at one ray is the

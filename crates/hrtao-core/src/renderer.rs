@@ -12,7 +12,7 @@ use crate::barrier::{Event, Stage, Use};
 use crate::buffer::{host_read_barrier, Buffer};
 use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
-use crate::dispatch_plan::{self, update_rays};
+use crate::dispatch_plan;
 use crate::error::{CoreError, Result};
 use crate::frame::{Change, FrameDesc, FrameKey, MapChange};
 use crate::gpu::{
@@ -672,7 +672,7 @@ impl Renderer {
             // One dispatch, or three with adaptive sampling (ours) in a young map.
             // Each cut into chunks over the queue's bands of gw pixels (at most gw x gh pixels are queued).
             for &phase in additions::update_phases(&young_frame) {
-                for c in dispatch_plan::plan(gw, gh, update_rays(phase, rpp), bound) {
+                for c in dispatch_plan::plan(gw, gh, additions::update_rays(phase, rpp), bound) {
                     let push = [phase, c.rays_word(), c.first_row * gw, c.rows * gw];
                     rec.dispatch_indirect(Pass::AO_UPDATE, args, rays, push);
                 }

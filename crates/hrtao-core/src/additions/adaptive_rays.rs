@@ -13,6 +13,20 @@ pub fn update_phases(frame: &YoungFrame) -> &'static [u32] {
     }
 }
 
+/// The most rays a queued pixel traces in the ray-tracing update's dispatch `phase` (adaptive_rays.glsl's
+/// `PHASE_*`) with a budget of `rays_per_pixel`, for the dispatch plan (`crate::dispatch_plan`): the budget,
+/// or a quarter of it in PHASE_FIRST; 1 for PHASE_WEIGH, which traces none but must run once per pixel (one
+/// chunk of rays, bands of rows still); PHASE_SECOND gives a pixel up to ADAPT_MAX_SHARE = 4 times its even
+/// share of the other three quarters, rounded up: at most 4 x the budget. An underestimate would cost only the
+/// bound: the last chunk traces to the end of the pixel's budget (`Chunk::last_rays`).
+pub fn update_rays(phase: u32, rays_per_pixel: u32) -> u32 {
+    match phase {
+        2 => 1,
+        3 => 4 * rays_per_pixel,
+        _ => rays_per_pixel,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::testkit::*;

@@ -96,6 +96,12 @@ pub fn update_phases(frame: &YoungFrame) -> &'static [u32] {
     adaptive_rays::update_phases(frame)
 }
 
+/// The most rays a pixel traces in the update's dispatch `phase` (`update_phases`) at `rays_per_pixel`: what
+/// the dispatch plan splits (`crate::dispatch_plan`).
+pub fn update_rays(phase: u32, rays_per_pixel: u32) -> u32 {
+    adaptive_rays::update_rays(phase, rays_per_pixel)
+}
+
 /// Records the additions' passes that read only the G-buffer, right after primary visibility (beside the cell
 /// finder, behind one barrier), over the frame's `width` x `height` pixels (its slice).
 pub fn record_after_primary(
