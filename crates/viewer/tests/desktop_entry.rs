@@ -55,6 +55,7 @@ fn mime_of(ext: &str) -> &'static str {
         "obj" => "model/obj",
         "stl" => "model/stl",
         "ply" => "application/x-ply",
+        "3mf" => "model/3mf",
         "step" | "stp" => "model/step",
         "iges" | "igs" => "model/iges",
         other => panic!("no MIME type known for .{other}: add it here and to packaging/hrtao.desktop"),
