@@ -1,7 +1,11 @@
-//! rod.glb compressed by gltfpack (meshopt) and gltf-pipeline (Draco) renders the AO of rod.glb: per-pixel
-//! RTAO (each pixel's own deterministic ray sequence) of the three files from one camera, MAE ≤ 0.005.
+//! rod.glb compressed by gltfpack (meshopt) and gltf-pipeline (Draco), and written as 3MF, renders the AO of
+//! rod.glb: per-pixel RTAO (each pixel's own deterministic ray sequence) of the files from one camera,
+//! MAE ≤ 0.005.
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+#[path = "../../scene/tests/common/threemf.rs"]
+mod threemf_writer;
 
 fn rod(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -17,7 +21,7 @@ fn dir() -> PathBuf {
 
 /// `hrtao render --mode rtao` of `scene` from `camera`: the linear AO image.
 fn render(scene: &Path, camera: &Path, radius: f32) -> Vec<f32> {
-    let pfm = dir().join(format!("{}.pfm", scene.file_stem().unwrap().to_string_lossy()));
+    let pfm = dir().join(format!("{}.pfm", scene.file_name().unwrap().to_string_lossy()));
     let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
         .args(["render", "--scene", scene.to_str().unwrap()])
         .args(["--camera", camera.to_str().unwrap(), "--mode", "rtao"])
@@ -36,7 +40,7 @@ fn render(scene: &Path, camera: &Path, radius: f32) -> Vec<f32> {
 }
 
 #[test]
-fn compressed_rod_renders_the_ao_of_rod() {
+fn compressed_and_3mf_rod_render_the_ao_of_rod() {
     // A camera on the model's diagonal, from rod.glb's bounds; the AO radius a tenth of its size.
     let scene = hrtao_scene::load(rod("rod.glb").to_str().unwrap(), &mut |_| {}).unwrap();
     let b = scene.bounds();
@@ -51,8 +55,14 @@ fn compressed_rod_renders_the_ao_of_rod() {
     let plain = render(&rod("rod.glb"), &camera, radius);
     let occluded = plain.iter().filter(|&&v| v < 0.9).count();
     assert!(occluded > 2000, "the view shows occlusion ({occluded} pixels)");
-    for name in ["rod.meshopt.glb", "rod.draco.glb"] {
-        let ao = render(&rod(name), &camera, radius);
+    // rod.glb as 3MF: its 29 instances as build items of 3 objects.
+    let as_3mf = dir().join("rod.3mf");
+    threemf_writer::write_3mf(&scene, &as_3mf, "millimeter");
+    let loaded = hrtao_scene::load(as_3mf.to_str().unwrap(), &mut |_| {}).unwrap();
+    assert_eq!((loaded.instances.len(), loaded.meshes.len()), (29, 3));
+    for path in [rod("rod.meshopt.glb"), rod("rod.draco.glb"), as_3mf] {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let ao = render(&path, &camera, radius);
         let e = hrtao_core::metrics::ao_error(&ao, &plain);
         println!("{name}: MAE {:.4} over {} pixels", e.mae, e.pixels);
         assert!(e.mae <= 0.005, "{name}: MAE {} against rod.glb", e.mae);
