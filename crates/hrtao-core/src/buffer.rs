@@ -280,3 +280,40 @@ pub fn whole_image_copy(width: u32, height: u32) -> vk::BufferImageCopy {
         },
     }
 }
+
+/// Records a write of `bytes` into the start of the device buffer `dst` by the command buffer itself
+/// (vkCmdUpdateBuffer, in chunks of 64 KiB), ordered after every command before it (frames still in flight
+/// read the old contents) and visible to every command after it: per-frame data (the frame's globals) written
+/// in queue order, with no host-visible copy per frame in flight. `bytes.len()` must be a multiple of 4.
+pub fn record_update(gpu: &Gpu, cmd: vk::CommandBuffer, dst: vk::Buffer, bytes: &[u8]) {
+    const CHUNK: usize = 65536;
+    let d = &gpu.device;
+    let all = vk::PipelineStageFlags::ALL_COMMANDS;
+    unsafe {
+        // Reads by earlier commands (the frame before, maybe still running) come first.
+        d.cmd_pipeline_barrier(
+            cmd,
+            all,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &[],
+        );
+        for (i, chunk) in bytes.chunks(CHUNK).enumerate() {
+            d.cmd_update_buffer(cmd, dst, (i * CHUNK) as u64, chunk);
+        }
+        let barrier = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)];
+        d.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            all,
+            vk::DependencyFlags::empty(),
+            &barrier,
+            &[],
+            &[],
+        );
+    }
+}

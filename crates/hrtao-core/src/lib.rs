@@ -34,6 +34,7 @@ pub mod gpu;
 pub mod hash;
 pub mod hash_map;
 pub mod imageio;
+pub mod in_flight;
 pub mod metrics;
 pub mod pass;
 pub mod passes;

@@ -166,7 +166,12 @@ impl RegionTable {
         self.dirty = true;
     }
 
-    /// Copies the table to the GPU if it changed (between frames).
+    /// The table changed since the last `upload`.
+    pub fn dirty(&self) -> bool {
+        self.dirty
+    }
+
+    /// Copies the table to the GPU if it changed (between frames: no frame that reads it may be in flight).
     pub fn upload(&mut self) -> Result<()> {
         if self.dirty {
             self.buffer.write(&self.table)?;

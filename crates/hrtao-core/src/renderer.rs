@@ -9,7 +9,7 @@ use gpu_allocator::MemoryLocation;
 use crate::accel::SceneGpu;
 use crate::additions;
 use crate::barrier::{Event, Stage, Use};
-use crate::buffer::{host_read_barrier, Buffer};
+use crate::buffer::{host_read_barrier, record_update, Buffer};
 use crate::camera::{Camera, Projection};
 use crate::context::Gpu;
 use crate::dispatch_plan;
@@ -20,12 +20,12 @@ use crate::gpu::{
     PixelRays,
 };
 use crate::hash_map::WorldHashMap;
+use crate::in_flight::{InFlight, Recorded};
 use crate::pass::{Pass, PassSet, Resource};
 use crate::raster::{Primary, Rasterizer};
 use crate::recorder::Recorder;
 use crate::settings::{AoSettings, Mode};
 use crate::slice_order;
-use crate::timer::GpuTimer;
 
 /// Buffers whose size follows the image resolution.
 struct Targets {
@@ -168,12 +168,13 @@ struct LevelShow {
 pub struct Renderer {
     gpu: Arc<Gpu>,
     passes: PassSet,
-    timer: Option<GpuTimer>,
+    /// The frame's `FrameGlobals`, in device memory: written by each frame's own commands (`record_update`).
     globals: Buffer,
-    /// `FrameStats` in device memory (the shaders' atomics stay on the GPU), and its host-visible copy made once
-    /// at the end of every frame.
+    /// `FrameStats` in device memory (the shaders' atomics stay on the GPU); each frame copies it at its end
+    /// into the host-visible buffer of its slot (`in_flight`), with its timestamps.
     stats: Buffer,
-    stats_readback: Buffer,
+    /// Frames recorded and not finished, and each one's readback and timer.
+    in_flight: InFlight,
     /// VkDispatchIndirectCommands of the ray-tracing update and the filter, written by the last work group of the
     /// cell finder and of the resolve (queue_args.glsl).
     dispatch_args: Buffer,
@@ -221,7 +222,7 @@ impl Renderer {
             gpu,
             "frame globals",
             std::mem::size_of::<FrameGlobals>() as u64,
-            MemoryLocation::CpuToGpu,
+            MemoryLocation::GpuOnly,
             vk::BufferUsageFlags::empty(),
         )?;
         let stats = Buffer::new(
@@ -229,13 +230,6 @@ impl Renderer {
             "frame stats",
             std::mem::size_of::<FrameStats>() as u64,
             MemoryLocation::GpuOnly,
-            vk::BufferUsageFlags::empty(),
-        )?;
-        let stats_readback = Buffer::new(
-            gpu,
-            "frame stats readback",
-            std::mem::size_of::<FrameStats>() as u64,
-            MemoryLocation::GpuToCpu,
             vk::BufferUsageFlags::empty(),
         )?;
         let dispatch_args = Buffer::new(
@@ -248,11 +242,10 @@ impl Renderer {
         let passes = PassSet::new(gpu, &globals, &crate::passes::ALL)?;
         let r = Renderer {
             gpu: gpu.clone(),
-            timer: GpuTimer::new(gpu)?,
             passes,
             globals,
             stats,
-            stats_readback,
+            in_flight: InFlight::new(gpu)?,
             dispatch_args,
             targets: Targets::new(gpu, 1, 1)?,
             map: WorldHashMap::new(gpu)?,
@@ -275,8 +268,9 @@ impl Renderer {
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
-            gpu.device
-                .cmd_fill_buffer(cmd, r.stats_readback.raw, 0, vk::WHOLE_SIZE, 0);
+            for readback in r.in_flight.readbacks() {
+                gpu.device.cmd_fill_buffer(cmd, readback, 0, vk::WHOLE_SIZE, 0);
+            }
         })?;
         Ok(r)
     }
@@ -586,6 +580,8 @@ impl Renderer {
     /// Records all passes of `frame` into `cmd` (the caller submits and then calls `finish_frame`). The output
     /// is left in `output_buffer()`.
     pub fn record_frame(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<()> {
+        // Before `prepare` moves the renderer on: a frame that cannot be recorded changes nothing.
+        self.in_flight.free_slot()?;
         self.prepare(frame)?;
         self.record_prepared(cmd, frame)
     }
@@ -594,9 +590,14 @@ impl Renderer {
     /// so it runs before the caller's command buffer is taken).
     fn record_prepared(&mut self, cmd: vk::CommandBuffer, frame: &FrameDesc) -> Result<()> {
         let (scene, camera, settings) = (frame.scene, &frame.camera, frame.settings);
+        let slot = self.in_flight.free_slot()?;
+        if self.map.regions.dirty() && !self.in_flight.is_empty() {
+            // A local edit's epochs are host-written: frames in flight read the table.
+            self.gpu.wait_idle();
+        }
         self.map.regions.upload()?;
         let globals = self.frame_globals(frame);
-        self.globals.write(&[globals])?;
+        record_update(&self.gpu, cmd, self.globals.raw, bytemuck::bytes_of(&globals));
         self.passes.bind_tlas(scene.tlas.raw, scene.tlas_generation());
 
         let (w, h) = self.size();
@@ -617,7 +618,9 @@ impl Renderer {
             .map
             .cell_levels(self.frame_index, self.pixel_count() as u32, settings.map.s_p);
         let young_frame = self.young_frame(frame);
-        let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, self.timer.as_mut());
+        let readback = self.in_flight.slot(slot).readback.raw;
+        let timer = self.in_flight.slot_mut(slot).timer.as_mut();
+        let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, timer);
         scene.record_uploads(&mut rec);
         match (primary, &mut self.raster) {
             (Primary::Raster, Some(raster)) => {
@@ -694,7 +697,7 @@ impl Renderer {
         // The frame's counters, once, for `finish_frame`: composite.comp counts nothing (its declaration
         // writes no `Stats`), so the copy is recorded before it and shares its barrier.
         let bytes = std::mem::size_of::<FrameStats>() as u64;
-        let (stats, readback) = (self.stats.raw, self.stats_readback.raw);
+        let stats = self.stats.raw;
         let uses = vec![
             Use::read(Resource::Stats, Stage::Transfer),
             Use::write(Resource::StatsReadback, Stage::Transfer),
@@ -718,6 +721,16 @@ impl Renderer {
             rec.dispatch(Pass::COMPOSITE, w, h, [1, show.edges as u32, 0, 0]);
         }
         self.last_events = rec.finish();
+        self.frame_index = self.frame_index.wrapping_add(1);
+        self.in_flight.push(Recorded {
+            slot,
+            key: self.prev.clone().expect("prepare keeps the frame's key"),
+            frame_index: self.frame_index,
+            still_index: self.still_index,
+            slice: self.slice,
+            lattice: self.lattice,
+            pixels: self.pixel_count(),
+        });
         Ok(())
     }
 
@@ -754,7 +767,7 @@ impl Renderer {
             None => self.raster.insert(Rasterizer::new(&self.gpu)?),
         };
         raster.prepare(w, h)?;
-        self.globals.write(&[globals])?;
+        record_update(&self.gpu, cmd, self.globals.raw, bytemuck::bytes_of(&globals));
         let scene = frame.scene;
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
         let drew = raster.record(
@@ -821,7 +834,7 @@ impl Renderer {
             return (0, None);
         }
         if let Some(key) = &self.prev {
-            if self.converged(key, 0) {
+            if self.converged(key, self.still_index, 0) {
                 return (0, None);
             }
         }
@@ -852,18 +865,20 @@ impl Renderer {
         !(self.gpu.info.is_software && self.primary == Primary::Raster)
     }
 
-    /// Reads the statistics of the frame just recorded and completed.
+    /// Reads the statistics of the oldest frame recorded and not finished, which the caller waited for (with
+    /// one frame in flight: the frame just recorded and completed).
     pub fn finish_frame(&mut self, wall_ms: f64) -> Result<FrameReport> {
-        let Some(key) = self.prev.clone() else {
+        let Some(done) = self.in_flight.pop() else {
             return Err(CoreError::Invalid(
                 "finish_frame before any recorded frame".into(),
             ));
         };
-        self.frame_index = self.frame_index.wrapping_add(1);
-        let stats: FrameStats = self.stats_readback.read(1)?[0];
+        let key = done.key;
+        let slot = self.in_flight.slot(done.slot);
+        let stats: FrameStats = slot.readback.read(1)?[0];
         let c = stats.counters;
         let rays = |i: u32| stats.rays[i as usize];
-        let gpu_ms = match &self.timer {
+        let gpu_ms = match &slot.timer {
             Some(t) if self.timestamps_measure() => t.read()?,
             _ => Vec::new(),
         };
@@ -871,18 +886,19 @@ impl Renderer {
         let young_pixels =
             c[gpu::STAT_RAY_QUEUE as usize] as u64 + c[gpu::STAT_UNPICKED_PIXELS as usize] as u64;
         // A still image is final only at the end of a round of slices, and from the whole round's pixels.
-        let slices = self.lattice * self.lattice;
-        self.round_young_pixels = if self.slice == 0 {
+        let slices = done.lattice * done.lattice;
+        self.round_young_pixels = if done.slice == 0 {
             young_pixels
         } else {
             self.round_young_pixels + young_pixels
         };
-        self.last_converged = self.slice + 1 == slices && self.converged(&key, self.round_young_pixels);
-        let budget = self.pixel_count() as f64
+        self.last_converged =
+            done.slice + 1 == slices && self.converged(&key, done.still_index, self.round_young_pixels);
+        let budget = done.pixels as f64
             * key.budget.rays_per_pixel as f64
             * key.budget.trace_fraction.clamp(0.0, 1.0) as f64;
         self.map.finish_frame(
-            self.frame_index,
+            done.frame_index,
             rays(gpu::RAYS_CELL),
             budget.ceil() as u64,
             occupied,
@@ -905,19 +921,26 @@ impl Renderer {
             load_factor: occupied as f64 / capacity as f64,
             scene_f: key.scene_f.wrapping_add(key.section_changes),
             map_f: self.map.key_f(),
-            accumulated_frames: self.still_index + 1,
+            accumulated_frames: done.still_index + 1,
             refine_rays: rays(gpu::RAYS_REFINE),
             cell_rays: rays(gpu::RAYS_CELL),
             ray_pixels: c[gpu::STAT_RAY_QUEUE as usize],
             filtered_pixels: c[gpu::STAT_FILTER_QUEUE as usize],
             converged: self.last_converged,
-            slice: self.slice,
+            slice: done.slice,
             slices,
         })
     }
 
-    /// Renders one frame headless and waits for it.
+    /// Renders one frame headless and waits for it. Frames recorded and not finished must be finished first
+    /// (their reports come first).
     pub fn render(&mut self, frame: &FrameDesc) -> Result<FrameReport> {
+        if !self.in_flight.is_empty() {
+            return Err(CoreError::Invalid(format!(
+                "render with {} frame(s) recorded and not finished",
+                self.in_flight.len()
+            )));
+        }
         let t0 = Instant::now();
         let gpu = self.gpu.clone();
         self.prepare(frame)?;
@@ -998,17 +1021,17 @@ impl Renderer {
     /// cells that still take rays, traced this frame or not) is final: per-pixel RTAO and HRTAO with refinement
     /// once each pixel has `still_samples` of its own rays (and, with jitter, `AA_FRAMES` samples); the paper's
     /// HRTAO once no pixel on screen has a cell that takes rays; other modes once anti-aliased.
-    fn converged(&self, key: &FrameKey, young_pixels: u64) -> bool {
+    fn converged(&self, key: &FrameKey, still_index: u32, young_pixels: u64) -> bool {
         let s = &key.settings;
         let rpp = key.budget.rays_per_pixel as u64;
-        let frames = self.still_index + 1;
+        let frames = still_index + 1;
         let aa = !key.jitter || frames >= AA_FRAMES;
         let own_rays = |frames: u32| frames as u64 * rpp >= s.still.still_samples as u64;
         match s.display.mode {
             Mode::Rtao => aa && (rpp == 0 || own_rays(frames)),
             // Pixels near a local edit restarted their own rays then.
             Mode::Hrtao if s.still.refine => {
-                aa && (rpp == 0 || own_rays(self.still_index.saturating_sub(self.edit_still_index)))
+                aa && (rpp == 0 || own_rays(still_index.saturating_sub(self.edit_still_index)))
             }
             Mode::Hrtao => young_pixels == 0 && frames > 1,
             _ => aa,
@@ -1148,11 +1171,11 @@ impl Renderer {
         const ROW: u32 = 256;
         globals.width = ROW;
         globals.height = (cases.len() as u32).div_ceil(ROW).max(1);
-        self.globals.write(&[globals])?;
         self.passes.bind_tlas(scene.tlas.raw, scene.tlas_generation());
         let [lo, hi] = buf.address_words();
         let push = [lo, hi, cases.len() as u32, 0];
         self.gpu.run_commands(|cmd| {
+            record_update(&self.gpu, cmd, self.globals.raw, bytemuck::bytes_of(&globals));
             let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, None);
             rec.dispatch(Pass::HASH_TEST, ROW, globals.height, push);
             rec.finish();

@@ -231,7 +231,8 @@ fn viewer_keeps_its_scene_when_a_reference_leads_nowhere() {
                 .args(["--open-at-frame", "1"])
                 .arg(&case.path)
                 .args(["--no-config", "--exit"])
-                .env("HRTAO_VALIDATION", "1"),
+                .env("HRTAO_VALIDATION", "1")
+                .env("HRTAO_FRAMES_IN_FLIGHT", "2"),
             Duration::from_secs(180),
             case.name,
         );

@@ -143,6 +143,11 @@ impl Latency {
     /// continuously (one iteration per frame; events that come during a frame wait for the next iteration), and
     /// possibly earlier than the event when the viewer rested and a timer woke it first. A pass without input
     /// ends what was pending: input that moved nothing by then (a drag's release) is not credited to a later move.
+    /// Frames' AO is written (`--ao-out`): read from the renderer's buffers when the frame completes.
+    pub fn dumps_ao(&self) -> bool {
+        self.ao_out.is_some()
+    }
+
     pub fn ui_pass(&mut self, had_input: bool) {
         let wake = self.wake_ms.take();
         if had_input {

@@ -12,6 +12,7 @@ mod app;
 mod command;
 pub mod edits;
 mod files;
+mod frames;
 mod input;
 pub mod latency;
 mod load_options;
@@ -226,6 +227,8 @@ pub(crate) struct Viewer {
     script: Script,
     /// Presentation and input stamps, `--ao-out`, `--exit-after`.
     latency: latency::Latency,
+    /// Frames submitted and not completed.
+    frames: frames::Frames,
     shut_down: bool,
 }
 
@@ -274,6 +277,12 @@ impl Viewer {
             egui::Theme::Light
         });
         let spec = args.file.clone().unwrap_or_else(default_spec);
+        let frames_in_flight = prefs::frames_in_flight(
+            std::env::var("HRTAO_FRAMES_IN_FLIGHT").ok().as_deref(),
+            prefs.frames_in_flight,
+            gpu.info.is_software,
+        );
+        log::info!("{frames_in_flight} frame(s) in flight");
         let mut v = Viewer {
             gpu,
             presenter,
@@ -337,6 +346,7 @@ impl Viewer {
                 ui_captured: false,
             },
             latency: latency::Latency::new(args.ao_out.clone(), args.exit_after),
+            frames: frames::Frames::new(frames_in_flight),
             shut_down: false,
         };
         if let Some(m) = prefs_msg {
@@ -433,6 +443,8 @@ impl Viewer {
             ..std::mem::replace(&mut self.startup, later)
         };
         let p = setup::prepare(&inputs, &scene)?;
+        // The old scene's frames in flight complete before the renderer renders the new one's probes.
+        self.complete_frames(0)?;
         self.gpu.wait_idle();
         let section_state = sections::SectionState::for_scene(scene.bounds(), &p.sections);
         self.cancel_background_shot(": another scene was opened");
@@ -1008,7 +1020,13 @@ impl Viewer {
 
     /// A frame after its UI pass (an error is fatal: shown, and the exit status of scripted runs).
     fn paint(&mut self, size: winit::dpi::PhysicalSize<u32>, mut ui: UiFrame) {
-        // egui's texture changes apply whether or not this frame presents: later frames' shapes use them.
+        // egui's texture changes apply whether or not this frame presents: later frames' shapes use them. The
+        // textures it changes or frees may be in use by frames in flight: those complete first.
+        if !(ui.textures.set.is_empty() && ui.textures.free.is_empty()) {
+            if let Err(e) = self.complete_frames(0) {
+                self.fatal(format!("{e:#}"));
+            }
+        }
         let pool = self.presenter.pool;
         if let Err(e) = self
             .presenter
@@ -1040,6 +1058,12 @@ impl Viewer {
             return Ok(());
         }
         self.poll_saving();
+        // The frames the device finished meanwhile: their reports before this frame's plan. All frames in flight
+        // before a screenshot is taken or a frame whose results are read from buffers the next one overwrites.
+        self.complete_finished_frames()?;
+        if self.shots.pending.is_some() || self.frames_to_keep() == 0 {
+            self.complete_frames(0)?;
+        }
         if let Some(req) = self.shots.pending.take() {
             match self.take_screenshot(req) {
                 Ok(p) => self.toast(format!("screenshot saved: {}", p.display()), false),
@@ -1067,18 +1091,11 @@ impl Viewer {
             shooting: self.shots.rendering(),
             size_at: &size_at,
         });
-        let cmd = self.presenter.cmd;
         split.acquire = laps.lap();
         let t0 = Instant::now();
-        unsafe {
-            let info =
-                vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-            self.gpu
-                .device
-                .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
-            self.gpu.device.begin_command_buffer(cmd, &info)?;
-        }
+        let cmd = self.presenter.begin_frame()?;
         // One frame of the background screenshot's current tile, before the view's own passes.
+        let shot = self.shots.rendering();
         let shot_error = match (&self.scene_gpu, &self.scene) {
             (Some(sg), Some(scene)) => self.shots.record(cmd, sg, scene.f()).err(),
             _ => None,
@@ -1094,30 +1111,101 @@ impl Viewer {
             .ui
             .record(cmd, index, ui.pixels_per_point, &ui.primitives)?;
         split.egui_record = laps.lap();
-        let readback = self.record_ui_capture(cmd, index)?;
+        let capture = self.record_ui_capture(cmd, index)?;
         unsafe {
             self.gpu.device.end_command_buffer(cmd)?;
         }
         split.record += laps.lap();
-        self.presenter.submit_and_wait(index)?;
+        let slot = self.presenter.submit(index)?;
+        // One frame in flight: the frame completes before it is presented.
+        let keep = self.frames_to_keep();
+        if keep == 0 {
+            self.presenter.wait(slot)?;
+        }
         split.gpu_wait = laps.lap();
         self.presenter.present(index)?;
         let presented_ms = latency::monotonic_ms();
         split.present = laps.lap();
-        let gpu_wall = t0.elapsed().as_secs_f64() * 1e3;
-        let shot_ms = self.finish_shot_frame(rendered);
-        if let Some(e) = shot_error {
+        self.frames.push(frames::Submitted {
+            slot,
+            waited: keep == 0,
+            plan,
+            rendered,
+            shot,
+            shot_error,
+            capture,
+            t0,
+            presented_ms,
+            split,
+            laps,
+            ui_started: self.clock.ui_started,
+            camera: Camera {
+                width: plan.size.0,
+                height: plan.size.1,
+                ..self.nav.cam
+            },
+        });
+        self.complete_frames(keep)?;
+        self.maybe_save_prefs(false);
+        self.schedule_repaint();
+        Ok(())
+    }
+
+    /// Frames in flight to keep after submitting one: the limit less one, none while a frame's results are
+    /// read from buffers the next frame overwrites (a background screenshot's tiles, `--ao-out`) or the window
+    /// is captured.
+    fn frames_to_keep(&self) -> usize {
+        let exclusive = self.shots.rendering() || self.latency.dumps_ao() || self.script.ui_capture_pending;
+        if exclusive {
+            0
+        } else {
+            self.frames.limit - 1
+        }
+    }
+
+    /// Completes frames in flight, oldest first, until `keep` are left: waits for each and reads its results.
+    fn complete_frames(&mut self, keep: usize) -> Result<()> {
+        while let Some(f) = self.frames.pop_over(keep) {
+            if !f.waited {
+                self.presenter.wait(f.slot)?;
+            }
+            self.complete(f)?;
+        }
+        Ok(())
+    }
+
+    /// Completes the frames in flight the device has finished, without waiting.
+    fn complete_finished_frames(&mut self) -> Result<()> {
+        while let Some(slot) = self.frames.oldest_slot() {
+            if !self.presenter.done(slot) {
+                break;
+            }
+            let f = self.frames.pop_over(0).expect("a frame in flight");
+            self.presenter.wait(f.slot)?;
+            self.complete(f)?;
+        }
+        Ok(())
+    }
+
+    /// After a frame completed: the background screenshot's tile, the window capture, the view's report.
+    fn complete(&mut self, mut f: frames::Submitted) -> Result<()> {
+        let gpu_wall = f.t0.elapsed().as_secs_f64() * 1e3;
+        self.frames.overlapped += (f.ui_started < self.clock.ui_started) as u64;
+        let shot_ms = if f.shot {
+            self.finish_shot_frame(f.rendered)
+        } else {
+            0.0
+        };
+        if let Some(e) = f.shot_error.take() {
             // Dropped only now: its commands were in the frame just completed.
             self.shots.cancel();
             self.shot_failed(format!("screenshot failed: {e:#}"));
         }
-        self.finish_ui_capture(readback)?;
-        if rendered {
-            self.frame_rendered(&plan, gpu_wall, shot_ms, presented_ms, split, laps)?;
+        self.finish_ui_capture(f.capture.take())?;
+        if f.rendered {
+            self.frame_rendered(f, gpu_wall, shot_ms)?;
             self.script_step();
         }
-        self.maybe_save_prefs(false);
-        self.schedule_repaint();
         Ok(())
     }
 
@@ -1177,15 +1265,16 @@ impl Viewer {
     }
 
     /// After a rendered frame: its report, what the pacer learns from it, the statistics and the AO dumps.
-    fn frame_rendered(
-        &mut self,
-        plan: &pacer::FramePlan,
-        gpu_wall: f64,
-        shot_ms: f64,
-        presented_ms: f64,
-        mut split: stats::CpuSplit,
-        mut laps: stats::Laps,
-    ) -> Result<()> {
+    fn frame_rendered(&mut self, f: frames::Submitted, gpu_wall: f64, shot_ms: f64) -> Result<()> {
+        let frames::Submitted {
+            plan,
+            presented_ms,
+            mut split,
+            mut laps,
+            ui_started,
+            camera,
+            ..
+        } = f;
         let full = self.internal_size();
         let Some(r) = self.renderer.as_mut() else {
             return Ok(());
@@ -1197,8 +1286,8 @@ impl Viewer {
         let round_end = report.slice + 1 >= report.slices;
         let roughness = self.latency.dump_ao(r, stats_index, !plan.moving, round_end)?;
         split.finish = laps.lap();
-        let wall_ms = self.clock.ui_started.elapsed().as_secs_f64() * 1e3;
-        let interval_ms = self.clock.rendered();
+        let wall_ms = ui_started.elapsed().as_secs_f64() * 1e3;
+        let interval_ms = self.clock.rendered(ui_started);
         let (iw, ih) = plan.size;
         // The background screenshot's share of the frame is not the view's.
         let measured = pacer::FrameMeasurement {
@@ -1206,7 +1295,7 @@ impl Viewer {
             camera: Camera {
                 width: iw,
                 height: ih,
-                ..self.nav.cam
+                ..camera
             },
             view_ms: (wall_ms - shot_ms).max(0.0),
             // The wait for the swapchain's image (a display's vsync) is not the frame's cost.
@@ -1353,6 +1442,11 @@ impl Viewer {
                 }
             }
             self.script.done = true;
+            // The frames recorded after this one complete first: the screenshot renders with the view's
+            // renderer, and the statistics end with them.
+            if let Err(e) = self.complete_frames(0) {
+                self.fatal(format!("{e:#}"));
+            }
             if let Some(path) = self
                 .script
                 .screenshot
@@ -1371,7 +1465,8 @@ impl Viewer {
             }
             if let Some(rep) = &self.last_report {
                 log::info!(
-                    "scripted run: {n} frames, last {:.1} ms ({}), {} rays, view {}x{}, internal {:?}",
+                    "scripted run: {n} frames, last {:.1} ms ({}), {} rays, view {}x{}, internal {:?}, {} \
+                     completed after the next frame began",
                     rep.wall_ms,
                     if rep.gpu_ms.is_empty() {
                         "passes not timed".to_string()
@@ -1381,7 +1476,8 @@ impl Viewer {
                     rep.rays,
                     self.view_rect[2],
                     self.view_rect[3],
-                    self.renderer.as_ref().map(|r| r.size())
+                    self.renderer.as_ref().map(|r| r.size()),
+                    self.frames.overlapped
                 );
             }
             self.write_stats();
@@ -1434,6 +1530,7 @@ impl Viewer {
             &self.gpu.info,
             self.pacer.target_ms(pacing(&self.prefs, self.render_scale)),
             &self.scene_spec,
+            (self.frames.limit, self.frames.overlapped),
         ) {
             Ok(()) => log::info!(
                 "stats written to {} ({} frames, median moving {:.1} ms, still {:.1} ms)",
@@ -1460,6 +1557,10 @@ impl Viewer {
         }
         self.shut_down = true;
         self.maybe_save_prefs(true);
+        if let Err(e) = self.complete_frames(0) {
+            log::warn!("the last frames: {e:#}");
+        }
+        self.frames.clear();
         self.write_stats();
         self.gpu.wait_idle();
         self.shots = shots::Shots::default();

@@ -32,6 +32,10 @@ pub struct Prefs {
     /// The user's frame-time target; None: the device's (a frame per display refresh on a GPU, 100 ms on a
     /// software device: `pacer::DeviceModel::target_ms`).
     pub frame_target_ms: Option<f32>,
+    /// Frames submitted before the host waits for the oldest, 1 or 2; None: the device's (2 on a GPU, where
+    /// the host records a frame while the device runs the last; 1 on a software device, whose frames use the
+    /// host's cores: `frames_in_flight`). `HRTAO_FRAMES_IN_FLIGHT` overrides it (the window tests set 2).
+    pub frames_in_flight: Option<u32>,
     /// Files of older versions hold `target_ms`, always written, 100 unless the user changed it: read once by
     /// `load` (100 was the default, not a choice: the device's target; another value is the user's), never
     /// written.
@@ -61,6 +65,7 @@ impl Default for Prefs {
             rays_per_frame: super::pacer::DEFAULT_RAYS_PER_FRAME,
             auto_budget: true,
             frame_target_ms: None,
+            frames_in_flight: None,
             legacy_target_ms: None,
             screenshot_folder: None,
             screenshot_custom: false,
@@ -80,6 +85,18 @@ const LEGACY_DEFAULT_TARGET_MS: f32 = 100.0;
 
 /// The user's pictures directory: `$XDG_PICTURES_DIR`, else the XDG user directory (`user-dirs.dirs`), else
 /// `~/Pictures`; relative paths and a missing home give None.
+/// The frames in flight the viewer keeps: `HRTAO_FRAMES_IN_FLIGHT` (`env`) if it names 1 or 2, else the
+/// user's choice, else 2 on a GPU and 1 on a software device (whose frames run on the host's cores: recording
+/// the next frame meanwhile only takes cores from this one).
+pub fn frames_in_flight(env: Option<&str>, chosen: Option<u32>, software: bool) -> usize {
+    let max = super::present::MAX_FRAMES_IN_FLIGHT as u32;
+    let valid = |n: u32| (1..=max).contains(&n).then_some(n as usize);
+    env.and_then(|v| v.trim().parse().ok())
+        .and_then(valid)
+        .or_else(|| chosen.and_then(valid))
+        .unwrap_or(if software { 1 } else { 2 })
+}
+
 pub fn pictures_dir() -> Option<PathBuf> {
     let from_env = std::env::var_os("XDG_PICTURES_DIR").map(PathBuf::from);
     let home_pictures = dirs::home_dir().map(|h| h.join("Pictures"));
@@ -202,6 +219,18 @@ impl PrefsFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frames_in_flight_by_device_choice_and_environment() {
+        assert_eq!(frames_in_flight(None, None, false), 2);
+        assert_eq!(frames_in_flight(None, None, true), 1);
+        assert_eq!(frames_in_flight(None, Some(2), true), 2);
+        assert_eq!(frames_in_flight(None, Some(1), false), 1);
+        assert_eq!(frames_in_flight(Some("2"), Some(1), true), 2);
+        // Out of range or garbage: ignored.
+        assert_eq!(frames_in_flight(Some("3"), Some(7), true), 1);
+        assert_eq!(frames_in_flight(Some("x"), None, false), 2);
+    }
 
     #[test]
     fn round_trip_missing_and_corrupt() {

@@ -1,6 +1,8 @@
 //! The window's swapchain and the per-frame copy of the renderer's output into it: output buffer → internal
 //! image (render-scale resolution) → scaled blit into the swapchain image's 3D-view rectangle → egui on top.
-//! One frame in flight: every frame waits for its fence, which keeps synchronisation trivially correct.
+//! Frames in flight: each of `MAX_FRAMES_IN_FLIGHT` slots has its command buffer, its acquire semaphore and
+//! its fence; the viewer waits for a frame's fence before it reuses the slot or reads the frame's results
+//! (`submit`, `wait`), and every frame starts with a barrier after all work before it (`begin_frame`).
 use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Context, Result};
@@ -11,6 +13,18 @@ use hrtao_core::Gpu;
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
 use super::ui_layer::UiLayer;
+
+/// The most frames submitted and not yet waited for (`Prefs::frames_in_flight` chooses 1 or 2).
+pub const MAX_FRAMES_IN_FLIGHT: usize = 2;
+
+/// A frame slot's command buffer and synchronisation.
+struct FrameSync {
+    cmd: vk::CommandBuffer,
+    /// Signalled by the acquire of the slot's swapchain image, waited by its submission.
+    acquire: vk::Semaphore,
+    /// Signalled when the slot's submission completes; unsignalled between `wait` and the next `submit`.
+    fence: vk::Fence,
+}
 
 /// The internal (render-resolution) image the output buffer is copied into before the scaled blit.
 struct Internal {
@@ -35,11 +49,12 @@ pub struct Presenter {
     pub blit_ok: bool,
     pub linear_filter: bool,
     pub readback_ok: bool,
-    acquire: vk::Semaphore,
     render_done: Vec<vk::Semaphore>,
-    fence: vk::Fence,
+    /// One per frame in flight, used in turn.
+    slots: Vec<FrameSync>,
+    /// The slot of the frame being drawn.
+    current: usize,
     pub pool: vk::CommandPool,
-    pub cmd: vk::CommandBuffer,
     internal: Option<Internal>,
     /// egui over the view, with a framebuffer per swapchain image.
     pub ui: UiLayer,
@@ -97,15 +112,19 @@ impl Presenter {
                     .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
                 None,
             )?;
-            let cmd = gpu.device.allocate_command_buffers(
+            let cmds = gpu.device.allocate_command_buffers(
                 &vk::CommandBufferAllocateInfo::default()
                     .command_pool(pool)
-                    .command_buffer_count(1),
-            )?[0];
-            let acquire = gpu
-                .device
-                .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)?;
-            let fence = gpu.device.create_fence(&vk::FenceCreateInfo::default(), None)?;
+                    .command_buffer_count(MAX_FRAMES_IN_FLIGHT as u32),
+            )?;
+            let mut slots = Vec::new();
+            for cmd in cmds {
+                let acquire = gpu
+                    .device
+                    .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)?;
+                let fence = gpu.device.create_fence(&vk::FenceCreateInfo::default(), None)?;
+                slots.push(FrameSync { cmd, acquire, fence });
+            }
             Ok(Presenter {
                 gpu: gpu.clone(),
                 surface_loader,
@@ -119,11 +138,10 @@ impl Presenter {
                 blit_ok: false,
                 linear_filter: false,
                 readback_ok: false,
-                acquire,
                 render_done: Vec::new(),
-                fence,
+                slots,
+                current: 0,
                 pool,
-                cmd,
                 internal: None,
                 ui,
             })
@@ -267,7 +285,7 @@ impl Presenter {
             match self.swapchain_loader.acquire_next_image(
                 self.swapchain,
                 u64::MAX,
-                self.acquire,
+                self.slots[self.current].acquire,
                 vk::Fence::null(),
             ) {
                 Ok((i, suboptimal)) => {
@@ -625,24 +643,68 @@ impl Presenter {
         }
     }
 
-    /// Submits `cmd` (waiting for the acquired image) and waits for it; `present` shows image `index` next.
-    pub fn submit_and_wait(&mut self, index: u32) -> Result<()> {
+    /// The command buffer of the frame being drawn, reset and begun, its first command a barrier after all
+    /// work submitted before it (frames still in flight write the images and buffers this one reuses).
+    pub fn begin_frame(&mut self) -> Result<vk::CommandBuffer> {
+        let cmd = self.slots[self.current].cmd;
         let d = &self.gpu.device;
         unsafe {
-            let waits = [self.acquire];
+            d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
+            let info =
+                vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            d.begin_command_buffer(cmd, &info)?;
+            let barrier = [vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+                .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)];
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::DependencyFlags::empty(),
+                &barrier,
+                &[],
+                &[],
+            );
+        }
+        Ok(cmd)
+    }
+
+    /// Submits the frame being drawn (waiting for its acquired image; `present` shows image `index` next) and
+    /// moves to the next slot. Returns the submitted slot, for `wait`. The next slot must have been waited for.
+    pub fn submit(&mut self, index: u32) -> Result<usize> {
+        let d = &self.gpu.device;
+        let slot = self.current;
+        let f = &self.slots[slot];
+        unsafe {
+            let waits = [f.acquire];
             let stages = [vk::PipelineStageFlags::TRANSFER];
             let signals = [self.render_done[index as usize]];
-            let cmds = [self.cmd];
+            let cmds = [f.cmd];
             let submit = [vk::SubmitInfo::default()
                 .wait_semaphores(&waits)
                 .wait_dst_stage_mask(&stages)
                 .command_buffers(&cmds)
                 .signal_semaphores(&signals)];
-            d.queue_submit(self.gpu.queue, &submit, self.fence)
+            d.queue_submit(self.gpu.queue, &submit, f.fence)
                 .map_err(|e| anyhow!("vkQueueSubmit: {e}"))?;
-            d.wait_for_fences(&[self.fence], true, 600_000_000_000)
+        }
+        self.current = (self.current + 1) % self.slots.len();
+        Ok(slot)
+    }
+
+    /// Whether the frame submitted from `slot` has completed (without waiting).
+    pub fn done(&self, slot: usize) -> bool {
+        unsafe { self.gpu.device.get_fence_status(self.slots[slot].fence) }.unwrap_or(false)
+    }
+
+    /// Waits for the frame submitted from `slot` to complete (its results may be read, its slot reused).
+    pub fn wait(&mut self, slot: usize) -> Result<()> {
+        let d = &self.gpu.device;
+        let fence = self.slots[slot].fence;
+        unsafe {
+            d.wait_for_fences(&[fence], true, 600_000_000_000)
                 .map_err(|e| anyhow!("vkWaitForFences: {e}"))?;
-            d.reset_fences(&[self.fence])?;
+            d.reset_fences(&[fence])?;
         }
         Ok(())
     }
@@ -684,13 +746,9 @@ impl Presenter {
                 self.surface_loader.destroy_surface(self.surface, None);
                 self.surface = vk::SurfaceKHR::null();
             }
-            if self.acquire != vk::Semaphore::null() {
-                gpu.device.destroy_semaphore(self.acquire, None);
-                self.acquire = vk::Semaphore::null();
-            }
-            if self.fence != vk::Fence::null() {
-                gpu.device.destroy_fence(self.fence, None);
-                self.fence = vk::Fence::null();
+            for f in self.slots.drain(..) {
+                gpu.device.destroy_semaphore(f.acquire, None);
+                gpu.device.destroy_fence(f.fence, None);
             }
             if self.pool != vk::CommandPool::null() {
                 gpu.device.destroy_command_pool(self.pool, None);

@@ -145,13 +145,13 @@ impl FrameClock {
         self.epoch.elapsed()
     }
 
-    /// A frame was rendered: milliseconds from the previous rendered frame's UI pass to this one's (0 for the
-    /// first).
-    pub fn rendered(&mut self) -> f64 {
-        let interval = self.last_rendered_start.map_or(0.0, |t| {
-            self.ui_started.saturating_duration_since(t).as_secs_f64() * 1e3
-        });
-        self.last_rendered_start = Some(self.ui_started);
+    /// A frame whose UI pass started at `started` was rendered: milliseconds from the previous rendered
+    /// frame's UI pass to this one's (0 for the first).
+    pub fn rendered(&mut self, started: std::time::Instant) -> f64 {
+        let interval = self
+            .last_rendered_start
+            .map_or(0.0, |t| started.saturating_duration_since(t).as_secs_f64() * 1e3);
+        self.last_rendered_start = Some(started);
         interval
     }
 }
@@ -173,6 +173,9 @@ struct StatsFile<'a> {
     median_moving_cpu_ms: Option<CpuSplit>,
     /// A background screenshot (--screenshot-size) written during the run.
     screenshot: Option<&'a ShotSummary>,
+    /// Frames the viewer kept in flight (1 or 2), and how many completed after the next frame began.
+    frames_in_flight: usize,
+    overlapped_frames: u64,
 }
 
 pub struct StatsLog {
@@ -205,7 +208,15 @@ impl StatsLog {
         )
     }
 
-    pub fn write(&self, device: &DeviceInfo, target_ms: f64, scene: &str) -> Result<()> {
+    /// Writes the file; `in_flight`: the frames in flight kept, and those completed after the next frame
+    /// began.
+    pub fn write(
+        &self,
+        device: &DeviceInfo,
+        target_ms: f64,
+        scene: &str,
+        in_flight: (usize, u64),
+    ) -> Result<()> {
         let file = StatsFile {
             device: &device.name,
             software: device.is_software,
@@ -219,6 +230,8 @@ impl StatsLog {
                 self.frames.iter().filter(|f| f.moving).map(|f| &f.cpu_ms),
             ),
             screenshot: self.screenshot.as_ref(),
+            frames_in_flight: in_flight.0,
+            overlapped_frames: in_flight.1,
         };
         if let Some(dir) = self.path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;

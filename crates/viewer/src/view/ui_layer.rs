@@ -67,9 +67,9 @@ impl UiLayer {
             // A UNORM swapchain's images hold sRGB-encoded values: `prepare` hands the renderer colours that
             // its decoding turns back into egui's, so its fragments need no encoding (ui_colors.rs). An `_SRGB`
             // swapchain encodes the renderer's linear output itself.
-            // One frame in flight: every frame waits for its fence (present.rs).
+            // Its vertex buffers, one set per frame in flight (present.rs).
             Options {
-                in_flight_frames: 1,
+                in_flight_frames: super::present::MAX_FRAMES_IN_FLIGHT,
                 srgb_framebuffer: true,
                 ..Options::default()
             },

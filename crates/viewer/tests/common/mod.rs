@@ -4,6 +4,10 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// Window tests run with two frames in flight (`HRTAO_FRAMES_IN_FLIGHT`; a software device's default is one),
+/// so that lavapipe and the validation layer exercise the frames' overlap.
+pub const FRAMES_IN_FLIGHT: &str = "2";
+
 pub fn display_available() -> bool {
     let ok = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
     if !ok {
@@ -110,6 +114,7 @@ impl Running {
             .arg("--no-config")
             .current_dir(cwd)
             .env("HRTAO_VALIDATION", "1")
+            .env("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)
             .env("RUST_LOG", "info")
             .stderr(std::process::Stdio::piped())
             .stdout(std::process::Stdio::null());
