@@ -5,6 +5,7 @@
 //!
 //! `cargo run -p bench-report -- docs/bench --markdown docs/benchmarks.md`
 mod first_frame_report;
+mod formats_report;
 mod latency_report;
 mod plot;
 mod report;

@@ -23,6 +23,7 @@ mod obj_load;
 mod ply_load;
 mod scene;
 mod stl_load;
+mod threemf_colors;
 mod threemf_load;
 mod tree;
 

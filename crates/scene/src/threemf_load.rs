@@ -1,8 +1,8 @@
 //! 3MF loader (the 3D-printing and CAD exchange format: a zip of XML model parts), through the `threemf` crate:
 //! each object with a mesh becomes one mesh, each build item (and each component of a composed object, through
 //! any depth) one instance of it with the composed transform, so a part placed many times is stored once.
-//! The model's unit is kept. Colours are not read yet: the threemf crate parses no core `<basematerials>`
-//! (objects shade in the default colour).
+//! The model's unit is kept, and each object's colour (`threemf_colors`: base materials and colour groups,
+//! which the threemf crate does not parse).
 //! Shading normals: 3MF stores none; meshes get smooth normals by the load's crease angle, as STL and PLY.
 //!
 //! The archive is read through the guard like every model file, and the decompressed size of its model parts
@@ -54,6 +54,7 @@ pub fn load_3mf(
         budget.reserve(declared.saturating_mul(XML_MEMORY_FACTOR), "the 3MF model parts")?;
     }
     opts.check_cancel(path)?;
+    let colors = crate::threemf_colors::object_colors(&bytes).map_err(err)?;
     let models = threemf::read(Cursor::new(bytes)).map_err(|e| err(format!("cannot read: {e}")))?;
     opts.check_cancel(path)?;
     let name = path
@@ -99,7 +100,11 @@ pub fn load_3mf(
                 let m = match mesh_of.get(&id) {
                     Some(&m) => m,
                     None => {
-                        let prim = primitive(mesh).map_err(|m| err(format!("object {id}: {m}")))?;
+                        let color = colors
+                            .get(&id)
+                            .copied()
+                            .unwrap_or(crate::scene::DEFAULT_BASE_COLOR);
+                        let prim = primitive(mesh, color).map_err(|m| err(format!("object {id}: {m}")))?;
                         let m = scene.meshes.len() as u32;
                         scene.meshes.push(Mesh {
                             name: object.name.clone().unwrap_or_else(|| format!("object {id}")),
@@ -181,7 +186,7 @@ fn unit_m(u: &threemf::model::Unit) -> f64 {
 }
 
 /// An object's mesh: every triangle's corners must name a vertex, every coordinate be finite.
-fn primitive(mesh: &threemf::model::Mesh) -> Result<Primitive, String> {
+fn primitive(mesh: &threemf::model::Mesh, base_color: [f32; 4]) -> Result<Primitive, String> {
     let positions: Vec<[f32; 3]> = mesh
         .vertices
         .vertex
@@ -204,7 +209,7 @@ fn primitive(mesh: &threemf::model::Mesh) -> Result<Primitive, String> {
     Ok(Primitive {
         positions,
         indices,
-        base_color: crate::scene::DEFAULT_BASE_COLOR,
+        base_color,
         double_sided: false,
         normals: Vec::new(),
     })

@@ -58,8 +58,9 @@ fn instance_moments(s: &hrtao_scene::Scene) -> Vec<(Vec3, f32)> {
 }
 
 /// rod.glb as 3MF: 29 build items of 3 objects load as 29 instances of 3 meshes, each where rod.glb has it
-/// (transforms composed in the 3MF's row-vector order). Fails with
-/// the transform read transposed (vertices move) and with one mesh per build item (instancing lost).
+/// (transforms composed in the 3MF's row-vector order), in rod.glb's colours (base materials). Fails with
+/// the transform read transposed (vertices move), with one mesh per build item (instancing lost) and without
+/// `threemf_colors` (the default grey).
 #[test]
 fn rod_as_3mf_loads_to_rods_instances_and_geometry() {
     let rod = hrtao_scene::load(common::test_scene("rod").to_str().unwrap(), &mut |_| {}).unwrap();
@@ -95,6 +96,22 @@ fn rod_as_3mf_loads_to_rods_instances_and_geometry() {
         );
     }
     assert_eq!(s.tree.len(), 30, "the file's node and its 29 build items");
+    // Each object's base material (its sRGB display colour) is its mesh's colour.
+    for m in &s.meshes {
+        let want = rod
+            .meshes
+            .iter()
+            .find(|r| r.name == m.name)
+            .unwrap_or_else(|| panic!("mesh {} of rod.glb", m.name))
+            .primitives[0]
+            .base_color;
+        let got = m.primitives[0].base_color;
+        assert!(
+            (0..4).all(|c| (got[c] - want[c]).abs() < 0.005),
+            "{}: colour {got:?}, rod.glb's {want:?}",
+            m.name
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
