@@ -27,8 +27,15 @@ pub(super) struct Submitted {
     pub laps: stats::Laps,
     /// When its UI pass started: its wall time runs from there to its completion.
     pub ui_started: Instant,
+    /// When it was submitted.
+    pub submitted: Instant,
+    /// Its device time: the wait for its fence with one frame in flight, else from its submission to its
+    /// completion (`complete`).
+    pub device_ms: f64,
     /// The view it rendered (the camera may have moved on by its completion).
     pub camera: hrtao_core::Camera,
+    /// The input it answers (`Latency::take_input` when it was recorded): the first and last event's stamps.
+    pub input: Option<(f64, f64)>,
 }
 
 /// The frames in flight, oldest first, and how many may be.

@@ -1101,6 +1101,8 @@ impl Viewer {
             _ => None,
         };
         let (src, rendered) = self.record_view_frame(cmd, &plan, script_running)?;
+        // The input this frame answers: what came before it was recorded (not before it completed).
+        let input = rendered.then(|| self.latency.take_input(plan.changed)).flatten();
         if let (true, Some((_, w, h))) = (self.presenter.blit_ok, src) {
             self.presenter.ensure_internal(w, h)?;
         }
@@ -1117,6 +1119,7 @@ impl Viewer {
         }
         split.record += laps.lap();
         let slot = self.presenter.submit(index)?;
+        let submitted = Instant::now();
         // One frame in flight: the frame completes before it is presented.
         let keep = self.frames_to_keep();
         if keep == 0 {
@@ -1139,6 +1142,9 @@ impl Viewer {
             split,
             laps,
             ui_started: self.clock.ui_started,
+            submitted,
+            device_ms: split.gpu_wait,
+            input,
             camera: Camera {
                 width: plan.size.0,
                 height: plan.size.1,
@@ -1190,6 +1196,12 @@ impl Viewer {
     /// After a frame completed: the background screenshot's tile, the window capture, the view's report.
     fn complete(&mut self, mut f: frames::Submitted) -> Result<()> {
         let gpu_wall = f.t0.elapsed().as_secs_f64() * 1e3;
+        if !f.waited {
+            // Submitted, presented, completed later: its device time runs from the submission to now (at most:
+            // the host may have found it complete late), the wait its part after the present.
+            f.device_ms = f.submitted.elapsed().as_secs_f64() * 1e3;
+            f.split.gpu_wait = (f.device_ms - f.split.present).max(0.0);
+        }
         self.frames.overlapped += (f.ui_started < self.clock.ui_started) as u64;
         let shot_ms = if f.shot {
             self.finish_shot_frame(f.rendered)
@@ -1273,6 +1285,8 @@ impl Viewer {
             mut laps,
             ui_started,
             camera,
+            input,
+            device_ms,
             ..
         } = f;
         let full = self.internal_size();
@@ -1281,7 +1295,7 @@ impl Viewer {
         };
         let report = r.finish_frame(gpu_wall)?;
         let converged = pacer::image_converged(&report) && r.size() == full;
-        let input_ms = self.latency.take_input(plan.changed);
+        let input_ms = input;
         let stats_index = self.script.stats.as_ref().map_or(0, |log| log.frames.len());
         let round_end = report.slice + 1 >= report.slices;
         let roughness = self.latency.dump_ao(r, stats_index, !plan.moving, round_end)?;
@@ -1306,7 +1320,7 @@ impl Viewer {
                 .iter()
                 .find(|(name, _)| name == hrtao_core::bench_json::HRTAO_PASSES[1])
                 .map(|&(_, ms)| ms),
-            device_ms: split.gpu_wait,
+            device_ms,
             render_ms: gpu_wall,
             slices: report.slices,
             shooting: self.shots.rendering(),
