@@ -163,7 +163,7 @@ fn asset_metadata(doc: &gltf::Document) -> Vec<(String, String)> {
 /// Runs the gltf crate's validation (index references must be in range: the document
 /// accessors panic otherwise), tolerating two common, harmless spec violations: missing
 /// POSITION `min`/`max` (we compute bounds ourselves) and required extensions that do not
-/// change geometry (materials, lights, texture transforms, quantization, which we decode).
+/// change geometry (`IGNORABLE_REQUIRED`; the compressions and quantization are decoded).
 fn validate_document(doc: &gltf::Document) -> Result<(), String> {
     use gltf::json::validation::{Error as VError, Validate};
     let root = doc.as_json();
@@ -176,9 +176,14 @@ fn validate_document(doc: &gltf::Document) -> Result<(), String> {
             && (p.ends_with(".min")
                 || p.ends_with(".max")
                 || (p.starts_with("accessors[") && p.ends_with(".bufferView"))))
-            || (e == VError::Unsupported && p.starts_with("extensionsRequired"));
+            || (e == VError::Unsupported && p.starts_with("extensionsRequired") && ignorable(&p));
         if harmless {
             log::warn!("ignoring glTF validation issue {p}: {e}");
+        } else if e == VError::Unsupported && p.starts_with("extensionsRequired") {
+            let name = required_name(&p).unwrap_or(&p);
+            errors.push(format!(
+                "the file requires the extension {name}, which hrtao does not implement"
+            ));
         } else {
             errors.push(format!("{p}: {e}"));
         }
@@ -190,6 +195,38 @@ fn validate_document(doc: &gltf::Document) -> Result<(), String> {
         errors.truncate(10);
         Err(format!("invalid glTF ({n} problems): {}", errors.join("; ")))
     }
+}
+
+/// Required extensions that change only what hrtao does not draw (materials beyond the base colour, textures,
+/// lights): a file that requires them still has the geometry and its AO. Any other required extension that
+/// the gltf crate does not know (and the loader does not decode) may change the geometry: the file is refused,
+/// as glTF 2.0 §3.12 asks of a loader that does not implement a required extension.
+const IGNORABLE_REQUIRED: [&str; 5] = [
+    "KHR_materials_",
+    "KHR_texture_",
+    "EXT_texture_",
+    "KHR_lights_",
+    "EXT_lights_",
+];
+
+/// Required extensions the loader decodes itself (`gltf_compressed`), unknown to the gltf crate.
+const DECODED_REQUIRED: [&str; 4] = [
+    gltf_compressed::DRACO,
+    gltf_compressed::MESHOPT[0],
+    gltf_compressed::MESHOPT[1],
+    "KHR_mesh_quantization",
+];
+
+/// Whether the required extension the validation path `p` names is decoded or one of `IGNORABLE_REQUIRED`.
+fn ignorable(p: &str) -> bool {
+    required_name(p).is_some_and(|name| {
+        DECODED_REQUIRED.contains(&name) || IGNORABLE_REQUIRED.iter().any(|prefix| name.starts_with(prefix))
+    })
+}
+
+/// The extension a validation path names: `extensionsRequired[0] = "NAME"`.
+fn required_name(p: &str) -> Option<&str> {
+    p.split_once("= \"")?.1.strip_suffix('"')
 }
 
 /// Rejects truncated/garbled GLB headers before the gltf crate sees them (its reader

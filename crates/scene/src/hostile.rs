@@ -13,6 +13,8 @@ pub enum Expect {
     Image,
 }
 
+mod formats;
+
 #[derive(Clone, Debug)]
 pub struct HostileCase {
     pub name: &'static str,
@@ -558,6 +560,7 @@ pub fn write_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
         });
     }
     cases.extend(write_reference_cases(dir, &good)?);
+    cases.extend(formats::write(dir)?);
     Ok(cases)
 }
 
