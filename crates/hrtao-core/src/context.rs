@@ -259,7 +259,8 @@ fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
 }
 
 const LAVAPIPE_HINT: &str =
-    "hrtao needs a Vulkan device with VK_KHR_ray_query and VK_KHR_acceleration_structure. \
+    "hrtao needs a Vulkan device with VK_KHR_acceleration_structure and VK_KHR_ray_query or \
+VK_KHR_ray_tracing_pipeline. \
 Without such a GPU, install Mesa's lavapipe (software Vulkan, Mesa >= 23): on Debian 12 \
 `apt-get install -t bookworm-backports mesa-vulkan-drivers`, on Ubuntu `apt-get install mesa-vulkan-drivers` \
 (or run scripts/install-deps.sh).";
@@ -428,7 +429,8 @@ pub fn list_devices(options: &ContextOptions) -> Result<Vec<DeviceListing>> {
 }
 
 impl Gpu {
-    /// Creates the instance and the device. Picks a hardware GPU with ray queries when present, else lavapipe.
+    /// Creates the instance and the device. Picks a hardware GPU when present, else lavapipe; rays are traced by
+    /// `RayBackend::choose`.
     pub fn new(options: &ContextOptions) -> Result<Arc<Gpu>> {
         unsafe { Self::create(options) }
     }
