@@ -1,6 +1,6 @@
-//! `--ray-backend query|pipeline` in `hrtao render` and `hrtao bench`: each runs with each backend, validation
-//! silent, the device reports the backend it traced with, and per-pixel RTAO renders the same image by both (the
-//! backends trace the same rays: crates/hrtao-core/tests/ray_backends.rs compares every tracing pass).
+//! `--ray-backend query|pipeline` in `hrtao render`, `hrtao bench` and `hrtao view`: each runs with each backend,
+//! validation silent, the device reports the backend it traced with, and per-pixel RTAO renders the same image by
+//! both (the backends trace the same rays: crates/hrtao-core/tests/ray_backends.rs compares every tracing pass).
 /// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
 #[path = "../../scene/tests/common/mod.rs"]
 mod common;
@@ -161,4 +161,34 @@ fn an_unknown_backend_is_refused() {
         .expect("run hrtao");
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("query, pipeline"));
+}
+
+/// The viewer's scripted run with each backend (where a display is: the window tests run under xvfb-run): it
+/// exits 0 (a scripted run exits 1 on any validation message) and saves its screenshot.
+#[test]
+fn view_runs_with_each_backend() {
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        eprintln!("skipped: no display");
+        return;
+    }
+    let dir = tmp_dir();
+    for backend in ["query", "pipeline"] {
+        let shot = dir.join(format!("view-{backend}.png"));
+        hrtao(&[
+            "view",
+            "--no-config",
+            "--size",
+            "160x90",
+            "--no-panel",
+            "--frames",
+            "3",
+            "--ray-backend",
+            backend,
+            "--screenshot",
+            shot.to_str().unwrap(),
+            "--exit",
+        ]);
+        let meta = std::fs::metadata(&shot).unwrap_or_else(|e| panic!("{backend}: no screenshot: {e}"));
+        assert!(meta.len() > 1000, "{backend}: screenshot of {} bytes", meta.len());
+    }
 }
