@@ -12,6 +12,7 @@
 // + push.y >> 16) (0xffff: to the end of the budget), and push.z, push.w the queue entries it takes (bands of
 // rows of the queue where one ray for every pixel is over the bound). A chunk claims its own rays from the
 // cell's sequence and adds its counts, so the chunks of a budget add up to the budget traced at once.
+#define HRTAO_TRACES
 #include "common.glsl"
 #include "ray_target.glsl"
 #include "near_field.glsl"

@@ -4,7 +4,7 @@
 #define HRTAO_CLEAR_GLSL
 
 void clear_frame_counters() {
-    if (gl_GlobalInvocationID.x == 0 && gl_GlobalInvocationID.y == 0) {
+    if (THREAD_ID.x == 0 && THREAD_ID.y == 0) {
         StatsRef stats = StatsRef(g.stats);
         for (uint i = 0; i < STAT_PER_FRAME; ++i) stats.counters[i] = 0u;
         for (uint i = 0; i < RAYS_COUNT; ++i) stats.rays[i] = uint64_t(0);

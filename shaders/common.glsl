@@ -3,20 +3,33 @@
 #ifndef HRTAO_COMMON_GLSL
 #define HRTAO_COMMON_GLSL
 
-#extension GL_EXT_ray_query : require
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference2 : require
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_KHR_memory_scope_semantics : require
+// A pass that traces rays `#define`s HRTAO_TRACES before including this file; build.rs compiles it as a compute
+// shader with ray queries and, where the device traces with pipelines, also as a ray-generation shader
+// (HRTAO_RAYGEN). Passes that do not trace declare no ray-tracing capability at all.
+#if defined(HRTAO_RAYGEN)
+#extension GL_EXT_ray_tracing : require
+#elif defined(HRTAO_TRACES)
+#extension GL_EXT_ray_query : require
+#endif
 
 #include "gpu_types.glsl"
 #include "hash.glsl"
 
+// The pass's thread: a compute shader's global invocation, or a ray-generation shader's launch index (launched
+// over the compute dispatch's groups times WORKGROUP_SIZE in x and y: recorder.rs), the same for every pixel.
+#ifdef HRTAO_RAYGEN
+#define THREAD_ID gl_LaunchIDEXT
+#else
 layout(local_size_x = WORKGROUP_SIZE, local_size_y = WORKGROUP_SIZE, local_size_z = 1) in;
+#define THREAD_ID gl_GlobalInvocationID
+#endif
 
-layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
 layout(set = 0, binding = 1, scalar) readonly buffer GlobalsBlock { FrameGlobals g; };
 layout(push_constant) uniform Push { uvec4 push; };
 
@@ -48,7 +61,7 @@ uint lattice() { return max(g.lattice, 1u); }
 // The pixel of this invocation (passes over the image are dispatched over the frame's lattice), or false when
 // it lies outside the image.
 bool pixel_coords(out uvec2 pix, out uint index) {
-    pix = gl_GlobalInvocationID.xy * lattice() + uvec2(g.lattice_x, g.lattice_y);
+    pix = THREAD_ID.xy * lattice() + uvec2(g.lattice_x, g.lattice_y);
     index = pix.y * g.width + pix.x;
     return pix.x < g.width && pix.y < g.height;
 }
@@ -59,9 +72,17 @@ ivec2 neighbour(uvec2 pix, ivec2 d) { return ivec2(pix) + d * int(lattice()); }
 
 // The entry of this invocation in a queue of `count` pixels, in a pass dispatched indirectly over it
 // (queue_args.comp: 2-D groups of WORKGROUP_SIZE^2 threads).
+// A ray-generation shader numbers its launch index as the compute shader's groups and local invocations would.
 bool queue_entry(uint count, out uint q) {
+#ifdef HRTAO_RAYGEN
+    uvec2 group_id = gl_LaunchIDEXT.xy / WORKGROUP_SIZE;
+    uvec2 local = gl_LaunchIDEXT.xy % WORKGROUP_SIZE;
+    uint group = group_id.y * (gl_LaunchSizeEXT.x / WORKGROUP_SIZE) + group_id.x;
+    q = group * (WORKGROUP_SIZE * WORKGROUP_SIZE) + local.y * WORKGROUP_SIZE + local.x;
+#else
     uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
     q = group * (WORKGROUP_SIZE * WORKGROUP_SIZE) + gl_LocalInvocationIndex;
+#endif
     return q < count;
 }
 
@@ -162,24 +183,8 @@ uvec2 pixel_shift(uint index) {
     return uvec2(h_check(index * 2u + 0x9e3779b9u), h_index(index * 2u + 1u + 0x7f4a7c15u));
 }
 
-// The distance of some hit (not necessarily the closest: the query stops at the first it finds) on the segment
-// [tmin, tmax] of the ray from p along dir, or -1 when the segment hits nothing (no section clipping).
-float segment_first_hit(vec3 p, vec3 dir, float tmin, float tmax) {
-    if (tmax <= tmin) return -1.0;
-    rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, p, tmin, dir, tmax);
-    while (rayQueryProceedEXT(rq)) {
-    }
-    if (rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT) return -1.0;
-    return rayQueryGetIntersectionTEXT(rq, true);
-}
-
-// True when the ray from p along dir hits nothing within tmax (nor where a section plane cuts it away: the ray
-// is clipped to the kept region).
-bool ray_unoccluded(vec3 p, vec3 dir, float tmax) {
-    float tmin = 0.0;
-    if (!section_clip(p, dir, tmin, tmax)) return true;
-    return segment_first_hit(p, dir, tmin, tmax) < 0.0;
-}
+#ifdef HRTAO_TRACES
+#include "trace.glsl"
+#endif
 
 #endif

@@ -9,7 +9,7 @@
 
 void main() {
     ContactDetailRef cd = ContactDetailRef(packUint2x32(push.zw));
-    if (gl_GlobalInvocationID.xy == uvec2(0u)) {
+    if (THREAD_ID.xy == uvec2(0u)) {
         cd.sums[0] = int64_t(0);
         cd.sums[1] = int64_t(0);
     }

@@ -24,6 +24,7 @@ bool near_field_on() {
     return (g.flags & FLAG_NEAR_FIELD) != 0u;
 }
 
+#ifdef HRTAO_TRACES
 // As ray_unoccluded, telling also whether the ray hits within r_near: the paper's first-hit query over
 // [0, tmax]; only when the hit it found lies beyond r_near, a second first-hit query over [0, r_near]. An open
 // ray and a ray whose first found hit is near cost what they cost the paper. (On lavapipe a closest-hit query
@@ -44,6 +45,7 @@ uint trace_ao_ray(vec3 origin, vec3 dir) {
     if (near_field_on()) return ray_escape(origin, dir, NEAR_FRACTION * g.ao_radius, g.ao_radius);
     return ray_unoccluded(origin, dir, g.ao_radius) ? RAY_OPEN : RAY_NEAR_HIT;
 }
+#endif
 
 // The correction of pixel `pix`'s cell estimate: its own near-open fraction minus its cells' (`cell_near`, the
 // interpolated near-open fraction) moves the estimate toward the pixel's contact shadow. The residual r is shrunk

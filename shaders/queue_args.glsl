@@ -1,7 +1,8 @@
 // The indirect dispatch size of a queue of pixels, written by the last work group of the pass that fills the
 // queue (no dispatch of its own). Groups are laid out in 2-D so no dimension exceeds 65,535 (the portable
 // limit), e.g. for 3840x2160 screenshots; a pass dispatched over the queue reads its entry with `queue_entry`
-// (common.glsl). The word after a queue's three arguments counts the work groups done (clear.glsl zeroes it).
+// (common.glsl). The word after a queue's three arguments counts the work groups done (clear.glsl zeroes it);
+// the launch size of a ray-tracing pipeline over the same groups follows at QUEUE_TRACE_ARGS.
 #ifndef HRTAO_QUEUE_ARGS_GLSL
 #define HRTAO_QUEUE_ARGS_GLSL
 
@@ -22,6 +23,10 @@ void write_queue_args(uint counter, uint o) {
     args.v[o] = min(groups, MAX_GROUPS_X);
     args.v[o + 1u] = (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
     args.v[o + 2u] = 1u;
+    // The same groups as a ray-generation launch (recorder.rs, the ray-tracing pipeline backend).
+    args.v[o + QUEUE_TRACE_ARGS] = args.v[o] * WORKGROUP_SIZE;
+    args.v[o + QUEUE_TRACE_ARGS + 1u] = args.v[o + 1u] * WORKGROUP_SIZE;
+    args.v[o + QUEUE_TRACE_ARGS + 2u] = 1u;
 }
 
 #endif

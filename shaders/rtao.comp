@@ -5,6 +5,7 @@
 // One dispatch traces one chunk of the pass (dispatch_plan.rs, so that none trips a GPU watchdog): rays
 // [push.y & 0xffff, + push.y >> 16) of every pixel (0xffff: to the end) of push.w rows from row push.z. The chunk
 // with the first ray writes PixelRays, later ones add to it: the counts are those of one dispatch.
+#define HRTAO_TRACES
 #include "common.glsl"
 
 void main() {
@@ -12,8 +13,8 @@ void main() {
     uint count = push.y >> 16;
     uint end = count == 0xffffu ? g.rays_per_pixel : min(first + count, g.rays_per_pixel);
     // Groups round the band up to whole work groups: the threads past its push.w rows are the next band's.
-    if (gl_GlobalInvocationID.y >= push.w) return;
-    uvec2 pix = (gl_GlobalInvocationID.xy + uvec2(0u, push.z)) * lattice() + uvec2(g.lattice_x, g.lattice_y);
+    if (THREAD_ID.y >= push.w) return;
+    uvec2 pix = (THREAD_ID.xy + uvec2(0u, push.z)) * lattice() + uvec2(g.lattice_x, g.lattice_y);
     if (pix.x >= g.width || pix.y >= g.height) return;
     uint index = pix.y * g.width + pix.x;
     GPixel px = GBufferRef(g.gbuffer).px[index];

@@ -1,6 +1,7 @@
 //! Generates `gpu_types.glsl` from `src/gpu_types.rs`, the young map's corrections (`corrections.glsl` and
 //! `corrections.rs`, see `write_corrections`) from the shaders that declare one, and compiles every
-//! `shaders/*.comp`, `*.vert` and `*.frag` to SPIR-V with glslc.
+//! `shaders/*.comp`, `*.vert`, `*.frag`, `*.rchit` and `*.rmiss` to SPIR-V with glslc, and each pass that traces
+//! rays also as a ray-generation shader (`<name>.rgen`, trace.glsl).
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -87,15 +88,32 @@ fn main() {
     for entry in std::fs::read_dir(&shader_dir).unwrap() {
         let path = entry.unwrap().path();
         println!("cargo:rerun-if-changed={}", path.display());
-        // Compute shaders are named by their stem, graphics stages by their file name (`visibility.vert`).
+        // Compute shaders are named by their stem, other stages by their file name (`visibility.vert`,
+        // `trace_hit.rchit`).
         let name = match path.extension().and_then(|e| e.to_str()) {
             Some("comp") => path.file_stem(),
-            Some("vert" | "frag") => path.file_name(),
+            Some("vert" | "frag" | "rchit" | "rmiss") => path.file_name(),
             _ => None,
         };
         if let Some(name) = name.and_then(|n| n.to_str()) {
-            compile(&path, name, &shader_dir, &out_dir);
+            compile(&path, name, &shader_dir, &out_dir, &[]);
             names.push(name.to_string());
+            // A pass that traces (`#define HRTAO_TRACES`, trace.glsl) is also compiled as the ray-generation
+            // shader of its ray-tracing pipeline, `<name>.rgen`, from the same source.
+            let text = std::fs::read_to_string(&path).unwrap();
+            if path.extension().is_some_and(|e| e == "comp")
+                && text.lines().any(|l| l.trim() == TRACES_MARKER)
+            {
+                let rgen = format!("{name}.rgen");
+                compile(
+                    &path,
+                    &rgen,
+                    &shader_dir,
+                    &out_dir,
+                    &["-fshader-stage=rgen", "-DHRTAO_RAYGEN"],
+                );
+                names.push(rgen);
+            }
         }
     }
     names.sort();
@@ -111,6 +129,9 @@ fn main() {
     table.push_str("];\n");
     std::fs::write(out_dir.join("shaders.rs"), table).unwrap();
 }
+
+/// The line by which a pass's shader says it traces rays (trace.glsl).
+const TRACES_MARKER: &str = "#define HRTAO_TRACES";
 
 /// The line by which a shader file declares a correction of the young map's corrections pass, with the place it
 /// takes in each phase: `// @correction order=N`.
@@ -227,10 +248,11 @@ fn write_corrections(shader_dir: &Path, out_dir: &Path) {
     std::fs::write(out_dir.join("corrections.rs"), rust).unwrap();
 }
 
-fn compile(src: &Path, name: &str, include: &Path, out_dir: &Path) {
+fn compile(src: &Path, name: &str, include: &Path, out_dir: &Path, extra: &[&str]) {
     let dst = out_dir.join(format!("{name}.spv"));
     let result = Command::new("glslc")
         .arg("--target-env=vulkan1.2")
+        .args(extra)
         .arg("-O")
         .arg("-I")
         .arg(include)

@@ -5,8 +5,9 @@
 //! The rule: a barrier before a command that has a read-after-write, write-after-read or write-after-write
 //! hazard with a command recorded since the last barrier, or that reads a buffer whose last write has not yet
 //! been made visible to the stage it reads in (an indirect-argument read after a barrier that served compute
-//! reads only). Every barrier includes the compute stage and shader reads and writes on both sides, so its
-//! dependency chains with the barriers before and after it and serves every later pass.
+//! reads only). Every barrier includes the compute stage (and, where passes trace with ray-tracing pipelines,
+//! the ray-tracing stage: `Tracker::new`) and shader reads and writes on both sides, so its dependency chains
+//! with the barriers before and after it and serves every later pass.
 use ash::vk;
 
 use crate::pass::{Pass, Resource};
@@ -14,8 +15,10 @@ use crate::pass::{Pass, Resource};
 /// Where in the pipeline a buffer is accessed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Stage {
-    /// A compute shader (every pass).
+    /// A compute shader (every pass under ray queries; every pass that does not trace).
     Compute,
+    /// A ray-tracing pipeline's shaders (a pass that traces, under `RayBackend::Pipeline`).
+    RayTracing,
     /// The work-group counts of an indirect dispatch.
     Indirect,
     /// A copy command.
@@ -28,6 +31,7 @@ impl Stage {
     pub fn flags(self) -> vk::PipelineStageFlags {
         match self {
             Stage::Compute => vk::PipelineStageFlags::COMPUTE_SHADER,
+            Stage::RayTracing => vk::PipelineStageFlags::RAY_TRACING_SHADER_KHR,
             Stage::Indirect => vk::PipelineStageFlags::DRAW_INDIRECT,
             Stage::Transfer => vk::PipelineStageFlags::TRANSFER,
             Stage::Graphics => {
@@ -40,8 +44,8 @@ impl Stage {
 
     pub fn access(self, write: bool) -> vk::AccessFlags {
         match (self, write) {
-            (Stage::Compute | Stage::Graphics, false) => vk::AccessFlags::SHADER_READ,
-            (Stage::Compute | Stage::Graphics, true) => vk::AccessFlags::SHADER_WRITE,
+            (Stage::Compute | Stage::RayTracing | Stage::Graphics, false) => vk::AccessFlags::SHADER_READ,
+            (Stage::Compute | Stage::RayTracing | Stage::Graphics, true) => vk::AccessFlags::SHADER_WRITE,
             (Stage::Indirect, _) => vk::AccessFlags::INDIRECT_COMMAND_READ,
             (Stage::Transfer, false) => vk::AccessFlags::TRANSFER_READ,
             (Stage::Transfer, true) => vk::AccessFlags::TRANSFER_WRITE,
@@ -74,10 +78,11 @@ impl Use {
     }
 }
 
-/// The accesses of a compute pass, as declared next to its definition.
-pub fn pass_uses(pass: Pass) -> Vec<Use> {
-    let reads = pass.reads().iter().map(|&r| Use::read(r, Stage::Compute));
-    let writes = pass.writes().iter().map(|&r| Use::write(r, Stage::Compute));
+/// The accesses of a pass, as declared next to its definition, made in `stage` (compute, or ray tracing for a
+/// pass that runs as a ray-tracing pipeline).
+pub fn pass_uses(pass: Pass, stage: Stage) -> Vec<Use> {
+    let reads = pass.reads().iter().map(|&r| Use::read(r, stage));
+    let writes = pass.writes().iter().map(|&r| Use::write(r, stage));
     reads.chain(writes).collect()
 }
 
@@ -106,6 +111,9 @@ pub enum Event {
 /// Follows the accesses recorded since the last barrier and the stages each buffer's last write is visible to.
 #[derive(Default)]
 pub struct Tracker {
+    /// The stages every barrier includes on both sides: compute, plus ray tracing where passes trace with
+    /// ray-tracing pipelines (a stage the device must have enabled).
+    always: vk::PipelineStageFlags,
     /// Accesses since the last barrier.
     pending: Vec<Use>,
     /// Per buffer written so far: the stage of its last write and the stages it has been made visible to.
@@ -114,6 +122,23 @@ pub struct Tracker {
 }
 
 impl Tracker {
+    /// A tracker for a frame whose tracing passes run as ray-tracing pipelines (`ray_tracing`) or compute.
+    pub fn new(ray_tracing: bool) -> Tracker {
+        Tracker {
+            always: if ray_tracing {
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::RAY_TRACING_SHADER_KHR
+            } else {
+                vk::PipelineStageFlags::COMPUTE_SHADER
+            },
+            ..Default::default()
+        }
+    }
+
+    /// The stages every barrier includes (`Tracker::default()`: compute).
+    fn always(&self) -> vk::PipelineStageFlags {
+        self.always | vk::PipelineStageFlags::COMPUTE_SHADER
+    }
+
     /// The barrier `uses` need before their command, if any; records the command (and the barrier).
     pub fn command(
         &mut self,
@@ -123,7 +148,7 @@ impl Tracker {
         uses: Vec<Use>,
     ) -> Option<Barrier> {
         let mut hazard = false;
-        let mut src_stages = vk::PipelineStageFlags::COMPUTE_SHADER;
+        let mut src_stages = self.always();
         let mut src_access = vk::AccessFlags::empty();
         for u in &uses {
             if self
@@ -149,8 +174,8 @@ impl Tracker {
                     src_access |= p.stage.access(true);
                 }
             }
-            // Compute on both sides always: writes made visible here serve every later pass.
-            let mut dst_stages = vk::PipelineStageFlags::COMPUTE_SHADER;
+            // Compute (and ray tracing) on both sides always: writes made visible here serve every later pass.
+            let mut dst_stages = self.always();
             let mut dst_access = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
             for u in &uses {
                 dst_stages |= u.stage.flags();
@@ -197,7 +222,7 @@ impl Tracker {
     /// it, in this submission (the viewer copies the output image) or a later one (the next frame: its first
     /// passes need no barrier of their own), and every write is visible to the host (read-backs).
     pub fn finish(&mut self) -> Barrier {
-        let all_stages = vk::PipelineStageFlags::COMPUTE_SHADER
+        let all_stages = self.always()
             | vk::PipelineStageFlags::TRANSFER
             | vk::PipelineStageFlags::DRAW_INDIRECT
             | Stage::Graphics.flags();

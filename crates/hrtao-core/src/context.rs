@@ -28,6 +28,71 @@ pub struct ContextOptions {
     /// Leave `multiDrawIndirect` off even where the device has it: the visibility draw then issues one call per
     /// draw, the path of devices without it (for tests).
     pub single_draws: bool,
+    /// Trace with this backend (`--ray-backend`); None: the device decides (`RayBackend::choose`).
+    pub ray_backend: Option<RayBackend>,
+    /// Treat every device as one without ray queries (VK_KHR_ray_query and its feature left off), the situation
+    /// of GPUs that trace with pipelines only (for tests).
+    pub mask_ray_query: bool,
+}
+
+/// How the passes that trace rays trace them (pass.rs, trace.glsl): ray queries in compute shaders, or
+/// ray-tracing pipelines (a ray-generation shader launched over the same work, a miss and a closest-hit shader,
+/// a shader binding table: rt_pipeline.rs). Chosen per device: ray queries where the device has them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RayBackend {
+    Query,
+    Pipeline,
+}
+
+impl RayBackend {
+    pub fn name(self) -> &'static str {
+        match self {
+            RayBackend::Query => "query",
+            RayBackend::Pipeline => "pipeline",
+        }
+    }
+
+    /// The backend of a device with ray queries (`query`) or not, ray-tracing pipelines (`pipeline`) or not:
+    /// `forced` when given and the device has it, else ray queries where available, pipelines otherwise.
+    pub fn choose(
+        forced: Option<RayBackend>,
+        query: bool,
+        pipeline: bool,
+    ) -> std::result::Result<RayBackend, String> {
+        match forced {
+            Some(RayBackend::Query) if !query => {
+                Err("ray queries forced but the device lacks rayQuery".into())
+            }
+            Some(RayBackend::Pipeline) if !pipeline => {
+                Err("ray-tracing pipelines forced but the device lacks rayTracingPipeline".into())
+            }
+            Some(b) => Ok(b),
+            None if query => Ok(RayBackend::Query),
+            None if pipeline => Ok(RayBackend::Pipeline),
+            None => Err("neither rayQuery nor rayTracingPipeline (with indirect traces)".into()),
+        }
+    }
+}
+
+impl std::str::FromStr for RayBackend {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "query" => Ok(RayBackend::Query),
+            "pipeline" => Ok(RayBackend::Pipeline),
+            _ => Err(format!("unknown ray backend `{s}` (query, pipeline)")),
+        }
+    }
+}
+
+/// The device's ray-tracing pipeline support, where VK_KHR_ray_tracing_pipeline is enabled: its functions and
+/// the shader binding table's layout rules.
+pub struct RtSupport {
+    pub loader: ash::khr::ray_tracing_pipeline::Device,
+    pub handle_size: u32,
+    pub handle_alignment: u32,
+    pub base_alignment: u32,
 }
 
 impl ContextOptions {
@@ -91,6 +156,8 @@ pub struct DeviceInfo {
     pub multi_draw_indirect: bool,
     /// The device has `shaderDrawParameters` (enabled): the visibility draw's vertex stage reads gl_DrawID.
     pub draw_parameters: bool,
+    /// How the passes trace rays (`RayBackend`).
+    pub ray_backend: RayBackend,
 }
 
 pub struct Gpu {
@@ -100,6 +167,8 @@ pub struct Gpu {
     pub queue: vk::Queue,
     pub queue_family: u32,
     pub accel: ash::khr::acceleration_structure::Device,
+    /// Ray-tracing pipelines, where the device has them (enabled whenever present).
+    pub rt: Option<RtSupport>,
     pub info: DeviceInfo,
     pub limits: vk::PhysicalDeviceLimits,
     pub scratch_alignment: u64,
@@ -116,9 +185,10 @@ pub struct Gpu {
     pub entry: ash::Entry,
 }
 
-const DEVICE_EXTENSIONS: [&CStr; 3] = [
+/// The extensions every device needs; a ray-tracing backend (`RayBackend`) needs one of VK_KHR_ray_query and
+/// VK_KHR_ray_tracing_pipeline besides.
+const DEVICE_EXTENSIONS: [&CStr; 2] = [
     ash::khr::acceleration_structure::NAME,
-    ash::khr::ray_query::NAME,
     ash::khr::deferred_host_operations::NAME,
 ];
 
@@ -162,6 +232,10 @@ struct Candidate {
     kind: vk::PhysicalDeviceType,
     problem: Option<String>,
     queue_family: u32,
+    /// VK_KHR_ray_query with its feature (and not masked).
+    ray_query: bool,
+    /// VK_KHR_ray_tracing_pipeline with its features (indirect traces included).
+    ray_pipeline: bool,
 }
 
 fn device_kind_rank(kind: vk::PhysicalDeviceType) -> u32 {
@@ -185,12 +259,17 @@ fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
 }
 
 const LAVAPIPE_HINT: &str =
-    "hrtao needs a Vulkan device with VK_KHR_ray_query and VK_KHR_acceleration_structure. \
+    "hrtao needs a Vulkan device with VK_KHR_acceleration_structure and VK_KHR_ray_query or \
+VK_KHR_ray_tracing_pipeline. \
 Without such a GPU, install Mesa's lavapipe (software Vulkan, Mesa >= 23): on Debian 12 \
 `apt-get install -t bookworm-backports mesa-vulkan-drivers`, on Ubuntu `apt-get install mesa-vulkan-drivers` \
 (or run scripts/install-deps.sh).";
 
-unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Candidate {
+unsafe fn check_candidate(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    options: &ContextOptions,
+) -> Candidate {
     let props = instance.get_physical_device_properties(physical);
     let name = CStr::from_ptr(props.device_name.as_ptr())
         .to_string_lossy()
@@ -201,6 +280,8 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
         kind: props.device_type,
         problem: None,
         queue_family: u32::MAX,
+        ray_query: false,
+        ray_pipeline: false,
     };
     if vk::api_version_minor(props.api_version) < 2 && vk::api_version_major(props.api_version) == 1 {
         cand.problem = Some("Vulkan 1.2 not supported".into());
@@ -223,20 +304,27 @@ unsafe fn check_candidate(instance: &ash::Instance, physical: vk::PhysicalDevice
         return cand;
     }
     let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut rtp = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
     let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
     let features = {
         let mut f2 = vk::PhysicalDeviceFeatures2::default()
             .push_next(&mut rq)
+            .push_next(&mut rtp)
             .push_next(&mut asf)
             .push_next(&mut v12);
         instance.get_physical_device_features2(physical, &mut f2);
         f2.features
     };
-    let mut lacking = Vec::new();
-    if rq.ray_query == 0 {
-        lacking.push("rayQuery");
+    cand.ray_query = !options.mask_ray_query && has(ash::khr::ray_query::NAME) && rq.ray_query == vk::TRUE;
+    cand.ray_pipeline = has(ash::khr::ray_tracing_pipeline::NAME)
+        && rtp.ray_tracing_pipeline == vk::TRUE
+        && rtp.ray_tracing_pipeline_trace_rays_indirect == vk::TRUE;
+    if let Err(e) = RayBackend::choose(options.ray_backend, cand.ray_query, cand.ray_pipeline) {
+        cand.problem = Some(e);
+        return cand;
     }
+    let mut lacking = Vec::new();
     if asf.acceleration_structure == 0 {
         lacking.push("accelerationStructure");
     }
@@ -321,8 +409,10 @@ pub fn list_devices(options: &ContextOptions) -> Result<Vec<DeviceListing>> {
             .create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None)
             .map_err(|e| CoreError::NoDevice(format!("vkCreateInstance failed: {e}. {LAVAPIPE_HINT}")))?;
         let physicals = instance.enumerate_physical_devices().unwrap_or_default();
-        let mut candidates: Vec<Candidate> =
-            physicals.iter().map(|&p| check_candidate(&instance, p)).collect();
+        let mut candidates: Vec<Candidate> = physicals
+            .iter()
+            .map(|&p| check_candidate(&instance, p, options))
+            .collect();
         let chosen = choose(&mut candidates, options.device.as_deref());
         instance.destroy_instance(None);
         Ok(candidates
@@ -339,7 +429,8 @@ pub fn list_devices(options: &ContextOptions) -> Result<Vec<DeviceListing>> {
 }
 
 impl Gpu {
-    /// Creates the instance and the device. Picks a hardware GPU with ray queries when present, else lavapipe.
+    /// Creates the instance and the device. Picks a hardware GPU when present, else lavapipe; rays are traced by
+    /// `RayBackend::choose`.
     pub fn new(options: &ContextOptions) -> Result<Arc<Gpu>> {
         unsafe { Self::create(options) }
     }
@@ -434,11 +525,15 @@ impl Gpu {
             };
 
         let physicals = instance.enumerate_physical_devices().unwrap_or_default();
-        let mut candidates: Vec<Candidate> =
-            physicals.iter().map(|&p| check_candidate(&instance, p)).collect();
-        let chosen = choose(&mut candidates, options.device.as_deref())
-            .map(|i| (candidates[i].physical, candidates[i].queue_family));
-        let Some((physical, queue_family)) = chosen else {
+        let mut candidates: Vec<Candidate> = physicals
+            .iter()
+            .map(|&p| check_candidate(&instance, p, options))
+            .collect();
+        let chosen = choose(&mut candidates, options.device.as_deref()).map(|i| {
+            let c = &candidates[i];
+            (c.physical, c.queue_family, c.ray_query, c.ray_pipeline)
+        });
+        let Some((physical, queue_family, has_ray_query, has_ray_pipeline)) = chosen else {
             let mut listing = String::new();
             for c in &candidates {
                 listing.push_str(&format!(
@@ -453,15 +548,19 @@ impl Gpu {
             }
             destroy_instance(&debug);
             return Err(CoreError::NoDevice(format!(
-                "no usable Vulkan device with ray queries. Devices found:{listing}\n{LAVAPIPE_HINT}"
+                "no usable Vulkan device with ray queries or ray-tracing pipelines. Devices found:{listing}\n{LAVAPIPE_HINT}"
             )));
         };
 
         let props = instance.get_physical_device_properties(physical);
+        let ray_backend = RayBackend::choose(options.ray_backend, has_ray_query, has_ray_pipeline)
+            .expect("a chosen device has its backend");
         let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+        let mut rt_props = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
         let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default()
             .push_next(&mut as_props)
+            .push_next(&mut rt_props)
             .push_next(&mut driver_props);
         instance.get_physical_device_properties2(physical, &mut props2);
         let name = CStr::from_ptr(props.device_name.as_ptr())
@@ -487,6 +586,9 @@ impl Gpu {
             f2.features
         };
         let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let mut rtp = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default()
+            .ray_tracing_pipeline(true)
+            .ray_tracing_pipeline_trace_rays_indirect(true);
         let mut asf =
             vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
@@ -508,15 +610,27 @@ impl Gpu {
             .draw_indirect_first_instance(multi_draw_indirect);
         let mut features2 = vk::PhysicalDeviceFeatures2::default()
             .features(base)
-            .push_next(&mut rq)
             .push_next(&mut asf)
             .push_next(&mut v12)
             .push_next(&mut v11);
+        // Each ray-tracing extension, with its feature, where the device has it (a masked ray query stays off).
+        if has_ray_query {
+            features2 = features2.push_next(&mut rq);
+        }
+        if has_ray_pipeline {
+            features2 = features2.push_next(&mut rtp);
+        }
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
         let mut dev_exts: Vec<*const i8> = DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        if has_ray_query {
+            dev_exts.push(ash::khr::ray_query::NAME.as_ptr());
+        }
+        if has_ray_pipeline {
+            dev_exts.push(ash::khr::ray_tracing_pipeline::NAME.as_ptr());
+        }
         if !options.surface_extensions.is_empty() {
             dev_exts.push(ash::khr::swapchain::NAME.as_ptr());
         }
@@ -550,6 +664,12 @@ impl Gpu {
             )
             .map_err(|e| CoreError::Vulkan("vkCreateCommandPool", e))?;
         let accel = ash::khr::acceleration_structure::Device::new(&instance, &device);
+        let rt = has_ray_pipeline.then(|| RtSupport {
+            loader: ash::khr::ray_tracing_pipeline::Device::new(&instance, &device),
+            handle_size: rt_props.shader_group_handle_size,
+            handle_alignment: rt_props.shader_group_handle_alignment.max(1),
+            base_alignment: rt_props.shader_group_base_alignment.max(1),
+        });
         let is_software = props.device_type == vk::PhysicalDeviceType::CPU;
         if is_software {
             keep_freed_memory();
@@ -572,12 +692,14 @@ impl Gpu {
             primitive_id_in_fragment,
             multi_draw_indirect,
             draw_parameters,
+            ray_backend,
         };
         log::info!(
-            "Vulkan device: {} ({}, {}), validation {}",
+            "Vulkan device: {} ({}, {}), rays traced by {}, validation {}",
             info.name,
             info.kind,
             info.driver,
+            ray_backend.name(),
             validation
         );
         Ok(Arc::new(Gpu {
@@ -587,6 +709,7 @@ impl Gpu {
             queue,
             queue_family,
             accel,
+            rt,
             info,
             limits: props.limits,
             scratch_alignment: as_props

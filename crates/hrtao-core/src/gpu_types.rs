@@ -108,10 +108,13 @@ gpu_consts! {
     RAYS_CELL: u32 = 2;
     RAYS_COUNT: u32 = 3;
     /// Offsets in words into the indirect dispatch arguments (`dispatch_args`, written by the last work group of the cell finder and of the resolve, queue_args.glsl):
-    /// the ray-tracing update's, then the filter's.
+    /// the ray-tracing update's, then the filter's. Each queue's block: its work-group counts (3 words), the count
+    /// of work groups done (1), then, at QUEUE_TRACE_ARGS, the same work as a ray-tracing launch size in threads
+    /// (`VkTraceRaysIndirectCommandKHR`, the ray-tracing pipeline backend's indirect trace), then a free word.
     RAY_ARGS_OFFSET: u32 = 0;
-    FILTER_ARGS_OFFSET: u32 = 4;
-    DISPATCH_ARGS_WORDS: u32 = 8;
+    FILTER_ARGS_OFFSET: u32 = 8;
+    QUEUE_TRACE_ARGS: u32 = 4;
+    DISPATCH_ARGS_WORDS: u32 = 16;
 }
 
 gpu_structs! {

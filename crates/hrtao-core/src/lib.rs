@@ -42,6 +42,7 @@ pub mod raster;
 pub mod recorder;
 pub mod regions;
 pub mod renderer;
+pub mod rt_pipeline;
 pub mod section;
 pub mod settings;
 pub mod slice_order;
@@ -51,7 +52,7 @@ pub mod timer;
 
 pub use accel::SceneGpu;
 pub use camera::Camera;
-pub use context::{ContextOptions, DeviceInfo, Gpu};
+pub use context::{ContextOptions, DeviceInfo, Gpu, RayBackend};
 pub use error::{CoreError, Result};
 pub use frame::{FrameDesc, Output, RayBudget, MAX_LATTICE};
 pub use raster::Primary;

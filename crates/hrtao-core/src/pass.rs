@@ -6,13 +6,19 @@
 //! shader and the buffers it reads and writes (`Pass::reads`, `Pass::writes`: the validation layer cannot see
 //! accesses through device addresses, so these declarations are the one source of truth, checked against the
 //! shaders by `tests/pass_declarations.rs`). `PassSet` builds all pipelines; `recorder::Recorder` records them.
+//!
+//! A pass that traces rays (its shader `#define`s HRTAO_TRACES: `Pass::traces`) runs by the device's
+//! `RayBackend`: a compute pipeline whose shader traces with ray queries, or a ray-tracing pipeline
+//! (`rt_pipeline::RtPipeline`) whose ray-generation shader build.rs compiles from the same source and which the
+//! recorder launches over the same threads. Its declaration is the same either way.
 use std::sync::Arc;
 
 use ash::vk;
 
 use crate::buffer::Buffer;
-use crate::context::Gpu;
+use crate::context::{Gpu, RayBackend};
 use crate::error::{CoreError, Result};
+use crate::rt_pipeline::RtPipeline;
 use Resource::*;
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
@@ -172,6 +178,14 @@ impl Pass {
     pub fn writes(self) -> &'static [Resource] {
         self.writes
     }
+
+    /// Whether its shader traces rays (`#define HRTAO_TRACES`): build.rs then compiled its ray-generation variant
+    /// too, and it runs as a ray-tracing pipeline under `RayBackend::Pipeline`.
+    pub fn traces(self) -> bool {
+        SHADERS
+            .iter()
+            .any(|(n, _)| n.strip_suffix(".rgen") == Some(self.shader))
+    }
 }
 
 /// The GPU buffers the passes read and write (each reached in the shaders through its `FrameGlobals` address,
@@ -300,6 +314,12 @@ impl Resource {
     }
 }
 
+/// How a pass runs: a compute pipeline, or (a tracing pass under `RayBackend::Pipeline`) a ray-tracing pipeline.
+pub(crate) enum PassPipeline {
+    Compute(vk::Pipeline),
+    Ray(Box<RtPipeline>),
+}
+
 /// Pipelines of all passes and their shared layout and descriptor set.
 pub struct PassSet {
     gpu: Arc<Gpu>,
@@ -307,7 +327,11 @@ pub struct PassSet {
     pub layout: vk::PipelineLayout,
     pool: vk::DescriptorPool,
     pub(crate) set: vk::DescriptorSet,
-    pipelines: Vec<(Pass, vk::Pipeline)>,
+    /// The shader stages of the layout's descriptor set and push constants: compute, and ray generation under
+    /// the pipeline backend.
+    pub(crate) stages: vk::ShaderStageFlags,
+    pub(crate) backend: RayBackend,
+    pipelines: Vec<(Pass, PassPipeline)>,
     bound_tlas: vk::AccelerationStructureKHR,
     /// The TLAS build generation binding 0 was last written for (0: never).
     bound_generation: u64,
@@ -338,21 +362,26 @@ pub(crate) fn shader_module(gpu: &Gpu, name: &str) -> Result<vk::ShaderModule> {
 }
 
 impl PassSet {
-    /// The pipelines of the passes of `list` (`crate::passes::ALL`).
+    /// The pipelines of the passes of `list` (`crate::passes::ALL`), those that trace by the device's backend.
     pub fn new(gpu: &Arc<Gpu>, globals: &Buffer, list: &[Pass]) -> Result<PassSet> {
         let device = &gpu.device;
+        let backend = gpu.info.ray_backend;
+        let stages = match backend {
+            RayBackend::Query => vk::ShaderStageFlags::COMPUTE,
+            RayBackend::Pipeline => vk::ShaderStageFlags::COMPUTE | vk::ShaderStageFlags::RAYGEN_KHR,
+        };
         unsafe {
             let bindings = [
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(0)
                     .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
                     .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE),
+                    .stage_flags(stages),
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(1)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE),
+                    .stage_flags(stages),
             ];
             let set_layout = device
                 .create_descriptor_set_layout(
@@ -361,7 +390,7 @@ impl PassSet {
                 )
                 .map_err(|e| CoreError::from_vk("vkCreateDescriptorSetLayout", e))?;
             let push = [vk::PushConstantRange {
-                stage_flags: vk::ShaderStageFlags::COMPUTE,
+                stage_flags: stages,
                 offset: 0,
                 size: 16,
             }];
@@ -416,12 +445,19 @@ impl PassSet {
                 layout,
                 pool,
                 set,
+                stages,
+                backend,
                 pipelines: Vec::new(),
                 bound_tlas: vk::AccelerationStructureKHR::null(),
                 bound_generation: 0,
                 tlas_writes: 0,
             };
             for &pass in list {
+                if backend == RayBackend::Pipeline && pass.traces() {
+                    let rt = RtPipeline::new(gpu, layout, &format!("{}.rgen", pass.shader()))?;
+                    passes.pipelines.push((pass, PassPipeline::Ray(Box::new(rt))));
+                    continue;
+                }
                 let module = shader_module(gpu, pass.shader())?;
                 let entry = c"main";
                 let stage = vk::PipelineShaderStageCreateInfo::default()
@@ -434,7 +470,7 @@ impl PassSet {
                 let result = device.create_compute_pipelines(vk::PipelineCache::null(), &info, None);
                 device.destroy_shader_module(module, None);
                 let pipeline = result.map_err(|(_, e)| CoreError::from_vk("vkCreateComputePipelines", e))?[0];
-                passes.pipelines.push((pass, pipeline));
+                passes.pipelines.push((pass, PassPipeline::Compute(pipeline)));
             }
             Ok(passes)
         }
@@ -467,12 +503,17 @@ impl PassSet {
         self.tlas_writes
     }
 
-    pub(crate) fn pipeline(&self, pass: Pass) -> vk::Pipeline {
+    pub(crate) fn pipeline(&self, pass: Pass) -> &PassPipeline {
         self.pipelines
             .iter()
             .find(|(p, _)| *p == pass)
-            .map(|(_, p)| *p)
+            .map(|(_, p)| p)
             .unwrap()
+    }
+
+    /// How the passes that trace rays trace them.
+    pub fn ray_backend(&self) -> RayBackend {
+        self.backend
     }
 }
 
@@ -481,7 +522,11 @@ impl Drop for PassSet {
         unsafe {
             let d = &self.gpu.device;
             for (_, p) in self.pipelines.drain(..) {
-                d.destroy_pipeline(p, None);
+                match p {
+                    PassPipeline::Compute(p) => d.destroy_pipeline(p, None),
+                    // Destroys its pipeline and its shader binding table.
+                    PassPipeline::Ray(rt) => drop(rt),
+                }
             }
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_pipeline_layout(self.layout, None);

@@ -671,7 +671,7 @@ impl Renderer {
                 rec.dispatch(Pass::CELL_FINDER, gw, gh, [top, bottom, 0, 0]);
             }
             let rays = gpu::RAY_ARGS_OFFSET;
-            let args = self.dispatch_args.raw;
+            let args = &self.dispatch_args;
             // One dispatch, or three with adaptive sampling (ours) in a young map.
             // Each cut into chunks over the queue's bands of gw pixels (at most gw x gh pixels are queued).
             for &phase in additions::update_phases(&young_frame) {

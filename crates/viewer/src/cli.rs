@@ -229,6 +229,10 @@ pub struct DeviceArgs {
     /// Enable the Khronos validation layer (also HRTAO_VALIDATION=1).
     #[arg(long)]
     pub validation: bool,
+    /// Trace rays with ray queries (`query`) or ray-tracing pipelines (`pipeline`); default: ray queries where
+    /// the device has them, else pipelines.
+    #[arg(long, value_name = "query|pipeline", env = "HRTAO_RAY_BACKEND")]
+    pub ray_backend: Option<hrtao_core::RayBackend>,
 }
 
 /// Section planes, for `render`, `bench` and `view`.

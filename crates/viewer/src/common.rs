@@ -16,15 +16,17 @@ pub fn open_gpu(d: &DeviceArgs) -> Result<Arc<Gpu>> {
     let opts = ContextOptions {
         validation: d.validation || hrtao_core::context::validation_requested_by_env(),
         device: d.device.clone(),
+        ray_backend: d.ray_backend,
         memory_limit: hrtao_core::context::memory_limit_from_env(),
         ..Default::default()
     };
     let gpu = Gpu::new(&opts)?;
     log::info!(
-        "device: {} ({}; {})",
+        "device: {} ({}; {}; rays traced by {})",
         gpu.info.name,
         gpu.info.kind,
-        gpu.info.driver
+        gpu.info.driver,
+        gpu.info.ray_backend.name()
     );
     Ok(gpu)
 }

@@ -35,6 +35,10 @@ const ENVIRONMENT: &[(&str, &str)] = &[
         "the Khronos validation layer on (as --validation)",
     ),
     (
+        "HRTAO_RAY_BACKEND",
+        "trace rays with ray queries (query) or ray-tracing pipelines (pipeline), as --ray-backend",
+    ),
+    (
         "HRTAO_MAX_SCENE_MB",
         "memory a scene may take while it loads, in MiB (default: from the machine's RAM)",
     ),

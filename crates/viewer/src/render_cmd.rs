@@ -135,18 +135,23 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 pub fn list_devices(d: &DeviceArgs) -> Result<()> {
     let options = hrtao_core::ContextOptions {
         device: d.device.clone(),
+        ray_backend: d.ray_backend,
         ..Default::default()
     };
     let devices = hrtao_core::context::list_devices(&options)?;
     print!("{}", devices_report(&devices, d.device.as_deref()));
     if !devices.iter().any(|x| x.chosen) {
-        anyhow::bail!("no usable Vulkan device with ray queries");
+        anyhow::bail!("no usable Vulkan device with ray queries or ray-tracing pipelines");
     }
     // The chosen device opened as every command opens it: its driver and API version.
     let gpu = open_gpu(d)?;
     println!(
-        "opened: {} ({}), driver {}, Vulkan {}",
-        gpu.info.name, gpu.info.kind, gpu.info.driver, gpu.info.api_version
+        "opened: {} ({}), driver {}, Vulkan {}, rays traced by {}",
+        gpu.info.name,
+        gpu.info.kind,
+        gpu.info.driver,
+        gpu.info.api_version,
+        gpu.info.ray_backend.name()
     );
     Ok(())
 }

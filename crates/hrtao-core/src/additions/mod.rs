@@ -15,8 +15,7 @@
 //! touches.
 use std::sync::Arc;
 
-use ash::vk;
-
+use crate::buffer::Buffer;
 use crate::context::Gpu;
 use crate::error::Result;
 use crate::gpu;
@@ -131,7 +130,7 @@ fn corrections(frame: &YoungFrame) -> (u32, u32) {
 
 /// Records the corrections pass over the pixels that traced rays into their cells this frame (the ray queue,
 /// an indirect dispatch sized at `RAY_ARGS_OFFSET` of `args`), once per phase the corrections on need.
-pub fn record_corrections(rec: &mut Recorder, frame: &YoungFrame, targets: &Targets, args: vk::Buffer) {
+pub fn record_corrections(rec: &mut Recorder, frame: &YoungFrame, targets: &Targets, args: &Buffer) {
     let (bits, phases) = corrections(frame);
     let [lo, hi] = targets.contact_detail.push();
     for phase in 1..=phases {

@@ -165,6 +165,7 @@ impl App {
         let opts = ContextOptions {
             validation: self.args.device.validation || hrtao_core::context::validation_requested_by_env(),
             device: self.args.device.device.clone(),
+            ray_backend: self.args.device.ray_backend,
             surface_extensions,
             ..Default::default()
         };

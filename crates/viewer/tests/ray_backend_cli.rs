@@ -1,0 +1,194 @@
+//! `--ray-backend query|pipeline` in `hrtao render`, `hrtao bench` and `hrtao view`: each runs with each backend,
+//! validation silent, the device reports the backend it traced with, and per-pixel RTAO renders the same image by
+//! both (the backends trace the same rays: crates/hrtao-core/tests/ray_backends.rs compares every tracing pass).
+/// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
+#[path = "../../scene/tests/common/mod.rs"]
+mod common;
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn tmp_dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("hrtao-ray-backend-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn hrtao(args: &[&str]) -> std::process::Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(args)
+        .env("HRTAO_VALIDATION", "1")
+        .env_remove("HRTAO_RAY_BACKEND")
+        .output()
+        .expect("run hrtao");
+    assert!(
+        out.status.success(),
+        "hrtao {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn read_pfm(path: &std::path::Path) -> Vec<f32> {
+    let bytes = std::fs::read(path).unwrap();
+    // Three header lines: "Pf", "W H", scale (negative: little-endian).
+    let mut lines = 0;
+    let mut at = 0;
+    while lines < 3 {
+        if bytes[at] == b'\n' {
+            lines += 1;
+        }
+        at += 1;
+    }
+    let header = String::from_utf8_lossy(&bytes[..at]).to_string();
+    assert!(
+        header.lines().nth(2).unwrap().trim().starts_with('-'),
+        "little-endian PFM"
+    );
+    bytes[at..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+#[test]
+fn render_with_each_backend_gives_the_same_per_pixel_rtao() {
+    let dir = tmp_dir();
+    let scene = common::test_scene("rod");
+    let camera = common::testdata("refs/rod_160x90.camera.json");
+    let mut images = Vec::new();
+    for backend in ["query", "pipeline"] {
+        let pfm = dir.join(format!("rod-{backend}.pfm"));
+        let stats = dir.join(format!("rod-{backend}.json"));
+        hrtao(&[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--camera",
+            camera.to_str().unwrap(),
+            "--radius",
+            "10",
+            "--mode",
+            "rtao",
+            "--rays",
+            "8",
+            "--frames",
+            "2",
+            "--ray-backend",
+            backend,
+            "--out",
+            dir.join(format!("rod-{backend}.png")).to_str().unwrap(),
+            "--ao-out",
+            pfm.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(
+            v["device"]["ray_backend"], backend,
+            "{backend}: the device's backend in the stats"
+        );
+        assert_eq!(v["validation_messages"], 0, "{backend}: validation messages");
+        images.push(read_pfm(&pfm));
+    }
+    assert_eq!(images[0].len(), 160 * 90);
+    let worst = images[0]
+        .iter()
+        .zip(&images[1])
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst <= 1e-4,
+        "per-pixel RTAO differs between the backends by up to {worst}"
+    );
+    assert!(images[0].iter().any(|&a| a < 0.9), "some occlusion");
+}
+
+#[test]
+fn bench_runs_with_each_backend() {
+    let dir = tmp_dir();
+    let scene = common::test_scene("rod");
+    for backend in ["query", "pipeline"] {
+        let json = dir.join(format!("bench-{backend}.json"));
+        hrtao(&[
+            "bench",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--orbit",
+            "2",
+            "--repeat",
+            "1",
+            "--settle",
+            "1",
+            "--rays",
+            "4",
+            "--max-rays",
+            "8",
+            "--ref-rays",
+            "16",
+            "--hrtao-frames",
+            "2",
+            "--ray-backend",
+            backend,
+            "--json",
+            json.to_str().unwrap(),
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(
+            v["device"]["ray_backend"], backend,
+            "{backend}: the device's backend in the bench"
+        );
+        assert_eq!(v["validation_messages"], 0, "{backend}: validation messages");
+        let nav = v["hrtao"]["nav"].as_array().unwrap();
+        assert_eq!(nav.len(), 2, "{backend}: navigation frames");
+        assert!(
+            nav.iter().all(|f| f["rays"].as_f64().unwrap() > 0.0),
+            "{backend}: rays traced"
+        );
+    }
+}
+
+#[test]
+fn an_unknown_backend_is_refused() {
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(["render", "--ray-backend", "magic"])
+        .output()
+        .expect("run hrtao");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("query, pipeline"));
+}
+
+/// The viewer's scripted run with each backend (where a display is: the window tests run under xvfb-run): it
+/// exits 0 (a scripted run exits 1 on any validation message) and saves its screenshot.
+#[test]
+fn view_runs_with_each_backend() {
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        eprintln!("skipped: no display");
+        return;
+    }
+    let dir = tmp_dir();
+    for backend in ["query", "pipeline"] {
+        let shot = dir.join(format!("view-{backend}.png"));
+        hrtao(&[
+            "view",
+            "--no-config",
+            "--size",
+            "160x90",
+            "--no-panel",
+            "--frames",
+            "3",
+            "--ray-backend",
+            backend,
+            "--screenshot",
+            shot.to_str().unwrap(),
+            "--exit",
+        ]);
+        let meta = std::fs::metadata(&shot).unwrap_or_else(|e| panic!("{backend}: no screenshot: {e}"));
+        assert!(meta.len() > 1000, "{backend}: screenshot of {} bytes", meta.len());
+    }
+}
