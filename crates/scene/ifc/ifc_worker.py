@@ -100,6 +100,12 @@ def main():
         return 2
     path = sys.argv[1]
     hook = os.environ.get("HRTAO_IFC_WORKER_TEST_HOOK", "")
+    # Out of memory, the system kills this process before the viewer (as the OpenCASCADE worker does).
+    try:
+        with open("/proc/self/oom_score_adj", "w") as adj:
+            adj.write("500")
+    except OSError:
+        pass
     progress("read", 0.0)
     try:
         import numpy as np
@@ -131,7 +137,9 @@ def main():
     settings.set("weld-vertices", False)
     settings.set("apply-default-materials", True)
     threads = max(1, min(8, os.cpu_count() or 1))
-    it = ifcopenshell.geom.iterator(settings, f, threads)
+    # Openings are voids (cut from their elements) and spaces are room volumes: neither is drawn (IfcConvert's
+    # defaults).
+    it = ifcopenshell.geom.iterator(settings, f, threads, exclude=("IfcOpeningElement", "IfcSpace"))
     parts = {}  # representation id -> (index, payload)
     placed = []  # (product id, part index, 16 doubles)
     if it.initialize():

@@ -25,7 +25,7 @@ pub const IFCOPENSHELL_VERSION: &str = "0.8.4.post1";
 const WORKER_SCRIPT: &str = include_str!("../ifc/ifc_worker.py");
 
 /// Most entities an IFC file may have (IfcOpenShell keeps every entity in memory, about 1 KiB each).
-const MAX_IFC_ENTITIES: u64 = 20_000_000;
+const MAX_IFC_ENTITIES: u64 = 10_000_000;
 
 /// Address space the worker may use beyond the scene memory limit (Python, NumPy, IfcOpenShell and OCCT
 /// libraries, thread stacks and heap arenas).
