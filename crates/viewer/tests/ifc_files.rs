@@ -300,8 +300,10 @@ fn entity_count_over_the_memory_limit_is_refused_before_the_worker() {
         .collect();
     body = body.replace("ENDSEC;\nEND-ISO", &format!("{extra}ENDSEC;\nEND-ISO"));
     std::fs::write(&path, body).unwrap();
-    let mut o = LoadOptions::default();
-    o.max_memory = 64 << 20;
+    let o = LoadOptions {
+        max_memory: 64 << 20,
+        ..Default::default()
+    };
     let e = hrtao_scene::load_with(path.to_str().unwrap(), &o, &mut |_| {}).unwrap_err();
     assert!(
         matches!(&e, SceneError::TooLarge(m) if m.contains("entities, over the cap")),
