@@ -3,7 +3,8 @@
 # Vulkan loader, Mesa lavapipe with VK_KHR_ray_query (Mesa >= 23; on Debian 12 from bookworm-backports),
 # glslc (shader compiler), Xvfb (windows without a display), xdotool (X input in tests), zenity (the Open…
 # dialog without a desktop portal), Khronos validation layers; OpenCASCADE 7.6 development packages (STEP/IGES
-# through XCAF, the `occt` feature), desktop-file-utils (the desktop entry's test). The STEP test files come from
+# through XCAF, the `occt` feature), desktop-file-utils (the desktop entry's test), python3-venv (IFC: then
+# scripts/install-ifc.sh puts IfcOpenShell, pinned, in a venv under the user's data folder). The STEP test files come from
 # Debian's gmsh-doc package (scripts/fetch-step-data.sh).
 # `install-deps.sh --bench` also installs what only measurements use: gmsh (the comparison mesher of the STEP AO
 # check, an ignored test) and f3d (the reference viewer of the STEP benchmark).
@@ -28,7 +29,7 @@ have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok
 # libocct-modeling-*-dev (B-rep, BRepMesh), libocct-foundation-dev (TKernel, TKMath); a C++ compiler for the bridge.
 for p in libvulkan1 vulkan-tools glslc xvfb vulkan-validationlayers xauth libxkbcommon-x11-0 libx11-xcb1 xdotool zenity \
   g++ libocct-data-exchange-dev libocct-ocaf-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev \
-  libocct-foundation-dev desktop-file-utils ${extra[@]+"${extra[@]}"}; do
+  libocct-foundation-dev desktop-file-utils python3-venv ${extra[@]+"${extra[@]}"}; do
   have_pkg "$p" || need+=("$p")
 done
 
@@ -55,8 +56,11 @@ mesa_need=0
 if ! have_pkg mesa-vulkan-drivers; then mesa_need=1
 elif ! lavapipe_ok; then mesa_need=1; fi
 
+ifc() { bash "$(dirname "$0")/install-ifc.sh"; }
+
 if [ ${#need[@]} -eq 0 ] && [ $mesa_need -eq 0 ] && [ -z "${updated_needed:-}" ]; then
   echo "[install-deps] system packages present"
+  ifc
   exit 0
 fi
 
@@ -77,4 +81,5 @@ if ! lavapipe_ok; then
   echo "[install-deps] WARNING: no Vulkan device with VK_KHR_ray_query found after install." >&2
   echo "[install-deps] hrtao needs Mesa >= 23 lavapipe (mesa-vulkan-drivers) or a GPU driver with ray queries." >&2
 fi
+ifc
 echo "[install-deps] done"

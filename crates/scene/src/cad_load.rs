@@ -96,7 +96,7 @@ pub fn load_cad(
 }
 
 /// Entities in a STEP file's DATA sections (an upper bound: statements ending in `;`), or why it is no STEP file.
-fn step_entities(bytes: &[u8]) -> Result<u64, String> {
+pub(crate) fn step_entities(bytes: &[u8]) -> Result<u64, String> {
     let start = bytes.trim_ascii_start();
     if !start.starts_with(b"ISO-10303-21") {
         return Err(
@@ -138,13 +138,13 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
 
 /// When each stage of a load began: the worker's start, its `read`, `transfer` and `tessellate` stages (each
 /// announced by the worker's first progress frame of the stage), the model's arrival and the scene built.
-struct StageClock {
+pub(crate) struct StageClock {
     start: Instant,
     marks: Vec<(&'static str, Instant)>,
 }
 
 impl StageClock {
-    fn new() -> StageClock {
+    pub(crate) fn new() -> StageClock {
         StageClock {
             start: Instant::now(),
             marks: Vec::new(),
@@ -152,14 +152,14 @@ impl StageClock {
     }
 
     /// Marks the start of `stage` (only its first mark counts).
-    fn mark(&mut self, stage: &'static str) {
+    pub(crate) fn mark(&mut self, stage: &'static str) {
         if !self.marks.iter().any(|(s, _)| *s == stage) {
             self.marks.push((stage, Instant::now()));
         }
     }
 
     /// "worker start 40 ms, STEP read 60 ms, …": each span from its mark to the next.
-    fn summary(&self) -> String {
+    pub(crate) fn summary(&self) -> String {
         let name = |s: &'static str| match s {
             "spawn" => "checks before the worker",
             "read" => "worker start-up",
@@ -183,7 +183,7 @@ impl StageClock {
     }
 }
 
-enum WorkerError {
+pub(crate) enum WorkerError {
     Cancelled,
     Failed(String),
 }
@@ -205,16 +205,42 @@ fn run_worker(
         ));
     };
     let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-    let address_space = opts.max_memory.saturating_add(WORKER_OVERHEAD);
-    let cpu_seconds = cad.cpu_seconds;
     let mut cmd = Command::new(&worker);
     cmd.arg("occt-worker")
         .arg(format.name().to_ascii_lowercase())
         .arg(cad.tessellation.relative.to_string())
         .arg(cad.tessellation.absolute.to_string())
         .arg(cad.tessellation.angular_deg.to_string())
-        .arg(&abs)
-        .stdin(Stdio::null())
+        .arg(&abs);
+    let limits = WorkerLimits {
+        kernel: "OpenCASCADE",
+        address_space: opts.max_memory.saturating_add(WORKER_OVERHEAD),
+        cpu_seconds: cad.cpu_seconds,
+    };
+    run_worker_command(cmd, &worker, &limits, opts, stages, progress)
+}
+
+/// What a worker process may take, and the kernel it runs (named in errors).
+pub(crate) struct WorkerLimits {
+    pub kernel: &'static str,
+    pub address_space: u64,
+    pub cpu_seconds: u64,
+}
+
+/// Starts `cmd` (a worker writing [`crate::cad`] frames to its stdout) under `limits` and reads its frames until
+/// the model; a crash, a kill or a limit reached is an error naming the kernel.
+pub(crate) fn run_worker_command(
+    mut cmd: Command,
+    program: &Path,
+    limits: &WorkerLimits,
+    opts: &LoadOptions,
+    stages: &mut StageClock,
+    progress: &mut dyn FnMut(LoadProgress),
+) -> Result<CadModel, WorkerError> {
+    let kernel = limits.kernel;
+    let address_space = limits.address_space;
+    let cpu_seconds = limits.cpu_seconds;
+    cmd.stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit());
     // SAFETY: only async-signal-safe system calls between fork and exec.
@@ -236,8 +262,8 @@ fn run_worker(
     }
     let mut child = cmd.spawn().map_err(|e| {
         WorkerError::Failed(format!(
-            "cannot start the OpenCASCADE worker {}: {e}",
-            worker.display()
+            "cannot start the {kernel} worker {}: {e}",
+            program.display()
         ))
     })?;
     let stdout = child.stdout.take().expect("piped stdout");
@@ -308,13 +334,16 @@ fn run_worker(
             }
             Ok(Err(e)) => {
                 let status = finish(&mut child, true);
-                break Err(WorkerError::Failed(died(status, cpu_seconds).unwrap_or(e)));
+                break Err(WorkerError::Failed(
+                    died(status, kernel, cpu_seconds).unwrap_or(e),
+                ));
             }
             Ok(Ok(None)) | Err(mpsc::RecvTimeoutError::Disconnected) => {
                 let status = finish(&mut child, false);
-                break Err(WorkerError::Failed(died(status, cpu_seconds).unwrap_or_else(
-                    || "the OpenCASCADE worker ended without a model".into(),
-                )));
+                break Err(WorkerError::Failed(
+                    died(status, kernel, cpu_seconds)
+                        .unwrap_or_else(|| format!("the {kernel} worker ended without a model")),
+                ));
             }
         }
     };
@@ -323,7 +352,7 @@ fn run_worker(
 }
 
 /// Why the worker ended, if it did not end normally.
-fn died(status: std::io::Result<std::process::ExitStatus>, cpu_seconds: u64) -> Option<String> {
+fn died(status: std::io::Result<std::process::ExitStatus>, kernel: &str, cpu_seconds: u64) -> Option<String> {
     let status = status.ok()?;
     if let Some(sig) = status.signal() {
         let why = match sig {
@@ -331,20 +360,20 @@ fn died(status: std::io::Result<std::process::ExitStatus>, cpu_seconds: u64) -> 
                 "killed (SIGKILL: by the user, Cancel, or the system being out of memory)".to_string()
             }
             libc::SIGXCPU => format!("stopped at its CPU time limit of {cpu_seconds} s (SIGXCPU)"),
-            libc::SIGSEGV => "crashed inside OpenCASCADE (SIGSEGV)".to_string(),
-            libc::SIGABRT => "aborted inside OpenCASCADE, probably out of memory (SIGABRT)".to_string(),
+            libc::SIGSEGV => format!("crashed inside {kernel} (SIGSEGV)"),
+            libc::SIGABRT => format!("aborted inside {kernel}, probably out of memory (SIGABRT)"),
             s => format!("ended by signal {s}"),
         };
         return Some(format!(
-            "the OpenCASCADE worker was {why} before handing back the model"
+            "the {kernel} worker was {why} before handing back the model"
         ));
     }
-    (!status.success()).then(|| format!("the OpenCASCADE worker failed ({status})"))
+    (!status.success()).then(|| format!("the {kernel} worker failed ({status})"))
 }
 
 /// Builds the scene: one mesh per part (and per recoloured occurrence), one instance per placed occurrence, the
 /// tree from the product structure, coordinates in the file's unit and re-centred when far from the origin.
-fn to_scene(path: &Path, model: CadModel) -> Result<Scene, String> {
+pub(crate) fn to_scene(path: &Path, model: CadModel) -> Result<Scene, String> {
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

@@ -977,3 +977,91 @@ pub fn write_cad_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
     }
     Ok(out)
 }
+
+/// A one-box IFC4 file written by hand: a project and an IfcBuildingElementProxy (outside any spatial structure)
+/// whose body is an IfcTriangulatedFaceSet; `extra` lines go before the end of its DATA section.
+pub fn ifc_box(schema: &str, extra: &str) -> String {
+    format!(
+        "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('ViewDefinition [CoordinationView]'),'2;1');\n\
+         FILE_NAME('box.ifc','2026-01-01T00:00:00',(''),(''),'hrtao','hrtao','');\nFILE_SCHEMA(('{schema}'));\n\
+         ENDSEC;\nDATA;\n\
+         #1=IFCPROJECT('0YvctVUKr0kugbFTf53O9L',$,'Box project',$,$,$,$,(#4),#7);\n\
+         #2=IFCCARTESIANPOINT((0.,0.,0.));\n#3=IFCAXIS2PLACEMENT3D(#2,$,$);\n\
+         #4=IFCGEOMETRICREPRESENTATIONCONTEXT($,'Model',3,1.E-05,#3,$);\n\
+         #5=IFCSIUNIT(*,.LENGTHUNIT.,$,.METRE.);\n#7=IFCUNITASSIGNMENT((#5));\n\
+         #10=IFCLOCALPLACEMENT($,#3);\n\
+         #11=IFCCARTESIANPOINTLIST3D(((0.,0.,0.),(1.,0.,0.),(1.,1.,0.),(0.,1.,0.),(0.,0.,1.),(1.,0.,1.),(1.,1.,1.),(0.,1.,1.)));\n\
+         #12=IFCTRIANGULATEDFACESET(#11,$,.T.,((1,3,2),(1,4,3),(5,6,7),(5,7,8),(1,2,6),(1,6,5),(2,3,7),(2,7,6),(3,4,8),(3,8,7),(4,1,5),(4,5,8)),$);\n\
+         #13=IFCSHAPEREPRESENTATION(#4,'Body','Tessellation',(#12));\n#14=IFCPRODUCTDEFINITIONSHAPE($,$,(#13));\n\
+         #15=IFCBUILDINGELEMENTPROXY('1YvctVUKr0kugbFTf53O9L',$,'box',$,$,#10,#14,$,$);\n{extra}\
+         ENDSEC;\nEND-ISO-10303-21;\n"
+    )
+}
+
+/// IFC files for the IfcOpenShell worker: garbage, empty, a header only, truncated, a STEP schema that is not
+/// IFC, an unknown IFC schema, an ifcZIP and an ifcXML named `.ifc`, a project without geometry, an aggregation
+/// cycle (the project decomposed into itself), and the valid box. Loading them needs the worker's venv.
+pub fn write_ifc_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
+    std::fs::create_dir_all(dir)?;
+    let one = ifc_box("IFC4", "");
+    let header_end = one.find("DATA;").unwrap_or(0);
+    let no_geometry = one
+        .lines()
+        .filter(|l| !l.starts_with("#1") || l.starts_with("#1="))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let cycle = ifc_box(
+        "IFC4",
+        "#20=IFCRELAGGREGATES('2YvctVUKr0kugbFTf53O9L',$,$,$,#1,(#1,#15));\n\
+         #21=IFCRELAGGREGATES('3YvctVUKr0kugbFTf53O9L',$,$,$,#15,(#1));\n",
+    );
+    let files: Vec<(&'static str, Vec<u8>, Expect)> = vec![
+        ("ifc_valid_box", one.clone().into_bytes(), Expect::Image),
+        ("ifc_aggregation_cycle", cycle.into_bytes(), Expect::Image),
+        (
+            "ifc_garbage",
+            b"\x7fELF\x02\x01\x01garbage".repeat(64),
+            Expect::Error,
+        ),
+        ("ifc_empty", Vec::new(), Expect::Error),
+        (
+            "ifc_header_only",
+            format!("{}END-ISO-10303-21;\n", &one[..header_end]).into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ifc_truncated",
+            one.as_bytes()[..one.len() / 2].to_vec(),
+            Expect::Error,
+        ),
+        (
+            "ifc_step_schema",
+            one.replace("'IFC4'", "'AUTOMOTIVE_DESIGN'").into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ifc_unknown_schema",
+            one.replace("'IFC4'", "'IFC9'").into_bytes(),
+            Expect::Error,
+        ),
+        ("ifc_zip", b"PK\x03\x04\x14\x00\x00\x00".repeat(16), Expect::Error),
+        (
+            "ifc_xml",
+            b"<?xml version=\"1.0\"?><ifcXML/>".to_vec(),
+            Expect::Error,
+        ),
+        ("ifc_no_geometry", no_geometry.into_bytes(), Expect::Error),
+    ];
+    let mut out = Vec::new();
+    for (name, bytes, expect) in files {
+        let path = dir.join(format!("{name}.ifc"));
+        make(&path, &Entry::File(bytes))?;
+        out.push(HostileCase {
+            name,
+            path,
+            expect,
+            reference: None,
+        });
+    }
+    Ok(out)
+}

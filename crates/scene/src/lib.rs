@@ -6,9 +6,10 @@
 
 mod aabb;
 pub mod cad;
-#[cfg(feature = "occt")]
+// Built without `occt` too: the IFC worker shares the worker process and the scene building.
+#[cfg_attr(not(feature = "occt"), allow(dead_code))]
 mod cad_header;
-#[cfg(feature = "occt")]
+#[cfg_attr(not(feature = "occt"), allow(dead_code))]
 mod cad_load;
 mod error;
 mod generate;
@@ -17,6 +18,7 @@ mod gltf_load;
 mod guard;
 #[cfg(feature = "hostile-corpus")]
 pub mod hostile;
+mod ifc_load;
 pub mod normals;
 mod obj_groups;
 mod obj_load;
@@ -35,6 +37,7 @@ pub use aabb::Aabb;
 pub use error::SceneError;
 pub use generate::{MAX_INSTANCES, MAX_MESH_TRIANGLES};
 pub use guard::{default_max_memory, CadFormat, CadOptions, CadTessellation, LoadOptions};
+pub use ifc_load::{default_venv, ifc_python, install_command as ifc_install_command, IFCOPENSHELL_VERSION};
 pub use scene::{
     Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR, EXACT_BOUNDS_VERTEX_BUDGET,
 };
@@ -77,8 +80,8 @@ pub fn generate(spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Sc
 }
 
 /// The extensions [`load_with`] reads (lower case; any case is accepted).
-pub const SUPPORTED_EXTENSIONS: [&str; 10] = [
-    "gltf", "glb", "obj", "stl", "ply", "3mf", "step", "stp", "iges", "igs",
+pub const SUPPORTED_EXTENSIONS: [&str; 11] = [
+    "gltf", "glb", "obj", "stl", "ply", "3mf", "step", "stp", "iges", "igs", "ifc",
 ];
 
 static DEFAULT_CAD_TESSELLATION: std::sync::RwLock<Option<CadTessellation>> = std::sync::RwLock::new(None);
@@ -119,8 +122,9 @@ pub fn load(path_or_spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Resul
     load_with(path_or_spec, &LoadOptions::default(), progress)
 }
 
-/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl`, `*.ply`, `*.3mf`, `*.step`/`*.stp` or
-/// `*.iges`/`*.igs` (any case; STEP and IGES through OpenCASCADE in a worker process, with the `occt` feature);
+/// Loads a scene from `gen:...`, `*.gltf`, `*.glb`, `*.obj`, `*.stl`, `*.ply`, `*.3mf`, `*.step`/`*.stp`,
+/// `*.iges`/`*.igs` or `*.ifc` (any case; STEP and IGES through OpenCASCADE in a worker process, with the `occt`
+/// feature; IFC through IfcOpenShell in a Python worker process);
 /// `opts` can cancel the load from another
 /// thread and bounds its memory. Files and their references are read through a guard: references stay
 /// inside the model's folder, only regular files of the declared size are read (never devices, FIFOs,
@@ -152,9 +156,10 @@ pub fn load_with(
             };
             load_cad(path, format, opts, progress)?
         }
+        "ifc" => ifc_load::load_ifc(path, opts, progress)?,
         _ => {
             return Err(SceneError::UnsupportedFormat(format!(
-                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply, .3mf, .step, .stp, .iges, .igs or gen:..."
+                "{path_or_spec}: expected .gltf, .glb, .obj, .stl, .ply, .3mf, .step, .stp, .iges, .igs, .ifc or gen:..."
             )))
         }
     };

@@ -58,6 +58,8 @@ fn mime_of(ext: &str) -> &'static str {
         "3mf" => "model/3mf",
         "step" | "stp" => "model/step",
         "iges" | "igs" => "model/iges",
+        // No registered type: the name FreeCAD and file managers give .ifc.
+        "ifc" => "application/x-extension-ifc",
         other => panic!("no MIME type known for .{other}: add it here and to packaging/hrtao.desktop"),
     }
 }

@@ -1,0 +1,225 @@
+# hrtao's IFC worker: reads an IFC file with IfcOpenShell and writes the frames of crates/scene/src/cad.rs to
+# stdout (tag byte, little-endian u64 length, payload): 'P' progress, 'E' an error, 'M' the model (layout version
+# 2). Run by the loader (crates/scene/src/ifc_load.rs) as `PYTHON -I -c SCRIPT PATH` under a CPU-time and an
+# address-space limit; it embeds this file, so an installed hrtao needs only the venv.
+#
+# One part per representation (the geometry iterator with local coordinates shares a mapped representation
+# between the products that place it: one mesh, many instances), one primitive per style colour. Nodes: the
+# spatial tree (IfcProject -> IfcSite -> IfcBuilding -> IfcBuildingStorey -> elements, through IfcRelAggregates,
+# IfcRelNests and IfcRelContainedInSpatialStructure), labelled "Name (IfcClass)"; a product with geometry outside
+# that tree is a root. Positions are in metres (the iterator converts); the file's length unit is reported.
+import os
+import struct
+import sys
+
+MODEL_FRAME_VERSION = 2
+PINNED = "0.8.4.post1"
+SPATIAL = ("IfcProject", "IfcSite", "IfcBuilding", "IfcBuildingStorey", "IfcFacility", "IfcFacilityPart")
+
+
+def frame(tag, payload):
+    out = sys.stdout.buffer
+    out.write(tag + struct.pack("<Q", len(payload)))
+    out.write(payload)
+    out.flush()
+
+
+def text(s):
+    b = (s or "").encode("utf-8", "replace")
+    return struct.pack("<Q", len(b)) + b
+
+
+def progress(stage, fraction):
+    frame(b"P", text(stage) + struct.pack("<d", fraction))
+
+
+def error(message):
+    frame(b"E", text(message))
+
+
+def colour(c):
+    if c is None:
+        return b"\x00" + struct.pack("<4f", 0, 0, 0, 0)
+    return b"\x01" + struct.pack("<4f", *c)
+
+
+def label(entity):
+    name = getattr(entity, "Name", None) or ""
+    cls = entity.is_a()
+    return f"{name} ({cls})" if name else cls
+
+
+def part_payload(np, geometry):
+    """A part's primitives: the triangles grouped by style, with the iterator's per-corner normals."""
+    verts = np.frombuffer(geometry.verts_buffer, dtype="<f8").reshape(-1, 3).astype("<f4")
+    normals = np.frombuffer(geometry.normals_buffer, dtype="<f8").reshape(-1, 3).astype("<f4")
+    if len(normals) != len(verts):
+        normals = np.zeros((0, 3), dtype="<f4")
+    faces = np.frombuffer(geometry.faces_buffer, dtype="<i4").reshape(-1, 3)
+    ids = np.frombuffer(geometry.material_ids_buffer, dtype="<i4")
+    materials = list(geometry.materials)
+    if len(ids) != len(faces):
+        ids = np.full(len(faces), -1, dtype="<i4")
+    prims = []
+    for m in sorted(set(ids.tolist())):
+        tri = faces[ids == m]
+        if len(tri) == 0:
+            continue
+        used = np.unique(tri)
+        remap = np.full(len(verts), 0, dtype="<u4")
+        remap[used] = np.arange(len(used), dtype="<u4")
+        c = None
+        if 0 <= m < len(materials):
+            d = materials[m].diffuse
+            t = materials[m].transparency
+            alpha = 1.0 - t if t == t and 0.0 <= t <= 1.0 else 1.0
+            c = (d.r(), d.g(), d.b(), alpha)
+        n = normals[used] if len(normals) else normals
+        p = colour(c) + b"\x01"
+        p += struct.pack("<Q", len(used)) + verts[used].tobytes()
+        p += struct.pack("<Q", len(n)) + n.tobytes()
+        p += struct.pack("<Q", tri.size) + remap[tri].astype("<u4").tobytes()
+        prims.append(p)
+    return struct.pack("<Q", len(prims)) + b"".join(prims)
+
+
+def children(entity):
+    out = []
+    for rel in getattr(entity, "IsDecomposedBy", None) or ():
+        out.extend(rel.RelatedObjects)
+    for rel in getattr(entity, "IsNestedBy", None) or ():
+        out.extend(rel.RelatedObjects)
+    for rel in getattr(entity, "ContainsElements", None) or ():
+        out.extend(rel.RelatedElements)
+    return out
+
+
+def main():
+    if len(sys.argv) != 2:
+        error("usage: ifc_worker.py FILE")
+        return 2
+    path = sys.argv[1]
+    hook = os.environ.get("HRTAO_IFC_WORKER_TEST_HOOK", "")
+    # Out of memory, the system kills this process before the viewer (as the OpenCASCADE worker does).
+    try:
+        with open("/proc/self/oom_score_adj", "w") as adj:
+            adj.write("500")
+    except OSError:
+        pass
+    progress("read", 0.0)
+    try:
+        import numpy as np
+        import ifcopenshell
+        import ifcopenshell.geom
+        import ifcopenshell.util.unit
+    except Exception as e:  # noqa: BLE001 - any import failure means the venv is not usable
+        error(f"IfcOpenShell is not installed for {sys.executable} ({e}): run scripts/install-deps.sh")
+        return 1
+    if hook == "spin":
+        while True:
+            pass
+    if hook == "sleep":
+        import time
+
+        time.sleep(3600)
+    try:
+        f = ifcopenshell.open(path)
+    except Exception as e:  # noqa: BLE001
+        error(f"IfcOpenShell cannot read the file: {e}")
+        return 1
+    progress("transfer", 0.0)
+    try:
+        file_unit = float(ifcopenshell.util.unit.calculate_unit_scale(f))
+    except Exception:  # noqa: BLE001 - no unit assignment: the iterator assumes metres
+        file_unit = 0.0
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", False)
+    settings.set("weld-vertices", False)
+    settings.set("apply-default-materials", True)
+    threads = max(1, min(8, os.cpu_count() or 1))
+    # Openings are voids (cut from their elements) and spaces are room volumes: neither is drawn (IfcConvert's
+    # defaults).
+    it = ifcopenshell.geom.iterator(settings, f, threads, exclude=("IfcOpeningElement", "IfcSpace"))
+    parts = {}  # representation id -> (index, payload)
+    placed = []  # (product id, part index, 16 doubles)
+    if it.initialize():
+        while True:
+            shape = it.get()
+            g = shape.geometry
+            key = g.id
+            if key not in parts:
+                parts[key] = (len(parts), text(shape.name or shape.type) + part_payload(np, g))
+            placed.append((shape.id, parts[key][0], bytes(shape.transformation_buffer)))
+            progress("tessellate", it.progress() / 100.0)
+            if not it.next():
+                break
+    if not placed:
+        schema = f.schema
+        products = len(f.by_type("IfcProduct"))
+        error(f"no geometry: IfcOpenShell found no product with a shape ({products} products, schema {schema})")
+        return 1
+    by_product = {}
+    for pid, part, world in placed:
+        by_product.setdefault(pid, []).append((part, world))
+
+    # The spatial tree, pre-order: spatial containers always, elements when they or their parts have geometry.
+    nodes = []  # (label, parent, part or None, world bytes)
+    identity = struct.pack("<16d", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1)
+    visited = set()
+
+    memo = {}
+
+    def has_geometry(e, depth=0):
+        if e.id() not in memo:
+            memo[e.id()] = False  # a cycle or a chain past 64 levels adds nothing
+            if depth <= 64:
+                memo[e.id()] = e.id() in by_product or any(has_geometry(c, depth + 1) for c in children(e))
+        return memo[e.id()]
+
+    def walk(e, parent, depth):
+        if e.id() in visited or depth > 64:
+            return
+        if e.is_a() not in SPATIAL and not has_geometry(e):
+            return
+        visited.add(e.id())
+        shapes = by_product.get(e.id(), [])
+        me = len(nodes)
+        if len(shapes) == 1:
+            nodes.append((label(e), parent, shapes[0][0], shapes[0][1]))
+        else:
+            nodes.append((label(e), parent, None, identity))
+            for k, (part, world) in enumerate(shapes):
+                nodes.append((f"{label(e)} #{k + 1}", me, part, world))
+        for c in children(e):
+            walk(c, me, depth + 1)
+
+    for project in f.by_type("IfcProject"):
+        walk(project, None, 0)
+    for pid, shapes in by_product.items():
+        if pid not in visited:
+            walk(f.by_id(pid), None, 0)
+
+    progress("model", 1.0)
+    out = [struct.pack("<Idd", MODEL_FRAME_VERSION, 1.0, file_unit), struct.pack("<Q", len(parts))]
+    for _, payload in sorted(parts.values(), key=lambda v: v[0]):
+        out.append(payload)
+    out.append(struct.pack("<Q", len(nodes)))
+    for name, parent, part, world in nodes:
+        out.append(text(name))
+        out.append(struct.pack("<Q", 0xFFFFFFFFFFFFFFFF if parent is None else parent))
+        out.append(struct.pack("<Q", 0xFFFFFFFFFFFFFFFF if part is None else part))
+        out.append(world)
+        out.append(colour(None) + b"\x01")
+    frame(b"M", b"".join(out))
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except MemoryError:
+        error("IfcOpenShell ran out of memory (the scene memory limit, HRTAO_MAX_SCENE_MB)")
+        sys.exit(1)
+    except Exception as e:  # noqa: BLE001 - every failure is an error frame, not a traceback
+        error(f"IfcOpenShell failed: {type(e).__name__}: {e}")
+        sys.exit(1)
