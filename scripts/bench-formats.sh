@@ -108,3 +108,30 @@ if [ -f "$engine" ]; then
 else
     echo "bench-formats: no $engine (HRTAO_SHARED): the Draco engine is left out" >&2
 fi
+
+# IFC: the open time (worker start, IfcOpenShell's tessellation, transfer, scene) of assimp's FZK-Haus, when the
+# IFC worker is installed (scripts/install-ifc.sh). Schema hrtao-format-open/1.
+assimp=$(scripts/fetch-assimp-models.sh)
+ifc="$assimp/IFC/AC14-FZK-Haus.ifc"
+if "$hrtao" render --scene "$ifc" --width 320 --height 180 --mode none --stats "$tmp/ifc.json" >"$tmp/ifc.log" 2>&1; then
+    python3 - "$tmp/ifc.json" "$out/ifc_fzk_haus.json" <<'EOF'
+import json, os, sys
+s = json.load(open(sys.argv[1]))
+json.dump({
+    "schema": "hrtao-format-open/1",
+    "name": "ifc_fzk_haus",
+    "format": "IFC2X3 (IfcOpenShell worker)",
+    "file": os.path.basename(s["scene"]),
+    "load_ms": s["load_ms"],
+    "unique_triangles": s["unique_triangles"],
+    "instanced_triangles": s["instanced_triangles"],
+    "meshes": s["meshes"],
+    "instances": s["instances"],
+    "load_average": os.getloadavg()[0],
+}, open(sys.argv[2], "w"), indent=1)
+print(f"ifc_fzk_haus: opened in {s['load_ms']:.0f} ms", file=sys.stderr)
+EOF
+else
+    echo "bench-formats: $ifc did not open (is the IFC worker installed? scripts/install-ifc.sh):" >&2
+    tail -3 "$tmp/ifc.log" >&2
+fi

@@ -9,6 +9,67 @@ use anyhow::{Context, Result};
 use serde::Deserialize;
 
 pub const FORMAT_SCHEMA: &str = "hrtao-format-compare/1";
+pub const OPEN_SCHEMA: &str = "hrtao-format-open/1";
+
+/// One file opened (`scripts/bench-formats.sh`'s IFC row).
+#[derive(Clone, Debug, Deserialize)]
+pub struct Open {
+    pub name: String,
+    pub format: String,
+    pub file: String,
+    pub load_ms: f64,
+    pub unique_triangles: u64,
+    pub instanced_triangles: u64,
+    pub meshes: u64,
+    pub instances: u64,
+    pub load_average: f64,
+}
+
+/// Every open-time result of `dir`, by name.
+pub fn load_opens(dir: &Path) -> Result<Vec<Open>> {
+    let mut out: Vec<Open> = crate::results::load_schema(dir, OPEN_SCHEMA)?
+        .into_iter()
+        .map(|(path, v)| {
+            serde_json::from_value(v).with_context(|| format!("{}: bad open time", path.display()))
+        })
+        .collect::<Result<_>>()?;
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(out)
+}
+
+/// The open times (nothing without results).
+pub fn open_section(m: &mut String, rows: &[Open]) -> Result<()> {
+    if rows.is_empty() {
+        return Ok(());
+    }
+    writeln!(m, "### Opening IFC\n")?;
+    writeln!(
+        m,
+        "`scripts/bench-formats.sh`: the process's `load_ms` of `hrtao render` (the IfcOpenShell worker's start, \
+         its tessellation, the transfer, the scene), with the machine's load average at the time.\n"
+    )?;
+    writeln!(
+        m,
+        "| file | format | open ms | meshes | instances | unique triangles | instanced triangles | load |"
+    )?;
+    writeln!(m, "|---|---|---|---|---|---|---|---|")?;
+    for r in rows {
+        writeln!(
+            m,
+            "| `{}` | {} | {:.0} | {} | {} | {} | {} | {:.1} |",
+            r.file,
+            r.format,
+            r.load_ms,
+            r.meshes,
+            r.instances,
+            r.unique_triangles,
+            r.instanced_triangles,
+            r.load_average
+        )?;
+    }
+    writeln!(m)?;
+    Ok(())
+}
 
 /// One compressed file against its twin.
 #[derive(Clone, Debug, Deserialize)]

@@ -835,6 +835,7 @@ fn render_markdown(
     step_table(&mut m, &load_step_results(dir)?)?;
     crate::step_sweep_report::section(&mut m, &crate::step_sweep_report::load(&dir.join("step"))?)?;
     crate::formats_report::section(&mut m, &crate::formats_report::load(&dir.join("formats"))?)?;
+    crate::formats_report::open_section(&mut m, &crate::formats_report::load_opens(&dir.join("formats"))?)?;
     first_frame_report::section(&mut m, &first_frame_report::load(&dir.join("first_frame"))?)?;
     latency_report::section(&mut m, &latency_report::load(&dir.join("latency"))?)?;
     viewer_report::section(&mut m, &viewer_report::load(&dir.join("viewer"))?)?;
