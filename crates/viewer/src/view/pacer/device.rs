@@ -12,6 +12,12 @@ use super::motion::{MIN_MOVING_SCALE, MOVING_FILTER_ITERATIONS};
 pub const SOFTWARE_TARGET_MS: f64 = 100.0;
 /// A GPU whose display reports no refresh rate (Xvfb, some Wayland compositors) aims at 60 Hz.
 pub const DEFAULT_REFRESH_MS: f64 = 1000.0 / 60.0;
+/// A frame that waited longer than this for its swapchain image was paced by the display.
+const PACED_WAIT_MS: f64 = 0.5;
+/// Present intervals of display-paced frames kept; their median is the refresh where the display reports none.
+const PRESENT_SAMPLES: usize = 15;
+/// Display-paced frames needed before their intervals stand for the refresh.
+const MIN_PRESENT_SAMPLES: usize = 8;
 /// Refresh rates outside 20-500 Hz are taken for a misreport.
 const REFRESH_MS_RANGE: (f64, f64) = (1000.0 / 500.0, 1000.0 / 20.0);
 /// The paper's budget (Table 1: 10 rays per pixel at 1080p): the first moving frame's rays per pixel at most.
@@ -62,6 +68,8 @@ pub struct DeviceModel {
     /// `recent_pixels` pixels (a frame of another size has another floor).
     recent: Vec<(f64, f64)>,
     recent_pixels: u64,
+    /// Intervals between display-paced frames (`observe_present`), while the display reports no refresh.
+    presents: Vec<f64>,
 }
 
 impl DeviceModel {
@@ -79,6 +87,7 @@ impl DeviceModel {
             floor_ms: None,
             recent: Vec::new(),
             recent_pixels: 0,
+            presents: Vec::new(),
         };
         model.display_refresh(refresh_mhz);
         model
@@ -92,12 +101,40 @@ impl DeviceModel {
             .filter(|ms| (REFRESH_MS_RANGE.0..=REFRESH_MS_RANGE.1).contains(ms));
     }
 
-    /// The frame-time target when the user set none: a frame per refresh on a GPU, 100 ms on a CPU.
+    /// The frame-time target when the user set none: a frame per refresh on a GPU (the display's, else the
+    /// one its presents show, else 60 Hz), 100 ms on a CPU.
     pub fn target_ms(&self) -> f64 {
         match self.class {
             DeviceClass::Software => SOFTWARE_TARGET_MS,
-            DeviceClass::Gpu => self.refresh_ms.unwrap_or(DEFAULT_REFRESH_MS),
+            DeviceClass::Gpu => self
+                .refresh_ms
+                .or_else(|| self.presented_refresh_ms())
+                .unwrap_or(DEFAULT_REFRESH_MS),
         }
+    }
+
+    /// After a frame presented `interval_ms` after the last one, having waited `waited_ms` for its swapchain
+    /// image: where the display reports no refresh, the intervals of frames the display paced (they waited)
+    /// measure it. Frames that did not wait say nothing (the device, not the display, set their pace).
+    pub fn observe_present(&mut self, interval_ms: f64, waited_ms: f64) {
+        let in_range = (REFRESH_MS_RANGE.0..=REFRESH_MS_RANGE.1).contains(&interval_ms);
+        if self.refresh_ms.is_some() || !(waited_ms > PACED_WAIT_MS && in_range) {
+            return;
+        }
+        self.presents.push(interval_ms);
+        if self.presents.len() > PRESENT_SAMPLES {
+            self.presents.remove(0);
+        }
+    }
+
+    /// The median interval of the display-paced frames, once there are enough of them.
+    fn presented_refresh_ms(&self) -> Option<f64> {
+        if self.presents.len() < MIN_PRESENT_SAMPLES {
+            return None;
+        }
+        let mut v = self.presents.clone();
+        v.sort_by(f64::total_cmp);
+        Some(v[v.len() / 2])
     }
 
     /// The first moving frames' render scale: a CPU starts at the smallest (its frames at full size take
@@ -281,6 +318,31 @@ mod tests {
         // A CPU: the probe's rays in a quarter of the target, as before.
         let cpu = DeviceModel::new(true, None).first_rays(459.0, 960 * 800, 960 * 800, 100.0);
         assert_eq!(cpu, budget::first_rays_per_frame(459.0, 960 * 800, 100.0));
+    }
+
+    /// A display that reports no refresh (Xvfb, some compositors): a GPU's target becomes the interval of the
+    /// frames the display paced, once 8 did; frames that did not wait, intervals out of range, a software
+    /// device and a reported refresh are left alone. Fails with `observe_present` counting every frame (the
+    /// 30 ms device-paced frames pull the median).
+    #[test]
+    fn a_gpu_without_a_reported_refresh_takes_it_from_its_presents() {
+        let mut m = DeviceModel::new(false, None);
+        for i in 0..7 {
+            m.observe_present(6.94, 2.0);
+            m.observe_present(30.0 + i as f64, 0.0);
+        }
+        assert_eq!(m.target_ms(), DEFAULT_REFRESH_MS, "7 paced frames are not enough");
+        m.observe_present(6.95, 1.0);
+        m.observe_present(1e4, 5.0);
+        assert!((m.target_ms() - 6.94).abs() < 0.02, "{}", m.target_ms());
+        let mut cpu = DeviceModel::new(true, None);
+        let mut reported = DeviceModel::new(false, Some(60_000));
+        for _ in 0..20 {
+            cpu.observe_present(6.94, 2.0);
+            reported.observe_present(6.94, 2.0);
+        }
+        assert_eq!(cpu.target_ms(), SOFTWARE_TARGET_MS);
+        assert!((reported.target_ms() - 16.667).abs() < 0.01);
     }
 
     /// With the ray pass timed, the floor and the rays' cost come from it; without, from a line through frames

@@ -335,6 +335,7 @@ impl Pacer {
         if let Some(last) = self.last_frame_at {
             let dt = m.now.saturating_sub(last).as_secs_f64() * 1e3;
             self.interval_ms_avg = ema(self.interval_ms_avg, dt);
+            self.device.observe_present(dt, m.wait_ms);
         }
         self.last_frame_at = Some(m.now);
         self.frame_ms_avg = ema(self.frame_ms_avg, m.render_ms);
