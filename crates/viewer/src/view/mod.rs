@@ -1198,9 +1198,10 @@ impl Viewer {
         let gpu_wall = f.t0.elapsed().as_secs_f64() * 1e3;
         if !f.waited {
             // Submitted, presented, completed later: its device time runs from the submission to now (at most:
-            // the host may have found it complete late), the wait its part after the present.
+            // the host may have found it complete late), the wait from its present to now (the spans stay
+            // disjoint: the finish is timed from here).
             f.device_ms = f.submitted.elapsed().as_secs_f64() * 1e3;
-            f.split.gpu_wait = (f.device_ms - f.split.present).max(0.0);
+            f.split.gpu_wait = f.laps.lap();
         }
         self.frames.overlapped += (f.ui_started < self.clock.ui_started) as u64;
         let shot_ms = if f.shot {
