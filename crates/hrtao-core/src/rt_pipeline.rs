@@ -160,13 +160,17 @@ impl RtPipeline {
         }
     }
 
-    /// Records a launch of `width` x `height` x 1 ray-generation invocations.
-    pub(crate) fn trace(&self, cmd: vk::CommandBuffer, width: u32, height: u32) {
-        let rt = self
-            .gpu
+    /// The device's ray-tracing pipeline functions (an `RtPipeline` exists only where they do).
+    fn rt(&self) -> &crate::context::RtSupport {
+        self.gpu
             .rt
             .as_ref()
-            .expect("an RtPipeline exists only with ray-tracing pipelines");
+            .expect("an RtPipeline exists only with ray-tracing pipelines")
+    }
+
+    /// Records a launch of `width` x `height` x 1 ray-generation invocations.
+    pub(crate) fn trace(&self, cmd: vk::CommandBuffer, width: u32, height: u32) {
+        let rt = self.rt();
         let [raygen, miss, hit, callable] = &self.regions;
         unsafe {
             rt.loader
@@ -176,11 +180,7 @@ impl RtPipeline {
 
     /// Records a launch whose size (`VkTraceRaysIndirectCommandKHR`) lies at device address `args`.
     pub(crate) fn trace_indirect(&self, cmd: vk::CommandBuffer, args: u64) {
-        let rt = self
-            .gpu
-            .rt
-            .as_ref()
-            .expect("an RtPipeline exists only with ray-tracing pipelines");
+        let rt = self.rt();
         let [raygen, miss, hit, callable] = &self.regions;
         unsafe {
             rt.loader

@@ -82,6 +82,26 @@ pub fn shared_meshes(scene: &crate::Scene) -> Vec<(String, usize)> {
         .collect()
 }
 
+/// The log line of a scene a CAD worker (`kernel`) read and tessellated in `read_s` seconds: its meshes,
+/// instances (the most shared meshes named) and triangles.
+pub fn loaded_summary(path: &std::path::Path, scene: &crate::Scene, kernel: &str, read_s: f64) -> String {
+    let shared = shared_meshes(scene);
+    format!(
+        "{}: {} unique meshes, {} instances{}, {} unique / {} instanced triangles; read and tessellated in \
+         {read_s:.2} s ({kernel} worker)",
+        path.display(),
+        scene.meshes.len(),
+        scene.instances.len(),
+        if shared.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", shared_meshes_text(&shared, 4))
+        },
+        scene.unique_triangle_count(),
+        scene.instanced_triangle_count(),
+    )
+}
+
 /// "nut ×8, bolt ×6, bracket ×2": the first `max` of [`shared_meshes`], "and K more" after them.
 pub fn shared_meshes_text(shared: &[(String, usize)], max: usize) -> String {
     let mut parts: Vec<String> = shared

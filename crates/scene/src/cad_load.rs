@@ -76,20 +76,9 @@ pub fn load_cad(
     let mut scene = to_scene(path, model).map_err(err)?;
     scene.metadata = metadata;
     stages.mark("scene");
-    let instanced: u64 = scene.instanced_triangle_count();
-    let shared = crate::cad::shared_meshes(&scene);
     log::info!(
-        "{}: {} unique meshes, {} instances{}, {} unique / {instanced} instanced triangles; read and tessellated \
-         in {read_s:.2} s (OpenCASCADE worker)",
-        path.display(),
-        scene.meshes.len(),
-        scene.instances.len(),
-        if shared.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", crate::cad::shared_meshes_text(&shared, 4))
-        },
-        scene.unique_triangle_count(),
+        "{}",
+        crate::cad::loaded_summary(path, &scene, "OpenCASCADE", read_s)
     );
     log::info!("{}: {}", path.display(), stages.summary());
     Ok(scene)

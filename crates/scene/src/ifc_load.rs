@@ -123,19 +123,9 @@ pub fn load_ifc(
     let read_s = started.elapsed().as_secs_f64();
     let scene = crate::cad_load::to_scene(path, model).map_err(err)?;
     stages.mark("scene");
-    let shared = crate::cad::shared_meshes(&scene);
     log::info!(
-        "{}: {} unique meshes, {} instances{}, {} unique triangles; read and tessellated in {read_s:.2} s \
-         (IfcOpenShell worker)",
-        path.display(),
-        scene.meshes.len(),
-        scene.instances.len(),
-        if shared.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", crate::cad::shared_meshes_text(&shared, 4))
-        },
-        scene.unique_triangle_count(),
+        "{}",
+        crate::cad::loaded_summary(path, &scene, "IfcOpenShell", read_s)
     );
     Ok(scene)
 }
