@@ -7,6 +7,8 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 export HRTAO_VALIDATION=1
 export RUST_BACKTRACE=1
+# A clean clone builds once: incremental caches would only double target/ (18 of 30 GB) on the CI disk.
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 # Lavapipe compiles every pipeline when first used (~0.4 s each) and every test builds its own device: Mesa's
 # shader cache lets later tests reuse the compiled pipelines (a suite twice as fast). It lives in target/, not in
 # $HOME, so it cannot grow across checkouts; its keys hash the SPIR-V and the driver, so a stale entry never hits.
