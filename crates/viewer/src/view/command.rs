@@ -29,6 +29,8 @@ pub enum Command {
     Open(String),
     /// The Open… dialog (Ctrl+O).
     OpenDialog,
+    /// Reload the open file, keeping the camera, sections and selection (F5, Ctrl+R; `reload.rs`).
+    Reload,
     /// Stop the running load.
     CancelLoading,
     /// Make this the selection (a tree node, a toggled set, nothing).

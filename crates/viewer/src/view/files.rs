@@ -89,6 +89,7 @@ impl FilesPanel {
         if ui.button("Open the bundled scene").clicked() && idle {
             out.push(Command::Open(super::default_spec()));
         }
+        out.extend(recent_row(ui, state));
         if let Some(l) = &state.loading {
             let cancel = ui
                 .horizontal(|ui| {
@@ -186,6 +187,72 @@ impl FilesPanel {
             }
         }
     }
+}
+
+/// Names under which the recent entries' rectangles are probed (`ui_probe`), most recent first.
+const RECENT_PROBES: [&str; super::recent::CAP] = [
+    "recent 1",
+    "recent 2",
+    "recent 3",
+    "recent 4",
+    "recent 5",
+    "recent 6",
+    "recent 7",
+    "recent 8",
+    "recent 9",
+    "recent 10",
+];
+
+/// The Recent menu (missing files disabled), Reload (F5) and the auto-reload switch.
+fn recent_row(ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
+    let mut out = Vec::new();
+    let ppp = ui.ctx().pixels_per_point();
+    let idle = state.loading.is_none();
+    ui.horizontal(|ui| {
+        let entries = super::recent::entries(&state.prefs.recent);
+        let menu = ui.add_enabled_ui(!entries.is_empty() && idle, |ui| {
+            ui.menu_button("Recent ▾", |ui| {
+                for (k, (path, exists)) in entries.iter().enumerate() {
+                    let label = path.display().to_string();
+                    let b = ui
+                        .add_enabled(*exists, egui::Button::new(&label))
+                        .on_disabled_hover_text("the file is not there any more");
+                    if let Some(name) = RECENT_PROBES.get(k) {
+                        super::ui_probe::note(name, b.rect, ppp);
+                    }
+                    if b.clicked() {
+                        out.push(Command::Open(label));
+                        ui.close();
+                    }
+                }
+            })
+            .response
+        });
+        super::ui_probe::note("recent", menu.inner.rect, ppp);
+        menu.response
+            .on_hover_text("Recently opened files, most recent first");
+        let file_open = std::path::Path::new(state.spec).is_file();
+        if ui
+            .add_enabled(file_open && idle, egui::Button::new("Reload"))
+            .on_hover_text(
+                "Open the file again, keeping the camera, section planes and selection (F5, Ctrl+R)",
+            )
+            .clicked()
+        {
+            out.push(Command::Reload);
+        }
+        let mut auto = state.prefs.auto_reload;
+        if ui
+            .checkbox(&mut auto, "Auto-reload")
+            .on_hover_text("Reload the open file when it changes on disk")
+            .changed()
+        {
+            let mut prefs = state.prefs.clone();
+            prefs.auto_reload = auto;
+            out.push(Command::Prefs(Box::new(prefs)));
+        }
+    });
+    out
 }
 
 #[cfg(test)]

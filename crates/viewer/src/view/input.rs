@@ -298,6 +298,8 @@ pub fn keyboard(ctx: &egui::Context, state: &ViewState, tools: &mut Tools) -> Ve
             Key::Z,
             Key::Y,
             Key::O,
+            Key::R,
+            Key::F5,
             Key::ArrowLeft,
             Key::ArrowRight,
             Key::ArrowUp,
@@ -351,6 +353,14 @@ pub fn keyboard(ctx: &egui::Context, state: &ViewState, tools: &mut Tools) -> Ve
             }
             Key::O if mods.command => {
                 out.push(Command::OpenDialog);
+                continue;
+            }
+            Key::F5 => {
+                out.push(Command::Reload);
+                continue;
+            }
+            Key::R if mods.command => {
+                out.push(Command::Reload);
                 continue;
             }
             Key::Escape if state.shot.as_ref().is_some_and(|s| s.2) => {

@@ -23,6 +23,8 @@ mod pacer;
 pub mod prefs;
 pub mod present;
 mod properties;
+mod recent;
+mod reload;
 mod sections;
 mod selection;
 mod settings_panel;
@@ -36,6 +38,7 @@ mod ui_colors;
 mod ui_layer;
 mod ui_probe;
 mod view_cube;
+mod watch;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -207,6 +210,9 @@ pub(crate) struct Viewer {
     panels: ui::Panels,
     edits: EditStack,
     loader: loader::Loader,
+    /// The view a running reload keeps (`reload.rs`), and the watch on the open file (`watch.rs`).
+    reloading: Option<reload::Keep>,
+    watch: Option<watch::FileWatch>,
     /// What the command line asked of the first scene (crate::setup), then of the scenes opened after it.
     startup: crate::setup::SetupInputs,
     // View.
@@ -310,6 +316,8 @@ impl Viewer {
             panels: ui::Panels::new(&spec, !args.no_panel),
             edits: EditStack::default(),
             loader: loader::Loader::default(),
+            reloading: None,
+            watch: None,
             startup: crate::setup::SetupInputs::from_view(args),
             render_scale,
             view_rect: [0, 0, 1, 1],
@@ -410,17 +418,26 @@ impl Viewer {
             return;
         };
         let spec = loaded.spec;
+        let keep = self.take_reload(&spec);
         match loaded.result.and_then(|scene| {
             self.install_scene(scene, &spec)
                 .map_err(|e| format!("cannot open `{spec}`: {e:#}"))
         }) {
-            Ok(()) => self.toast(
-                format!("opened {spec} in {:.1} s", loaded.took.as_secs_f64()),
-                false,
-            ),
+            Ok(()) => {
+                self.opened_file(&spec);
+                match keep {
+                    Some(k) => self.reloaded(k),
+                    None => self.toast(
+                        format!("opened {spec} in {:.1} s", loaded.took.as_secs_f64()),
+                        false,
+                    ),
+                }
+            }
             Err(e) => {
                 self.loader.error = Some(e.clone());
-                if self.scene.is_none() && self.script.exit {
+                if keep.is_some() {
+                    self.reload_failed(&e);
+                } else if self.scene.is_none() && self.script.exit {
                     // The exit status's line names the file and the reason (the OS's, for a missing file).
                     self.fatal(e);
                 } else {
@@ -622,6 +639,7 @@ impl Viewer {
     fn ui(&mut self, ui: &mut egui::Ui) {
         self.clock.ui_started = Instant::now();
         self.poll_loading();
+        self.poll_watch();
         self.script_orbit();
         if let Some(d) = self.script.deadline {
             if Instant::now() > d {
@@ -665,6 +683,7 @@ impl Viewer {
     fn apply(&mut self, command: Command) {
         match command {
             Command::Open(spec) => self.start_loading(spec),
+            Command::Reload => self.reload(),
             Command::OpenDialog => {
                 if let Some(c) = self.panels.files.open_dialog(&self.scene_spec, &self.egui_ctx) {
                     self.apply(c);

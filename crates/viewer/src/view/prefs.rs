@@ -55,6 +55,10 @@ pub struct Prefs {
     pub cad_load: super::load_options::CadLoadOptions,
     /// How meshes without normals of their own are smoothed when opened (the panel's load options).
     pub mesh_load: super::load_options::MeshLoadOptions,
+    /// Recently opened files, most recent first (canonical paths, at most `recent::CAP`; see `recent.rs`).
+    pub recent: Vec<PathBuf>,
+    /// Reload the open file when it changes on disk (`watch.rs`).
+    pub auto_reload: bool,
 }
 
 impl Default for Prefs {
@@ -76,6 +80,8 @@ impl Default for Prefs {
             dark_theme: true,
             cad_load: Default::default(),
             mesh_load: Default::default(),
+            recent: Vec::new(),
+            auto_reload: true,
         }
     }
 }
@@ -142,6 +148,7 @@ pub fn load(path: &Path) -> (Prefs, Option<String>) {
                 );
             }
             p.bookmarks.retain(|b| b.camera.validate().is_ok());
+            super::recent::sanitize(&mut p.recent, super::recent::CAP);
             // The older versions' default of 100 ms was written whether chosen or not: the device's target.
             if let Some(t) = p.legacy_target_ms.take() {
                 if p.frame_target_ms.is_none() && t != LEGACY_DEFAULT_TARGET_MS {

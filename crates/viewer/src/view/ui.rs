@@ -90,6 +90,11 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Tab",
         "show / hide the panel (also while a panel widget has the keyboard focus)",
     ),
+    (
+        "F5 / Ctrl+R",
+        "reload the open file, keeping the camera, section planes and selection (also automatic when the file \
+         changes on disk: the Scene section's Auto-reload)",
+    ),
     ("F11", "full screen on / off"),
     ("Ctrl+Q", "quit"),
 ];
@@ -346,6 +351,9 @@ pub(crate) fn draw_toasts(ctx: &egui::Context, toasts: &mut Vec<Toast>) {
         .anchor(egui::Align2::LEFT_BOTTOM, [10.0, -10.0])
         .interactable(false)
         .show(ctx, |ui| {
+            if let Some(last) = toasts.last() {
+                ui_probe::note_text("toast", &last.text);
+            }
             for t in toasts.iter() {
                 egui::Frame::popup(ui.style()).show(ui, |ui| {
                     let color = if t.error {

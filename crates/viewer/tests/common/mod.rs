@@ -105,14 +105,17 @@ impl Running {
         Self::launch(&[&["view"], args].concat(), cwd, &env)
     }
 
-    /// `hrtao ARGS --no-config` in `cwd` with `env` changed, its log captured.
+    /// `hrtao ARGS --no-config` (unless ARGS name a `--config` file) in `cwd` with `env` changed, its log
+    /// captured.
     pub fn launch(args: &[&str], cwd: &Path, env: &[(&str, Option<&str>)]) -> Running {
         use std::io::BufRead;
         let display = display_lock();
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_hrtao"));
-        cmd.args(args)
-            .arg("--no-config")
-            .current_dir(cwd)
+        cmd.args(args);
+        if !args.contains(&"--config") {
+            cmd.arg("--no-config");
+        }
+        cmd.current_dir(cwd)
             .env("HRTAO_VALIDATION", "1")
             .env("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)
             .env("RUST_LOG", "info")
