@@ -2,7 +2,9 @@
 //! `scripts/test.sh` runs through `scripts/install-deps.sh`): assimp's AC14-FZK-Haus.ifc with its spatial tree and
 //! shared representations (counted with IfcOpenShell's own API), its AO against IfcOpenShell's own glTF export, a
 //! building generated with IfcOpenShell's API, the hostile IFC corpus, a missing interpreter, and a worker that is
-//! killed or runs out of CPU time. Each test skips, saying why, only when the venv is absent.
+//! killed or runs out of CPU time, in `render` and in the viewer's window. Each test skips, saying why, only when the venv is absent.
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -407,5 +409,124 @@ fn a_worker_killed_or_out_of_cpu_time_is_an_error() {
         "{stderr}"
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// The pid of a child of `parent` whose command line contains `needle`.
+fn child_process(parent: u32, needle: &str) -> Option<i32> {
+    std::fs::read_dir("/proc").ok()?.flatten().find_map(|entry| {
+        let pid = entry.file_name().to_string_lossy().parse::<i32>().ok()?;
+        let stat = std::fs::read_to_string(entry.path().join("stat")).ok()?;
+        let ppid = stat
+            .rsplit(')')
+            .next()?
+            .split_whitespace()
+            .nth(1)?
+            .parse::<u32>()
+            .ok()?;
+        let cmd = std::fs::read(entry.path().join("cmdline")).ok()?;
+        (ppid == parent && String::from_utf8_lossy(&cmd).contains(needle)).then_some(pid)
+    })
+}
+
+/// Where the viewer last logged the centre of the panel control `name` (`HRTAO_UI_PROBE`).
+fn probed(v: &mut common::Running, name: &str) -> (i32, i32) {
+    let needle = format!("ui probe: {name} at ");
+    v.wait_for(&needle, 1, Duration::from_secs(30));
+    let log = v.log_text();
+    let line = log.lines().rev().find(|l| l.contains(&needle)).unwrap();
+    let at = line
+        .split(&needle)
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap();
+    let (x, y) = at.split_once(',').unwrap();
+    (x.parse().unwrap(), y.parse().unwrap())
+}
+
+/// The window (under Xvfb) shows gen:box and opens an IFC file from the Recent menu (real X input); the test kills the
+/// IfcOpenShell worker while it reads. The viewer keeps running with gen:box on screen and shows the error in a
+/// toast; it still answers input (F12 saves a screenshot of gen:box).
+#[test]
+fn the_window_survives_a_killed_worker_with_an_error_toast() {
+    if python().is_none() || !common::display_available() {
+        return;
+    }
+    let _x = common::x_input_lock();
+    let dir = common::out_dir("ifc-kill");
+    let path = dir.join("box.ifc");
+    std::fs::write(&path, hrtao_scene::hostile::ifc_box("IFC4", "")).unwrap();
+    // Opened as a user would: File ▸ Recent, where the preferences remember it.
+    let config = dir.join("viewer.json");
+    std::fs::write(
+        &config,
+        serde_json::json!({ "recent": [std::fs::canonicalize(&path).unwrap()] }).to_string(),
+    )
+    .unwrap();
+    let mut v = common::Running::start_with(
+        &[
+            "gen:box",
+            "--size",
+            "640x400",
+            "--config",
+            config.to_str().unwrap(),
+        ],
+        &dir,
+        &[
+            ("HRTAO_UI_PROBE", Some("1")),
+            ("HRTAO_IFC_WORKER_TEST_HOOK", Some("sleep")),
+        ],
+    );
+    v.wait_for("] opened gen:box", 1, Duration::from_secs(60));
+    let window = v.focus_window();
+    let menu = probed(&mut v, "recent");
+    v.click_until(&window, menu, "ui probe: recent 1 at ", 1);
+    let entry = probed(&mut v, "recent 1");
+    v.click_until(&window, entry, "] opening ", 2);
+    let t0 = Instant::now();
+    let worker = loop {
+        if let Some(pid) = child_process(v.child.id(), "box.ifc") {
+            break pid;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(60) && v.child.try_wait().unwrap().is_none(),
+            "no worker ran:\n{}",
+            v.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    // SAFETY: kill(2) on the worker of the viewer this test started.
+    unsafe { libc::kill(worker, libc::SIGKILL) };
+    v.wait_for("ui probe: toast = ", 1, Duration::from_secs(30));
+    v.wait_for("killed", 1, Duration::from_secs(30));
+    let toast = v
+        .log_text()
+        .lines()
+        .rev()
+        .find(|l| l.contains("ui probe: toast = "))
+        .unwrap()
+        .to_string();
+    assert!(
+        toast.contains("box.ifc") && toast.contains("killed"),
+        "the toast names the file and what happened: {toast}"
+    );
+    assert!(v.child.try_wait().unwrap().is_none(), "the viewer runs on");
+    common::xdotool(&["key", "--window", &window, "F12"]);
+    v.wait_for("] screenshot saved", 1, Duration::from_secs(60));
+    let shot = &common::screenshots(&dir.join("screenshots"))[0];
+    assert!(
+        shot.file_name().unwrap().to_string_lossy().starts_with("gen_box"),
+        "the open scene is still gen:box: {shot:?}"
+    );
+    let img = image::open(shot).unwrap().to_rgb8();
+    let corner = *img.get_pixel(0, 0);
+    let model = img
+        .pixels()
+        .filter(|p| p.0.iter().zip(corner.0).any(|(a, b)| a.abs_diff(b) > 60))
+        .count();
+    assert!(model > 500, "gen:box is still on screen ({model} pixels)");
+    v.validation_clean();
     let _ = std::fs::remove_dir_all(dir);
 }

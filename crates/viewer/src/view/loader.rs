@@ -40,6 +40,7 @@ impl Loader {
     /// Starts loading `spec` on a thread with `opts`; a load still running is cancelled.
     pub fn start(&mut self, spec: String, opts: hrtao_scene::LoadOptions) {
         self.cancel();
+        log::info!("opening {spec}");
         let (tx, rx) = mpsc::channel();
         let s = spec.clone();
         let thread_opts = opts.clone();
