@@ -175,17 +175,23 @@ def preflight(hrtao):
         ctypes.CDLL("libvulkan.so.1")
     except OSError as e:
         raise Missing(
-            f"no Vulkan loader (libvulkan.so.1): {e}. The bundle carries one in lib/ (scripts/gpu-check.sh sets "
+            f"a Vulkan loader (libvulkan.so.1): {e}. The bundle carries one in lib/ (scripts/gpu-check.sh sets "
             "LD_LIBRARY_PATH); elsewhere install libvulkan1."
         )
     p, _ = hrtao.run(["devices"], "devices", check=False)
     listing = p.stdout + p.stderr
     print(listing, end="", flush=True)
     if p.returncode != 0:
+        if "Unable to find a Vulkan driver" in listing or "Vulkan devices (0)" in listing:
+            files = os.environ.get("VK_DRIVER_FILES")
+            raise Missing(
+                "a Vulkan driver: the loader found none (no ICD file"
+                + (f" at VK_DRIVER_FILES={files}" if files else "; set VK_DRIVER_FILES to the driver's icd.json")
+                + ")"
+            )
         raise Missing(
-            "no Vulkan device with VK_KHR_acceleration_structure and VK_KHR_ray_query or "
-            "VK_KHR_ray_tracing_pipeline (each device's reason is listed above; with no device listed the loader "
-            "found no driver: is the NVIDIA ICD there, VK_DRIVER_FILES?)"
+            "a Vulkan device with VK_KHR_acceleration_structure and VK_KHR_ray_query or "
+            "VK_KHR_ray_tracing_pipeline: each device's reason is listed above"
         )
     # The kinds are `hrtao_core::context::kind_name`'s ("CPU (software)" has parentheses of its own).
     kinds = r"discrete GPU|integrated GPU|virtual GPU|CPU \(software\)|other"
@@ -341,9 +347,12 @@ def write_markdown(path, report):
     if d:
         m += ["", f"- device: {d['name']} ({d['kind']}), driver {d['driver']}, Vulkan {d['api_version']}",
               f"- ray backends: {', '.join(d['ray_backends'])} (default {d['default_ray_backend']})"]
+        if d.get("properties"):
+            m.append(f"- properties: `{json.dumps(d['properties'])}`")
     if report.get("error"):
         m += ["", f"**{report['error']}**"]
-    m += ["", "| check | result | numbers |", "|---|---|---|"]
+    if report["checks"]:
+        m += ["", "| check | result | numbers |", "|---|---|---|"]
     for c in report["checks"]:
         nums = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in c["numbers"].items())
         m.append(f"| {c['name']} | {'pass' if c['passed'] else 'FAIL'} | {nums} |")
@@ -383,6 +392,7 @@ def main():
         report["checks"].append(hash_overload(hrtao, main_scene, size))
         # Device facts as every command records them (timestamps, backend, software or not).
         report["device"]["properties"] = json.load(open(os.path.join(a.out, "map_normal.stats.json")))["device"]
+        log(f"device properties: {json.dumps(report['device']['properties'])}")
         for s in scenes:
             report["benches"].append(bench(hrtao, s, a.small))
         if len(scenes) == 1:

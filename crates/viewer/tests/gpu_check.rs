@@ -161,3 +161,31 @@ fn a_bundle_over_the_size_limit_fails_loudly() {
     assert!(log.contains("over the limit of 1 MiB"), "{log}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn a_machine_without_a_vulkan_driver_is_told_what_is_missing() {
+    if tools_missing() {
+        return;
+    }
+    let dir = tmp_dir("no-driver");
+    // From the repository, as on a machine whose loader finds no driver file.
+    let run = Command::new("bash")
+        .arg(script())
+        .args(["run", "--small", "--out"])
+        .arg(&dir)
+        .env("HRTAO_BIN", env!("CARGO_BIN_EXE_hrtao"))
+        .env("VK_DRIVER_FILES", dir.join("no-such-icd.json"))
+        .output()
+        .expect("run gpu-check.sh run");
+    let log = text(&run);
+    assert_eq!(run.status.code(), Some(2), "{log}");
+    assert!(log.contains("missing: a Vulkan driver"), "{log}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["passed"], false);
+    assert!(
+        report["error"].as_str().unwrap().contains("no-such-icd.json"),
+        "{report:#}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
