@@ -53,6 +53,13 @@ bundle() {
   loader=$("$ldconfig" -p | awk '/libvulkan\.so\.1 .*x86-64/ && !n++ {print $NF}')
   [ -n "$loader" ] || { echo "gpu-check: no libvulkan.so.1 here to bundle (apt install libvulkan1)" >&2; exit 1; }
   cp -L "$loader" "$dir/lib/libvulkan.so.1"
+  # The C++ runtime the glTF decoders link (they need only CXXABI_1.3, which every libstdc++ has): used there only
+  # when the machine has none, so that a newer system copy, which the GPU driver may need, is never shadowed.
+  mkdir -p "$dir/lib/fallback"
+  local lib
+  for lib in libstdc++.so.6 libgcc_s.so.1; do
+    cp -L "$("$ldconfig" -p | awk -v l="$lib" '$1 == l && /x86-64/ && !n++ {print $NF}')" "$dir/lib/fallback/"
+  done
   cp "$HERE/gpu-check.sh" "$HERE/gpu_check.py" "$dir/"
   # The bundled gearbox (the scene `hrtao render` shows by default) with its camera and its Cycles references.
   cp assets/default.glb assets/default.camera.json assets/default.LICENSE.md "$dir/scenes/"
@@ -80,7 +87,8 @@ bundle() {
   printf '{"scenes": [%s]}\n' "$scenes" >"$dir/manifest.json"
   python3 -c 'import json, sys; json.load(open(sys.argv[1]))' "$dir/manifest.json"
 
-  echo "gpu-check: the binary needs glibc >= $(glibc_needed "$dir/bin/hrtao" | sed 's/GLIBC_//')"
+  echo "gpu-check: the binary needs glibc >= $(glibc_needed "$dir/bin/hrtao" | sed 's/GLIBC_//') and the libraries" \
+    "$(objdump -p "$dir/bin/hrtao" | awk '/NEEDED/ {printf "%s ", $2}')(libvulkan.so.1 dlopened)"
   local bytes
   bytes=$(du -sb "$dir" | cut -f1)
   echo "gpu-check: bundle $dir: $((bytes / 1024)) KiB"
@@ -108,6 +116,10 @@ run() {
     root=$HERE
     bin=${HRTAO_BIN:-$HERE/bin/hrtao}
     export LD_LIBRARY_PATH="$HERE/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    if ! python3 -c 'import ctypes; ctypes.CDLL("libstdc++.so.6"); ctypes.CDLL("libgcc_s.so.1")' 2>/dev/null; then
+      echo "gpu-check: no C++ runtime on this machine: the bundle's (lib/fallback)"
+      export LD_LIBRARY_PATH="$LD_LIBRARY_PATH:$HERE/lib/fallback"
+    fi
   else
     root=$(cd "$HERE/.." && pwd)
     bin=${HRTAO_BIN:-${CARGO_TARGET_DIR:-$root/target}/release/hrtao}
