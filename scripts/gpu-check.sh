@@ -5,7 +5,7 @@
 #   scripts/gpu-check.sh bundle [DIR]            (here) a release hrtao without OpenCASCADE, stripped, with
 #                                                libvulkan.so.1, the scenes, the Cycles references and this driver,
 #                                                in DIR (default .gpu-check/, at most 64 MiB)
-#   DIR/gpu-check.sh run [--small] [--out DIR]   (there) checks the machine, then correctness against the
+#   DIR/gpu-check.sh run [--small] [--out OUT]   (there) checks the machine, then correctness against the
 #                                                references, the hash map overloaded, and `hrtao bench` at
 #                                                1920x1080 (--small: 160x90, about a minute on lavapipe);
 #                                                writes OUT/report.json and OUT/report.md (default OUT: ./gpu-check-out)
@@ -32,12 +32,12 @@ glibc_needed() {
 bundle() {
   local repo dir max_mib bin shared
   repo=$(cd "$HERE/.." && pwd)
-  dir=${1:-$repo/.gpu-check}
+  # Paths given relative to where the command runs, before it moves to the repository.
+  dir=$(realpath -m "${1:-$repo/.gpu-check}")
+  bin=${HRTAO_BIN:+$(realpath "$HRTAO_BIN")}
   max_mib=${GPU_CHECK_MAX_MIB:-64}
   cd "$repo"
-  if [ -n "${HRTAO_BIN:-}" ]; then
-    bin=$HRTAO_BIN
-  else
+  if [ -z "$bin" ]; then
     # No OpenCASCADE: the target has none of its libraries, and the check reads glTF only.
     cargo build --release -p hrtao-viewer --no-default-features
     bin=${CARGO_TARGET_DIR:-target}/release/hrtao
@@ -96,7 +96,7 @@ bundle() {
     echo "gpu-check: error: the bundle is $((bytes / 1024 / 1024)) MiB, over the limit of $max_mib MiB" >&2
     exit 1
   fi
-  echo "gpu-check: on the GPU machine: $dir/gpu-check.sh run [--small] [--out DIR]"
+  echo "gpu-check: on the GPU machine: $dir/gpu-check.sh run [--small] [--out OUT]"
 }
 
 # ---------------------------------------------------------------- run (on the GPU machine, or here)
@@ -130,6 +130,10 @@ run() {
   local nvidia=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
   if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$nvidia" ]; then
     export VK_DRIVER_FILES=$nvidia
+    # The driver library that file names (libGLX_nvidia.so.0) lives beside it, maybe off the linker's path.
+    if [ -d /usr/local/nvidia/lib64 ]; then
+      export LD_LIBRARY_PATH="${LD_LIBRARY_PATH:+$LD_LIBRARY_PATH:}/usr/local/nvidia/lib64"
+    fi
   fi
   # The caller's backend choice must not narrow the check (each backend is tried in turn).
   unset HRTAO_RAY_BACKEND
