@@ -1,11 +1,13 @@
 //! `bench-report DIR [--markdown FILE]`: reads every `hrtao bench` result of DIR (schema `hrtao-bench/1`, with
-//! the `first_frame/` and `latency/` results under it and `scripts/bench-step.sh`'s `step_*.json`) and writes
-//! the markdown report (default: DIR/../benchmarks.md) and its PNG plots beside the results. A development tool:
-//! `hrtao bench` measures, this renders, and the user's binary carries none of it.
+//! the `first_frame/` and `latency/` results under it, `scripts/bench-step.sh`'s `step_*.json` and
+//! `scripts/gpu-check.sh`'s `gpu/report.json`) and writes the markdown report (default: DIR/../benchmarks.md) and
+//! its PNG plots beside the results. A development tool: `hrtao bench` measures, this renders, and the user's
+//! binary carries none of it.
 //!
 //! `cargo run -p bench-report -- docs/bench --markdown docs/benchmarks.md`
 mod first_frame_report;
 mod formats_report;
+mod gpu_report;
 mod latency_report;
 mod plot;
 mod report;

@@ -839,6 +839,10 @@ fn render_markdown(
     first_frame_report::section(&mut m, &first_frame_report::load(&dir.join("first_frame"))?)?;
     latency_report::section(&mut m, &latency_report::load(&dir.join("latency"))?)?;
     viewer_report::section(&mut m, &viewer_report::load(&dir.join("viewer"))?)?;
+    crate::gpu_report::section(
+        &mut m,
+        crate::gpu_report::load(&dir.join("gpu/report.json"))?.as_ref(),
+    )?;
     Ok(m)
 }
 
@@ -1177,6 +1181,7 @@ mod tests {
             "## Error against a converged reference",
             "### Ours beside the paper's behaviour",
             "## Scale: generated server rooms",
+            "## GPU results",
         ] {
             assert!(text.contains(heading), "the report lacks {heading:?}");
         }
