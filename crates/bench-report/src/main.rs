@@ -10,6 +10,7 @@ mod formats_report;
 mod gpu_report;
 mod latency_report;
 mod plot;
+mod ray_backend_report;
 mod report;
 mod results;
 mod step_sweep_report;

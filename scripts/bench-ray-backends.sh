@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# First frame and navigation frame with each way to trace (ray queries in compute shaders, or ray-tracing
+# pipelines), side by side: `hrtao bench --ray-backend query|pipeline` on the shared scenes' reference views at
+# 640x360 (8 rays per pixel, 5 first frames from an empty map and 16 orbit frames per run), the two backends
+# alternating run by run so that both see the same load. One JSON per backend, scene and run in
+# docs/bench/ray_backend/<backend>_<key>_<run>.json; `cargo run -p bench-report -- docs/bench` tabulates them.
+#
+#   HRTAO_SHARED=DIR scripts/bench-ray-backends.sh   (KEYS="sf duplex", RUNS=3, HRTAO=target/release/hrtao)
+#
+# Run it on an idle machine; a backend the device lacks is an error of `hrtao bench`.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+OUT=${OUT:-docs/bench/ray_backend}
+: "${HRTAO_SHARED:=/work/shared}"
+KEYS=${KEYS:-"sf duplex"}
+RUNS=${RUNS:-3}
+export MESA_SHADER_CACHE_DISABLE=false MESA_SHADER_CACHE_DIR=$PWD/target/mesa-shader-cache
+unset HRTAO_VALIDATION HRTAO_RAY_BACKEND
+
+if [ -z "${HRTAO:-}" ]; then
+    cargo build --release -q -p hrtao-viewer
+    HRTAO=target/release/hrtao
+fi
+
+mkdir -p "$OUT"
+for key in $KEYS; do
+    scene=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]]['scene'])" \
+        "$HRTAO_SHARED/refs/index.json" "$key")
+    radius=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]]['radius'])" \
+        "$HRTAO_SHARED/refs/index.json" "$key")
+    for run in $(seq 1 "$RUNS"); do
+        for backend in query pipeline; do
+            echo "== $key run $run: $backend $(date -u +%H:%M:%S)"
+            "$HRTAO" bench --ray-backend "$backend" --scene "$HRTAO_SHARED/$scene" --label "$key" \
+                --camera "$HRTAO_SHARED/refs/${key}_640x360.camera.json" --radius "$radius" --rays 8 \
+                --repeat 5 --settle 0 --orbit 16 --no-quality --json "$OUT/${backend}_${key}_${run}.json"
+        done
+    done
+done
