@@ -45,6 +45,7 @@ pub mod renderer;
 pub mod rt_pipeline;
 pub mod section;
 pub mod settings;
+pub mod sky;
 pub mod slice_order;
 pub mod stats;
 pub mod tile;
