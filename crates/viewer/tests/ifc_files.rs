@@ -429,23 +429,6 @@ fn child_process(parent: u32, needle: &str) -> Option<i32> {
     })
 }
 
-/// Where the viewer last logged the centre of the panel control `name` (`HRTAO_UI_PROBE`).
-fn probed(v: &mut common::Running, name: &str) -> (i32, i32) {
-    let needle = format!("ui probe: {name} at ");
-    v.wait_for(&needle, 1, Duration::from_secs(30));
-    let log = v.log_text();
-    let line = log.lines().rev().find(|l| l.contains(&needle)).unwrap();
-    let at = line
-        .split(&needle)
-        .nth(1)
-        .unwrap()
-        .split_whitespace()
-        .next()
-        .unwrap();
-    let (x, y) = at.split_once(',').unwrap();
-    (x.parse().unwrap(), y.parse().unwrap())
-}
-
 /// The window (under Xvfb) shows gen:box and opens an IFC file from the Recent menu (real X input); the test kills the
 /// IfcOpenShell worker while it reads. The viewer keeps running with gen:box on screen and shows the error in a
 /// toast; it still answers input (F12 saves a screenshot of gen:box).
@@ -481,9 +464,9 @@ fn the_window_survives_a_killed_worker_with_an_error_toast() {
     );
     v.wait_for("] opened gen:box", 1, Duration::from_secs(60));
     let window = v.focus_window();
-    let menu = probed(&mut v, "recent");
+    let menu = v.probed("recent");
     v.click_until(&window, menu, "ui probe: recent 1 at ", 1);
-    let entry = probed(&mut v, "recent 1");
+    let entry = v.probed("recent 1");
     v.click_until(&window, entry, "] opening ", 2);
     let t0 = Instant::now();
     let worker = loop {

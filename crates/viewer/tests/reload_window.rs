@@ -34,23 +34,6 @@ fn differing_pixels(a: &Path, b: &Path) -> usize {
         .count()
 }
 
-/// Where the viewer last logged the centre of the panel control `name` (`HRTAO_UI_PROBE`).
-fn probed(v: &mut Running, name: &str) -> (i32, i32) {
-    let needle = format!("ui probe: {name} at ");
-    v.wait_for(&needle, 1, Duration::from_secs(30));
-    let log = v.log_text();
-    let line = log.lines().rev().find(|l| l.contains(&needle)).unwrap();
-    let at = line
-        .split(&needle)
-        .nth(1)
-        .unwrap()
-        .split_whitespace()
-        .next()
-        .unwrap();
-    let (x, y) = at.split_once(',').unwrap();
-    (x.parse().unwrap(), y.parse().unwrap())
-}
-
 /// F12 and the new screenshot (the `n`-th of the run).
 fn screenshot(v: &mut Running, window: &str, dir: &Path, n: usize) -> PathBuf {
     xdotool(&["key", "--window", window, "F12"]);
@@ -105,9 +88,9 @@ fn recent_files_and_reload_on_change_keep_the_view() {
     let area = (w * h) as usize;
 
     // File ▸ Recent: `small` went to the front, `wide` is second.
-    let menu = probed(&mut v, "recent");
+    let menu = v.probed("recent");
     v.click_until(&window, menu, "ui probe: recent 2 at ", 1);
-    let entry = probed(&mut v, "recent 2");
+    let entry = v.probed("recent 2");
     v.click_until(&window, entry, "] opened ", 2);
     assert!(v.log_text().contains("wide.stl"), "{}", v.log_text());
     let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&config).unwrap()).unwrap();

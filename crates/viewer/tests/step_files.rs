@@ -546,17 +546,6 @@ fn viewer_keeps_its_scene_when_the_worker_is_killed() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// Where the viewer logged the centre of the panel control `name` (`HRTAO_UI_PROBE`: `ui probe: NAME at X,Y WxH`),
-/// its latest position.
-fn probed(v: &common::Running, name: &str) -> Option<(i32, i32)> {
-    let needle = format!("ui probe: {name} at ");
-    let log = v.log_text();
-    let line = log.lines().rev().find(|l| l.contains(&needle))?;
-    let at = line.split(&needle).nth(1)?.split_whitespace().next()?;
-    let (x, y) = at.split_once(',')?;
-    Some((x.parse().ok()?, y.parse().ok()?))
-}
-
 /// Unique triangles of each STEP/IGES file opened so far, from the loader's log line.
 fn loaded_triangles(log: &str) -> Vec<usize> {
     log.lines()
@@ -603,17 +592,13 @@ fn load_options_typed_in_the_panel_reopen_the_file_with_them() {
     v.wait_for("] opened ", 1, Duration::from_secs(120));
     assert_eq!(loaded_triangles(&v.log_text()), [default_count]);
     let window = v.focus_window();
-    let at = |v: &mut Running, name: &str| {
-        v.wait_for(&format!("ui probe: {name} at "), 1, Duration::from_secs(30));
-        probed(v, name).unwrap()
-    };
-    let header = at(&mut v, "Load options");
+    let header = v.probed("Load options");
     v.click_until(&window, header, "ui probe: in millimetres at ", 1);
-    let mm = at(&mut v, "in millimetres");
+    let mm = v.probed("in millimetres");
     v.click_until(&window, mm, "ui probe: linear deflection mm at ", 1);
     // A click on a number field edits it as text: select all, type, Enter.
     for (name, value) in [("linear deflection mm", "2"), ("angular deflection", "45")] {
-        let (x, y) = at(&mut v, name);
+        let (x, y) = v.probed(name);
         xdotool(&[
             "mousemove",
             "--window",
@@ -630,7 +615,7 @@ fn load_options_typed_in_the_panel_reopen_the_file_with_them() {
         xdotool(&["key", "Return"]);
         std::thread::sleep(Duration::from_millis(500));
     }
-    let reopen = at(&mut v, "Reopen with these options");
+    let reopen = v.probed("Reopen with these options");
     v.click_until(&window, reopen, "] opened ", 2);
     assert_eq!(
         loaded_triangles(&v.log_text()),

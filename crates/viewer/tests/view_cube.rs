@@ -42,17 +42,6 @@ fn differing(a: &Path, b: &Path) -> f64 {
     n as f64 / (a.width() * a.height()) as f64
 }
 
-/// `ui probe: NAME at X,Y WxH` (the last one logged): the control's centre in window pixels.
-fn probed_centre(v: &Running, name: &str) -> (i32, i32) {
-    let needle = format!("ui probe: {name} at ");
-    let log = v.log_text();
-    let line = log.lines().rev().find(|l| l.contains(&needle)).unwrap();
-    let at = line.split(&needle).nth(1).unwrap();
-    let xy = at.split_whitespace().next().unwrap();
-    let (x, y) = xy.split_once(',').unwrap();
-    (x.parse().unwrap(), y.parse().unwrap())
-}
-
 /// Waits for the next "at rest" (the image converged after the last change), counted from `before`.
 fn rest_after(v: &mut Running, before: usize) {
     v.wait_for("at rest", before + 1, Duration::from_secs(120));
@@ -112,7 +101,7 @@ fn clicking_the_cube_top_face_gives_the_top_view_and_properties_count_the_select
     let before = v.seen("at rest");
     xdotool(&["key", "Return"]);
     rest_after(&mut v, before);
-    let cube = probed_centre(&v, "view cube");
+    let cube = v.probed("view cube");
     let before = v.seen("at rest");
     v.click_until(&window, cube, "view cube: Top view", 1);
     rest_after(&mut v, before);

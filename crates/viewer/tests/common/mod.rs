@@ -176,6 +176,24 @@ impl Running {
         }
     }
 
+    /// The centre of the panel control `name` in window pixels, as the viewer last logged it (`HRTAO_UI_PROBE`:
+    /// `ui probe: NAME at X,Y WxH`), waiting up to 30 s for a first one.
+    pub fn probed(&mut self, name: &str) -> (i32, i32) {
+        let needle = format!("ui probe: {name} at ");
+        self.wait_for(&needle, 1, std::time::Duration::from_secs(30));
+        let log = self.log_text();
+        let line = log.lines().rev().find(|l| l.contains(&needle)).unwrap();
+        let at = line
+            .split(&needle)
+            .nth(1)
+            .unwrap()
+            .split_whitespace()
+            .next()
+            .unwrap();
+        let (x, y) = at.split_once(',').unwrap();
+        (x.parse().unwrap(), y.parse().unwrap())
+    }
+
     /// Log lines containing `needle` so far.
     pub fn seen(&self, needle: &str) -> usize {
         self.log
