@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # First frame and navigation frame with each way to trace (ray queries in compute shaders, or ray-tracing
 # pipelines), side by side: `hrtao bench --ray-backend query|pipeline` on the shared scenes' reference views at
-# 640x360 (8 rays per pixel, 5 first frames from an empty map and 16 orbit frames per run), the two backends
+# 640x360 (8 rays per pixel, 5 first frames from an empty map and 8 orbit frames per run), the two backends
 # alternating run by run so that both see the same load. One JSON per backend, scene and run in
 # docs/bench/ray_backend/<backend>_<key>_<run>.json; `cargo run -p bench-report -- docs/bench` tabulates them.
 #
-#   HRTAO_SHARED=DIR scripts/bench-ray-backends.sh   (KEYS="sf duplex", RUNS=3, HRTAO=target/release/hrtao)
+#   HRTAO_SHARED=DIR scripts/bench-ray-backends.sh   (KEYS="duplex rod", RUNS=3, ORBIT=8, HRTAO=target/release/hrtao)
 #
 # Run it on an idle machine; a backend the device lacks is an error of `hrtao bench`.
 set -euo pipefail
@@ -13,8 +13,9 @@ cd "$(dirname "$0")/.."
 
 OUT=${OUT:-docs/bench/ray_backend}
 : "${HRTAO_SHARED:=/work/shared}"
-KEYS=${KEYS:-"sf duplex"}
+KEYS=${KEYS:-"duplex rod"}
 RUNS=${RUNS:-3}
+ORBIT=${ORBIT:-8}
 export MESA_SHADER_CACHE_DISABLE=false MESA_SHADER_CACHE_DIR=$PWD/target/mesa-shader-cache
 unset HRTAO_VALIDATION HRTAO_RAY_BACKEND
 
@@ -34,7 +35,7 @@ for key in $KEYS; do
             echo "== $key run $run: $backend $(date -u +%H:%M:%S)"
             "$HRTAO" bench --ray-backend "$backend" --scene "$HRTAO_SHARED/$scene" --label "$key" \
                 --camera "$HRTAO_SHARED/refs/${key}_640x360.camera.json" --radius "$radius" --rays 8 \
-                --repeat 5 --settle 0 --orbit 16 --no-quality --json "$OUT/${backend}_${key}_${run}.json"
+                --repeat 5 --settle 0 --orbit "$ORBIT" --no-quality --json "$OUT/${backend}_${key}_${run}.json"
         done
     done
 done

@@ -45,8 +45,8 @@ pub fn section(m: &mut String, results: &[BenchResult]) -> Result<()> {
         m,
         "`scripts/bench-ray-backends.sh` (`docs/bench/ray_backend/`): `hrtao bench --ray-backend query|pipeline` \
          at 640×360, 8 rays per pixel, the two backends alternating run by run. Each cell: the median over the \
-         runs of each run's median whole-frame wall time (first frame from an empty map; navigation frame of a \
-         16-frame orbit); the ratio is pipeline over query.\n"
+         runs of each run's median whole-frame wall time (first frame from an empty map; navigation frame of an \
+         orbit); the ratio is pipeline over query.\n"
     )?;
     writeln!(
         m,
