@@ -192,3 +192,42 @@ fn view_runs_with_each_backend() {
         assert!(meta.len() > 1000, "{backend}: screenshot of {} bytes", meta.len());
     }
 }
+
+/// The backend saved in the preferences (the panel's "Rays" choice) opens the device at the next start; the
+/// command line's wins over it.
+#[test]
+fn the_viewer_opens_the_device_with_the_saved_backend() {
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        eprintln!("skipped: no display");
+        return;
+    }
+    let dir = tmp_dir();
+    let config = dir.join("viewer.json");
+    std::fs::write(&config, r#"{ "ray_backend": "pipeline" }"#).unwrap();
+    for (forced, traced) in [(None, "pipeline"), (Some("query"), "query")] {
+        let mut args = vec![
+            "view",
+            "gen:box",
+            "--config",
+            config.to_str().unwrap(),
+            "--size",
+            "160x90",
+            "--no-panel",
+            "--frames",
+            "2",
+            "--exit",
+        ];
+        if let Some(f) = forced {
+            args.extend(["--ray-backend", f]);
+        }
+        let out = hrtao(&args);
+        let log = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            log.contains(&format!("rays traced by {traced}")),
+            "saved pipeline, forced {forced:?}: {log}"
+        );
+    }
+    // The saved choice is kept as it was (the run rewrote the file with the viewer's state).
+    let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&config).unwrap()).unwrap();
+    assert_eq!(saved["ray_backend"], "pipeline");
+}

@@ -110,6 +110,14 @@ struct App {
     running: Option<Running>,
 }
 
+/// What ties the viewer to the app and the scripted run: the script's hooks, the exit request and the outcome
+/// the process reports.
+pub(super) struct Links {
+    pub hooks: ScriptHooks,
+    pub exit: ExitSignal,
+    pub outcome: Arc<Mutex<Outcome>>,
+}
+
 /// Opens the window and runs the loop until the viewer or the user ends it.
 pub(super) fn run(args: &ViewArgs, hooks: ScriptHooks, outcome: Arc<Mutex<Outcome>>) -> Result<ExitCode> {
     let event_loop = EventLoop::<Wake>::with_user_event()
@@ -162,14 +170,32 @@ impl App {
                     .collect()
             })
             .unwrap_or_default();
-        let opts = ContextOptions {
+        // The preferences first: they name the ray backend the device is opened with.
+        let prefs_path = (!self.args.no_config).then(|| {
+            self.args
+                .config
+                .clone()
+                .unwrap_or_else(super::prefs::default_path)
+        });
+        let (prefs_file, prefs, mut prefs_msg) = super::prefs::PrefsFile::open(prefs_path);
+        let mut opts = ContextOptions {
             validation: self.args.device.validation || hrtao_core::context::validation_requested_by_env(),
             device: self.args.device.device.clone(),
-            ray_backend: self.args.device.ray_backend,
+            ray_backend: super::prefs::ray_backend(self.args.device.ray_backend, prefs.ray_backend),
             surface_extensions,
             ..Default::default()
         };
-        let gpu = Gpu::new(&opts)?;
+        let gpu = match Gpu::new(&opts) {
+            // A saved backend this device lacks (the preferences came from another machine): the device's own.
+            Err(e) if self.args.device.ray_backend.is_none() && opts.ray_backend.is_some() => {
+                let saved = opts.ray_backend.take().map_or("", |b| b.name());
+                prefs_msg = Some(format!(
+                    "the saved ray backend `{saved}` cannot be used here ({e:#}): the device's own is used"
+                ));
+                Gpu::new(&opts)?
+            }
+            r => r?,
+        };
         self.outcome.lock().unwrap_or_else(|p| p.into_inner()).gpu = Some(gpu.clone());
         let presenter = Presenter::new(&gpu, &window)?;
         let max_texture_side = gpu.limits.max_image_dimension2_d as usize;
@@ -185,10 +211,13 @@ impl App {
             gpu,
             presenter,
             &self.args,
-            self.hooks.clone(),
-            self.exit.clone(),
-            self.outcome.clone(),
+            Links {
+                hooks: self.hooks.clone(),
+                exit: self.exit.clone(),
+                outcome: self.outcome.clone(),
+            },
             self.ctx.clone(),
+            (prefs_file, prefs, prefs_msg),
         );
         // The display's refresh: a GPU's frame-time target (none under Xvfb: the pacer assumes 60 Hz).
         viewer.display_refresh(window.current_monitor().and_then(|m| m.refresh_rate_millihertz()));

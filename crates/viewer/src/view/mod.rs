@@ -243,13 +243,16 @@ impl Viewer {
         gpu: Arc<Gpu>,
         presenter: Presenter,
         args: &ViewArgs,
-        hooks: ScriptHooks,
-        exit_signal: app::ExitSignal,
-        outcome: Arc<Mutex<Outcome>>,
+        links: app::Links,
         egui_ctx: egui::Context,
+        // The preferences file, what it holds and what went wrong reading it (opened with the device: app.rs).
+        (prefs_file, mut prefs, prefs_msg): (prefs::PrefsFile, prefs::Prefs, Option<String>),
     ) -> Viewer {
-        let prefs_path = (!args.no_config).then(|| args.config.clone().unwrap_or_else(prefs::default_path));
-        let (prefs_file, mut prefs, prefs_msg) = prefs::PrefsFile::open(prefs_path);
+        let app::Links {
+            hooks,
+            exit: exit_signal,
+            outcome,
+        } = links;
         if let Some(m) = args.mode {
             prefs.settings.display.mode = m;
         }

@@ -36,6 +36,10 @@ pub struct Prefs {
     /// the host records a frame while the device runs the last; 1 on a software device, whose frames use the
     /// host's cores: `frames_in_flight`). `HRTAO_FRAMES_IN_FLIGHT` overrides it (the window tests set 2).
     pub frames_in_flight: Option<u32>,
+    /// How rays are traced (ray queries or ray-tracing pipelines); None: the device's choice (ray queries where
+    /// it has them). Read when the device is opened: a change applies at the next start. `--ray-backend` and
+    /// `HRTAO_RAY_BACKEND` override it.
+    pub ray_backend: Option<hrtao_core::RayBackend>,
     /// Files of older versions hold `target_ms`, always written, 100 unless the user changed it: read once by
     /// `load` (100 was the default, not a choice: the device's target; another value is the user's), never
     /// written.
@@ -70,6 +74,7 @@ impl Default for Prefs {
             auto_budget: true,
             frame_target_ms: None,
             frames_in_flight: None,
+            ray_backend: None,
             legacy_target_ms: None,
             screenshot_folder: None,
             screenshot_custom: false,
@@ -94,6 +99,15 @@ const LEGACY_DEFAULT_TARGET_MS: f32 = 100.0;
 /// The frames in flight the viewer keeps: `HRTAO_FRAMES_IN_FLIGHT` (`env`) if it names 1 or 2, else the
 /// user's choice, else 2 on a GPU and 1 on a software device (whose frames run on the host's cores: recording
 /// the next frame meanwhile only takes cores from this one).
+/// The ray backend the device is opened with: the command line's or environment's (`--ray-backend`,
+/// `HRTAO_RAY_BACKEND`), else the saved one, else None (the device chooses).
+pub fn ray_backend(
+    command_line: Option<hrtao_core::RayBackend>,
+    saved: Option<hrtao_core::RayBackend>,
+) -> Option<hrtao_core::RayBackend> {
+    command_line.or(saved)
+}
+
 pub fn frames_in_flight(env: Option<&str>, chosen: Option<u32>, software: bool) -> usize {
     let max = super::present::MAX_FRAMES_IN_FLIGHT as u32;
     let valid = |n: u32| (1..=max).contains(&n).then_some(n as usize);
@@ -226,6 +240,25 @@ impl PrefsFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_command_line_ray_backend_wins_over_the_saved_one() {
+        use hrtao_core::RayBackend::{Pipeline, Query};
+        assert_eq!(ray_backend(None, None), None);
+        assert_eq!(ray_backend(None, Some(Pipeline)), Some(Pipeline));
+        assert_eq!(ray_backend(Some(Query), Some(Pipeline)), Some(Query));
+        // Saved as the panel writes it, read back.
+        let p = Prefs {
+            ray_backend: Some(Pipeline),
+            ..Prefs::default()
+        };
+        let json = serde_json::to_string(&p).unwrap();
+        assert!(json.contains("\"ray_backend\":\"pipeline\""), "{json}");
+        assert_eq!(
+            serde_json::from_str::<Prefs>(&json).unwrap().ray_backend,
+            Some(Pipeline)
+        );
+    }
 
     #[test]
     fn frames_in_flight_by_device_choice_and_environment() {

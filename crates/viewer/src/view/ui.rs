@@ -261,6 +261,7 @@ impl Panels {
                 "software device: render scale starts low",
             );
         }
+        out.extend(ray_backend_row(ui, state));
         egui::CollapsingHeader::new("Scene")
             .default_open(true)
             .show(ui, |ui| {
@@ -339,6 +340,45 @@ impl Panels {
 }
 
 /// Draws the toasts that have not expired, and asks for a repaint when the first one expires.
+/// How rays are traced now, and the saved choice (automatic, ray queries, ray-tracing pipelines), which the
+/// device is opened with at the next start (app.rs; `--ray-backend` overrides it).
+fn ray_backend_row(ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
+    use hrtao_core::RayBackend;
+    let name = |b: Option<RayBackend>| match b {
+        None => "automatic",
+        Some(RayBackend::Query) => "ray queries",
+        Some(RayBackend::Pipeline) => "ray-tracing pipelines",
+    };
+    let mut out = Vec::new();
+    let saved = state.prefs.ray_backend;
+    let active = state.device.ray_backend;
+    ui.horizontal(|ui| {
+        ui.label(format!("Rays: {}", name(Some(active))));
+        let mut choice = saved;
+        egui::ComboBox::from_id_salt("ray backend")
+            .selected_text(name(choice))
+            .show_ui(ui, |ui| {
+                for b in [None, Some(RayBackend::Query), Some(RayBackend::Pipeline)] {
+                    ui.selectable_value(&mut choice, b, name(b));
+                }
+            })
+            .response
+            .on_hover_text(
+                "How rays are traced: ray queries in compute shaders, or ray-tracing pipelines (the same \
+                 image). Automatic: ray queries where the device has them. Applies at the next start.",
+            );
+        if choice != saved {
+            let mut prefs = state.prefs.clone();
+            prefs.ray_backend = choice;
+            out.push(Command::Prefs(Box::new(prefs)));
+        }
+    });
+    if saved.is_some_and(|b| b != active) {
+        ui.small("the saved choice applies at the next start");
+    }
+    out
+}
+
 pub(crate) fn draw_toasts(ctx: &egui::Context, toasts: &mut Vec<Toast>) {
     let now = Instant::now();
     toasts.retain(|t| t.until > now);
