@@ -211,7 +211,7 @@ fn recent_row(ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
     ui.horizontal(|ui| {
         let entries = super::recent::entries(&state.prefs.recent);
         let menu = ui.add_enabled_ui(!entries.is_empty() && idle, |ui| {
-            ui.menu_button("Recent ▾", |ui| {
+            ui.menu_button("Recent", |ui| {
                 for (k, (path, exists)) in entries.iter().enumerate() {
                     let label = path.display().to_string();
                     let b = ui
