@@ -123,9 +123,10 @@ fn write_gltf(path: &Path, segments: u32, with_normal: bool) {
     std::fs::write(path, json).unwrap();
 }
 
-/// From the side and a little above, so the top cap shows too (the core test's camera).
-fn camera() -> PathBuf {
-    let path = tmp("camera.json");
+/// From the side and a little above, so the top cap shows too (the core test's camera). One file per scene:
+/// the tests run in parallel, and a file rewritten while another test's render reads it is a race.
+fn camera(scene: &Path) -> PathBuf {
+    let path = PathBuf::from(format!("{}.camera.json", scene.display()));
     std::fs::write(
         &path,
         format!(
@@ -140,8 +141,9 @@ fn camera() -> PathBuf {
 /// luminance of each pixel in 0..1 and whether it shows the model (it differs from the background, a vertical
 /// gradient read from the image's left column, by more than 3/255 in some channel).
 fn render(scene: &Path, extra: &[&str]) -> (Vec<f32>, Vec<bool>) {
-    let png = scene.with_extension(format!("{}.png", extra.join("")));
-    let camera = camera();
+    // Named after the whole file name: c12.obj and c12.gltf render in parallel tests.
+    let png = PathBuf::from(format!("{}{}.png", scene.display(), extra.join("")));
+    let camera = camera(scene);
     let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
         .args(["render", "--scene", scene.to_str().unwrap()])
         .args([
