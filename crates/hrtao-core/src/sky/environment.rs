@@ -142,6 +142,7 @@ impl Environment {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     /// (1/π) ∫ E(ω) max(0, n·ω) dω by a fine quadrature: the light of an open white surface.
     fn unshadowed_exact(env: &Environment, n: DVec3) -> [f64; 3] {
@@ -227,40 +228,58 @@ mod tests {
         assert!((turned - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-12, "{turned}");
     }
 
-    /// A broad warm lobe (the sky references' test environment: the gradient plus a lobe at azimuth 30°,
-    /// elevation 30°) is not band-limited: how well the bands light an open surface, band by band. The
+    /// The sky references' test environment (testdata/env/sky_lobe_64x32.hdr, scripts/make-sky-hdr.py): the
+    /// gradient plus a broad warm lobe (2.0, 1.4, 0.8)·max(0, b·l)⁸ at azimuth 30°, elevation 30°.
+    fn lobe_environment(b: DVec3) -> [f64; 3] {
+        let (az, el) = (30f64.to_radians(), 30f64.to_radians());
+        let lobe = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+        let g = Environment::Gradient.radiance(b);
+        let k = b.normalize().dot(lobe).max(0.0).powi(8);
+        [g[0] + 2.0 * k, g[1] + 1.4 * k, g[2] + 0.8 * k]
+    }
+
+    fn committed_lobe() -> Environment {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/env/sky_lobe_64x32.hdr");
+        Environment::Equirect(Equirect::load(&path).unwrap())
+    }
+
+    /// The committed .hdr reads back (image's Radiance decoder) as the formula at each pixel centre, within
+    /// RGBE's precision (a 1/256 step of the largest channel), and row 0 is the zenith.
+    #[test]
+    fn the_committed_test_environment_reads_back_as_its_formula() {
+        let Environment::Equirect(img) = committed_lobe() else {
+            unreachable!()
+        };
+        assert_eq!((img.width, img.height), (64, 32));
+        for j in 0..img.height {
+            for i in 0..img.width {
+                let u = (i as f64 + 0.5) / img.width as f64;
+                let t = (j as f64 + 0.5) / img.height as f64;
+                let (phi, el) = (
+                    (0.5 - u) * 2.0 * std::f64::consts::PI,
+                    (0.5 - t) * std::f64::consts::PI,
+                );
+                let b = DVec3::new(el.cos() * phi.cos(), el.cos() * phi.sin(), el.sin());
+                let want = lobe_environment(b);
+                let got = img.pixels[j * img.width + i];
+                let step = want.iter().cloned().fold(0.0, f64::max) / 128.0;
+                for ch in 0..3 {
+                    assert!(
+                        (got[ch] as f64 - want[ch]).abs() <= step,
+                        "pixel {i},{j}: {got:?} vs {want:?}"
+                    );
+                }
+            }
+        }
+        // The top rows are the sky's blue, the bottom rows the ground's brown.
+        assert!(img.pixels[0][2] > img.pixels[0][0] && img.pixels[31 * 64][0] > img.pixels[31 * 64][2]);
+    }
+
+    /// The test environment is not band-limited: how well the bands light an open surface, band by band. The
     /// clamped cosine's bands fall as l^−2.5, so bands 0–2 stay within a few per cent (Ramamoorthi & Hanrahan).
     #[test]
     fn a_lobe_lights_an_open_surface_within_a_few_percent_from_band_2() {
-        let lobe = DVec3::new(
-            30f64.to_radians().cos() * 30f64.to_radians().cos(),
-            30f64.to_radians().cos() * 30f64.to_radians().sin(),
-            30f64.to_radians().sin(),
-        );
-        // Sampled into a 64×32 image, as the committed test environment is.
-        let (w, h) = (64usize, 32usize);
-        let mut pixels = Vec::new();
-        for j in 0..h {
-            for i in 0..w {
-                let u = (i as f64 + 0.5) / w as f64;
-                let t = (j as f64 + 0.5) / h as f64;
-                let phi = (0.5 - u) * 2.0 * std::f64::consts::PI;
-                let el = (0.5 - t) * std::f64::consts::PI;
-                let b = DVec3::new(el.cos() * phi.cos(), el.cos() * phi.sin(), el.sin());
-                let g = Environment::Gradient.radiance(b);
-                let k = b.dot(lobe).max(0.0).powi(8);
-                pixels.push([
-                    (g[0] + 2.0 * k) as f32,
-                    (g[1] + 1.4 * k) as f32,
-                    (g[2] + 0.8 * k) as f32,
-                ]);
-            }
-        }
-        let env = Environment::Equirect(Equirect {
-            width: w,
-            height: h,
-            pixels,
-        });
+        let env = committed_lobe();
         let mut worst = [0.0f64; 5];
         for n in normals() {
             let exact = unshadowed_exact(&env, n);

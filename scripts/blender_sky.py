@@ -1,0 +1,238 @@
+# Sky-light reference of a glTF/GLB scene with Blender Cycles (headless). Run by make-sky-references.sh:
+#   blender -b --factory-startup -noaudio --python-exit-code 3 -P blender_sky.py -- \
+#       --scene FILE.glb --camera CAM.json --environment uniform|gradient|FILE.hdr [--rotation DEG] \
+#       [--intensity K] [--up y|z] --out PREFIX [--samples 1024] [--seed 0] [--threads 0]
+# Writes PREFIX.exr (RGB float32, linear, row 0 at the top, ZIP) and PREFIX.json (the render facts).
+#
+# The value follows hrtao's `--light-out` contract (the sky light):
+# - the camera as blender_ao.py places it (pinhole from CAM.json in the scene file's coordinates, every sample
+#   through the pixel centre);
+# - at the first hit, L = (1/pi) * integral of K E(w) V(w) max(0, n.w) dw: a white Lambertian (albedo 1) with the
+#   file's normals (Cycles turns them toward the camera on a back face), V = 0 where any surface at any distance
+#   blocks w (no AO radius), direct light only (no bounces); background pixels 0 (film transparent).
+# - Directions: Blender's glTF import turns the file's (x, y, z) into (x, -z, y), which is the sky frame b of a Y-up
+#   file; a Z-up file's b is its own (x, y, z): the world's Mapping turns Blender's direction back by -90 degrees
+#   about X. Then b' = R_z(-theta) b (Mapping rotation Z = -theta; X applies first).
+# - uniform: E = (1, 1, 1). gradient: E = G + (S - G)(1 + b'_z)/2 (Separate XYZ z, Map Range -1..1 -> 0..1, Mix RGB
+#   G -> S), S = (0.6, 0.8, 1.0), G = (0.4, 0.3, 0.2). FILE.hdr: Environment Texture (equirectangular, Linear
+#   interpolation), which reads u = 0.5 - atan2(b'_y, b'_x)/2pi and t = 0.5 - asin(b'_z)/pi from the top row.
+# - Standard view transform, no look, no denoising, no adaptive sampling; the world is importance sampled.
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_ao  # noqa: E402  (the shared camera, import and clip conventions)
+
+SKY = (0.6, 0.8, 1.0)
+GROUND = (0.4, 0.3, 0.2)
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    p = argparse.ArgumentParser(prog="blender_sky.py", description="Cycles sky-light reference of a glTF scene")
+    p.add_argument("--scene", required=True, help=".glb or .gltf")
+    p.add_argument("--camera", required=True, help="camera JSON in the scene file's coordinates")
+    p.add_argument("--environment", required=True, help="uniform, gradient or an equirectangular .hdr")
+    p.add_argument("--rotation", type=float, default=0.0, help="degrees, counter-clockwise seen from above")
+    p.add_argument("--intensity", type=float, default=1.0, help="K, the environment's scale")
+    p.add_argument("--up", choices=("y", "z"), default="y", help="the scene file's up axis (the zenith)")
+    p.add_argument("--out", required=True, help="output prefix: writes PREFIX.exr and PREFIX.json")
+    p.add_argument("--samples", type=int, default=1024, help="samples per pixel")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--threads", type=int, default=0, help="CPU threads (0 = all)")
+    a = p.parse_args(argv)
+    if a.samples < 1 or not a.intensity >= 0.0:
+        p.error("--samples must be >= 1 and --intensity >= 0")
+    if a.environment not in ("uniform", "gradient") and not os.path.isfile(a.environment):
+        p.error("--environment: no such file: %s" % a.environment)
+    return a
+
+
+def white_material():
+    """Diffuse white with the mesh's own (smooth or custom) normals: the Normal input left unconnected."""
+    mat = bpy.data.materials.new("hrtao_sky_white")
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.clear()
+    out = nodes.new("ShaderNodeOutputMaterial")
+    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
+    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.0
+    links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    mat.use_backface_culling = False
+    return mat
+
+
+def world(args):
+    w = bpy.data.worlds.new("hrtao_sky_world")
+    w.use_nodes = True
+    nodes, links = w.node_tree.nodes, w.node_tree.links
+    nodes.clear()
+    out = nodes.new("ShaderNodeOutputWorld")
+    bg = nodes.new("ShaderNodeBackground")
+    bg.inputs["Strength"].default_value = args.intensity
+    links.new(bg.outputs["Background"], out.inputs["Surface"])
+    if args.environment == "uniform":
+        bg.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    else:
+        coords = nodes.new("ShaderNodeTexCoord")
+        mapping = nodes.new("ShaderNodeMapping")
+        mapping.vector_type = "POINT"
+        x = -90.0 if args.up == "z" else 0.0
+        mapping.inputs["Rotation"].default_value = (math.radians(x), 0.0, math.radians(-args.rotation))
+        links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+        if args.environment == "gradient":
+            xyz = nodes.new("ShaderNodeSeparateXYZ")
+            ramp = nodes.new("ShaderNodeMapRange")
+            ramp.inputs["From Min"].default_value = -1.0
+            ramp.inputs["From Max"].default_value = 1.0
+            ramp.inputs["To Min"].default_value = 0.0
+            ramp.inputs["To Max"].default_value = 1.0
+            mix = nodes.new("ShaderNodeMixRGB")
+            mix.blend_type = "MIX"
+            mix.inputs["Color1"].default_value = GROUND + (1.0,)
+            mix.inputs["Color2"].default_value = SKY + (1.0,)
+            links.new(mapping.outputs["Vector"], xyz.inputs["Vector"])
+            links.new(xyz.outputs["Z"], ramp.inputs["Value"])
+            links.new(ramp.outputs["Result"], mix.inputs["Fac"])
+            links.new(mix.outputs["Color"], bg.inputs["Color"])
+        else:
+            tex = nodes.new("ShaderNodeTexEnvironment")
+            tex.image = bpy.data.images.load(os.path.abspath(args.environment), check_existing=False)
+            tex.image.colorspace_settings.name = "Linear"
+            tex.interpolation = "Linear"
+            tex.projection = "EQUIRECTANGULAR"
+            links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+            links.new(tex.outputs["Color"], bg.inputs["Color"])
+    w.cycles.sampling_method = "AUTOMATIC"  # importance-sample the environment
+    return w
+
+
+def set_up_render(scene, args, cam):
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x, r.resolution_y, r.resolution_percentage = int(cam["width"]), int(cam["height"]), 100
+    r.film_transparent = True  # background pixels 0
+    r.threads_mode = "FIXED" if args.threads > 0 else "AUTO"
+    if args.threads > 0:
+        r.threads = args.threads
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    c = scene.cycles
+    c.device = "CPU"
+    c.samples = args.samples
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.seed = args.seed
+    c.sampling_pattern = "SOBOL"
+    c.pixel_filter_type = "BLACKMAN_HARRIS"
+    c.filter_width = 0.01  # every sample through the pixel centre (blender_ao.py)
+    c.max_bounces = c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = 0
+    c.volume_bounces = c.transparent_max_bounces = 0
+    c.use_fast_gi = False
+    scene.world = world(args)
+    s = r.image_settings
+    s.file_format, s.color_mode, s.color_depth, s.exr_codec = "OPEN_EXR", "RGBA", "32", "ZIP"
+
+
+def render_light(scene, w, h):
+    """The light image (RGB, row 0 at the top) and the coverage."""
+    bpy.ops.render.render(write_still=False)
+    tmp = tempfile.mkdtemp(prefix="hrtao_sky_")
+    raw = os.path.join(tmp, "raw.exr")
+    bpy.data.images["Render Result"].save_render(raw, scene=scene)
+    img = bpy.data.images.load(raw, check_existing=False)
+    rgba = np.empty(w * h * 4, dtype=np.float32)
+    img.pixels.foreach_get(rgba)
+    bpy.data.images.remove(img)
+    os.remove(raw)
+    os.rmdir(tmp)
+    rgba = rgba.reshape(h, w, 4)[::-1]  # Blender's rows are bottom-up
+    alpha = np.clip(rgba[..., 3], 0.0, 1.0)
+    return np.ascontiguousarray(rgba[..., :3]).astype(np.float32), alpha
+
+
+def write_exr(scene, path, rgb):
+    h, w, _ = rgb.shape
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[..., :3] = rgb
+    img = bpy.data.images.new("hrtao_sky_out", w, h, alpha=True, float_buffer=True)
+    img.pixels.foreach_set(rgba[::-1].ravel())
+    scene.render.image_settings.color_mode = "RGB"
+    img.save_render(path, scene=scene)
+    bpy.data.images.remove(img)
+
+
+def main():
+    t0 = time.perf_counter()
+    args = parse_args()
+    with open(args.camera) as f:
+        cam = json.load(f)
+    for k in ("eye", "target", "up", "fov_y_deg", "width", "height"):
+        if k not in cam:
+            raise ValueError("%s: the camera needs '%s'" % (args.camera, k))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene, meshes = blender_ao.import_gltf(os.path.abspath(args.scene))
+    mat = white_material()
+    for obj in scene.objects:
+        if obj.type == "MESH":
+            obj.data.materials.clear()
+            obj.data.materials.append(mat)
+            for slot in obj.material_slots:
+                slot.material = mat
+    cam_blender = blender_ao.place_camera(scene, cam)
+    set_up_render(scene, args, cam)
+    t_render = time.perf_counter()
+    w, h = int(cam["width"]), int(cam["height"])
+    rgb, alpha = render_light(scene, w, h)
+    t_render = time.perf_counter() - t_render
+    write_exr(scene, args.out + ".exr", rgb)
+    geometry = alpha > 0.5
+    env = args.environment if args.environment in ("uniform", "gradient") else os.path.basename(args.environment)
+    facts = {
+        "engine": "cycles",
+        "method": "Cycles combined pass, white diffuse, no bounces, world importance sampled (the sky light)",
+        "blender_version": bpy.app.version_string,
+        "width": w,
+        "height": h,
+        "samples": args.samples,
+        "environment": env,
+        "rotation_deg": args.rotation,
+        "intensity": args.intensity,
+        "up": args.up,
+        "normal": "the file's (smooth or custom split normals)",
+        "filter_width_px": 0.01,
+        "sampling_pattern": "sobol",
+        "seed": args.seed,
+        "render_time_s": round(t_render, 4),
+        "total_time_s": round(time.perf_counter() - t0, 4),
+        "threads": scene.render.threads,
+        "scene": os.path.basename(args.scene),
+        "mesh_objects": meshes,
+        "camera_json": cam,
+        "camera_blender_space": cam_blender,
+        "stats": {
+            "geometry_pixel_fraction": float(geometry.mean()),
+            "light_mean_geometry": [float(v) for v in rgb[geometry].mean(axis=0)] if geometry.any() else None,
+            "light_max": float(rgb.max()),
+        },
+        "outputs": {"exr": os.path.basename(args.out) + ".exr"},
+    }
+    with open(args.out + ".json", "w") as f:
+        json.dump(facts, f, indent=1)
+    print("[blender_sky] %s: %dx%d, %d samples, %.1f s" % (args.out, w, h, args.samples, t_render), flush=True)
+
+
+if __name__ == "__main__":
+    main()
