@@ -146,24 +146,12 @@ mod tests {
 
     /// (1/π) ∫ E(ω) max(0, n·ω) dω by a fine quadrature: the light of an open white surface.
     fn unshadowed_exact(env: &Environment, n: DVec3) -> [f64; 3] {
-        let rows = 256;
-        let cols = 2 * rows;
-        let (dt, dp) = (
-            std::f64::consts::PI / rows as f64,
-            2.0 * std::f64::consts::PI / cols as f64,
-        );
         let mut out = [0.0; 3];
-        for r in 0..rows {
-            let theta = (r as f64 + 0.5) * dt;
-            let w = ((r as f64 * dt).cos() - ((r + 1) as f64 * dt).cos()) * dp;
-            for c in 0..cols {
-                let phi = (c as f64 + 0.5) * dp;
-                let b = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
-                let k = w * b.dot(n).max(0.0) / std::f64::consts::PI;
-                let e = env.radiance(b);
-                for ch in 0..3 {
-                    out[ch] += k * e[ch];
-                }
+        for (b, w) in super::super::sh::sphere_quadrature(256) {
+            let k = w * b.dot(n).max(0.0) / std::f64::consts::PI;
+            let e = env.radiance(b);
+            for ch in 0..3 {
+                out[ch] += k * e[ch];
             }
         }
         out

@@ -76,30 +76,17 @@ pub struct ShRgb {
 }
 
 impl ShRgb {
-    /// Projects `f` by a quadrature over the sphere: `rows` × 2·`rows` cells of equal latitude and longitude
-    /// steps, each weighted by its solid angle and sampled at its centre.
+    /// Projects `f` by `sphere_quadrature(rows)`.
     pub fn project(band: usize, rows: usize, f: impl Fn(DVec3) -> [f64; 3]) -> ShRgb {
         let n = coefficient_count(band);
         let mut coefficients = vec![[0.0; 3]; n];
         let mut y = vec![0.0; n];
-        let cols = 2 * rows;
-        let (dt, dp) = (
-            std::f64::consts::PI / rows as f64,
-            2.0 * std::f64::consts::PI / cols as f64,
-        );
-        for r in 0..rows {
-            let theta = (r as f64 + 0.5) * dt;
-            // The cell's solid angle: the band of latitudes' area over its columns.
-            let w = ((r as f64 * dt).cos() - ((r + 1) as f64 * dt).cos()) * dp;
-            for c in 0..cols {
-                let phi = (c as f64 + 0.5) * dp;
-                let b = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
-                let v = f(b);
-                eval(band, b, &mut y);
-                for (acc, yi) in coefficients.iter_mut().zip(&y) {
-                    for ch in 0..3 {
-                        acc[ch] += v[ch] * yi * w;
-                    }
+        for (b, w) in sphere_quadrature(rows) {
+            let v = f(b);
+            eval(band, b, &mut y);
+            for (acc, yi) in coefficients.iter_mut().zip(&y) {
+                for ch in 0..3 {
+                    acc[ch] += v[ch] * yi * w;
                 }
             }
         }
@@ -140,6 +127,25 @@ impl ShRgb {
         }
         out
     }
+}
+
+/// A quadrature over the sphere: `rows` × 2·`rows` cells of equal latitude and longitude steps, each its centre's
+/// direction and its solid angle (the band of latitudes' area over its columns); the weights sum to 4π.
+pub fn sphere_quadrature(rows: usize) -> impl Iterator<Item = (DVec3, f64)> {
+    let cols = 2 * rows;
+    let (dt, dp) = (
+        std::f64::consts::PI / rows as f64,
+        2.0 * std::f64::consts::PI / cols as f64,
+    );
+    (0..rows).flat_map(move |r| {
+        let theta = (r as f64 + 0.5) * dt;
+        let w = ((r as f64 * dt).cos() - ((r + 1) as f64 * dt).cos()) * dp;
+        (0..cols).map(move |c| {
+            let phi = (c as f64 + 0.5) * dp;
+            let b = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            (b, w)
+        })
+    })
 }
 
 /// Â_l: band l of max(0, cos θ) as a zonal kernel (4π/(2l+1))^½ times its coefficient; π, 2π/3, π/4, 0, −π/24, …
