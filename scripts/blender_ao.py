@@ -126,24 +126,27 @@ def place_camera(scene, cam):
             "clip_end": far, "angle_y_deg": math.degrees(data.angle_y)}
 
 
-def set_up_render(scene, args, cam):
+def cycles_settings(scene, cam, samples, seed, threads):
+    """What every reference of this project renders with: Cycles on the CPU at the camera's size, film transparent,
+    colour management off, `samples` per pixel through the pixel centre, no adaptive sampling, no denoising, no
+    bounces (blender_ao.py and blender_sky.py)."""
     r = scene.render
     r.engine = "CYCLES"
     r.resolution_x, r.resolution_y, r.resolution_percentage = int(cam["width"]), int(cam["height"]), 100
-    r.film_transparent = True  # alpha = coverage; the background becomes AO = 1 below
-    r.threads_mode = "FIXED" if args.threads > 0 else "AUTO"
-    if args.threads > 0:
-        r.threads = args.threads
+    r.film_transparent = True
+    r.threads_mode = "FIXED" if threads > 0 else "AUTO"
+    if threads > 0:
+        r.threads = threads
     scene.view_settings.view_transform = "Standard"
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0
     scene.view_settings.gamma = 1.0
     c = scene.cycles
     c.device = "CPU"
-    c.samples = args.samples
+    c.samples = samples
     c.use_adaptive_sampling = False
     c.use_denoising = False
-    c.seed = args.seed
+    c.seed = seed
     c.sampling_pattern = "SOBOL"
     # Every sample through the pixel centre: a filter 0.01 px wide (Cycles' box filter spreads over the whole
     # pixel whatever its width: 423 of rod 160x90's pixels changed coverage with it).
@@ -152,6 +155,13 @@ def set_up_render(scene, args, cam):
     c.max_bounces = c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = 0
     c.volume_bounces = c.transparent_max_bounces = 0
     c.use_fast_gi = False
+    s = r.image_settings
+    s.file_format, s.color_mode, s.color_depth, s.exr_codec = "OPEN_EXR", "RGBA", "32", "ZIP"
+
+
+def set_up_render(scene, args, cam):
+    cycles_settings(scene, cam, args.samples, args.seed, args.threads)  # alpha = coverage: background AO = 1 below
+    r = scene.render
     world = bpy.data.worlds.new("hrtao_ao_world")
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
@@ -170,14 +180,12 @@ def set_up_render(scene, args, cam):
     comp.use_alpha = True
     tree.links.new(layers.outputs["AO"], comp.inputs["Image"])
     tree.links.new(layers.outputs["Alpha"], comp.inputs["Alpha"])
-    s = r.image_settings
-    s.file_format, s.color_mode, s.color_depth, s.exr_codec = "OPEN_EXR", "RGBA", "32", "ZIP"
 
 
-def render_ao(scene, w, h):
-    """The AO image, row 0 at the top, and the coverage."""
+def render_rgba(scene, w, h):
+    """Renders; the result's RGBA (premultiplied), row 0 at the top."""
     bpy.ops.render.render(write_still=False)
-    tmp = tempfile.mkdtemp(prefix="hrtao_ao_")
+    tmp = tempfile.mkdtemp(prefix="hrtao_ref_")
     raw = os.path.join(tmp, "raw.exr")
     bpy.data.images["Render Result"].save_render(raw, scene=scene)
     img = bpy.data.images.load(raw, check_existing=False)
@@ -186,21 +194,31 @@ def render_ao(scene, w, h):
     bpy.data.images.remove(img)
     os.remove(raw)
     os.rmdir(tmp)
-    rgba = rgba.reshape(h, w, 4)[::-1]  # Blender's rows are bottom-up
+    return rgba.reshape(h, w, 4)[::-1]  # Blender's rows are bottom-up
+
+
+def render_ao(scene, w, h):
+    """The AO image, row 0 at the top, and the coverage."""
+    rgba = render_rgba(scene, w, h)
     alpha = np.clip(rgba[..., 3], 0.0, 1.0)
     ao = np.clip(rgba[..., :3].mean(axis=2) + (1.0 - alpha), 0.0, 1.0)  # premultiplied AO + open background
     return ao.astype(np.float32), alpha
 
 
-def write_exr(scene, path, ao):
-    h, w = ao.shape
+def save_rgb_exr(scene, path, rgb):
+    """Writes an (h, w, 3) image, row 0 at the top, as an RGB float EXR."""
+    h, w, _ = rgb.shape
     rgba = np.ones((h, w, 4), dtype=np.float32)
-    rgba[..., 0] = rgba[..., 1] = rgba[..., 2] = ao
-    img = bpy.data.images.new("hrtao_ao_out", w, h, alpha=True, float_buffer=True)
+    rgba[..., :3] = rgb
+    img = bpy.data.images.new("hrtao_ref_out", w, h, alpha=True, float_buffer=True)
     img.pixels.foreach_set(rgba[::-1].ravel())
     scene.render.image_settings.color_mode = "RGB"
     img.save_render(path, scene=scene)
     bpy.data.images.remove(img)
+
+
+def write_exr(scene, path, ao):
+    save_rgb_exr(scene, path, np.repeat(ao[..., None], 3, axis=2))
 
 
 def main():

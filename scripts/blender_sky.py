@@ -23,7 +23,6 @@ import json
 import math
 import os
 import sys
-import tempfile
 import time
 
 import bpy
@@ -118,60 +117,15 @@ def world(args):
 
 
 def set_up_render(scene, args, cam):
-    r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x, r.resolution_y, r.resolution_percentage = int(cam["width"]), int(cam["height"]), 100
-    r.film_transparent = True  # background pixels 0
-    r.threads_mode = "FIXED" if args.threads > 0 else "AUTO"
-    if args.threads > 0:
-        r.threads = args.threads
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
-    c = scene.cycles
-    c.device = "CPU"
-    c.samples = args.samples
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.seed = args.seed
-    c.sampling_pattern = "SOBOL"
-    c.pixel_filter_type = "BLACKMAN_HARRIS"
-    c.filter_width = 0.01  # every sample through the pixel centre (blender_ao.py)
-    c.max_bounces = c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = 0
-    c.volume_bounces = c.transparent_max_bounces = 0
-    c.use_fast_gi = False
+    blender_ao.cycles_settings(scene, cam, args.samples, args.seed, args.threads)  # background 0: film transparent
     scene.world = world(args)
-    s = r.image_settings
-    s.file_format, s.color_mode, s.color_depth, s.exr_codec = "OPEN_EXR", "RGBA", "32", "ZIP"
 
 
 def render_light(scene, w, h):
     """The light image (RGB, row 0 at the top) and the coverage."""
-    bpy.ops.render.render(write_still=False)
-    tmp = tempfile.mkdtemp(prefix="hrtao_sky_")
-    raw = os.path.join(tmp, "raw.exr")
-    bpy.data.images["Render Result"].save_render(raw, scene=scene)
-    img = bpy.data.images.load(raw, check_existing=False)
-    rgba = np.empty(w * h * 4, dtype=np.float32)
-    img.pixels.foreach_get(rgba)
-    bpy.data.images.remove(img)
-    os.remove(raw)
-    os.rmdir(tmp)
-    rgba = rgba.reshape(h, w, 4)[::-1]  # Blender's rows are bottom-up
+    rgba = blender_ao.render_rgba(scene, w, h)
     alpha = np.clip(rgba[..., 3], 0.0, 1.0)
     return np.ascontiguousarray(rgba[..., :3]).astype(np.float32), alpha
-
-
-def write_exr(scene, path, rgb):
-    h, w, _ = rgb.shape
-    rgba = np.ones((h, w, 4), dtype=np.float32)
-    rgba[..., :3] = rgb
-    img = bpy.data.images.new("hrtao_sky_out", w, h, alpha=True, float_buffer=True)
-    img.pixels.foreach_set(rgba[::-1].ravel())
-    scene.render.image_settings.color_mode = "RGB"
-    img.save_render(path, scene=scene)
-    bpy.data.images.remove(img)
 
 
 def main():
@@ -197,7 +151,7 @@ def main():
     w, h = int(cam["width"]), int(cam["height"])
     rgb, alpha = render_light(scene, w, h)
     t_render = time.perf_counter() - t_render
-    write_exr(scene, args.out + ".exr", rgb)
+    blender_ao.save_rgb_exr(scene, args.out + ".exr", rgb)
     geometry = alpha > 0.5
     env = args.environment if args.environment in ("uniform", "gradient") else os.path.basename(args.environment)
     facts = {
