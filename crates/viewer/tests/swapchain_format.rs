@@ -10,7 +10,7 @@ fn capture(kind: &str) -> image::RgbImage {
     let dir = out_dir(&format!("swapchain-{kind}"));
     let shot = dir.join("window.png");
     let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(["view", "--size", "900x400", "--mode", "none", "--frames", "4"])
+        .args(["view", "--size", "900x400", "--mode", "none", "--frames", "24"])
         .arg("--screenshot-ui")
         .arg(&shot)
         .args(["--no-config", "--exit"])
