@@ -209,9 +209,10 @@ fn recent_row(ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
     let ppp = ui.ctx().pixels_per_point();
     let idle = state.loading.is_none();
     ui.horizontal(|ui| {
-        let entries = super::recent::entries(&state.prefs.recent);
-        let menu = ui.add_enabled_ui(!entries.is_empty() && idle, |ui| {
+        let menu = ui.add_enabled_ui(!state.prefs.recent.is_empty() && idle, |ui| {
             ui.menu_button("Recent", |ui| {
+                // Looked up on disk only while the menu is open, not on every UI pass.
+                let entries = super::recent::entries(&state.prefs.recent);
                 for (k, (path, exists)) in entries.iter().enumerate() {
                     let label = path.display().to_string();
                     let b = ui
