@@ -71,12 +71,28 @@ void main() {
     vec3 origin = offset_ray(px.position, px.normal);
     uvec3 all_rays = uvec3(rays, 0u, 0u);   // traced, open, open within r_near
     uvec3 cell_rays = uvec3(claimed, 0u, 0u);   // the same among the first `claimed` rays (the target cell's)
+    // Sky light (sky.glsl): the basis values of the rays that escape, of all rays and of the target cell's.
+    bool sky = sky_on();
+    float sky_all[SKY_COEFFS];
+    float sky_cell[SKY_COEFFS];
+    for (uint i = 0u; i < SKY_COEFFS; ++i) {
+        sky_all[i] = 0.0;
+        sky_cell[i] = 0.0;
+    }
     for (uint r = 0u; r < rays; ++r) {
         vec3 dir = cosine_direction(px.normal, r2_point(seq0 + r, shift));
         uint e = trace_ao_ray(origin, dir);
         uvec2 counts = uvec2(e == RAY_OPEN ? 1u : 0u, e != RAY_NEAR_HIT ? 1u : 0u);
         all_rays.yz += counts;
         if (r < claimed) cell_rays.yz += counts;
+        if (sky && e == RAY_OPEN && sky_escapes(origin, dir)) {
+            float y[SKY_COEFFS];
+            sky_basis(sky_frame(dir), y);
+            for (uint i = 0u; i < SKY_COEFFS; ++i) {
+                sky_all[i] += y[i];
+                if (r < claimed) sky_cell[i] += y[i];
+            }
+        }
     }
     if (rays == 0u) return;
     rays_add(RAYS_ALL, rays);
@@ -95,6 +111,13 @@ void main() {
         PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
         PixelRaysRef(g.pixel_rays).v[index].traced = (ray0 == 0u ? 0u : pr.traced) + rays;
         PixelRaysRef(g.pixel_rays).v[index].unoccluded = (ray0 == 0u ? 0u : pr.unoccluded) + all_rays.y;
+        if (sky) {
+            SkyPixelRef own_sky = SkyPixelRef(g.sky_pixels);
+            uint base = index * SKY_PIXEL_FLOATS + SKY_OWN;
+            for (uint i = 0u; i < SKY_COEFFS; ++i) {
+                own_sky.v[base + i] = (ray0 == 0u ? 0.0 : own_sky.v[base + i]) + sky_all[i];
+            }
+        }
     }
     if (first >= LOD_COUNT) return;
     // The target cell takes the rays it granted; bottom-up propagation (§4): every coarser level takes all of
@@ -102,6 +125,7 @@ void main() {
     int lod = pixel_lod(px.t);
     if (claimed > 0u) {
         add_rays(cells, pc.cells[first], cell_rays);
+        if (sky) sky_cell_add(pc.cells[first], sky_cell);
         rays_add(RAYS_CELL, claimed);
     }
     for (uint l = first + 1u; l < LOD_COUNT; ++l) {
@@ -109,6 +133,9 @@ void main() {
         if (c == INVALID_CELL || !slot_in_bounds(c)) continue;
         // Atomic: other pixels add to the same coarse cell in this dispatch.
         uint samples = atomicLoad(cells.v[c].samples, gl_ScopeDevice, gl_StorageSemanticsBuffer, gl_SemanticsRelaxed);
-        if (samples < SAMPLE_CAP) add_rays(cells, c, all_rays);
+        if (samples < SAMPLE_CAP) {
+            add_rays(cells, c, all_rays);
+            if (sky) sky_cell_add(c, sky_all);
+        }
     }
 }

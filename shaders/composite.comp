@@ -13,6 +13,7 @@
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
+#include "sky.glsl"
 
 vec3 linear_to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
@@ -61,18 +62,13 @@ vec3 debug_color(uint index) {
     return heat(log2(1.0 + float(s)) / log2(1.0 + float(max(g.max_samples, 1u))));
 }
 
-// Base colour x key light of the pixel's sample (the background gradient on a miss).
-vec3 shade(uvec2 pix, GPixel px) {
-    if (px.t < 0.0) {
-        float y = (float(pix.y) + 0.5) / float(g.height);
-        return mix(g.background_top.rgb, g.background_bottom.rgb, y);
-    }
-    vec3 view = view_dir(px.position);
-    // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
-    vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
-    // The shading normal: curved surfaces shade smoothly across their triangles.
-    float diffuse = max(dot(unpack_normal(px.shading), key), 0.0);
-    float light = 0.4 + 0.6 * diffuse;
+vec3 background(uvec2 pix) {
+    float y = (float(pix.y) + 0.5) / float(g.height);
+    return mix(g.background_top.rgb, g.background_bottom.rgb, y);
+}
+
+// The surface's albedo times `light`, and the selection's highlight over it.
+vec3 lit(GPixel px, vec3 light) {
     // Section caps keep their colour in the clay look too.
     vec3 base = (g.flags & FLAG_SHADED) != 0u || (px.flags & GPIXEL_SECTION) != 0u ? unpack_base_color(px.color) : vec3(0.8);
     vec3 color = base * light;
@@ -80,6 +76,45 @@ vec3 shade(uvec2 pix, GPixel px) {
         color = mix(color, vec3(1.0, 0.55, 0.1), 0.45);
     }
     return color;
+}
+
+// Base colour x key light of the pixel's sample (the background gradient on a miss).
+vec3 shade(uvec2 pix, GPixel px) {
+    if (px.t < 0.0) return background(pix);
+    vec3 view = view_dir(px.position);
+    // Key light from above-left of the viewer, plus a soft fill: a CAD-viewport look.
+    vec3 key = normalize(-view + 0.6 * normalize(g.cam_v.xyz) - 0.4 * normalize(g.cam_u.xyz));
+    // The shading normal: curved surfaces shade smoothly across their triangles.
+    float diffuse = max(dot(unpack_normal(px.shading), key), 0.0);
+    return lit(px, vec3(0.4 + 0.6 * diffuse));
+}
+
+// Sky light (sky.glsl): the pixel's transfer accumulated over the still frames as the AO is, its cell estimate
+// counting as k of its own rays (wc the weight of this frame's cell estimate, a the AO's accumulation after
+// this frame, `restart` whether it restarted this frame), and the light of it, kept for --light-out. Turning the
+// environment changes only `sky_light`'s coefficients: the accumulation goes on.
+vec3 sky_pixel_light(uint index, GPixel px, PixelRays pr, PixelAccum a, float wc, float k, bool accumulates,
+                     bool restart) {
+    SkyPixelRef sp = SkyPixelRef(g.sky_pixels);
+    uint base = index * SKY_PIXEL_FLOATS;
+    vec3 light = vec3(0.0);
+    if (px.t >= 0.0) {
+        float t[SKY_COEFFS];
+        for (uint i = 0u; i < SKY_COEFFS; ++i) {
+            float resolved = sp.v[base + SKY_RESOLVED + i];
+            float own = pr.traced > 0u ? sp.v[base + SKY_OWN + i] : 0.0;
+            float acc_cell = (restart ? 0.0 : sp.v[base + SKY_ACC_CELL + i]) + wc * resolved;
+            float acc_own = (restart ? 0.0 : sp.v[base + SKY_ACC_OWN + i]) + own;
+            sp.v[base + SKY_ACC_CELL + i] = acc_cell;
+            sp.v[base + SKY_ACC_OWN + i] = acc_own;
+            t[i] = accumulates ? (k * acc_cell / a.frames + acc_own) / (k + a.rays) : resolved;
+        }
+        light = max(sky_light(t), vec3(0.0));
+    }
+    sp.v[base + SKY_LIGHT] = light.r;
+    sp.v[base + SKY_LIGHT + 1u] = light.g;
+    sp.v[base + SKY_LIGHT + 2u] = light.b;
+    return light;
 }
 
 // Internal pixels a feature-edge line spans: edge_width view pixels at this render scale (at least one).
@@ -351,6 +386,8 @@ void main() {
     // The shade without the feature edges (the held rounds keep it aside); debug views keep their colour.
     vec3 plain = vec3(0.0);
     bool has_plain = false;
+    // The sky light's `plain` is lit already (not a shade for the AO to darken).
+    bool sky_shown = false;
     float final_ao = FloatRef(g.ao).v[index];
     if (px.t >= 0.0 && (g.mode == MODE_DEBUG_CELLS || g.mode == MODE_DEBUG_LOD || g.mode == MODE_DEBUG_SAMPLES)) {
         color = debug_color(index);
@@ -378,7 +415,8 @@ void main() {
         // away or removed may have left them: what they accumulated was its AO; a miss is exact at once).
         bool edited = px.t >= 0.0 ? edited_near(px.position, g.ao_radius + exp2(float(pixel_lod(px.t))))
                                   : edited_this_frame();
-        if (!accumulates || g.still_index == 0u || edited) {
+        bool restart = !accumulates || g.still_index == 0u || edited;
+        if (restart) {
             a.shade_cell = vec3(0.0);
             a.cell = 0.0;
             a.shade_open = vec3(0.0);
@@ -429,6 +467,13 @@ void main() {
             ao = 1.0;
             color = a.shade_cell / a.frames;
         }
+        if (hashed && sky_on()) {
+            // Sky light: the albedo lit by the environment through the pixel's transfer, the background as it is.
+            vec3 light = sky_pixel_light(index, px, pr, a, wc, k, accumulates, restart);
+            plain = px.t >= 0.0 ? lit(px, light) : plain;
+            sky_shown = true;
+            color = mix(plain, EDGE_COLOR, 0.85 * edge(pix, px));
+        }
         ao = clamp(ao, 0.0, 1.0);
         if (held_round()) {
             final_ao = ao;
@@ -441,7 +486,7 @@ void main() {
         // Kept aside; the pixel goes on showing the grid's interpolation, whose AO `ao` holds again (the
         // frame's resolve wrote the cell estimate there). In a frame that completes a grid, show_level runs
         // next and writes every pixel.
-        keep_aside(index, final_ao, has_plain ? pack_output(plain * final_ao) : rgba);
+        keep_aside(index, final_ao, has_plain ? pack_output(sky_shown ? plain : plain * final_ao) : rgba);
         FloatRef(g.ao).v[index] = Vec4Ref(g.bias_evidence).v[kept_slot(index)].z;
     } else {
         UintRef(g.output_rgba).v[index] = rgba;

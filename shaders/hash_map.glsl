@@ -10,6 +10,7 @@
 #ifndef HRTAO_HASH_MAP_GLSL
 #define HRTAO_HASH_MAP_GLSL
 #include "hash.glsl"
+#include "sky.glsl"
 
 // Records an out-of-range slot in assertion mode (FLAG_CHECK_BOUNDS); returns true when `slot` is usable.
 bool slot_in_bounds(uint slot) {
@@ -107,6 +108,7 @@ void reset_counters(CellRef cells, uint slot) {
     atomicExchange(cells.v[slot].qmc_index, 0u);
     atomicExchange(cells.v[slot].near_traced, 0u);
     atomicExchange(cells.v[slot].near_open, 0u);
+    if (sky_on()) sky_cell_reset(slot);
 }
 
 // How many times a probe restarts after losing its candidate slot to another key (bounded work per thread).

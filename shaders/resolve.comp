@@ -17,8 +17,8 @@
 // Trilinear interpolation at level `lod` of the 8 cells around `position` (cells absent or empty drop out):
 // (sum of w AO, the near-open fraction times sum of w, sum of w, the rays the weighted mean is worth:
 // (sum w)^2 / sum w^2/s). The near-open fraction is interpolated over the cells that classified rays (-1 when
-// none did).
-vec4 interpolate(vec3 position, int lod, ivec3 nq) {
+// none did). With the sky light, `sky` the sum of w times each cell's transfer (sky.glsl).
+vec4 interpolate(vec3 position, int lod, ivec3 nq, inout float sky[SKY_COEFFS]) {
     CellRef cells = CellRef(g.hash_cells);
     vec3 u = ldexp(position, ivec3(-lod)) - 0.5;
     vec3 base = floor(u);
@@ -48,6 +48,9 @@ vec4 interpolate(vec3 position, int lod, ivec3 nq) {
         }
         wsum += w;
         w2s += w * w / float(s);
+        if (sky_on()) {
+            for (uint i = 0u; i < SKY_COEFFS; ++i) sky[i] += w * sky_cell_mean(c, i, float(s));
+        }
     }
     float near = near_w > 0.0 ? near_sum / near_w * wsum : -1.0;
     return vec4(sum, near, wsum, w2s > 0.0 ? wsum * wsum / w2s : 0.0);
@@ -62,6 +65,10 @@ void resolve_pixel() {
     uint used = LOD_COUNT;
     uint iterations = (g.flags & FLAG_FILTER) != 0u ? g.filter_iterations : 0u;
     uint plan = 0u;
+    // Sky light: the pixel's cell transfer (open where it has no cell, as its AO is 1).
+    float sky[SKY_COEFFS];
+    for (uint i = 0u; i < SKY_COEFFS; ++i) sky[i] = 0.0;
+    bool sky_resolved = false;
     if (px.t >= 0.0) {
         PixelCells pc = PixelCellRef(g.pixel_cells).v[index];
         CellRef cells = CellRef(g.hash_cells);
@@ -86,13 +93,19 @@ void resolve_pixel() {
             used = best;
             int lod = pixel_lod(px.t) + int(best);
             ivec3 nq = normal_coord(px.normal, g.s_nd, g.normal_offset);
-            vec4 fine = interpolate(px.position, lod, nq);
+            vec4 fine = interpolate(px.position, lod, nq, sky);
             float sum = fine.x;
             float near_sum = fine.y;
             float wsum = fine.z;
             uint own = pc.cells[best];
             float own_samples = float(cells.v[own].samples);
             ao = wsum > 0.0 ? sum / wsum : float(cells.v[own].unoccluded) / own_samples;
+            if (sky_on()) {
+                for (uint i = 0u; i < SKY_COEFFS; ++i) {
+                    sky[i] = wsum > 0.0 ? sky[i] / wsum : sky_cell_mean(own, i, own_samples);
+                }
+                sky_resolved = true;
+            }
             // Near-field control variate (ours, near_field.glsl): the pixel's own rays against its cells'.
             PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
             uint own_near = cells.v[own].near_traced;
@@ -104,6 +117,11 @@ void resolve_pixel() {
             uint own_rays = uint(own_samples);
             plan = make_plan(planned_iterations(footprint, own_rays, iterations), own_rays);
         }
+    }
+    if (sky_on()) {
+        if (!sky_resolved && px.t >= 0.0) sky_open_transfer(unpack_normal(px.shading), sky);
+        SkyPixelRef pixels = SkyPixelRef(g.sky_pixels);
+        for (uint i = 0u; i < SKY_COEFFS; ++i) pixels.v[index * SKY_PIXEL_FLOATS + SKY_RESOLVED + i] = sky[i];
     }
     GuideRef(g.filter_guide).v[index] = make_guide(px, used < LOD_COUNT);
     store_resolved(index, plan, clamp(ao, 0.0, 1.0), iterations);

@@ -43,6 +43,17 @@ gpu_consts! {
     /// rather than a stale slot met before it, so cells older than the cache lifetime keep their AO until the
     /// table needs their slots (hash_map.glsl `find_or_insert`).
     FLAG_MAP_HAS_ROOM: u32 = 512;
+    /// Sky light (`LightSettings::sky`, crates/hrtao-core/src/sky): the update extends the rays open within R to
+    /// infinity and its cells and pixels gather the transfer vector of the escaped ones (shaders/sky.glsl); the
+    /// composite lights with the environment's coefficients (`FrameGlobals::sky_env`).
+    FLAG_SKY: u32 = 1024;
+    /// Sky light: the highest spherical-harmonic band of the transfer vectors (sky/sh.rs), and their
+    /// coefficients ((SKY_BAND + 1)²).
+    SKY_BAND: u32 = 2;
+    SKY_COEFFS: u32 = 9;
+    /// Sky light: floats per pixel of `FrameGlobals::sky_pixels`: the resolved cell transfer, this frame's own
+    /// rays' transfer sum, the still accumulation of both (SKY_COEFFS each), then the light (RGB, and a free word).
+    SKY_PIXEL_FLOATS: u32 = 40;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
     /// `FilterGuide::normal` of a pixel without AO (a miss, or no cell): never a packed normal (packSnorm2x16
@@ -256,6 +267,17 @@ gpu_structs! {
         still_start_frame: u32,
         /// Per pixel `SlicePrior`: the cell estimate it resolved when last drawn (slices' filter taps).
         slice_prior: u64,
+        /// Sky light (`FLAG_SKY`, shaders/sky.glsl): per hash cell, SKY_COEFFS fixed-point sums (int64) of the
+        /// escaped rays' basis values; per pixel, SKY_PIXEL_FLOATS floats. 0 without the sky light.
+        sky_cells: u64,
+        sky_pixels: u64,
+        /// Sky light: the sky frame's axes in world coordinates (b_i = dot(sky_axis_i, d); sky/environment.rs).
+        sky_axis_x: [f32; 4],
+        sky_axis_y: [f32; 4],
+        sky_axis_z: [f32; 4],
+        /// Sky light: the environment's coefficients, rotated and scaled by its intensity (RGB per coefficient).
+        sky_env: [f32; 27],
+        _sky_pad: u32,
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.

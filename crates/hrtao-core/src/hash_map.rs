@@ -30,6 +30,9 @@ pub struct WorldHashMap {
     gpu: Arc<Gpu>,
     /// Allocated with the capacity of the first frame's settings, again when a frame's capacity differs.
     cells: Option<(u32, Buffer)>,
+    /// Sky light: each cell's transfer sums (`gpu::SKY_COEFFS` int64 per slot, shaders/sky.glsl), made while
+    /// the sky light is on (`ensure_sky`), dropped with the cells.
+    sky: Option<Buffer>,
     /// `frame_index` of the first frame rendered with the current key F (eq. 6).
     f_start_frame: u32,
     /// The F cells are keyed with (eq. 6): the scene's F (plus section changes) after a global change, plus
@@ -59,6 +62,7 @@ impl WorldHashMap {
         Ok(WorldHashMap {
             gpu: gpu.clone(),
             cells: None,
+            sky: None,
             f_start_frame: 0,
             key_f: 0,
             settings_f: 0,
@@ -107,6 +111,7 @@ impl WorldHashMap {
         }
         self.gpu.wait_idle();
         self.cells = None;
+        self.sky = None;
         let cells = Buffer::new(
             &self.gpu,
             "hash map cells",
@@ -119,6 +124,31 @@ impl WorldHashMap {
         self.load = TableLoad::empty(capacity);
         self.last_cell_rays = NEW_MAP;
         Ok(())
+    }
+
+    /// Sky light: the cells' transfer sums, made (zeroed) on first use for the map's capacity. A cell's sums are
+    /// emptied when a key claims it, as its counters are.
+    pub fn ensure_sky(&mut self) -> Result<()> {
+        if self.sky.is_some() {
+            return Ok(());
+        }
+        let sky = Buffer::new(
+            &self.gpu,
+            "sky transfer sums",
+            self.capacity().max(1) as u64 * crate::gpu::SKY_COEFFS as u64 * 8,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        let device = &self.gpu.device;
+        self.gpu
+            .run_commands(|cmd| unsafe { device.cmd_fill_buffer(cmd, sky.raw, 0, vk::WHOLE_SIZE, 0) })?;
+        self.sky = Some(sky);
+        Ok(())
+    }
+
+    /// The sky sums' address (0 while there are none).
+    pub fn sky_address(&self) -> u64 {
+        self.sky.as_ref().map_or(0, |b| b.address)
     }
 
     /// Empties the map (all cached AO is forgotten) and its occupancy counter in `stats`.

@@ -10,6 +10,45 @@ pub struct AoError {
     pub pixels: usize,
 }
 
+/// Error of a sky light image (linear RGB, background 0: `--light-out`) against a reference, over the pixels
+/// that show the model in either: the mean over them and the channels of |L − L_ref|, and the reference's mean
+/// there (the relative error is their ratio).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct LightError {
+    pub mae: f64,
+    pub reference_mean: f64,
+    pub pixels: usize,
+}
+
+impl LightError {
+    /// The MAE relative to the reference's mean.
+    pub fn relative(&self) -> f64 {
+        self.mae / self.reference_mean.max(1e-12)
+    }
+}
+
+pub fn light_error(image: &[[f32; 3]], reference: &[[f32; 3]]) -> LightError {
+    let (mut abs, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
+    for (a, r) in image.iter().zip(reference) {
+        if a.iter().chain(r).all(|c| *c == 0.0) {
+            continue;
+        }
+        for ch in 0..3 {
+            abs += (a[ch] as f64 - r[ch] as f64).abs() / 3.0;
+            sum += r[ch] as f64 / 3.0;
+        }
+        n += 1;
+    }
+    if n == 0 {
+        return LightError::default();
+    }
+    LightError {
+        mae: abs / n as f64,
+        reference_mean: sum / n as f64,
+        pixels: n,
+    }
+}
+
 pub fn ao_error(image: &[f32], reference: &[f32]) -> AoError {
     let (mut abs, mut sq, mut n) = (0.0f64, 0.0f64, 0usize);
     for (a, r) in image.iter().zip(reference) {

@@ -89,15 +89,15 @@ impl Pass {
         "cell_finder",
         "cell finder",
         &[GBuffer, PixelCells, Regions, HashCells, Stats, DispatchArgs],
-        &[HashCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
+        &[HashCells, SkyCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
     );
     pub const AO_UPDATE: Pass = Pass::new(
         "ao_update",
         "ray-tracing update",
         &[
-            Stats, RayQueue, GBuffer, PixelCells, HashCells, FilterTmp, PixelRays,
+            Stats, RayQueue, GBuffer, PixelCells, HashCells, FilterTmp, PixelRays, SkyCells, SkyPixels,
         ],
-        &[HashCells, FilterTmp, PixelRays, Stats],
+        &[HashCells, FilterTmp, PixelRays, Stats, SkyCells, SkyPixels],
     );
     pub const RESOLVE: Pass = Pass::new(
         "resolve",
@@ -110,6 +110,7 @@ impl Pass {
             Regions,
             Stats,
             DispatchArgs,
+            SkyCells,
         ],
         &[
             FilterGuide,
@@ -121,6 +122,7 @@ impl Pass {
             FilterQueue,
             Stats,
             DispatchArgs,
+            SkyPixels,
         ],
     );
     pub const FILTER: Pass = Pass::new(
@@ -154,8 +156,9 @@ impl Pass {
             PixelRays,
             Accum,
             Regions,
+            SkyPixels,
         ],
-        &[BiasEvidence, Ao, Accum, Output],
+        &[BiasEvidence, Ao, Accum, Output, SkyPixels],
     );
     pub const HASH_TEST: Pass = Pass::new("hash_test", "hash test", &[HashTestCases], &[HashTestCases]);
 
@@ -239,12 +242,16 @@ pub enum Resource {
     Accum,
     /// The composited RGBA8 image.
     Output,
+    /// Sky light: the cells' transfer sums (beside `HashCells`, slot for slot).
+    SkyCells,
+    /// Sky light: per pixel, its transfer vectors, their accumulation and its light.
+    SkyPixels,
     /// The cases of the hash test pass (tests only).
     HashTestCases,
 }
 
 impl Resource {
-    pub const ALL: [Resource; 24] = [
+    pub const ALL: [Resource; 26] = [
         Resource::Instances,
         Resource::Geometries,
         Resource::Visibility,
@@ -268,6 +275,8 @@ impl Resource {
         Resource::BiasEvidence,
         Resource::Accum,
         Resource::Output,
+        Resource::SkyCells,
+        Resource::SkyPixels,
         Resource::HashTestCases,
     ];
 
@@ -296,6 +305,8 @@ impl Resource {
             Resource::BiasEvidence => "bias_evidence",
             Resource::Accum => "accum",
             Resource::Output => "output_rgba",
+            Resource::SkyCells => "sky_cells",
+            Resource::SkyPixels => "sky_pixels",
             Resource::Visibility
             | Resource::StatsReadback
             | Resource::HashTestCases

@@ -25,6 +25,7 @@ use crate::pass::{Pass, PassSet, Resource};
 use crate::raster::{Primary, Rasterizer};
 use crate::recorder::Recorder;
 use crate::settings::{AoSettings, Mode};
+use crate::sky::SkyLight;
 use crate::slice_order;
 
 /// Buffers whose size follows the image resolution.
@@ -213,6 +214,11 @@ pub struct Renderer {
     last_events: Vec<Event>,
     /// The most rays one dispatch of a ray-tracing pass traces (`set_max_rays_per_dispatch`).
     max_rays_per_dispatch: u64,
+    /// Sky light (`LightSettings::sky_light`): the environment's projection, loaded when first named, and the
+    /// per-pixel buffer (`FrameGlobals::sky_pixels`, `gpu::SKY_PIXEL_FLOATS` floats per pixel) with the pixels
+    /// it holds, made while the sky light is on. The cells' sums are the map's (`WorldHashMap::ensure_sky`).
+    sky: Option<SkyLight>,
+    sky_pixels: Option<(u64, Buffer)>,
 }
 
 impl Renderer {
@@ -265,6 +271,8 @@ impl Renderer {
             raster: None,
             last_events: Vec::new(),
             max_rays_per_dispatch: dispatch_plan::MAX_RAYS_PER_DISPATCH,
+            sky: None,
+            sky_pixels: None,
         };
         gpu.run_commands(|cmd| unsafe {
             gpu.device.cmd_fill_buffer(cmd, r.stats.raw, 0, vk::WHOLE_SIZE, 0);
@@ -321,6 +329,11 @@ impl Renderer {
     /// of a local edit get new epochs, or every cell gets a new key F (eq. 6).
     fn prepare(&mut self, frame: &FrameDesc) -> Result<()> {
         frame.validate().map_err(CoreError::Invalid)?;
+        // Before anything moves on: an environment that cannot be read changes nothing.
+        let light = &frame.settings.light;
+        if light.sky_light && self.sky.as_ref().map(SkyLight::environment) != Some(light.environment.as_str()) {
+            self.sky = Some(SkyLight::load(&light.environment).map_err(|e| CoreError::Invalid(format!("{e:#}")))?);
+        }
         let (w, h) = frame.size();
         if (w, h) != self.size() {
             if w as u64 * h as u64 <= self.targets.capacity {
@@ -331,6 +344,10 @@ impl Renderer {
             }
         }
         self.map.ensure(frame.settings.map.hash_capacity, &self.stats)?;
+        if light.sky_light {
+            self.ensure_sky_pixels()?;
+            self.map.ensure_sky()?;
+        }
         self.map
             .begin_frame(self.frame_index, frame.time, frame.settings.map.cache_lifetime_s);
         let key = frame.key(self.primary);
@@ -366,6 +383,27 @@ impl Renderer {
             self.edit_still_index = self.still_index + (self.slice > 0) as u32;
         }
         self.prev = Some(key);
+        Ok(())
+    }
+
+    /// Sky light: the per-pixel buffer, for as many pixels as the targets hold.
+    fn ensure_sky_pixels(&mut self) -> Result<()> {
+        let pixels = self.targets.capacity;
+        if self.sky_pixels.as_ref().is_some_and(|(n, _)| *n >= pixels) {
+            return Ok(());
+        }
+        // Frames in flight may read the old one.
+        self.gpu.wait_idle();
+        self.sky_pixels = None;
+        let bytes = pixels * gpu::SKY_PIXEL_FLOATS as u64 * 4;
+        let buffer = Buffer::new(
+            &self.gpu,
+            "sky pixels",
+            bytes,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::empty(),
+        )?;
+        self.sky_pixels = Some((pixels, buffer));
         Ok(())
     }
 
@@ -539,6 +577,14 @@ impl Renderer {
             g.flags |= gpu::FLAG_MAP_HAS_ROOM;
         }
         g.flags |= additions::flags(&self.young_frame(frame));
+        if s.light.sky_light {
+            // `prepare` made both.
+            if let (Some(sky), Some((_, pixels))) = (&self.sky, &self.sky_pixels) {
+                sky.write_gpu(&s.light, &mut g);
+                g.sky_cells = self.map.sky_address();
+                g.sky_pixels = pixels.address;
+            }
+        }
         g
     }
 
@@ -1075,6 +1121,24 @@ impl Renderer {
     /// The linear AO image of the last frame, row 0 at the top (background = 1).
     pub fn read_ao(&self) -> Result<Vec<f32>> {
         self.read_buffer(&self.targets.ao, self.pixel_count())
+    }
+
+    /// The sky light of the last frame (`--light-out`'s value: linear RGB, background 0), row 0 at the top; an
+    /// error when it did not light with the sky.
+    pub fn read_light(&self) -> Result<Vec<[f32; 3]>> {
+        let on = self.prev.as_ref().is_some_and(|k| k.settings.light.sky_light && k.settings.display.mode == Mode::Hrtao);
+        let Some((_, buffer)) = self.sky_pixels.as_ref().filter(|_| on) else {
+            return Err(CoreError::Invalid(
+                "the last frame was not lit by the sky light (HRTAO with `sky_light`)".into(),
+            ));
+        };
+        let stride = gpu::SKY_PIXEL_FLOATS as usize;
+        let light = (4 * gpu::SKY_COEFFS) as usize;
+        let floats: Vec<f32> = self.read_buffer(buffer, self.pixel_count() * stride)?;
+        Ok(floats
+            .chunks_exact(stride)
+            .map(|p| [p[light], p[light + 1], p[light + 2]])
+            .collect())
     }
 
     /// The composited sRGB RGBA8 image of the last frame, row 0 at the top.

@@ -14,6 +14,7 @@ use crate::gpu::FrameGlobals;
 mod display;
 mod edits;
 mod filter;
+mod light;
 mod map;
 mod mode;
 mod still;
@@ -22,6 +23,7 @@ mod young;
 pub use display::{DisplaySettings, CREASE_DEG_RANGE};
 pub use edits::EditSettings;
 pub use filter::{FilterSettings, FILTER_SIGMA, MAX_FILTER_ITERATIONS};
+pub use light::{LightSettings, INTENSITY_RANGE};
 pub use map::{MapSettings, MAX_CACHE_LIFETIME_S, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};
 pub use mode::Mode;
 pub use still::{frame_smoothing, StillSettings, PRIOR_RAYS, RESIDUAL_SIGMA, STILL_SMOOTHING};
@@ -171,6 +173,9 @@ pub struct AoSettings {
     /// What is shown and how: mode, shading, feature edges.
     #[serde(flatten)]
     pub display: DisplaySettings,
+    /// How the model is lit: the AO look or the sky light.
+    #[serde(flatten)]
+    pub light: LightSettings,
 }
 
 impl AoSettings {
@@ -183,6 +188,7 @@ impl AoSettings {
         list.extend(self.young.additions_mut());
         list.extend(self.edits.additions_mut());
         list.extend(self.display.additions_mut());
+        list.extend(self.light.additions_mut());
         list
     }
 
@@ -206,6 +212,7 @@ impl AoSettings {
             young: self.young.paper(),
             edits: self.edits.paper(),
             display: self.display.paper(),
+            light: self.light.paper(),
         }
     }
 
@@ -218,6 +225,7 @@ impl AoSettings {
             self.young.invalidates(&new.young),
             self.edits.invalidates(&new.edits),
             self.display.invalidates(&new.display),
+            self.light.invalidates(&new.light),
         ]
         .into_iter()
         .max()
@@ -233,6 +241,7 @@ impl AoSettings {
             YoungMapSettings::CLASSES,
             EditSettings::CLASSES,
             DisplaySettings::CLASSES,
+            LightSettings::CLASSES,
         ]
         .concat()
     }
@@ -298,7 +307,8 @@ impl AoSettings {
     pub fn validate(&self) -> Result<(), String> {
         self.map.validate()?;
         self.filter.validate()?;
-        self.display.validate()
+        self.display.validate()?;
+        self.light.validate()
     }
 
     /// Writes the settings' share of the frame's GPU parameters, group by group (the young map's additions have
@@ -405,7 +415,8 @@ mod tests {
             .as_object()
             .unwrap()
             .iter()
-            .filter(|(k, v)| v.is_boolean() && paper[k.as_str()] == serde_json::json!(false))
+            // A switch the paper's mode turns off (a switch it keeps, as the sky light, is not ours to ablate).
+            .filter(|(k, v)| **v == serde_json::json!(true) && paper[k.as_str()] == serde_json::json!(false))
             .map(|(k, _)| k.as_str())
             .collect();
         off_in_paper.sort();

@@ -3,7 +3,9 @@
 //! (`sh.rs`): the cells will keep the directions their rays escaped in as a transfer vector in that basis, so a
 //! rotation of the environment turns its coefficients and traces no new rays.
 pub mod environment;
+pub mod light;
 pub mod sh;
 
 pub use environment::{Environment, Equirect};
+pub use light::{EnvironmentSpec, SkyLight};
 pub use sh::ShRgb;
