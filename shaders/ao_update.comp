@@ -111,13 +111,19 @@ void main() {
         PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
         PixelRaysRef(g.pixel_rays).v[index].traced = (ray0 == 0u ? 0u : pr.traced) + rays;
         PixelRaysRef(g.pixel_rays).v[index].unoccluded = (ray0 == 0u ? 0u : pr.unoccluded) + all_rays.y;
-        if (sky) {
-            SkyPixelRef own_sky = SkyPixelRef(g.sky_pixels);
-            uint base = index * SKY_PIXEL_FLOATS + SKY_OWN;
-            for (uint i = 0u; i < SKY_COEFFS; ++i) {
-                own_sky.v[base + i] = (ray0 == 0u ? 0.0 : own_sky.v[base + i]) + sky_all[i];
-            }
+    }
+    if (sky) {
+        // Sky light: every ray the pixel traced this frame, its own or its cell's, is a sample of its own
+        // transfer (the composite weighs them against the cell estimate). The first chunk of the frame sets
+        // them, later chunks and phases add theirs.
+        SkyPixelRef own_sky = SkyPixelRef(g.sky_pixels);
+        uint base = index * SKY_PIXEL_FLOATS;
+        bool fresh = floatBitsToUint(own_sky.v[base + SKY_OWN_FRAME]) != g.frame_index + 1u;
+        for (uint i = 0u; i < SKY_COEFFS; ++i) {
+            own_sky.v[base + SKY_OWN + i] = (fresh ? 0.0 : own_sky.v[base + SKY_OWN + i]) + sky_all[i];
         }
+        own_sky.v[base + SKY_OWN_RAYS] = (fresh ? 0.0 : own_sky.v[base + SKY_OWN_RAYS]) + float(rays);
+        own_sky.v[base + SKY_OWN_FRAME] = uintBitsToFloat(g.frame_index + 1u);
     }
     if (first >= LOD_COUNT) return;
     // The target cell takes the rays it granted; bottom-up propagation (§4): every coarser level takes all of

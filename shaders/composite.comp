@@ -89,25 +89,30 @@ vec3 shade(uvec2 pix, GPixel px) {
     return lit(px, vec3(0.4 + 0.6 * diffuse));
 }
 
-// Sky light (sky.glsl): the pixel's transfer accumulated over the still frames as the AO is, its cell estimate
-// counting as k of its own rays (wc the weight of this frame's cell estimate, a the AO's accumulation after
-// this frame, `restart` whether it restarted this frame), and the light of it, kept for --light-out. Turning the
-// environment changes only `sky_light`'s coefficients: the accumulation goes on.
-vec3 sky_pixel_light(uint index, GPixel px, PixelRays pr, PixelAccum a, float wc, float k, bool accumulates,
-                     bool restart) {
+// Sky light (sky.glsl): the pixel's transfer, its cell estimate counting as k of its own rays, accumulated over
+// the still frames as the AO is (wc the weight of this frame's cell estimate, `frames` the sum of those weights
+// after this frame, `restart` whether the accumulation restarted this frame). Every ray the pixel traced counts
+// as its own, the rays it traced into its cell too (a young map's frames): they sample its own transfer.
+// The light of it is kept for --light-out. Turning the environment changes only `sky_light`'s coefficients:
+// the accumulation goes on.
+vec3 sky_pixel_light(uint index, GPixel px, float wc, float frames, float k, bool accumulates, bool restart) {
     SkyPixelRef sp = SkyPixelRef(g.sky_pixels);
     uint base = index * SKY_PIXEL_FLOATS;
     vec3 light = vec3(0.0);
     if (px.t >= 0.0) {
+        bool traced = floatBitsToUint(sp.v[base + SKY_OWN_FRAME]) == g.frame_index + 1u;
+        float rays = traced ? sp.v[base + SKY_OWN_RAYS] : 0.0;
+        float acc_rays = (restart ? 0.0 : sp.v[base + SKY_ACC_RAYS]) + rays;
+        sp.v[base + SKY_ACC_RAYS] = acc_rays;
         float t[SKY_COEFFS];
         for (uint i = 0u; i < SKY_COEFFS; ++i) {
             float resolved = sp.v[base + SKY_RESOLVED + i];
-            float own = pr.traced > 0u ? sp.v[base + SKY_OWN + i] : 0.0;
+            float own = traced ? sp.v[base + SKY_OWN + i] : 0.0;
             float acc_cell = (restart ? 0.0 : sp.v[base + SKY_ACC_CELL + i]) + wc * resolved;
             float acc_own = (restart ? 0.0 : sp.v[base + SKY_ACC_OWN + i]) + own;
             sp.v[base + SKY_ACC_CELL + i] = acc_cell;
             sp.v[base + SKY_ACC_OWN + i] = acc_own;
-            t[i] = accumulates ? (k * acc_cell / a.frames + acc_own) / (k + a.rays) : resolved;
+            t[i] = accumulates ? (k * acc_cell / frames + acc_own) / (k + acc_rays) : (k * resolved + own) / (k + rays);
         }
         light = max(sky_light(t), vec3(0.0));
     }
@@ -469,7 +474,7 @@ void main() {
         }
         if (hashed && sky_on()) {
             // Sky light: the albedo lit by the environment through the pixel's transfer, the background as it is.
-            vec3 light = sky_pixel_light(index, px, pr, a, wc, k, accumulates, restart);
+            vec3 light = sky_pixel_light(index, px, wc, a.frames, max(g.prior_rays, 1.0), accumulates, restart);
             plain = px.t >= 0.0 ? lit(px, light) : plain;
             sky_shown = true;
             color = mix(plain, EDGE_COLOR, 0.85 * edge(pix, px));

@@ -11,6 +11,8 @@
 // Pixels of full cells are left as they are, except in a still image's frames, where the cell estimate is the
 // prior of the pixels' own rays and is filtered down to the noise of the final image's own rays
 // (`still_prior_frame`). Which iterations a pixel takes is its plan (filter_plan.glsl).
+// Sky light (ours, sky.glsl): the pixels' resolved transfer vectors are filtered with the same taps and weights,
+// in their own ping-pong slots.
 #include "common.glsl"
 #include "hash_map.glsl"
 #include "filter_plan.glsl"
@@ -20,6 +22,24 @@ const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
 // steps), and the plane weight's tolerance in units of the iteration's reach (2 steps, at least the cell).
 const float GUIDED_REACH = 4.0;
 const float GUIDED_PLANE = 2.0;
+
+// Guided (ours): the stop of the edge-stopping weight exp(-|value - center| stop) for a pixel whose value
+// `center` is a fraction of the n rays of its cell (AO: open rays; sky light: escaped rays).
+float guided_stop(float center, float n, float cell, float pixel_size, int step) {
+    float p = clamp(center, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
+    float footprint = cell / max(pixel_size, 1e-30);
+    float cells_spanned = 4.0 * float(step) / max(footprint, 1.0);
+    float variance = p * (1.0 - p) / n / max(cells_spanned, 1.0);
+    // A still image's prior (ours): differences within the noise the final image keeps from its own rays
+    // (S_f = still_samples of them at the weight S_f / (k + S_f), composite.comp) are noise the final image
+    // will not show; smoothing them keeps the refinement's first frames as smooth.
+    if (still_prior_frame()) {
+        float final_rays = max(g.still_samples, 1.0);
+        float final_weight = final_rays / (g.prior_rays + final_rays);
+        variance = max(variance, p * (1.0 - p) * final_weight * final_weight / final_rays);
+    }
+    return 1.0 / (g.filter_sigma * sqrt(2.0 * variance));
+}
 
 void main() {
     // Dispatched over the pixels whose plan takes an iteration (resolve.comp queues them); the others hold
@@ -40,8 +60,17 @@ void main() {
     uint done = plan_iterations(plan);
     if (iteration > done) return;
     float center = src.v[index];
+    bool sky = sky_on() && SKY_FILTER;
+    SkyPixelRef sky_px = SkyPixelRef(g.sky_pixels);
+    uint sky_src = src_is_tmp ? SKY_PONG : SKY_RESOLVED;
+    uint sky_dst = src_is_tmp ? SKY_RESOLVED : SKY_PONG;
     if (iteration == done) {
         dst.v[index] = center;
+        if (sky) {
+            for (uint i = 0u; i < SKY_COEFFS; ++i) {
+                sky_px.v[index * SKY_PIXEL_FLOATS + sky_dst + i] = sky_px.v[index * SKY_PIXEL_FLOATS + sky_src + i];
+            }
+        }
         return;
     }
     GBufferRef gb = GBufferRef(g.gbuffer);
@@ -70,25 +99,18 @@ void main() {
     // open or closed cell still admits its neighbours' noise). The pixels of one cell share its noise, so the
     // averaging only lowers it once the kernel (4 steps wide) spans more than the cell's footprint: from there
     // it halves per doubling of the kernel.
-    float stop = 0.0;
-    if (guided) {
-        float n = float(max(plan_samples(plan), 1u));
-        float p = clamp(center, 0.5 / (n + 1.0), 1.0 - 0.5 / (n + 1.0));
-        float footprint = cell / max(pixel_size, 1e-30);
-        float cells_spanned = 4.0 * float(step) / max(footprint, 1.0);
-        float variance = p * (1.0 - p) / n / max(cells_spanned, 1.0);
-        // A still image's prior (ours): differences within the noise the final image keeps from its own rays
-        // (S_f = still_samples of them at the weight S_f / (k + S_f), composite.comp) are noise the final image
-        // will not show; smoothing them keeps the refinement's first frames as smooth.
-        if (still_prior_frame()) {
-            float final_rays = max(g.still_samples, 1.0);
-            float final_weight = final_rays / (g.prior_rays + final_rays);
-            variance = max(variance, p * (1.0 - p) * final_weight * final_weight / final_rays);
-        }
-        stop = 1.0 / (g.filter_sigma * sqrt(2.0 * variance));
-    }
+    float n = float(max(plan_samples(plan), 1u));
+    float stop = guided ? guided_stop(center, n, cell, pixel_size, step) : 0.0;
+    // Sky light: the taps are weighed by the pixels' escaped fraction (the transfer's band 0 over an open
+    // surface's), as the AO's by the AO, with that fraction's own binomial noise: the sky varies where the AO
+    // within R does not (a face open within R, shadowed from afar).
+    float sky_center = sky ? sky_escaped(sky_px.v[index * SKY_PIXEL_FLOATS + sky_src]) : 0.0;
+    float sky_stop = sky && guided ? guided_stop(sky_center, n, cell, pixel_size, step) : 0.0;
     float sum = 0.0;
     float wsum = 0.0;
+    float sky_sum[SKY_COEFFS];
+    for (uint i = 0u; i < SKY_COEFFS; ++i) sky_sum[i] = 0.0;
+    float sky_wsum = 0.0;
     for (int dy = -2; dy <= 2; ++dy) {
         for (int dx = -2; dx <= 2; ++dx) {
             ivec2 q = full_taps ? ivec2(pix) + ivec2(dx, dy) * step : neighbour(pix, ivec2(dx, dy) * step);
@@ -117,10 +139,24 @@ void main() {
             float w_plane = exp(-abs(dot(delta, px.normal)) / plane_scale);
             float w_n = pow(max(dot(q_normal, px.normal), 0.0), 2.0 * g.s_nd);
             float w_ao = guided ? exp(-abs(value - center) * stop) : 1.0;
-            float w = k * w_pos * w_plane * w_n * w_ao;
+            float w_geometry = k * w_pos * w_plane * w_n;
+            float w = w_geometry * w_ao;
             sum += w * value;
             wsum += w;
+            // The sky's taps: the pixels drawn this frame (another slice's pixel keeps no transfer aside).
+            if (sky && !prior) {
+                uint at = qi * SKY_PIXEL_FLOATS + sky_src;
+                float w_sky = w_geometry * (guided ? exp(-abs(sky_escaped(sky_px.v[at]) - sky_center) * sky_stop) : 1.0);
+                for (uint i = 0u; i < SKY_COEFFS; ++i) sky_sum[i] += w_sky * sky_px.v[at + i];
+                sky_wsum += w_sky;
+            }
         }
     }
     dst.v[index] = wsum > 0.0 ? sum / wsum : center;
+    if (sky) {
+        uint at = index * SKY_PIXEL_FLOATS;
+        for (uint i = 0u; i < SKY_COEFFS; ++i) {
+            sky_px.v[at + sky_dst + i] = sky_wsum > 0.0 ? sky_sum[i] / sky_wsum : sky_px.v[at + sky_src + i];
+        }
+    }
 }

@@ -120,8 +120,16 @@ void resolve_pixel() {
     }
     if (sky_on()) {
         if (!sky_resolved && px.t >= 0.0) sky_open_transfer(unpack_normal(px.shading), sky);
+        // Where the filter starts, as store_resolved does the AO: a pixel that takes no iteration into both.
+        bool odd = SKY_FILTER && (iterations & 1u) == 1u;
         SkyPixelRef pixels = SkyPixelRef(g.sky_pixels);
-        for (uint i = 0u; i < SKY_COEFFS; ++i) pixels.v[index * SKY_PIXEL_FLOATS + SKY_RESOLVED + i] = sky[i];
+        uint start = index * SKY_PIXEL_FLOATS + (odd ? SKY_PONG : SKY_RESOLVED);
+        uint other = index * SKY_PIXEL_FLOATS + (odd ? SKY_RESOLVED : SKY_PONG);
+        bool both = SKY_FILTER && plan_iterations(plan) == 0u && iterations > 0u;
+        for (uint i = 0u; i < SKY_COEFFS; ++i) {
+            pixels.v[start + i] = sky[i];
+            if (both) pixels.v[other + i] = sky[i];
+        }
     }
     GuideRef(g.filter_guide).v[index] = make_guide(px, used < LOD_COUNT);
     store_resolved(index, plan, clamp(ao, 0.0, 1.0), iterations);

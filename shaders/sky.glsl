@@ -22,13 +22,22 @@ layout(buffer_reference, scalar) buffer SkyPixelRef { float v[]; };
 const float SKY_FIXED = 16777216.0;
 // Where a sky ray ends: nothing in a scene lies this far.
 const float SKY_FAR = 1.0e30;
-// Offsets into a pixel's SKY_PIXEL_FLOATS: the resolved cell transfer, this frame's own rays' sum, the still
+// Offsets into a pixel's SKY_PIXEL_FLOATS: the resolved cell transfer and the filter's pong of it (the sky's
+// `ao` and `filter_tmp`: filter.comp filters it with the AO's weights), this frame's own rays' sum, the still
 // accumulation of the cell transfer (weighted as the AO's) and of the own sums, the light (RGB).
 const uint SKY_RESOLVED = 0u;
-const uint SKY_OWN = SKY_COEFFS;
-const uint SKY_ACC_CELL = 2u * SKY_COEFFS;
-const uint SKY_ACC_OWN = 3u * SKY_COEFFS;
-const uint SKY_LIGHT = 4u * SKY_COEFFS;
+const uint SKY_PONG = SKY_COEFFS;
+const uint SKY_OWN = 2u * SKY_COEFFS;
+const uint SKY_ACC_CELL = 3u * SKY_COEFFS;
+const uint SKY_ACC_OWN = 4u * SKY_COEFFS;
+const uint SKY_LIGHT = 5u * SKY_COEFFS;
+// The rays behind SKY_OWN and the frame that traced them (its `frame_index` + 1, as float bits; 0 in a new
+// buffer: a pixel that traced nothing since holds an older one), and the own rays of the still accumulation.
+const uint SKY_OWN_RAYS = 5u * SKY_COEFFS + 3u;
+const uint SKY_OWN_FRAME = 5u * SKY_COEFFS + 4u;
+const uint SKY_ACC_RAYS = 5u * SKY_COEFFS + 5u;
+
+const bool SKY_FILTER = true;
 
 bool sky_on() { return (g.flags & FLAG_SKY) != 0u; }
 
@@ -91,6 +100,12 @@ void sky_open_transfer(vec3 n, out float t[SKY_COEFFS]) {
         float a = l == 0 ? 1.0 : (l == 1 ? 2.0 / 3.0 : (l == 2 ? 0.25 : 0.0));
         for (int i = l * l; i < (l + 1) * (l + 1); ++i) t[i] *= a;
     }
+}
+
+// The fraction of an open surface's sky a transfer's band 0 shows: the cosine-weighted escaped fraction
+// (t_0 = Y_0 times it).
+float sky_escaped(float t0) {
+    return t0 * 2.0 * sqrt(PI);
 }
 
 // The light of a transfer vector: Σ e_i t_i (RGB).

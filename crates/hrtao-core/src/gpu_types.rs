@@ -51,9 +51,11 @@ gpu_consts! {
     /// coefficients ((SKY_BAND + 1)²).
     SKY_BAND: u32 = 2;
     SKY_COEFFS: u32 = 9;
-    /// Sky light: floats per pixel of `FrameGlobals::sky_pixels`: the resolved cell transfer, this frame's own
-    /// rays' transfer sum, the still accumulation of both (SKY_COEFFS each), then the light (RGB, and a free word).
-    SKY_PIXEL_FLOATS: u32 = 40;
+    /// Sky light: floats per pixel of `FrameGlobals::sky_pixels`: the resolved cell transfer and the filter's
+    /// pong of it, this frame's own rays' transfer sum, the still accumulation of the cell transfer and of the own
+    /// sums (SKY_COEFFS each), then the light (RGB), the own rays' count and frame, the accumulated own rays
+    /// and a free word (shaders/sky.glsl).
+    SKY_PIXEL_FLOATS: u32 = 52;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
     /// `FilterGuide::normal` of a pixel without AO (a miss, or no cell): never a packed normal (packSnorm2x16

@@ -139,8 +139,9 @@ impl Pass {
             FilterTmp,
             SlicePrior,
             Regions,
+            SkyPixels,
         ],
-        &[Ao, FilterTmp],
+        &[Ao, FilterTmp, SkyPixels],
     );
     pub const COMPOSITE: Pass = Pass::new(
         "composite",

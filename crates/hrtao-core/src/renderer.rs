@@ -403,6 +403,10 @@ impl Renderer {
             MemoryLocation::GpuOnly,
             vk::BufferUsageFlags::empty(),
         )?;
+        // Zeroed: no pixel holds rays of a frame yet (sky.glsl `SKY_OWN_FRAME`).
+        let device = &self.gpu.device;
+        self.gpu
+            .run_commands(|cmd| unsafe { device.cmd_fill_buffer(cmd, buffer.raw, 0, vk::WHOLE_SIZE, 0) })?;
         self.sky_pixels = Some((pixels, buffer));
         Ok(())
     }
@@ -1133,7 +1137,7 @@ impl Renderer {
             ));
         };
         let stride = gpu::SKY_PIXEL_FLOATS as usize;
-        let light = (4 * gpu::SKY_COEFFS) as usize;
+        let light = (5 * gpu::SKY_COEFFS) as usize;
         let floats: Vec<f32> = self.read_buffer(buffer, self.pixel_count() * stride)?;
         Ok(floats
             .chunks_exact(stride)

@@ -58,8 +58,13 @@ fn run(
     (first, light_error(&r.read_light().unwrap(), reference))
 }
 
+/// Every committed view (the rotation-invariant `uniform` and `gradient` at 0 only): after 32 still frames at 8
+/// rays per pixel MAE ≤ 0.01 under `uniform` and MAE ÷ the reference's mean ≤ 0.02 under the others; the first
+/// frame within 1.5× the AO mode's first-frame MAE on the same view (against its own Cycles reference).
+/// Measured: frame 32 uniform 0.0054 (both scenes), relative 0.006–0.009 (gradient), 0.012–0.019 (the lobe, whose
+/// band-2 truncation is most of it); frame 1 0.97–1.48× the AO's.
 #[test]
-fn sky_light_matches_cycles() {
+fn sky_light_converges_to_cycles_and_starts_as_close_as_the_ao() {
     let gpu = gpu();
     for key in REFERENCE_SCENES {
         let (scene, cam, radius) = shared_scene(key, 160, 90);
@@ -70,17 +75,99 @@ fn sky_light_matches_cycles() {
             mae(&r.read_ao().unwrap(), &cycles_ref(key, 160, 90))
         };
         for (env, rotation, reference) in views(key) {
+            if rotation != 0.0 && !env.ends_with(".hdr") {
+                continue;
+            }
             let mut r = Headless::new(&gpu, cam.width, cam.height, sky(8, radius, &env, rotation)).unwrap();
             let (first, last) = run(&mut r, &sg, scene.f(), &cam, 32, &reference);
+            let name = format!("{key} {} at {rotation}°", env.rsplit('/').next().unwrap());
             println!(
-                "{key} {} {rotation}: frame 1 MAE {:.4} (AO {ao_first:.4}), frame 32 MAE {:.4} rel {:.4} (ref mean {:.3})",
-                env.rsplit('/').next().unwrap(),
+                "{name}: frame 1 MAE {:.4} (AO {ao_first:.4}), frame 32 MAE {:.4}, relative {:.4}",
                 first.mae,
                 last.mae,
-                last.relative(),
-                last.reference_mean
+                last.relative()
             );
+            assert!(first.pixels > 1000, "{name}: the model covers {} pixels", first.pixels);
+            assert!(
+                first.mae as f32 <= 1.5 * ao_first,
+                "{name}: first frame MAE {} against the AO's {ao_first}",
+                first.mae
+            );
+            if env == "uniform" {
+                assert!(last.mae <= 0.01, "{name}: frame 32 MAE {}", last.mae);
+            } else {
+                assert!(last.relative() <= 0.02, "{name}: frame 32 relative MAE {}", last.relative());
+            }
         }
     }
+    assert_clean(&gpu);
+}
+
+/// Rotation is free: turning the lobe environment by 90° at frame 16 traces, frame for frame, the rays of a run
+/// that never turns it (within 1 %), keeps the still image accumulating, and its frame 48 is within 1.2× the
+/// error of a fresh 48-frame render at 90° against the 90° reference.
+#[test]
+fn turning_the_environment_traces_no_new_rays() {
+    let gpu = gpu();
+    let (scene, cam, radius) = shared_scene("rod", 160, 90);
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let lobe = testdata("env/sky_lobe_64x32.hdr").to_str().unwrap().to_string();
+    let reference = views("rod")
+        .into_iter()
+        .find(|(env, rot, _)| *env == lobe && *rot == 90.0)
+        .unwrap()
+        .2;
+    let frames = |turn_at: Option<u32>| {
+        let start = if turn_at.is_some() { 0.0 } else { 90.0 };
+        let mut r = Headless::new(&gpu, cam.width, cam.height, sky(8, radius, &lobe, start)).unwrap();
+        let mut reports = Vec::new();
+        for i in 0..48 {
+            if Some(i) == turn_at {
+                let mut s = r.settings.clone();
+                s.light.environment_rotation = 90.0;
+                r.set_settings(s).unwrap();
+            }
+            reports.push(r.render(&sg, scene.f(), &cam).unwrap());
+        }
+        (reports, light_error(&r.read_light().unwrap(), &reference))
+    };
+    let (turned, turned_error) = frames(Some(16));
+    let (fresh, fresh_error) = frames(None);
+    println!("frame 48 MAE: turned at 16 {:.4}, fresh {:.4}", turned_error.mae, fresh_error.mae);
+    for (i, (a, b)) in turned.iter().zip(&fresh).enumerate() {
+        let (a, b) = (a.rays as f64, b.rays as f64);
+        assert!((a - b).abs() <= 0.01 * b.max(1.0), "frame {i}: {a} rays against {b}");
+    }
+    assert_eq!(
+        turned[16].accumulated_frames,
+        turned[15].accumulated_frames + 1,
+        "the still image goes on accumulating through the turn"
+    );
+    assert!(
+        turned_error.mae <= 1.2 * fresh_error.mae,
+        "turned {} against fresh {}",
+        turned_error.mae,
+        fresh_error.mae
+    );
+    assert_clean(&gpu);
+}
+
+/// An environment that cannot be read is a clear error of the frame, and the renderer renders on once it is
+/// fixed; asking for the light of a frame that was not lit by the sky is an error too.
+#[test]
+fn a_missing_environment_is_a_clear_error() {
+    let gpu = gpu();
+    let (scene, cam, radius) = shared_scene("rod", 160, 90);
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let mut r = Headless::new(&gpu, 32, 18, hrtao(2, radius)).unwrap();
+    r.render(&sg, scene.f(), &cam).unwrap();
+    assert!(r.read_light().is_err(), "the AO look has no sky light to read");
+    r.set_settings(sky(2, radius, "/nonexistent/sky.hdr", 0.0)).unwrap();
+    let err = r.render(&sg, scene.f(), &cam).unwrap_err().to_string();
+    assert!(err.contains("/nonexistent/sky.hdr"), "{err}");
+    r.set_settings(sky(2, radius, "uniform", 0.0)).unwrap();
+    r.render(&sg, scene.f(), &cam).unwrap();
+    let light = r.read_light().unwrap();
+    assert!(light.iter().any(|p| p[0] > 0.2), "lit once the environment is readable");
     assert_clean(&gpu);
 }
