@@ -12,8 +12,15 @@ macro_rules! gpu_structs {
         $(
             $(#[$m])*
             #[repr(C)]
-            #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+            #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
             pub struct $name { $( $(#[$fm])* pub $field: $fty ),* }
+
+            /// All zero (as `bytemuck::Zeroable`: arrays of any length).
+            impl Default for $name {
+                fn default() -> Self {
+                    bytemuck::Zeroable::zeroed()
+                }
+            }
         )*
     };
 }

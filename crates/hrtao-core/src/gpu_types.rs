@@ -49,13 +49,13 @@ gpu_consts! {
     FLAG_SKY: u32 = 1024;
     /// Sky light: the highest spherical-harmonic band of the transfer vectors (sky/sh.rs), and their
     /// coefficients ((SKY_BAND + 1)²).
-    SKY_BAND: u32 = 2;
-    SKY_COEFFS: u32 = 9;
+    SKY_BAND: u32 = 3;
+    SKY_COEFFS: u32 = 16;
     /// Sky light: floats per pixel of `FrameGlobals::sky_pixels`: the resolved cell transfer and the filter's
     /// pong of it, this frame's own rays' transfer sum, the still accumulation of the cell transfer and of the own
     /// sums (SKY_COEFFS each), then the light (RGB), the own rays' count and frame, the accumulated own rays
     /// and a free word (shaders/sky.glsl).
-    SKY_PIXEL_FLOATS: u32 = 52;
+    SKY_PIXEL_FLOATS: u32 = 88;
     /// Low bits of a pixel's filter plan holding its iteration count (the rest hold its cell's rays).
     FILTER_PLAN_BITS: u32 = 4;
     /// `FilterGuide::normal` of a pixel without AO (a miss, or no cell): never a packed normal (packSnorm2x16
@@ -278,8 +278,7 @@ gpu_structs! {
         sky_axis_y: [f32; 4],
         sky_axis_z: [f32; 4],
         /// Sky light: the environment's coefficients, rotated and scaled by its intensity (RGB per coefficient).
-        sky_env: [f32; 27],
-        _sky_pad: u32,
+        sky_env: [f32; 48],
     }
 
     /// One pixel of the G-buffer written by the primary visibility pass.
