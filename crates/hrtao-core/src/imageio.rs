@@ -235,7 +235,9 @@ mod tests {
     fn rgb_round_trips_through_colour_pfm_and_exr() {
         let dir = std::env::temp_dir().join(format!("hrtao-rgb-rt-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let data: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 0.5 * i as f32, 2.0 + i as f32]).collect();
+        let data: Vec<[f32; 3]> = (0..6)
+            .map(|i| [i as f32, 0.5 * i as f32, 2.0 + i as f32])
+            .collect();
         for name in ["light.pfm", "light.exr"] {
             let path = dir.join(name);
             write_rgb(&path, 3, 2, &data).unwrap();

@@ -89,7 +89,15 @@ impl Pass {
         "cell_finder",
         "cell finder",
         &[GBuffer, PixelCells, Regions, HashCells, Stats, DispatchArgs],
-        &[HashCells, SkyCells, PixelCells, PixelRays, RayQueue, Stats, DispatchArgs],
+        &[
+            HashCells,
+            SkyCells,
+            PixelCells,
+            PixelRays,
+            RayQueue,
+            Stats,
+            DispatchArgs,
+        ],
     );
     pub const AO_UPDATE: Pass = Pass::new(
         "ao_update",

@@ -331,8 +331,10 @@ impl Renderer {
         frame.validate().map_err(CoreError::Invalid)?;
         // Before anything moves on: an environment that cannot be read changes nothing.
         let light = &frame.settings.light;
-        if light.sky_light && self.sky.as_ref().map(SkyLight::environment) != Some(light.environment.as_str()) {
-            self.sky = Some(SkyLight::load(&light.environment).map_err(|e| CoreError::Invalid(format!("{e:#}")))?);
+        if light.sky_light && self.sky.as_ref().map(SkyLight::environment) != Some(light.environment.as_str())
+        {
+            self.sky =
+                Some(SkyLight::load(&light.environment).map_err(|e| CoreError::Invalid(format!("{e:#}")))?);
         }
         let (w, h) = frame.size();
         if (w, h) != self.size() {
@@ -1130,7 +1132,10 @@ impl Renderer {
     /// The sky light of the last frame (`--light-out`'s value: linear RGB, background 0), row 0 at the top; an
     /// error when it did not light with the sky.
     pub fn read_light(&self) -> Result<Vec<[f32; 3]>> {
-        let on = self.prev.as_ref().is_some_and(|k| k.settings.light.sky_light && k.settings.display.mode == Mode::Hrtao);
+        let on = self
+            .prev
+            .as_ref()
+            .is_some_and(|k| k.settings.light.sky_light && k.settings.display.mode == Mode::Hrtao);
         let Some((_, buffer)) = self.sky_pixels.as_ref().filter(|_| on) else {
             return Err(CoreError::Invalid(
                 "the last frame was not lit by the sky light (HRTAO with `sky_light`)".into(),

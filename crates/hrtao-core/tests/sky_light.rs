@@ -87,7 +87,11 @@ fn sky_light_converges_to_cycles_and_starts_as_close_as_the_ao() {
                 last.mae,
                 last.relative()
             );
-            assert!(first.pixels > 1000, "{name}: the model covers {} pixels", first.pixels);
+            assert!(
+                first.pixels > 1000,
+                "{name}: the model covers {} pixels",
+                first.pixels
+            );
             assert!(
                 first.mae as f32 <= 1.5 * ao_first,
                 "{name}: first frame MAE {} against the AO's {ao_first}",
@@ -96,7 +100,11 @@ fn sky_light_converges_to_cycles_and_starts_as_close_as_the_ao() {
             if env == "uniform" {
                 assert!(last.mae <= 0.01, "{name}: frame 32 MAE {}", last.mae);
             } else {
-                assert!(last.relative() <= 0.02, "{name}: frame 32 relative MAE {}", last.relative());
+                assert!(
+                    last.relative() <= 0.02,
+                    "{name}: frame 32 relative MAE {}",
+                    last.relative()
+                );
             }
         }
     }
@@ -133,10 +141,16 @@ fn turning_the_environment_traces_no_new_rays() {
     };
     let (turned, turned_error) = frames(Some(16));
     let (fresh, fresh_error) = frames(None);
-    println!("frame 48 MAE: turned at 16 {:.4}, fresh {:.4}", turned_error.mae, fresh_error.mae);
+    println!(
+        "frame 48 MAE: turned at 16 {:.4}, fresh {:.4}",
+        turned_error.mae, fresh_error.mae
+    );
     for (i, (a, b)) in turned.iter().zip(&fresh).enumerate() {
         let (a, b) = (a.rays as f64, b.rays as f64);
-        assert!((a - b).abs() <= 0.01 * b.max(1.0), "frame {i}: {a} rays against {b}");
+        assert!(
+            (a - b).abs() <= 0.01 * b.max(1.0),
+            "frame {i}: {a} rays against {b}"
+        );
     }
     assert_eq!(
         turned[16].accumulated_frames,
@@ -162,12 +176,16 @@ fn a_missing_environment_is_a_clear_error() {
     let mut r = Headless::new(&gpu, 32, 18, hrtao(2, radius)).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     assert!(r.read_light().is_err(), "the AO look has no sky light to read");
-    r.set_settings(sky(2, radius, "/nonexistent/sky.hdr", 0.0)).unwrap();
+    r.set_settings(sky(2, radius, "/nonexistent/sky.hdr", 0.0))
+        .unwrap();
     let err = r.render(&sg, scene.f(), &cam).unwrap_err().to_string();
     assert!(err.contains("/nonexistent/sky.hdr"), "{err}");
     r.set_settings(sky(2, radius, "uniform", 0.0)).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     let light = r.read_light().unwrap();
-    assert!(light.iter().any(|p| p[0] > 0.2), "lit once the environment is readable");
+    assert!(
+        light.iter().any(|p| p[0] > 0.2),
+        "lit once the environment is readable"
+    );
     assert_clean(&gpu);
 }

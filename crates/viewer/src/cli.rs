@@ -298,6 +298,16 @@ pub struct AoArgs {
     /// Crease angle of the feature edges, in degrees.
     #[arg(long, default_value_t = AoSettings::default().display.crease_deg)]
     pub crease: f32,
+    /// Sky light (ours): light the model with this environment and its soft shadows instead of the AO look:
+    /// `uniform`, `gradient` or an equirectangular Radiance .hdr file (zenith: --up).
+    #[arg(long, value_name = "uniform|gradient|FILE.hdr")]
+    pub environment: Option<String>,
+    /// Sky light: turn the environment counter-clockwise seen from above, in degrees.
+    #[arg(long, value_name = "DEG", default_value_t = AoSettings::default().light.environment_rotation, allow_negative_numbers = true)]
+    pub environment_rotation: f32,
+    /// Sky light: scale the environment's light by K.
+    #[arg(long, value_name = "K", default_value_t = AoSettings::default().light.environment_intensity)]
+    pub environment_intensity: f32,
     /// Any other AO setting, as a JSON object of `AoSettings` fields (applied last), e.g.
     /// `--set '{"refine": false, "filter_iterations": 3}'`.
     #[arg(long, value_name = "JSON", value_parser = parse_settings_json)]
@@ -321,6 +331,19 @@ impl AoArgs {
         settings.display.shaded = !self.clay;
         settings.display.edges = self.edges;
         settings.display.crease_deg = self.crease;
+        if let Some(environment) = &self.environment {
+            settings.light.sky_light = true;
+            // A file is named by its absolute path: the settings outlive the working directory (prefs).
+            settings.light.environment = match hrtao_core::sky::EnvironmentSpec::parse(environment) {
+                Ok(hrtao_core::sky::EnvironmentSpec::File(path)) => std::path::absolute(&path)
+                    .unwrap_or(path)
+                    .to_string_lossy()
+                    .into_owned(),
+                _ => environment.clone(),
+            };
+        }
+        settings.light.environment_rotation = self.environment_rotation;
+        settings.light.environment_intensity = self.environment_intensity;
         match &self.set {
             Some(json) => settings.with_overrides(json).map_err(anyhow::Error::msg),
             None => Ok(settings),
@@ -369,6 +392,10 @@ pub struct RenderArgs {
     /// Linear AO output (.pfm or .exr).
     #[arg(long)]
     pub ao_out: Option<PathBuf>,
+    /// Linear sky light output (with --environment): RGB at the first hit through each pixel centre, a white
+    /// Lambertian lit by the environment with its shadows, background 0; a colour .pfm or an RGB .exr.
+    #[arg(long)]
+    pub light_out: Option<PathBuf>,
     /// Statistics JSON (device, timings, rays).
     #[arg(long)]
     pub stats: Option<PathBuf>,

@@ -45,8 +45,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let prepared = (|| -> Result<_> {
         let (scene, load_ms) = load_scene(&spec)?;
         let prepared = setup::prepare(&inputs, &scene)?;
-        let settings = args.ao.settings(prepared.radius)?;
+        let mut settings = args.ao.settings(prepared.radius)?;
+        // The sky's zenith is the scene's up axis (--up, the camera file's, or the scene's default).
+        settings.light.sky_up = prepared.up;
         settings.validate().map_err(|e| anyhow::anyhow!(e))?;
+        if args.light_out.is_some()
+            && !(settings.light.sky_light && settings.display.mode == hrtao_core::Mode::Hrtao)
+        {
+            anyhow::bail!("--light-out needs the sky light: give --environment (and the HRTAO mode)");
+        }
         Ok((scene, load_ms, prepared, settings))
     })();
     let device = early.join().map_err(|_| anyhow!("the device thread panicked"))?;
@@ -100,6 +107,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(out) = &args.ao_out {
         let ao = renderer.read_ao()?;
         imageio::write_ao(out, w, h, &ao)?;
+        log::info!("wrote {}", out.display());
+    }
+    if let Some(out) = &args.light_out {
+        let light = renderer.read_light()?;
+        imageio::write_rgb(out, w, h, &light)?;
         log::info!("wrote {}", out.display());
     }
     let validation_messages = gpu.validation_messages();

@@ -33,7 +33,8 @@ impl LightSettings {
                 self.environment_rotation
             ));
         }
-        if !(self.environment_intensity.is_finite() && INTENSITY_RANGE.contains(&self.environment_intensity)) {
+        if !(self.environment_intensity.is_finite() && INTENSITY_RANGE.contains(&self.environment_intensity))
+        {
             return Err(format!(
                 "environment intensity must be in {}..={}, got {}",
                 INTENSITY_RANGE.start(),

@@ -126,10 +126,16 @@ mod tests {
     #[test]
     fn environments_are_named_or_refused_clearly() {
         assert_eq!(EnvironmentSpec::parse("uniform"), Ok(EnvironmentSpec::Uniform));
-        assert!(matches!(EnvironmentSpec::parse("a/b.HDR"), Ok(EnvironmentSpec::File(_))));
+        assert!(matches!(
+            EnvironmentSpec::parse("a/b.HDR"),
+            Ok(EnvironmentSpec::File(_))
+        ));
         assert!(EnvironmentSpec::parse("sunset.png").unwrap_err().contains(".hdr"));
         let missing = SkyLight::load("/nonexistent/sky.hdr").unwrap_err();
-        assert!(format!("{missing:#}").contains("/nonexistent/sky.hdr"), "{missing:#}");
+        assert!(
+            format!("{missing:#}").contains("/nonexistent/sky.hdr"),
+            "{missing:#}"
+        );
     }
 
     /// Uniform light of intensity K is K times band 0 alone (an open surface then gets K).
@@ -139,7 +145,11 @@ mod tests {
         let c = sky.coefficients(37.0, 2.5);
         // e_0 = ∫ K Y_0 dω = K 4π / (2 √π) = 2 K √π; the other bands see nothing.
         for (i, v) in c.iter().enumerate() {
-            let want = if i < 3 { 2.0 * 2.5 * std::f32::consts::PI.sqrt() } else { 0.0 };
+            let want = if i < 3 {
+                2.0 * 2.5 * std::f32::consts::PI.sqrt()
+            } else {
+                0.0
+            };
             assert!((v - want).abs() < 2e-3, "coefficient {i}: {v} vs {want}");
         }
     }
