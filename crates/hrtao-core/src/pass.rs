@@ -88,7 +88,15 @@ impl Pass {
     pub const CELL_FINDER: Pass = Pass::new(
         "cell_finder",
         "cell finder",
-        &[GBuffer, PixelCells, Regions, HashCells, Stats, DispatchArgs],
+        &[
+            GBuffer,
+            PixelCells,
+            Regions,
+            HashCells,
+            SkyCells,
+            Stats,
+            DispatchArgs,
+        ],
         &[
             HashCells,
             SkyCells,

@@ -472,6 +472,8 @@ impl Viewer {
         self.default_radius = p.default_radius;
         let radius = p.radius;
         let world_up = p.up;
+        // The sky light's zenith is the scene's up axis.
+        self.prefs.settings.light.sky_up = world_up;
         // Orient the camera with a true up vector (nav keeps it orthogonal).
         let mut cam = nav::orbit(&p.camera, nav::target(&p.camera), world_up.vector(), 0.0, 0.0);
         // A camera file framed for a wider image: back off so the 3D view shows the same horizontal extent.

@@ -1,7 +1,8 @@
 //! The panel's AO settings: one section per settings group (hrtao_core::settings), each drawing its group's
 //! fields and nothing else. Adding a setting to a group means adding its widget here, in its group's function.
 use hrtao_core::settings::{
-    DisplaySettings, EditSettings, FilterSettings, MapSettings, StillSettings, YoungMapSettings,
+    DisplaySettings, EditSettings, FilterSettings, LightSettings, MapSettings, StillSettings,
+    YoungMapSettings,
 };
 use hrtao_core::Mode;
 
@@ -17,6 +18,7 @@ impl SettingsPanel {
         let mut s = state.prefs.settings.clone();
         let mut prefs = state.prefs.clone();
         display(ui, &mut s.display);
+        light(ui, &mut s.light);
         // With the frame-time target on, the slider shows the target's budget; off, it sets the user's.
         let mut live = state.rays_per_frame;
         let rays = if prefs.auto_budget {
@@ -150,6 +152,55 @@ pub fn display(ui: &mut egui::Ui, s: &mut DisplaySettings) {
     });
     ui.checkbox(&mut s.shaded, "base colours")
         .on_hover_text("Use the materials' base colours (off: uniform grey clay)");
+}
+
+/// How the model is lit: the AO look, or the sky light with its environment, rotation and intensity (which
+/// re-light the cells' transfer without new rays).
+pub fn light(ui: &mut egui::Ui, s: &mut LightSettings) {
+    ui.checkbox(&mut s.sky_light, "sky light").on_hover_text(
+        "Light the model with an environment and its soft shadows (rays past the AO radius, to the sky) \
+         instead of the AO look. The cells keep where their rays escaped: turning the environment or changing \
+         it traces no new rays.",
+    );
+    ui.add_enabled_ui(s.sky_light, |ui| {
+        let is_file = s.environment.to_ascii_lowercase().ends_with(".hdr");
+        let id = ui.make_persistent_id("environment file");
+        let mut path: String = ui.data_mut(|d| d.get_temp::<String>(id)).unwrap_or_default();
+        if path.is_empty() && is_file {
+            path = s.environment.clone();
+        }
+        egui::ComboBox::from_label("environment")
+            .selected_text(if is_file { "HDR file" } else { s.environment.as_str() })
+            .show_ui(ui, |ui| {
+                for name in ["uniform", "gradient"] {
+                    ui.selectable_value(&mut s.environment, name.to_string(), name);
+                }
+                if ui.selectable_label(is_file, "HDR file").clicked() && !path.is_empty() {
+                    s.environment = path.clone();
+                }
+            })
+            .response
+            .on_hover_text(
+                "uniform: white light from every direction (an open surface gets 1). gradient: a blue sky over \
+                 a brown ground. HDR file: an equirectangular Radiance .hdr image, its centre facing +x.",
+            );
+        let edit = ui.add(egui::TextEdit::singleline(&mut path).hint_text("equirectangular .hdr file"));
+        let usable = path.to_ascii_lowercase().ends_with(".hdr") && std::path::Path::new(&path).is_file();
+        if edit.lost_focus() && usable {
+            s.environment = path.clone();
+        }
+        if !path.is_empty() && !usable {
+            ui.colored_label(egui::Color32::from_rgb(200, 80, 60), "not a readable .hdr file");
+        }
+        ui.data_mut(|d| d.insert_temp(id, path));
+        ui.add(egui::Slider::new(&mut s.environment_rotation, -180.0..=180.0).text("rotation °"))
+            .on_hover_text("Turns the environment counter-clockwise seen from above (no new rays).");
+        ui.add(
+            egui::Slider::new(&mut s.environment_intensity, hrtao_core::settings::INTENSITY_RANGE)
+                .text("intensity"),
+        )
+        .on_hover_text("Scales the environment's light.");
+    });
 }
 
 /// The paper's hash map and sampling; `default_radius` is the scene's default AO radius.
