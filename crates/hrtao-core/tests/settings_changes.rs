@@ -132,6 +132,10 @@ fn changed_values() -> Vec<(&'static str, serde_json::Value)> {
         ("filter_iterations", json!(2)),
         ("still_samples", json!(16)),
         ("crease_deg", json!(20.0)),
+        ("environment", json!("uniform")),
+        ("environment_rotation", json!(45.0)),
+        ("environment_intensity", json!(2.0)),
+        ("sky_up", json!("Z")),
     ]
 }
 
