@@ -1383,6 +1383,8 @@ impl Viewer {
                 }
             }
         }
+        // Window tests follow the still image's accumulation (`HRTAO_UI_PROBE`).
+        ui_probe::note_text("accumulated", &report.accumulated_frames.to_string());
         self.last_report = Some(report);
         Ok(())
     }

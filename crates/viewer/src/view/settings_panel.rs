@@ -157,7 +157,11 @@ pub fn display(ui: &mut egui::Ui, s: &mut DisplaySettings) {
 /// How the model is lit: the AO look, or the sky light with its environment, rotation and intensity (which
 /// re-light the cells' transfer without new rays).
 pub fn light(ui: &mut egui::Ui, s: &mut LightSettings) {
-    ui.checkbox(&mut s.sky_light, "sky light").on_hover_text(
+    let ppp = ui.ctx().pixels_per_point();
+    let toggle = ui.checkbox(&mut s.sky_light, "sky light");
+    super::ui_probe::note("sky light", toggle.rect, ppp);
+    super::ui_probe::note_text("sky light", if s.sky_light { "on" } else { "off" });
+    toggle.on_hover_text(
         "Light the model with an environment and its soft shadows (rays past the AO radius, to the sky) \
          instead of the AO look. The cells keep where their rays escaped: turning the environment or changing \
          it traces no new rays.",
@@ -193,8 +197,10 @@ pub fn light(ui: &mut egui::Ui, s: &mut LightSettings) {
             ui.colored_label(egui::Color32::from_rgb(200, 80, 60), "not a readable .hdr file");
         }
         ui.data_mut(|d| d.insert_temp(id, path));
-        ui.add(egui::Slider::new(&mut s.environment_rotation, -180.0..=180.0).text("rotation °"))
-            .on_hover_text("Turns the environment counter-clockwise seen from above (no new rays).");
+        let rotation = ui.add(egui::Slider::new(&mut s.environment_rotation, -180.0..=180.0).text("rotation °"));
+        super::ui_probe::note("environment rotation", rotation.rect, ppp);
+        super::ui_probe::note_text("environment rotation", &format!("{:.0}", s.environment_rotation));
+        rotation.on_hover_text("Turns the environment counter-clockwise seen from above (no new rays).");
         ui.add(
             egui::Slider::new(&mut s.environment_intensity, hrtao_core::settings::INTENSITY_RANGE)
                 .text("intensity"),
