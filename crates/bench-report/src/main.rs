@@ -13,6 +13,7 @@ mod plot;
 mod ray_backend_report;
 mod report;
 mod results;
+mod sky_report;
 mod step_sweep_report;
 mod viewer_report;
 

@@ -843,6 +843,7 @@ fn render_markdown(
         &mut m,
         &crate::ray_backend_report::load(&dir.join("ray_backend"))?,
     )?;
+    crate::sky_report::section(&mut m, &crate::sky_report::load(&dir.join("sky"))?)?;
     crate::gpu_report::section(
         &mut m,
         crate::gpu_report::load(&dir.join("gpu/report.json"))?.as_ref(),

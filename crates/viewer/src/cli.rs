@@ -396,6 +396,15 @@ pub struct RenderArgs {
     /// Lambertian lit by the environment with its shadows, background 0; a colour .pfm or an RGB .exr.
     #[arg(long)]
     pub light_out: Option<PathBuf>,
+    /// A reference of the AO image (.pfm or .exr, e.g. a Blender Cycles one): the last frame's error against it
+    /// goes into --stats (`ao_error`: MAE and RMSE over the pixels not open in both).
+    #[arg(long, value_name = "FILE")]
+    pub ao_reference: Option<PathBuf>,
+    /// A reference of the sky light (.pfm or .exr, background 0; with --environment): the last frame's error
+    /// against it goes into --stats (`light_error`: MAE over the pixels the model covers in either, and the
+    /// reference's mean there).
+    #[arg(long, value_name = "FILE")]
+    pub light_reference: Option<PathBuf>,
     /// Statistics JSON (device, timings, rays).
     #[arg(long)]
     pub stats: Option<PathBuf>,

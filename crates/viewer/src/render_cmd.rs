@@ -28,6 +28,24 @@ struct RenderStats<'a> {
     /// The section planes (scene coordinates) and the instances they keep, cross and cut away.
     sections: &'a hrtao_core::Sections,
     section_sides: [usize; 3],
+    /// The last frame against --ao-reference / --light-reference.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ao_error: Option<hrtao_core::metrics::AoError>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    light_error: Option<hrtao_core::metrics::LightError>,
+}
+
+/// A reference image of the render's size (`w` × `h`), read by `read`; an error names the file.
+fn reference<T>(
+    path: &std::path::Path,
+    (w, h): (u32, u32),
+    read: impl Fn(&std::path::Path) -> hrtao_core::Result<(u32, u32, Vec<T>)>,
+) -> Result<Vec<T>> {
+    let (rw, rh, data) = read(path)?;
+    if (rw, rh) != (w, h) {
+        anyhow::bail!("{}: a {rw}×{rh} reference for a {w}×{h} render", path.display());
+    }
+    Ok(data)
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
@@ -49,10 +67,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         // The sky's zenith is the scene's up axis (--up, the camera file's, or the scene's default).
         settings.light.sky_up = prepared.up;
         settings.validate().map_err(|e| anyhow::anyhow!(e))?;
-        if args.light_out.is_some()
+        if (args.light_out.is_some() || args.light_reference.is_some())
             && !(settings.light.sky_light && settings.display.mode == hrtao_core::Mode::Hrtao)
         {
-            anyhow::bail!("--light-out needs the sky light: give --environment (and the HRTAO mode)");
+            anyhow::bail!(
+                "--light-out and --light-reference need the sky light: give --environment (and the HRTAO mode)"
+            );
         }
         Ok((scene, load_ms, prepared, settings))
     })();
@@ -114,6 +134,31 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         imageio::write_rgb(out, w, h, &light)?;
         log::info!("wrote {}", out.display());
     }
+    let ao_error = match &args.ao_reference {
+        Some(path) => {
+            let reference = reference(path, (w, h), imageio::read_ao)?;
+            Some(hrtao_core::metrics::ao_error(&renderer.read_ao()?, &reference))
+        }
+        None => None,
+    };
+    let light_error = match &args.light_reference {
+        Some(path) => {
+            let reference = reference(path, (w, h), imageio::read_rgb)?;
+            Some(hrtao_core::metrics::light_error(
+                &renderer.read_light()?,
+                &reference,
+            ))
+        }
+        None => None,
+    };
+    for (what, mae) in [
+        ("AO", ao_error.map(|e| e.mae)),
+        ("sky light", light_error.map(|e| e.mae)),
+    ] {
+        if let Some(mae) = mae {
+            log::info!("{what} MAE against the reference: {mae:.4}");
+        }
+    }
     let validation_messages = gpu.validation_messages();
     if let Some(path) = &args.stats {
         let stats = RenderStats {
@@ -134,6 +179,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             validation_messages,
             sections,
             section_sides: scene_gpu.section_sides,
+            ao_error,
+            light_error,
         };
         write_json(path, &stats)?;
     }
