@@ -159,3 +159,43 @@ fn what_cannot_be_lit_is_a_clear_error() {
         "{err}"
     );
 }
+
+/// The sky light traced by ray queries and by ray-tracing pipelines (the backend a GPU without ray queries
+/// takes): the same contract, errors against the reference within 10 % of each other, validation clean.
+#[test]
+fn both_ray_backends_light_alike() {
+    let error = |backend: &str| {
+        let (img, stats) = (tmp(&format!("{backend}.pfm")), tmp(&format!("{backend}.json")));
+        render_rod(
+            None,
+            &[
+                "--frames",
+                "32",
+                "--environment-rotation",
+                "90",
+                "--ray-backend",
+                backend,
+                "--light-out",
+                img.to_str().unwrap(),
+                "--stats",
+                stats.to_str().unwrap(),
+            ],
+            true,
+        );
+        rays_per_frame(&stats);
+        light_error(&img)
+    };
+    let (query, pipeline) = (error("query"), error("pipeline"));
+    println!(
+        "rod lobe 90°, frame 32: ray queries MAE {:.4}, pipelines {:.4}",
+        query.mae, pipeline.mae
+    );
+    assert!(
+        query.relative() <= 0.02 && pipeline.relative() <= 0.02,
+        "{query:?} {pipeline:?}"
+    );
+    assert!(
+        (query.mae - pipeline.mae).abs() <= 0.1 * query.mae,
+        "{query:?} {pipeline:?}"
+    );
+}
