@@ -1008,7 +1008,8 @@ impl Renderer {
     /// submission's latency, not the passes), else both on the wall clock (timestamps after a render pass are
     /// unreliable on lavapipe, `timestamps_measure`). Keeps the choice (`primary()`) and returns it with the
     /// two times in ms (ray queries, raster; NaN when a scene above `RASTER_TRIAL_TRIANGLES`, or a device that
-    /// cannot rasterise it, is not tried). The hash map is untouched; the next frame starts a new still image.
+    /// cannot rasterise it, is not tried). The trial frames are forgotten, as `warm_up`'s: the next frame is a
+    /// first frame (a new map, young, and a new still image), not the fifth of a view whose map took no rays.
     pub fn pick_primary(&mut self, frame: &FrameDesc) -> Result<(Primary, f64, f64)> {
         if let Err(e) = Rasterizer::available(&self.gpu) {
             log::info!("{e}");
@@ -1043,6 +1044,7 @@ impl Renderer {
         } else {
             Primary::RayQuery
         };
+        self.prev = None;
         Ok((self.primary, ray_query, raster))
     }
 
