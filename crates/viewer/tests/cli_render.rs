@@ -1,9 +1,11 @@
 //! `hrtao render` end to end: a test scene with its reference camera, image outputs, and bad input.
+mod cli;
 /// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
 #[path = "../../scene/tests/common/mod.rs"]
 mod common;
 
-use common::{test_scene, testdata};
+use cli::{hrtao, rod_view};
+use common::test_scene;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -13,35 +15,16 @@ fn tmp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-fn hrtao(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(args)
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .expect("run hrtao")
-}
-
 #[test]
 fn render_test_scene_writes_png_pfm_exr_and_stats() {
     let png = tmp("rod.png");
     let pfm = tmp("rod.pfm");
     let exr = tmp("rod.exr");
     let stats = tmp("rod.json");
-    let scene = test_scene("rod");
-    let camera = testdata("refs/rod_160x90.camera.json");
     for (mode, ao_out) in [("rtao", &pfm), ("hrtao", &exr)] {
-        let out = hrtao(&[
-            "render",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--camera",
-            camera.to_str().unwrap(),
-            "--radius",
-            "10",
+        let out = hrtao(&rod_view(&[
             "--mode",
             mode,
-            "--rays",
-            "8",
             "--frames",
             "2",
             "--out",
@@ -50,7 +33,7 @@ fn render_test_scene_writes_png_pfm_exr_and_stats() {
             ao_out.to_str().unwrap(),
             "--stats",
             stats.to_str().unwrap(),
-        ]);
+        ]));
         assert!(
             out.status.success(),
             "{mode}: {}",

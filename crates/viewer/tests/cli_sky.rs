@@ -1,12 +1,12 @@
 //! `hrtao render --environment … --light-out` end to end: the sky light's measurable contract against the
 //! committed Cycles reference (testdata/refs/sky), a mid-run rotation that traces no new rays (statistics JSON),
 //! and clear errors for what cannot be lit.
+mod cli;
 #[path = "../../scene/tests/common/mod.rs"]
 mod common;
 
-use common::{test_scene, testdata};
+use common::testdata;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("hrtao-cli-sky-{}", std::process::id()));
@@ -17,28 +17,10 @@ fn tmp(name: &str) -> PathBuf {
 /// `hrtao render` of rod's 160×90 reference view under `environment` (None: the lobe .hdr), 8 rays per pixel,
 /// `extra` appended; its output (asserted successful when `ok`).
 fn render_rod(environment: Option<&str>, extra: &[&str], ok: bool) -> std::process::Output {
-    let scene = test_scene("rod");
-    let camera = testdata("refs/rod_160x90.camera.json");
     let lobe = testdata("env/sky_lobe_64x32.hdr");
-    let mut args = vec![
-        "render",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--camera",
-        camera.to_str().unwrap(),
-        "--radius",
-        "10",
-        "--rays",
-        "8",
-        "--environment",
-        environment.unwrap_or(lobe.to_str().unwrap()),
-    ];
-    args.extend_from_slice(extra);
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(&args)
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .expect("run hrtao");
+    let mut args = cli::rod_view(&["--environment", environment.unwrap_or(lobe.to_str().unwrap())]);
+    args.extend(extra.iter().map(|s| s.to_string()));
+    let out = cli::hrtao(&args);
     if ok {
         assert!(
             out.status.success(),
@@ -132,16 +114,13 @@ fn the_light_out_contract_and_a_free_rotation() {
 
 #[test]
 fn what_cannot_be_lit_is_a_clear_error() {
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args([
-            "render",
-            "--scene",
-            "gen:box",
-            "--light-out",
-            tmp("x.pfm").to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let out = cli::hrtao(&[
+        "render",
+        "--scene",
+        "gen:box",
+        "--light-out",
+        tmp("x.pfm").to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--environment"), "{err}");
     let out = render_rod(Some("sunset.png"), &[], false);

@@ -1,6 +1,7 @@
 //! `--ray-backend query|pipeline` in `hrtao render`, `hrtao bench` and `hrtao view`: each runs with each backend,
 //! validation silent, the device reports the backend it traced with, and per-pixel RTAO renders the same image by
 //! both (the backends trace the same rays: crates/hrtao-core/tests/ray_backends.rs compares every tracing pass).
+mod cli;
 /// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
 #[path = "../../scene/tests/common/mod.rs"]
 mod common;
@@ -12,22 +13,6 @@ fn tmp_dir() -> PathBuf {
     let d = std::env::temp_dir().join(format!("hrtao-ray-backend-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn hrtao(args: &[&str]) -> std::process::Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(args)
-        .env("HRTAO_VALIDATION", "1")
-        .env_remove("HRTAO_RAY_BACKEND")
-        .output()
-        .expect("run hrtao");
-    assert!(
-        out.status.success(),
-        "hrtao {args:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 fn read_pfm(path: &std::path::Path) -> Vec<f32> {
@@ -55,35 +40,29 @@ fn read_pfm(path: &std::path::Path) -> Vec<f32> {
 #[test]
 fn render_with_each_backend_gives_the_same_per_pixel_rtao() {
     let dir = tmp_dir();
-    let scene = common::test_scene("rod");
-    let camera = common::testdata("refs/rod_160x90.camera.json");
     let mut images = Vec::new();
     for backend in ["query", "pipeline"] {
         let pfm = dir.join(format!("rod-{backend}.pfm"));
         let stats = dir.join(format!("rod-{backend}.json"));
-        hrtao(&[
-            "render",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--camera",
-            camera.to_str().unwrap(),
-            "--radius",
-            "10",
-            "--mode",
-            "rtao",
-            "--rays",
-            "8",
-            "--frames",
-            "2",
-            "--ray-backend",
-            backend,
-            "--out",
-            dir.join(format!("rod-{backend}.png")).to_str().unwrap(),
-            "--ao-out",
-            pfm.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
-        ]);
+        cli::hrtao_ok(
+            &cli::rod_view(&[
+                "--mode",
+                "rtao",
+                "--frames",
+                "2",
+                "--ray-backend",
+                backend,
+                "--out",
+                dir.join(format!("rod-{backend}.png")).to_str().unwrap(),
+                "--ao-out",
+                pfm.to_str().unwrap(),
+                "--stats",
+                stats.to_str().unwrap(),
+            ])
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+        );
         let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
         assert_eq!(
             v["device"]["ray_backend"], backend,
@@ -111,7 +90,7 @@ fn bench_runs_with_each_backend() {
     let scene = common::test_scene("rod");
     for backend in ["query", "pipeline"] {
         let json = dir.join(format!("bench-{backend}.json"));
-        hrtao(&[
+        cli::hrtao_ok(&[
             "bench",
             "--scene",
             scene.to_str().unwrap(),
@@ -174,7 +153,7 @@ fn view_runs_with_each_backend() {
     let dir = tmp_dir();
     for backend in ["query", "pipeline"] {
         let shot = dir.join(format!("view-{backend}.png"));
-        hrtao(&[
+        cli::hrtao_ok(&[
             "view",
             "--no-config",
             "--size",
@@ -220,7 +199,7 @@ fn the_viewer_opens_the_device_with_the_saved_backend() {
         if let Some(f) = forced {
             args.extend(["--ray-backend", f]);
         }
-        let out = hrtao(&args);
+        let out = cli::hrtao_ok(&args);
         let log = String::from_utf8_lossy(&out.stderr);
         assert!(
             log.contains(&format!("rays traced by {traced}")),

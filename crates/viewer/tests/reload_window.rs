@@ -7,7 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use common::{display_available, out_dir, write_box_stl, x_input_lock, xdotool, Running};
+use common::{differing_pixels, display_available, out_dir, write_box_stl, x_input_lock, xdotool, Running};
 
 /// Pixels of the screenshot that differ from the background, a vertical gradient: each row's first pixel (the
 /// model must not touch the view's left edge).
@@ -19,28 +19,6 @@ fn covered_pixels(png: &Path) -> usize {
             p.0.iter().zip(bg.0).any(|(a, b)| a.abs_diff(b) > 24)
         })
         .count()
-}
-
-/// Pixels that differ between two screenshots of the same size by more than a little.
-fn differing_pixels(a: &Path, b: &Path) -> usize {
-    let (a, b) = (
-        image::open(a).unwrap().to_rgb8(),
-        image::open(b).unwrap().to_rgb8(),
-    );
-    assert_eq!(a.dimensions(), b.dimensions());
-    a.pixels()
-        .zip(b.pixels())
-        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24))
-        .count()
-}
-
-/// F12 and the new screenshot (the `n`-th of the run).
-fn screenshot(v: &mut Running, window: &str, dir: &Path, n: usize) -> PathBuf {
-    xdotool(&["key", "--window", window, "F12"]);
-    v.wait_for("] screenshot saved", n, Duration::from_secs(60));
-    let shots = common::screenshots(&dir.join("screenshots"));
-    assert_eq!(shots.len(), n, "{shots:?}");
-    shots[n - 1].clone()
 }
 
 /// Writes `path` the way an exporter does: a temporary file beside it, renamed over it (a new inode).
@@ -83,7 +61,7 @@ fn recent_files_and_reload_on_change_keep_the_view() {
     );
     v.wait_for("] opened ", 1, Duration::from_secs(120));
     let window = v.focus_window();
-    let first = screenshot(&mut v, &window, &dir, 1);
+    let first = v.screenshot(&window, &dir, 1);
     let (w, h) = image::image_dimensions(&first).unwrap();
     let area = (w * h) as usize;
 
@@ -100,8 +78,8 @@ fn recent_files_and_reload_on_change_keep_the_view() {
         vec![wide_abs.clone(), std::fs::canonicalize(&small).unwrap()],
         "most recent first, saved at once"
     );
-    let second = screenshot(&mut v, &window, &dir, 2);
-    let changed = differing_pixels(&first, &second);
+    let second = v.screenshot(&window, &dir, 2);
+    let changed = differing_pixels(&first, &second, 24);
     assert!(
         changed * 20 > area,
         "the wide box shows: {changed} of {area} pixels differ from the cube's view"
@@ -111,7 +89,7 @@ fn recent_files_and_reload_on_change_keep_the_view() {
     // block covers a fraction of the view (a view framed on it would fill most of the view, as the boxes did).
     save_by_rename(&wide, |p| write_box_stl(p, [-1.0, -1.0, 0.0], [-0.5, -0.5, 0.5]));
     v.wait_for("] Reloaded wide.stl", 1, Duration::from_secs(60));
-    let third = screenshot(&mut v, &window, &dir, 3);
+    let third = v.screenshot(&window, &dir, 3);
     let block_px = covered_pixels(&third);
     assert!(
         block_px > 1000 && block_px * 5 < area,
@@ -134,7 +112,7 @@ fn recent_files_and_reload_on_change_keep_the_view() {
         Duration::from_secs(60),
     );
     v.wait_for("ui probe: toast = reload failed", 1, Duration::from_secs(30));
-    let fourth = screenshot(&mut v, &window, &dir, 4);
+    let fourth = v.screenshot(&window, &dir, 4);
     let kept_px = covered_pixels(&fourth);
     assert!(
         kept_px.abs_diff(block_px) * 10 < block_px,

@@ -3,32 +3,10 @@
 //! change) while the still image goes on accumulating (no restart, no cache clear: the transfer is re-lit).
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
-use common::{display_available, out_dir, x_input_lock, xdotool, Running};
-
-/// Pixels that differ between two screenshots of the same size by more than a little.
-fn differing_pixels(a: &Path, b: &Path) -> usize {
-    let (a, b) = (
-        image::open(a).unwrap().to_rgb8(),
-        image::open(b).unwrap().to_rgb8(),
-    );
-    assert_eq!(a.dimensions(), b.dimensions());
-    a.pixels()
-        .zip(b.pixels())
-        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 12))
-        .count()
-}
-
-/// F12 and the new screenshot (the `n`-th of the run).
-fn screenshot(v: &mut Running, window: &str, dir: &Path, n: usize) -> PathBuf {
-    xdotool(&["key", "--window", window, "F12"]);
-    v.wait_for("] screenshot saved", n, Duration::from_secs(60));
-    let shots = common::screenshots(&dir.join("screenshots"));
-    assert_eq!(shots.len(), n, "{shots:?}");
-    shots[n - 1].clone()
-}
+use common::{differing_pixels, display_available, out_dir, x_input_lock, xdotool, Running};
 
 /// The still image's accumulated frames as the viewer logged them (`ui probe: accumulated = N`), in order, from
 /// log line `from` on.
@@ -125,7 +103,7 @@ fn the_sky_light_turns_with_its_slider_and_keeps_accumulating() {
     }
     wait_accumulated(&v, 4);
     let shot = log_lines(&v);
-    let lit = screenshot(&mut v, &window, &dir, 1);
+    let lit = v.screenshot(&window, &dir, 1);
     // The screenshot renders the view at its own size: the view's still image restarts after it.
     let start = Instant::now();
     while accumulated_from(&v, shot).last().is_none_or(|n| *n < 2) {
@@ -177,8 +155,8 @@ fn the_sky_light_turns_with_its_slider_and_keeps_accumulating() {
     // rotation then renders one more frame of it).
     wait_accumulated(&v, frames_before_drag + 1);
     std::thread::sleep(Duration::from_secs(2));
-    let turned = screenshot(&mut v, &window, &dir, 2);
-    let changed = differing_pixels(&lit, &turned);
+    let turned = v.screenshot(&window, &dir, 2);
+    let changed = differing_pixels(&lit, &turned, 12);
     let counts = accumulated_from(&v, before_drag);
     println!("{changed} pixels changed; accumulated frames from {frames_before_drag}: {counts:?}");
     assert!(changed > 1000, "turning the environment changed {changed} pixels");

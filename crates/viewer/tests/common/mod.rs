@@ -394,3 +394,27 @@ pub fn screenshots(dir: &Path) -> Vec<PathBuf> {
     files.sort_by_key(|f| std::fs::metadata(f).and_then(|m| m.modified()).ok());
     files
 }
+
+/// Pixels that differ between two screenshots of the same size by more than `tolerance` in some channel.
+pub fn differing_pixels(a: &Path, b: &Path, tolerance: u8) -> usize {
+    let (a, b) = (
+        image::open(a).unwrap().to_rgb8(),
+        image::open(b).unwrap().to_rgb8(),
+    );
+    assert_eq!(a.dimensions(), b.dimensions());
+    a.pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > tolerance))
+        .count()
+}
+
+impl Running {
+    /// F12 in `window` and the new screenshot in `dir`/screenshots (the `n`-th of the run).
+    pub fn screenshot(&mut self, window: &str, dir: &Path, n: usize) -> PathBuf {
+        xdotool(&["key", "--window", window, "F12"]);
+        self.wait_for("] screenshot saved", n, std::time::Duration::from_secs(60));
+        let shots = screenshots(&dir.join("screenshots"));
+        assert_eq!(shots.len(), n, "{shots:?}");
+        shots[n - 1].clone()
+    }
+}

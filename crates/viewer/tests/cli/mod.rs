@@ -1,0 +1,51 @@
+//! What the command-line tests share: `hrtao` run with the validation layer, and rod's 160×90 reference view
+//! (the committed test scene and camera). A test binary that uses it declares the scene tests' `common` module
+//! (test_scene, testdata) beside it.
+#![allow(dead_code)]
+use std::ffi::OsStr;
+use std::fmt::Debug;
+use std::process::{Command, Output};
+
+/// `hrtao ARGS` with the validation layer on and the ray backend as the arguments say (HRTAO_RAY_BACKEND unset).
+pub fn hrtao<S: AsRef<OsStr> + Debug>(args: &[S]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .args(args)
+        .env("HRTAO_VALIDATION", "1")
+        .env_remove("HRTAO_RAY_BACKEND")
+        .output()
+        .expect("run hrtao")
+}
+
+/// `hrtao ARGS`, asserted successful (its output in the message otherwise).
+pub fn hrtao_ok<S: AsRef<OsStr> + Debug>(args: &[S]) -> Output {
+    let out = hrtao(args);
+    assert!(
+        out.status.success(),
+        "hrtao {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// `render` of rod's 160×90 reference view (its committed camera, R = 10) at 8 rays per pixel, then `extra`.
+pub fn rod_view(extra: &[&str]) -> Vec<String> {
+    let scene = crate::common::test_scene("rod");
+    let camera = crate::common::testdata("refs/rod_160x90.camera.json");
+    let mut args: Vec<String> = [
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--camera",
+        camera.to_str().unwrap(),
+        "--radius",
+        "10",
+        "--rays",
+        "8",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args
+}
