@@ -221,34 +221,32 @@ def write_exr(scene, path, ao):
     save_rgb_exr(scene, path, np.repeat(ao[..., None], 3, axis=2))
 
 
-def main():
-    t0 = time.perf_counter()
-    args = parse_args()
-    with open(args.camera) as f:
+def read_camera(path):
+    """The camera file (eye, target, up, fov_y_deg, width, height), checked."""
+    with open(path) as f:
         cam = json.load(f)
     for k in ("eye", "target", "up", "fov_y_deg", "width", "height"):
         if k not in cam:
-            raise ValueError("%s: the camera needs '%s'" % (args.camera, k))
+            raise ValueError("%s: the camera needs '%s'" % (path, k))
+    return cam
+
+
+def open_scene(args):
+    """An empty Blender with the scene imported: (scene, its mesh objects, the camera file)."""
+    cam = read_camera(args.camera)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene, meshes = import_gltf(os.path.abspath(args.scene))
-    cam_blender = place_camera(scene, cam)
-    set_up_render(scene, args, cam)
-    t_render = time.perf_counter()
-    w, h = int(cam["width"]), int(cam["height"])
-    ao, alpha = render_ao(scene, w, h)
-    t_render = time.perf_counter() - t_render
-    write_exr(scene, args.out + ".exr", ao)
-    geometry = alpha > 0.5
-    facts = {
+    return scene, meshes, cam
+
+
+def render_facts(scene, args, cam, cam_blender, meshes, t0, t_render):
+    """The facts every reference's JSON records beside its own (engine, size, sampling, times, scene)."""
+    return {
         "engine": "cycles",
-        "method": "Cycles AO render pass (world AO distance = R), ray traced, 1 AO ray per sample",
         "blender_version": bpy.app.version_string,
-        "width": w,
-        "height": h,
+        "width": int(cam["width"]),
+        "height": int(cam["height"]),
         "samples": args.samples,
-        "ao_rays_per_pixel": args.samples,
-        "radius": args.radius,
-        "normal": "geometric (Geometry.True Normal)",
         "filter_width_px": 0.01,
         "sampling_pattern": "sobol",
         "seed": args.seed,
@@ -259,14 +257,35 @@ def main():
         "mesh_objects": meshes,
         "camera_json": cam,
         "camera_blender_space": cam_blender,
+        "outputs": {"exr": os.path.basename(args.out) + ".exr"},
+    }
+
+
+def main():
+    t0 = time.perf_counter()
+    args = parse_args()
+    scene, meshes, cam = open_scene(args)
+    cam_blender = place_camera(scene, cam)
+    set_up_render(scene, args, cam)
+    t_render = time.perf_counter()
+    w, h = int(cam["width"]), int(cam["height"])
+    ao, alpha = render_ao(scene, w, h)
+    t_render = time.perf_counter() - t_render
+    write_exr(scene, args.out + ".exr", ao)
+    geometry = alpha > 0.5
+    facts = render_facts(scene, args, cam, cam_blender, meshes, t0, t_render)
+    facts.update({
+        "method": "Cycles AO render pass (world AO distance = R), ray traced, 1 AO ray per sample",
+        "ao_rays_per_pixel": args.samples,
+        "radius": args.radius,
+        "normal": "geometric (Geometry.True Normal)",
         "stats": {
             "geometry_pixel_fraction": float(geometry.mean()),
             "ao_mean_geometry": float(ao[geometry].mean()) if geometry.any() else None,
             "ao_min": float(ao.min()),
             "ao_max": float(ao.max()),
         },
-        "outputs": {"exr": os.path.basename(args.out) + ".exr"},
-    }
+    })
     with open(args.out + ".json", "w") as f:
         json.dump(facts, f, indent=1)
     print("[blender_ao] %s: %dx%d, %d rays/pixel, %.1f s" % (args.out, w, h, args.samples, t_render), flush=True)

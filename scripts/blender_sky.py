@@ -131,13 +131,7 @@ def render_light(scene, w, h):
 def main():
     t0 = time.perf_counter()
     args = parse_args()
-    with open(args.camera) as f:
-        cam = json.load(f)
-    for k in ("eye", "target", "up", "fov_y_deg", "width", "height"):
-        if k not in cam:
-            raise ValueError("%s: the camera needs '%s'" % (args.camera, k))
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene, meshes = blender_ao.import_gltf(os.path.abspath(args.scene))
+    scene, meshes, cam = blender_ao.open_scene(args)
     mat = white_material()
     for obj in scene.objects:
         if obj.type == "MESH":
@@ -154,35 +148,20 @@ def main():
     blender_ao.save_rgb_exr(scene, args.out + ".exr", rgb)
     geometry = alpha > 0.5
     env = args.environment if args.environment in ("uniform", "gradient") else os.path.basename(args.environment)
-    facts = {
-        "engine": "cycles",
+    facts = blender_ao.render_facts(scene, args, cam, cam_blender, meshes, t0, t_render)
+    facts.update({
         "method": "Cycles combined pass, white diffuse, no bounces, world importance sampled (the sky light)",
-        "blender_version": bpy.app.version_string,
-        "width": w,
-        "height": h,
-        "samples": args.samples,
         "environment": env,
         "rotation_deg": args.rotation,
         "intensity": args.intensity,
         "up": args.up,
         "normal": "the file's (smooth or custom split normals)",
-        "filter_width_px": 0.01,
-        "sampling_pattern": "sobol",
-        "seed": args.seed,
-        "render_time_s": round(t_render, 4),
-        "total_time_s": round(time.perf_counter() - t0, 4),
-        "threads": scene.render.threads,
-        "scene": os.path.basename(args.scene),
-        "mesh_objects": meshes,
-        "camera_json": cam,
-        "camera_blender_space": cam_blender,
         "stats": {
             "geometry_pixel_fraction": float(geometry.mean()),
             "light_mean_geometry": [float(v) for v in rgb[geometry].mean(axis=0)] if geometry.any() else None,
             "light_max": float(rgb.max()),
         },
-        "outputs": {"exr": os.path.basename(args.out) + ".exr"},
-    }
+    })
     with open(args.out + ".json", "w") as f:
         json.dump(facts, f, indent=1)
     print("[blender_sky] %s: %dx%d, %d samples, %.1f s" % (args.out, w, h, args.samples, t_render), flush=True)
