@@ -262,9 +262,10 @@ float monotone_weight(float es, float own, float k) {
 }
 
 // Sky light (sky.glsl): the pixel's transfer, its cell estimate counting as k of its own rays, accumulated over
-// the still frames as the AO is, its own rays' residual weighed as the AO's (wc the weight of this frame's cell estimate, `frames` the sum of those weights
-// after this frame, `restart` whether the accumulation restarted this frame). Every ray the pixel traced counts
-// as its own, the rays it traced into its cell too (a young map's frames): they sample its own transfer.
+// the still frames as the AO is, its own rays' residual weighed as the AO's (wc the weight of this frame's cell
+// estimate, `frames` the sum of those weights after this frame, `restart` whether the accumulation restarted
+// this frame). Every ray the pixel traced counts as its own, the rays it traced into its cell too (a young
+// map's frames): they sample its own transfer.
 // The light of it is kept for --light-out. Turning the environment changes only `sky_light`'s coefficients:
 // the accumulation goes on.
 vec3 sky_pixel_light(uint index, GPixel px, float wc, float frames, float k, bool accumulates, bool restart) {
