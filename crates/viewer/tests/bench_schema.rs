@@ -1,6 +1,7 @@
 //! `hrtao bench` end to end on a tiny run (64×36, 3 navigation frames, validation on): the JSON schema, the
 //! self-consistency of its numbers (no timing assertion), and that the report's reader (`hrtao_core::bench_json`,
 //! what `bench-report` loads) parses it.
+mod cli;
 /// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
 #[path = "../../scene/tests/common/mod.rs"]
 mod common;
@@ -19,20 +20,9 @@ fn tmp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// `hrtao ARGS`, asserted successful, compiling its pipelines afresh (no Mesa shader cache).
 fn hrtao(args: &[&str]) -> std::process::Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(args)
-        .env("HRTAO_VALIDATION", "1")
-        .env("MESA_SHADER_CACHE_DISABLE", "true")
-        .output()
-        .expect("run hrtao");
-    assert!(
-        out.status.success(),
-        "hrtao {args:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
+    cli::hrtao_ok_with(args, &[("MESA_SHADER_CACHE_DISABLE", "true")])
 }
 
 fn num(v: &serde_json::Value, path: &str) -> f64 {

@@ -8,17 +8,28 @@ use std::process::{Command, Output};
 
 /// `hrtao ARGS` with the validation layer on and the ray backend as the arguments say (HRTAO_RAY_BACKEND unset).
 pub fn hrtao<S: AsRef<OsStr> + Debug>(args: &[S]) -> Output {
+    hrtao_with(args, &[])
+}
+
+/// `hrtao`, with `env` set too.
+pub fn hrtao_with<S: AsRef<OsStr> + Debug>(args: &[S], env: &[(&str, &str)]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_hrtao"))
         .args(args)
         .env("HRTAO_VALIDATION", "1")
         .env_remove("HRTAO_RAY_BACKEND")
+        .envs(env.iter().copied())
         .output()
         .expect("run hrtao")
 }
 
 /// `hrtao ARGS`, asserted successful (its output in the message otherwise).
 pub fn hrtao_ok<S: AsRef<OsStr> + Debug>(args: &[S]) -> Output {
-    let out = hrtao(args);
+    hrtao_ok_with(args, &[])
+}
+
+/// `hrtao_ok`, with `env` set too.
+pub fn hrtao_ok_with<S: AsRef<OsStr> + Debug>(args: &[S], env: &[(&str, &str)]) -> Output {
+    let out = hrtao_with(args, env);
     assert!(
         out.status.success(),
         "hrtao {args:?} failed:\n{}\n{}",
