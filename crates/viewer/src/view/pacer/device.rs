@@ -33,6 +33,13 @@ pub const FIRST_FRAME_SHARE: f64 = 0.6;
 const GPU_PRIOR_MS_PER_RAY: f64 = 1e-6;
 /// The share of the target a moving frame's predicted cost aims at: a margin for the frames' noise.
 pub const FILL: f64 = 0.85;
+/// The share of the target a moving frame's AO rays keep whatever the floor. Where the floor alone fills the
+/// target (a CPU at its smallest moving scale, a large scene's primary visibility), fewer rays bring the frame
+/// no closer to it (the render scale is what cuts the floor) and only starve the moving image: the bundled
+/// scene on lavapipe, whose 280×280 moving frames cost ~90 ms without rays, fell to the 1,000-ray minimum
+/// (one ray from 1 pixel in 16), where 25 ms of rays are ~20k. A frame still over the target with its rays at
+/// this share is the floor's.
+pub const MIN_RAY_SHARE: f64 = 0.25;
 /// Weight of a measurement below the estimate (one above it replaces it: latency wins, a frame over the target
 /// must not wait for an average).
 const FALL_EMA: f64 = 0.3;
@@ -45,6 +52,24 @@ const FIT_FRAMES: usize = 8;
 /// the first moving frame's 12,281 rays against seven of ~1,100 priced a ray at 2.5 µs in one run and 0.8 µs
 /// in another; a still slice's rays cost 1.4 µs there).
 const MIN_FRAMES_PER_SIDE: usize = 2;
+/// A fitted slope stands for the rays' price only at this many standard errors above zero (its residuals'
+/// spread against the rays' spread): lavapipe's moving frames over cached geometry traced 1.1-2.7k rays in
+/// 92-131 ms frames, and the line through them priced a ray at 11 µs (it costs ~1.4 µs). That price then sized
+/// the first still image's slices for rays 8× too dear (lattice 12 at fewer rays: 70 s to converge, not 40).
+const MIN_SLOPE_T: f64 = 3.0;
+
+/// A moving frame's rays as the device model prices them (`DeviceModel::rays_that_fit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RayFit {
+    /// The rays that fit in the target over the floor, at least `least`.
+    pub fits: u32,
+    /// The rays of `MIN_RAY_SHARE` of the target (of `budget::PROBE_SHARE` of it on a guessed price): a
+    /// budget is never cut below them, but to probe a guessed price.
+    pub least: u32,
+    /// Whether the rays' price is still the probe's guess: no frame has measured it (the ray pass's own time,
+    /// or a line through frames whose rays differ) since the scene opened.
+    pub guessed: bool,
+}
 
 /// The kind of device, from `DeviceInfo::is_software`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +87,8 @@ pub struct DeviceModel {
     refresh_ms: Option<f64>,
     /// Milliseconds per AO ray: from the primary probe, then from the frames.
     ms_per_ray: Option<f64>,
+    /// Whether a frame measured `ms_per_ray` since the scene opened (else it is the probe's or the prior).
+    measured: bool,
     /// The non-ray cost of a moving frame, milliseconds.
     floor_ms: Option<f64>,
     /// (rays, frame ms) of the last moving frames, for frames without the ray pass's own time, all of
@@ -84,6 +111,7 @@ impl DeviceModel {
             },
             refresh_ms: None,
             ms_per_ray: None,
+            measured: false,
             floor_ms: None,
             recent: Vec::new(),
             recent_pixels: 0,
@@ -164,6 +192,7 @@ impl DeviceModel {
         if probed {
             self.ms_per_ray = Some(probe_ms * AO_RAY_COST / pixels as f64);
         }
+        self.measured = false;
         self.floor_ms = None;
         self.recent.clear();
         match self.class {
@@ -190,6 +219,7 @@ impl DeviceModel {
             Some(ms) => {
                 if priced {
                     self.ms_per_ray = Some(rise_or_fall(self.ms_per_ray, ms / rays as f64));
+                    self.measured = true;
                 }
                 self.floor_ms = Some(rise_or_fall(self.floor_ms, frame_ms - ms));
             }
@@ -205,6 +235,7 @@ impl DeviceModel {
                 if let Some((floor, per_ray)) = fit_line(&self.recent).filter(|_| priced) {
                     self.ms_per_ray = Some(rise_or_fall(self.ms_per_ray, per_ray));
                     self.floor_ms = Some(floor);
+                    self.measured = true;
                 } else {
                     let rays_ms = self.ms_per_ray.map_or(0.0, |c| c * rays as f64);
                     self.floor_ms = Some(rise_or_fall(self.floor_ms, (frame_ms - rays_ms).max(0.0)));
@@ -213,12 +244,20 @@ impl DeviceModel {
         }
     }
 
-    /// The rays a moving frame can trace in `FILL` of `target_ms` over its floor; None before the device's
-    /// rays were priced. At least the minimum budget (a floor over the target leaves the scale to cut).
-    pub fn rays_that_fit(&self, target_ms: f64) -> Option<u32> {
+    /// The rays a moving frame can trace in `FILL` of `target_ms` over its floor, and the rays of
+    /// `MIN_RAY_SHARE` of the target it keeps whatever the floor (a floor over the target leaves the render
+    /// scale to cut); None before the device's rays were priced.
+    pub fn rays_that_fit(&self, target_ms: f64) -> Option<RayFit> {
         let per_ray = self.ms_per_ray.filter(|c| *c > 0.0)?;
         let floor = self.floor_ms?;
-        Some(clamp_rays((FILL * target_ms - floor).max(0.0) / per_ray))
+        // On a guessed price the least is halved: the probe may price an AO ray several times low.
+        let guess = if self.measured { 1.0 } else { budget::PROBE_SHARE };
+        let least = guess * MIN_RAY_SHARE * target_ms.max(0.0);
+        Some(RayFit {
+            fits: clamp_rays((FILL * target_ms - floor).max(least) / per_ray),
+            least: clamp_rays(least / per_ray),
+            guessed: !self.measured,
+        })
     }
 
     /// The learned (floor ms, ms per ray), for the log and the tests.
@@ -245,7 +284,7 @@ fn rise_or_fall(estimate: Option<f64>, x: f64) -> f64 {
 /// The least-squares line ms = floor + rays × per_ray through `points`, where the rays spread by at least a
 /// fifth of their mean (else the slope is noise), at least `MIN_FRAMES_PER_SIDE` frames lie on each side of
 /// the middle of the rays' range (else one frame decides the slope, and its noise with it), and the slope
-/// comes out positive.
+/// comes out positive by `MIN_SLOPE_T` standard errors.
 fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
     let n = points.len() as f64;
     if n < 2.0 {
@@ -268,7 +307,10 @@ fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
         return None;
     }
     let per_ray = sxy / sxx;
-    (per_ray > 0.0).then(|| ((my - per_ray * mx).max(0.0), per_ray))
+    let floor = my - per_ray * mx;
+    let residual: f64 = points.iter().map(|p| (p.1 - floor - per_ray * p.0).powi(2)).sum();
+    let standard_error = (residual / (n - 2.0).max(1.0) / sxx).sqrt();
+    (per_ray > MIN_SLOPE_T * standard_error).then(|| (floor.max(0.0), per_ray))
 }
 
 #[cfg(test)]
@@ -353,7 +395,7 @@ mod tests {
         m.observe(5.0, 2_000_000, Some(4.0), 1);
         assert_eq!(m.cost(), (Some(1.0), Some(2e-6)));
         // 5.8 ms fit in 0.85 × 8 ms: 2.9 M rays.
-        assert_eq!(m.rays_that_fit(8.0), Some(2_900_000));
+        assert_eq!(m.rays_that_fit(8.0).map(|f| f.fits), Some(2_900_000));
         m.observe(9.0, 2_000_000, Some(8.0), 1);
         assert_eq!(m.cost().1, Some(4e-6), "a rise counts at once");
         m.observe(5.0, 2_000_000, Some(4.0), 1);
@@ -369,7 +411,57 @@ mod tests {
         }
         let (floor, per_ray) = cpu.cost();
         assert!((floor.unwrap() - 30.0).abs() < 1e-6 && (per_ray.unwrap() - 4e-3).abs() < 1e-9);
-        assert_eq!(cpu.rays_that_fit(100.0), Some(13_750));
+        assert_eq!(
+            cpu.rays_that_fit(100.0),
+            Some(RayFit {
+                fits: 13_750,
+                least: 6_250,
+                guessed: false
+            })
+        );
+    }
+
+    /// A floor that alone fills the target leaves the rays their share, not the minimum budget: the bundled
+    /// scene's moving frames on lavapipe (~90 ms at 280×280 without rays, the probe's 0.94 µs an AO ray).
+    /// Fails with `MIN_RAY_SHARE` left out of `rays_that_fit` (1,000 rays).
+    #[test]
+    fn a_floor_over_the_target_leaves_the_rays_their_share() {
+        let mut m = DeviceModel::new(true, None);
+        m.first_rays(300.0, 640_000, 78_400, SOFTWARE_TARGET_MS);
+        for _ in 0..4 {
+            m.observe(95.0, 1_100, None, 78_400);
+        }
+        let fit = m.rays_that_fit(SOFTWARE_TARGET_MS).expect("priced");
+        let per_ray = m.cost().1.unwrap();
+        assert!((per_ray - 0.9375e-3).abs() < 1e-9, "{per_ray}");
+        assert_eq!(fit.fits, fit.least);
+        assert_eq!(fit.least, (0.5 * 25.0 / per_ray).round() as u32);
+        assert!(fit.guessed, "frames of one ray count price nothing");
+    }
+
+    /// Frames whose rays differ by less than their noise does not price the rays: lavapipe's moving frames
+    /// over cached geometry (frame ms, traced rays) as recorded by `hrtao view --stats`, the budget
+    /// alternating on a guessed price. Fails without `MIN_SLOPE_T` (11 µs a ray).
+    #[test]
+    fn frames_whose_rays_differ_by_less_than_their_noise_do_not_price_the_rays() {
+        let frames = [
+            (2_668u64, 128.0),
+            (1_215, 119.0),
+            (2_456, 131.0),
+            (1_345, 106.0),
+            (2_475, 102.0),
+            (1_222, 123.0),
+            (2_473, 120.0),
+            (1_417, 114.0),
+        ];
+        let mut m = DeviceModel::new(true, None);
+        m.first_rays(300.0, 640_000, 78_400, SOFTWARE_TARGET_MS);
+        for (rays, ms) in frames {
+            m.observe(ms, rays, None, 78_400);
+        }
+        let (_, per_ray) = m.cost();
+        assert!((per_ray.unwrap() - 0.9375e-3).abs() < 1e-9, "{per_ray:?}");
+        assert!(m.rays_that_fit(SOFTWARE_TARGET_MS).unwrap().guessed);
     }
 
     /// One frame far from the others does not price the rays: lavapipe's moving frames of the bundled scene

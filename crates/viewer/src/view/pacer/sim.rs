@@ -416,3 +416,30 @@ fn an_orbit_over_cached_geometry_does_not_grow_the_budget() {
     let swing = run.frames.last().expect("frame").cost_ms;
     assert!(swing <= 2.0 * run.target_ms(), "{swing} ms");
 }
+
+/// A CPU whose floor alone exceeds the target (a large scene on lavapipe: 120 ms a frame without rays): the
+/// moving frames keep the rays of `device::MIN_RAY_SHARE` of the target instead of falling to the 1,000-ray
+/// minimum, and spend about that share on them. Fails with the least left out of
+/// `budget::next_rays_per_frame`'s cut (the pan traces 1,000 rays a frame).
+#[test]
+fn a_floor_over_the_target_keeps_the_rays_share() {
+    const SLOW: SimDevice = SimDevice {
+        name: "slow CPU",
+        fixed_ms: 120.0,
+        ..LAVAPIPE
+    };
+    let mut run = Run::new(&SLOW);
+    run.navigate(60, 40, 0);
+    let share = device::MIN_RAY_SHARE * run.target_ms();
+    // The pan's first two frames trace the budget priced before it; the others that of the floor-bound frames.
+    for (i, f) in run.frames[63..101].iter().enumerate() {
+        let ray_ms = f.rays as f64 / SLOW.unseen_rays_per_ms;
+        assert!(
+            (0.5 * share..=1.5 * share).contains(&ray_ms),
+            "pan frame {}: {} rays, {ray_ms:.1} ms of rays in a {:.1} ms frame",
+            i + 2,
+            f.rays,
+            f.cost_ms
+        );
+    }
+}
