@@ -46,12 +46,6 @@ pub fn first_rays_per_frame(probe_ms: f64, pixels: u64, target_ms: f64) -> u32 {
 /// grow. Over cached geometry most cells take no rays, so a budget grown on such frames' slack (up to 64 M
 /// rays before this rule) would trace ~31 rays per pixel at 1080p at the next swing into unseen geometry.
 pub const USED_SHARE: f64 = 0.8;
-/// While the rays' price is the probe's guess, the model's least (`RayFit::least`) is this share of its
-/// `MIN_RAY_SHARE`, and a budget held at it traces this share of it every other frame. Frames of one ray count
-/// cannot tell the rays' cost from the floor's, and a ray the probe priced low (a primary ray hits near, an AO
-/// ray into unseen geometry may cost 7× one) would keep a least that spends several times its share; frames of
-/// two counts let the model fit the price (`DeviceModel::observe`), after which the least holds still.
-pub const PROBE_SHARE: f64 = 0.5;
 /// The most a budget grows in one frame, whatever the model says fits (its estimate may be young).
 pub const MAX_GROWTH: f64 = 2.0;
 
@@ -77,19 +71,7 @@ pub fn next_rays_per_frame(
     let used = traced as f64 >= USED_SHARE * granted;
     let next = if frame_ms > target_ms {
         let cut = b * (0.9 * target_ms / frame_ms).clamp(0.25, 0.9);
-        fit.map_or(cut, |f| {
-            let least = f.least as f64;
-            if f.guessed && cut.min(f.fits as f64) <= least {
-                // Held at the least on a guessed price: every other frame traces a share of it.
-                if b > PROBE_SHARE.midpoint(1.0) * least {
-                    PROBE_SHARE * least
-                } else {
-                    least
-                }
-            } else {
-                cut.min(f.fits as f64).max(least)
-            }
-        })
+        fit.map_or(cut, |f| cut.min(f.fits as f64).max(f.least as f64))
     } else if frame_ms < target_ms * 0.8 && used {
         fits.map_or(b * 1.1 + 1.0, |f| f.max(b)).min(b * MAX_GROWTH + 1.0)
     } else {
@@ -158,7 +140,6 @@ mod tests {
         Some(RayFit {
             fits,
             least: MIN_RAYS_PER_FRAME,
-            guessed: false,
         })
     }
 
@@ -170,7 +151,6 @@ mod tests {
         let floor_bound = Some(RayFit {
             fits: 20_000,
             least: 20_000,
-            guessed: false,
         });
         let mut b = 20_000;
         for _ in 0..10 {
@@ -180,14 +160,6 @@ mod tests {
         // Over the least, the cut goes down to it, not under.
         let cut = next_rays_per_frame(80_000, 8e4, 80_000, 300.0, 100.0, floor_bound);
         assert_eq!(cut, 20_000);
-        // On a guessed price, the held budget alternates with half of it, starting from the half (so that
-        // the model can fit the price).
-        let guessed = floor_bound.map(|f| RayFit { guessed: true, ..f });
-        let steps: Vec<u32> = [80_000, 20_000, 10_000, 20_000]
-            .into_iter()
-            .map(|b| next_rays_per_frame(b, b as f64, b as u64, 120.0, 100.0, guessed))
-            .collect();
-        assert_eq!(steps, [10_000, 10_000, 20_000, 10_000]);
     }
 
     /// A fast frame that traced a tenth of its rays (cells over cached geometry take none) does not grow the

@@ -40,6 +40,14 @@ pub const FILL: f64 = 0.85;
 /// (one ray from 1 pixel in 16), where 25 ms of rays are ~20k. A frame still over the target with its rays at
 /// this share is the floor's.
 pub const MIN_RAY_SHARE: f64 = 0.25;
+/// While the rays' price is still the probe's guess (no frame has measured it since the scene opened: the ray
+/// pass's own time, or a line through frames whose rays differ), the least is this share of `MIN_RAY_SHARE`'s
+/// rays: a primary ray hits near, and an AO ray into unseen geometry may cost several (up to ~7×) of them.
+/// Frames of one ray count cannot tell the rays' cost from the floor's, and probing the price by varying the
+/// budget was tried and left: on lavapipe the rays traced over cached geometry are ~2 ms of a ~100 ms frame,
+/// and the line through such frames priced a ray at 5-11 µs now and then (it costs ~1.4 µs), which sized the
+/// first still image for rays 8× too dear (lattice 12 at half its rays: 78-82 s to converge instead of 47-50).
+pub const GUESSED_SHARE: f64 = 0.5;
 /// Weight of a measurement below the estimate (one above it replaces it: latency wins, a frame over the target
 /// must not wait for an average).
 const FALL_EMA: f64 = 0.3;
@@ -63,12 +71,9 @@ const MIN_SLOPE_T: f64 = 3.0;
 pub struct RayFit {
     /// The rays that fit in the target over the floor, at least `least`.
     pub fits: u32,
-    /// The rays of `MIN_RAY_SHARE` of the target (of `budget::PROBE_SHARE` of it on a guessed price): a
-    /// budget is never cut below them, but to probe a guessed price.
+    /// The rays of `MIN_RAY_SHARE` of the target (`GUESSED_SHARE` of that while the price is the probe's
+    /// guess): a budget is never cut below them.
     pub least: u32,
-    /// Whether the rays' price is still the probe's guess: no frame has measured it (the ray pass's own time,
-    /// or a line through frames whose rays differ) since the scene opened.
-    pub guessed: bool,
 }
 
 /// The kind of device, from `DeviceInfo::is_software`.
@@ -250,13 +255,11 @@ impl DeviceModel {
     pub fn rays_that_fit(&self, target_ms: f64) -> Option<RayFit> {
         let per_ray = self.ms_per_ray.filter(|c| *c > 0.0)?;
         let floor = self.floor_ms?;
-        // On a guessed price the least is halved: the probe may price an AO ray several times low.
-        let guess = if self.measured { 1.0 } else { budget::PROBE_SHARE };
+        let guess = if self.measured { 1.0 } else { GUESSED_SHARE };
         let least = guess * MIN_RAY_SHARE * target_ms.max(0.0);
         Some(RayFit {
             fits: clamp_rays((FILL * target_ms - floor).max(least) / per_ray),
             least: clamp_rays(least / per_ray),
-            guessed: !self.measured,
         })
     }
 
@@ -415,8 +418,7 @@ mod tests {
             cpu.rays_that_fit(100.0),
             Some(RayFit {
                 fits: 13_750,
-                least: 6_250,
-                guessed: false
+                least: 6_250
             })
         );
     }
@@ -436,12 +438,11 @@ mod tests {
         assert!((per_ray - 0.9375e-3).abs() < 1e-9, "{per_ray}");
         assert_eq!(fit.fits, fit.least);
         assert_eq!(fit.least, (0.5 * 25.0 / per_ray).round() as u32);
-        assert!(fit.guessed, "frames of one ray count price nothing");
     }
 
     /// Frames whose rays differ by less than their noise does not price the rays: lavapipe's moving frames
     /// over cached geometry (frame ms, traced rays) as recorded by `hrtao view --stats`, the budget
-    /// alternating on a guessed price. Fails without `MIN_SLOPE_T` (11 µs a ray).
+    /// alternating between two values. Fails without `MIN_SLOPE_T` (11 µs a ray).
     #[test]
     fn frames_whose_rays_differ_by_less_than_their_noise_do_not_price_the_rays() {
         let frames = [
@@ -461,7 +462,7 @@ mod tests {
         }
         let (_, per_ray) = m.cost();
         assert!((per_ray.unwrap() - 0.9375e-3).abs() < 1e-9, "{per_ray:?}");
-        assert!(m.rays_that_fit(SOFTWARE_TARGET_MS).unwrap().guessed);
+        assert_eq!(m.rays_that_fit(SOFTWARE_TARGET_MS).unwrap().least, 13_333);
     }
 
     /// One frame far from the others does not price the rays: lavapipe's moving frames of the bundled scene
