@@ -68,10 +68,11 @@ pub fn next_rays_per_frame(
 ) -> u32 {
     let b = rays_per_frame as f64;
     let fits = fit.map(|f| f.fits as f64);
+    let least = fit.map_or(0.0, |f| f.least as f64);
     let used = traced as f64 >= USED_SHARE * granted;
     let next = if frame_ms > target_ms {
         let cut = b * (0.9 * target_ms / frame_ms).clamp(0.25, 0.9);
-        fit.map_or(cut, |f| cut.min(f.fits as f64).max(f.least as f64))
+        fits.map_or(cut, |f| f.min(cut)).max(least)
     } else if frame_ms < target_ms * 0.8 && used {
         fits.map_or(b * 1.1 + 1.0, |f| f.max(b)).min(b * MAX_GROWTH + 1.0)
     } else {
