@@ -3,6 +3,8 @@
 //! image spans `ortho_height` world units vertically (rays parallel to the view direction, starting on the
 //! plane through the eye).
 use glam::Vec3;
+/// Which world direction points up (the six signed axes; `hrtao_scene::UpAxis`).
+pub use hrtao_scene::UpAxis;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
@@ -266,6 +268,42 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// A camera that frames the box `min..max` from an isometric-like direction (front-right-above).
+    /// An empty or non-finite box (a scene with nothing visible) frames the unit cube.
+    pub fn fit(min: Vec3, max: Vec3, up: UpAxis, fov_y_deg: f32, width: u32, height: u32) -> Camera {
+        let (min, max) = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
+            (min, max)
+        } else {
+            (Vec3::splat(-0.5), Vec3::splat(0.5))
+        };
+        let center = (min + max) * 0.5;
+        let radius = ((max - min).length() * 0.5).max(1e-6);
+        let upv = up.vector();
+        // Front-right-above in the up axis's frame (e1, e2, up): for +Z the direction (1, -1.2, 0.8).
+        let dir = up
+            .from_frame(glam::DVec3::new(1.0, -1.2, 0.8))
+            .as_vec3()
+            .normalize();
+        let aspect = width as f32 / height.max(1) as f32;
+        let half = (fov_y_deg.to_radians() * 0.5)
+            .tan()
+            .min((fov_y_deg.to_radians() * 0.5).tan() * aspect);
+        let dist = radius / half.atan().sin();
+        let eye = center + dir * dist;
+        Camera {
+            eye: eye.to_array(),
+            target: center.to_array(),
+            up: upv.to_array(),
+            fov_y_deg,
+            width,
+            height,
+            projection: Projection::Perspective,
+            ortho_height: 2.0 * radius / aspect.min(1.0),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -405,58 +443,5 @@ mod tests {
         cam.target = [1.0, 0.0, 0.0];
         cam.fov_y_deg = f32::NAN;
         assert!(cam.validate().is_err());
-    }
-}
-
-/// Which world axis points up for automatic cameras.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-pub enum UpAxis {
-    #[default]
-    Y,
-    Z,
-}
-
-impl UpAxis {
-    pub fn vector(self) -> Vec3 {
-        match self {
-            UpAxis::Y => Vec3::Y,
-            UpAxis::Z => Vec3::Z,
-        }
-    }
-}
-
-impl Camera {
-    /// A camera that frames the box `min..max` from an isometric-like direction (front-right-above).
-    /// An empty or non-finite box (a scene with nothing visible) frames the unit cube.
-    pub fn fit(min: Vec3, max: Vec3, up: UpAxis, fov_y_deg: f32, width: u32, height: u32) -> Camera {
-        let (min, max) = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
-            (min, max)
-        } else {
-            (Vec3::splat(-0.5), Vec3::splat(0.5))
-        };
-        let center = (min + max) * 0.5;
-        let radius = ((max - min).length() * 0.5).max(1e-6);
-        let upv = up.vector();
-        let dir = match up {
-            UpAxis::Y => Vec3::new(1.0, 0.8, 1.2),
-            UpAxis::Z => Vec3::new(1.0, -1.2, 0.8),
-        }
-        .normalize();
-        let aspect = width as f32 / height.max(1) as f32;
-        let half = (fov_y_deg.to_radians() * 0.5)
-            .tan()
-            .min((fov_y_deg.to_radians() * 0.5).tan() * aspect);
-        let dist = radius / half.atan().sin();
-        let eye = center + dir * dist;
-        Camera {
-            eye: eye.to_array(),
-            target: center.to_array(),
-            up: upv.to_array(),
-            fov_y_deg,
-            width,
-            height,
-            projection: Projection::Perspective,
-            ortho_height: 2.0 * radius / aspect.min(1.0),
-        }
     }
 }

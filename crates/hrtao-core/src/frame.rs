@@ -77,6 +77,9 @@ pub struct FrameDesc<'a> {
     /// simulated times (`at`), so a run at 10 or 144 frames per second is reproducible. Not part of what the
     /// frame shows: a new time changes nothing that was drawn.
     pub time: Option<Duration>,
+    /// Rays traced besides the image (`probes.rs`, at most `MAX_PROBE_RAYS`): their hits come with the frame's
+    /// report. Not part of what the frame shows.
+    pub probes: &'a [crate::gpu::ProbeRay],
 }
 
 impl<'a> FrameDesc<'a> {
@@ -94,6 +97,7 @@ impl<'a> FrameDesc<'a> {
             output: Output::default(),
             lattice: 1,
             time: None,
+            probes: &[],
         }
     }
 

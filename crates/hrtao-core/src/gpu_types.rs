@@ -128,9 +128,36 @@ gpu_consts! {
     FILTER_ARGS_OFFSET: u32 = 8;
     QUEUE_TRACE_ARGS: u32 = 4;
     DISPATCH_ARGS_WORDS: u32 = 16;
+    /// Probe rays a frame traces at most (`probes.rs`: the walk's gravity and collision rays).
+    MAX_PROBE_RAYS: u32 = 64;
 }
 
 gpu_structs! {
+    /// A probe ray (`probes.rs`): from `origin` along the unit `dir`, over the segment [tmin, tmax]; `tag` comes
+    /// back in its hit (the asker's own number: which ask an answer belongs to).
+    struct ProbeRay {
+        origin: [f32; 3],
+        tmin: f32,
+        dir: [f32; 3],
+        tmax: f32,
+        tag: u32,
+        pad0: u32,
+        pad1: u32,
+        pad2: u32,
+    }
+
+    /// What a probe ray found: the distance of the closest hit (negative: none on its segment, in the region the
+    /// section planes keep), the hit triangle's unit normal turned toward the ray's origin, and its instance.
+    struct ProbeHit {
+        normal: [f32; 3],
+        t: f32,
+        instance: u32,
+        /// The ray's `tag`.
+        tag: u32,
+        pad1: u32,
+        pad2: u32,
+    }
+
     /// Per-frame parameters, read by every pass (binding 1).
     struct FrameGlobals {
         /// Camera: eye position; `cam_u`/`cam_v` span half the image (perspective: right * tan(fov/2) * aspect,

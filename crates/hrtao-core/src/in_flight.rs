@@ -15,6 +15,7 @@ use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::frame::FrameKey;
 use crate::gpu::FrameStats;
+use crate::probes::ProbeBuffer;
 use crate::timer::GpuTimer;
 
 /// The most frames recorded and not yet finished: two lets the host record frame N+1 while the device runs
@@ -27,6 +28,8 @@ pub struct Slot {
     pub readback: Buffer,
     /// The frame's per-section timestamps (None: the queue has none).
     pub timer: Option<GpuTimer>,
+    /// The frame's probe rays and their hits (`probes.rs`).
+    pub probes: ProbeBuffer,
 }
 
 /// What `finish_frame` needs of a recorded frame: its slot and the renderer's state when it was recorded
@@ -61,6 +64,7 @@ impl InFlight {
                         vk::BufferUsageFlags::empty(),
                     )?,
                     timer: GpuTimer::new(gpu)?,
+                    probes: ProbeBuffer::new(gpu, &format!("probe rays {i}"))?,
                 })
             })
             .collect::<Result<Vec<_>>>()?;

@@ -38,6 +38,7 @@ pub mod in_flight;
 pub mod metrics;
 pub mod pass;
 pub mod passes;
+pub mod probes;
 pub mod raster;
 pub mod recorder;
 pub mod regions;

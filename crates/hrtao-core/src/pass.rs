@@ -265,10 +265,12 @@ pub enum Resource {
     SkyPixels,
     /// The cases of the hash test pass (tests only).
     HashTestCases,
+    /// The frame's probe rays and their hits (`probes.rs`: the walk's gravity and collision), host-visible.
+    Probes,
 }
 
 impl Resource {
-    pub const ALL: [Resource; 26] = [
+    pub const ALL: [Resource; 27] = [
         Resource::Instances,
         Resource::Geometries,
         Resource::Visibility,
@@ -295,6 +297,7 @@ impl Resource {
         Resource::SkyCells,
         Resource::SkyPixels,
         Resource::HashTestCases,
+        Resource::Probes,
     ];
 
     /// The `FrameGlobals` field holding its device address, which is how shaders reach it; None for a buffer
@@ -327,6 +330,7 @@ impl Resource {
             Resource::Visibility
             | Resource::StatsReadback
             | Resource::HashTestCases
+            | Resource::Probes
             | Resource::ContactDetail => return None,
         })
     }
@@ -337,6 +341,7 @@ impl Resource {
             Resource::Visibility => Some("VisRef"),
             Resource::HashTestCases => Some("HashTestRef"),
             Resource::ContactDetail => Some("ContactDetailRef"),
+            Resource::Probes => Some("ProbeRef"),
             _ => None,
         }
     }

@@ -3,11 +3,13 @@
 //! docs/architecture.md lists them. Above both `pass.rs` and the additions, so neither imports the other's list.
 use crate::additions;
 use crate::pass::{Pass, Resource};
+use crate::probes;
 
 /// Every compute pass, in frame order (the pass table's rows).
-pub const ALL: [Pass; 11] = [
+pub const ALL: [Pass; 12] = [
     Pass::PRIMARY,
     Pass::GBUFFER_FROM_VIS,
+    probes::PROBE,
     additions::contact_detail::OBSCURANCE,
     Pass::RTAO,
     Pass::CELL_FINDER,

@@ -157,6 +157,9 @@ pub struct FrameReport {
     /// still image's round ends with the last.
     pub slice: u32,
     pub slices: u32,
+    /// The hits of the frame's probe rays (`FrameDesc::probes`), in their order.
+    #[serde(skip)]
+    pub probe_hits: Vec<crate::gpu::ProbeHit>,
 }
 
 /// A frame of the held rounds that shows the grid over the whole image (`Renderer::level_spacing`).
@@ -671,6 +674,7 @@ impl Renderer {
             .cell_levels(self.frame_index, self.pixel_count() as u32, settings.map.s_p);
         let young_frame = self.young_frame(frame);
         let readback = self.in_flight.slot(slot).readback.raw;
+        let probe_push = self.in_flight.slot_mut(slot).probes.write(frame.probes)?;
         let timer = self.in_flight.slot_mut(slot).timer.as_mut();
         let mut rec = Recorder::new(&self.gpu, cmd, &self.passes, timer);
         scene.record_uploads(&mut rec);
@@ -705,6 +709,8 @@ impl Renderer {
             _ => rec.dispatch(Pass::PRIMARY, gw, gh, [0; 4]),
         }
         additions::record_after_primary(&mut rec, &young_frame, &self.targets.additions, gw, gh);
+        // The frame's probe rays (the walk's), on the TLAS the frame traces.
+        crate::probes::record(&mut rec, probe_push);
         // Ray-tracing passes in dispatches of at most `max_rays_per_dispatch` rays (dispatch_plan.rs).
         let rpp = settings.map.rays_per_pixel;
         let bound = self.max_rays_per_dispatch;
@@ -926,6 +932,7 @@ impl Renderer {
             ));
         };
         let key = done.key;
+        let probe_hits = self.in_flight.slot_mut(done.slot).probes.take_hits()?;
         let slot = self.in_flight.slot(done.slot);
         let stats: FrameStats = slot.readback.read(1)?[0];
         let c = stats.counters;
@@ -981,6 +988,7 @@ impl Renderer {
             converged: self.last_converged,
             slice: done.slice,
             slices,
+            probe_hits,
         })
     }
 

@@ -7,7 +7,15 @@
 # between the products that place it: one mesh, many instances), one primitive per style colour. Nodes: the
 # spatial tree (IfcProject -> IfcSite -> IfcBuilding -> IfcBuildingStorey -> elements, through IfcRelAggregates,
 # IfcRelNests and IfcRelContainedInSpatialStructure), labelled "Name (IfcClass)"; a product with geometry outside
-# that tree is a root. Positions are in metres (the iterator converts); the file's length unit is reported.
+# that tree is a root.
+#
+# Units: the file's length unit is the one its IfcProject declares (IfcUnitAssignment: an IfcSIUnit with its
+# prefix, or an IfcConversionBasedUnit such as the inch), found here. The iterator converts positions to metres
+# with the unit it finds itself (it.unit_magnitude()), and IfcOpenShell 0.8.4 finds none when an
+# IfcProjectLibrary is beside the project: then it leaves them in the file's unit, as metres. (Its
+# convert-back-units setting is no way out: it converts the vertices back but not the placements.) So the header
+# reports the metres per unit of the positions sent (the project's unit over the iterator's) and the file's unit,
+# or 0.0 when the file declares none (the loader then warns and takes metres).
 import os
 import struct
 import sys
@@ -83,6 +91,46 @@ def part_payload(np, geometry):
     return struct.pack("<Q", len(prims)) + b"".join(prims)
 
 
+SI_PREFIX = {
+    None: 1.0, "EXA": 1e18, "PETA": 1e15, "TERA": 1e12, "GIGA": 1e9, "MEGA": 1e6, "KILO": 1e3, "HECTO": 1e2,
+    "DECA": 1e1, "DECI": 1e-1, "CENTI": 1e-2, "MILLI": 1e-3, "MICRO": 1e-6, "NANO": 1e-9, "PICO": 1e-12,
+    "FEMTO": 1e-15, "ATTO": 1e-18,
+}
+
+
+def length_unit_m(unit, depth=0):
+    """Metres per `unit` (an IfcSIUnit, or an IfcConversionBasedUnit such as the inch, through its factor's unit),
+    or None where it is not a length unit."""
+    if unit is None or depth > 8:
+        return None
+    if unit.is_a("IfcSIUnit"):
+        return SI_PREFIX.get(unit.Prefix) if unit.Name == "METRE" else None
+    if unit.is_a("IfcConversionBasedUnit"):
+        factor = unit.ConversionFactor
+        value = getattr(factor.ValueComponent, "wrappedValue", None) if factor else None
+        inner = length_unit_m(factor.UnitComponent, depth + 1) if factor else None
+        if isinstance(value, (int, float)) and inner is not None:
+            return float(value) * inner
+    return None
+
+
+def project_length_unit(f):
+    """Metres per length unit of the IfcProject's IfcUnitAssignment, or None where it declares none (or one that
+    is not a length, or not positive)."""
+    for project in f.by_type("IfcProject"):
+        assignment = getattr(project, "UnitsInContext", None)
+        for unit in (assignment.Units or ()) if assignment else ():
+            if getattr(unit, "UnitType", None) != "LENGTHUNIT":
+                continue
+            try:
+                m = length_unit_m(unit)
+            except Exception:  # noqa: BLE001 - a malformed unit is no unit
+                m = None
+            if m is not None and m == m and 0.0 < m < float("inf"):
+                return float(m)
+    return None
+
+
 def children(entity):
     out = []
     for rel in getattr(entity, "IsDecomposedBy", None) or ():
@@ -111,7 +159,6 @@ def main():
         import numpy as np
         import ifcopenshell
         import ifcopenshell.geom
-        import ifcopenshell.util.unit
     except Exception as e:  # noqa: BLE001 - any import failure means the venv is not usable
         error(f"IfcOpenShell is not installed for {sys.executable} ({e}): run scripts/install-deps.sh")
         return 1
@@ -128,10 +175,6 @@ def main():
         error(f"IfcOpenShell cannot read the file: {e}")
         return 1
     progress("transfer", 0.0)
-    try:
-        file_unit = float(ifcopenshell.util.unit.calculate_unit_scale(f))
-    except Exception:  # noqa: BLE001 - no unit assignment: the iterator assumes metres
-        file_unit = 0.0
     settings = ifcopenshell.geom.settings()
     settings.set("use-world-coords", False)
     settings.set("weld-vertices", False)
@@ -153,6 +196,18 @@ def main():
             progress("tessellate", it.progress() / 100.0)
             if not it.next():
                 break
+    # Metres per unit of the positions the iterator gave (the unit it found, metres where it found none).
+    try:
+        iterator_unit = float(it.unit_magnitude())
+    except Exception:  # noqa: BLE001
+        iterator_unit = 1.0
+    if not (iterator_unit == iterator_unit and 0.0 < iterator_unit < float("inf")):
+        iterator_unit = 1.0
+    file_unit = project_length_unit(f)
+    if file_unit is None and iterator_unit != 1.0:
+        file_unit = iterator_unit  # found by the iterator where this search did not
+    # Positions are file coordinates times iterator_unit; in metres they are file coordinates times file_unit.
+    model_unit = file_unit / iterator_unit if file_unit else 1.0
     if not placed:
         schema = f.schema
         products = len(f.by_type("IfcProduct"))
@@ -200,7 +255,7 @@ def main():
             walk(f.by_id(pid), None, 0)
 
     progress("model", 1.0)
-    out = [struct.pack("<Idd", MODEL_FRAME_VERSION, 1.0, file_unit), struct.pack("<Q", len(parts))]
+    out = [struct.pack("<Idd", MODEL_FRAME_VERSION, model_unit, file_unit or 0.0), struct.pack("<Q", len(parts))]
     for _, payload in sorted(parts.values(), key=lambda v: v[0]):
         out.append(payload)
     out.append(struct.pack("<Q", len(nodes)))

@@ -143,6 +143,8 @@ pub fn load_gltf(
         done: scene.instances.len() as u64,
         total: scene.instances.len() as u64,
     });
+    // glTF is Y up (glTF 2.0 specification, 3.4 "Coordinate System and Units").
+    scene.up = Some(crate::UpAxis::Y);
     Ok(scene)
 }
 

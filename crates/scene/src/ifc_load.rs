@@ -3,10 +3,11 @@
 //! the venv's interpreter that `scripts/install-deps.sh` creates), which streams the frames of [`crate::cad`]:
 //! one part per representation (products sharing a mapped representation are instances of one mesh), the
 //! spatial tree (project → site → building → storey → element, labelled with names and IFC classes), style
-//! colours and the file's length unit. The scene is built as for STEP ([`crate::cad_load::to_scene`]): the file's
-//! unit, re-centred when far from the origin (georeferenced coordinates). The worker runs under the same limits
-//! as the OpenCASCADE one: address space, CPU seconds (`HRTAO_IFC_CPU_SECONDS`, default 300), killed on Cancel
-//! or with the viewer.
+//! colours and the file's length unit (its IfcProject's, also where IfcOpenShell's iterator finds none; a file that
+//! declares none is read in metres with a warning in [`Scene::warnings`] and the log). The scene is built as for
+//! STEP ([`crate::cad_load::to_scene`]): the file's unit, re-centred when far from the origin (georeferenced
+//! coordinates). The worker runs under the same limits as the OpenCASCADE one: address space, CPU seconds
+//! (`HRTAO_IFC_CPU_SECONDS`, default 300), killed on Cancel or with the viewer.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -121,13 +122,36 @@ pub fn load_ifc(
             WorkerError::Failed(m) => err(m),
         })?;
     let read_s = started.elapsed().as_secs_f64();
-    let scene = crate::cad_load::to_scene(path, model).map_err(err)?;
+    // The worker reports 0 (no unit) when the IfcProject's IfcUnitAssignment declares no length unit it can read.
+    let no_unit = model.file_unit_m.is_none();
+    let mut scene = crate::cad_load::to_scene(path, model).map_err(err)?;
+    if no_unit {
+        let warning = no_unit_warning(path, scene.unit_m.unwrap_or(1.0));
+        log::warn!("{warning}");
+        scene.warnings.push(warning);
+    }
+    // IFC is Z up by its schema (IfcGeometricRepresentationContext's world coordinate system).
+    scene.up = Some(crate::UpAxis::Z);
     stages.mark("scene");
     log::info!(
         "{}",
         crate::cad::loaded_summary(path, &scene, "IfcOpenShell", read_s)
     );
     Ok(scene)
+}
+
+/// The warning for a file whose project declares no length unit, its coordinates taken in `unit_m` metres.
+fn no_unit_warning(path: &Path, unit_m: f64) -> String {
+    let unit = if unit_m == 1.0 {
+        "metres".to_string()
+    } else {
+        format!("units of {unit_m} m")
+    };
+    format!(
+        "{}: the IFC file declares no length unit (no LENGTHUNIT in its IfcProject's IfcUnitAssignment); its \
+         coordinates are taken as {unit}, so its size may be wrong",
+        path.display()
+    )
 }
 
 /// The entity count of an IFC file in the STEP physical format, or why it is not one IfcOpenShell reads.

@@ -28,6 +28,7 @@ mod stl_load;
 mod threemf_colors;
 mod threemf_load;
 mod tree;
+mod up;
 
 use std::path::Path;
 
@@ -42,6 +43,7 @@ pub use scene::{
     Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR, EXACT_BOUNDS_VERTEX_BUDGET,
 };
 pub use tree::{Node, NodeTree};
+pub use up::UpAxis;
 
 /// Loads a glTF 2.0 file (`.gltf` or `.glb`), validated and non-empty, with the default [`LoadOptions`].
 pub fn load_gltf(path: &Path, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {

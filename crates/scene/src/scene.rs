@@ -130,6 +130,12 @@ pub struct Scene {
     /// or a binary STL's header text, a STEP file's HEADER section, an IGES file's global section. Empty when the
     /// format carries nothing (OBJ).
     pub metadata: Vec<(String, String)>,
+    /// The up axis the format implies: IFC and 3MF +Z (their specifications), glTF +Y; `None` where the
+    /// format says nothing (STEP, IGES, STL, OBJ, PLY, generated scenes).
+    pub up: Option<crate::UpAxis>,
+    /// What the loader could not read and assumed instead (an IFC file with no length unit): shown to the
+    /// user and logged, never silent.
+    pub warnings: Vec<String>,
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     f: u32,
     /// The world bounds each recent edit changed, with the F it produced (newest last, at most
@@ -202,6 +208,8 @@ impl Scene {
             tree: NodeTree::default(),
             unit_m: None,
             metadata: Vec::new(),
+            up: None,
+            warnings: Vec::new(),
             f: 0,
             changes: Default::default(),
         }

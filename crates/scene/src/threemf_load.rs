@@ -160,6 +160,8 @@ pub fn load_3mf(
         .iter()
         .filter_map(|m| m.value.clone().map(|v| (m.name.clone(), v)))
         .collect();
+    // 3MF is Z up (3MF core specification, 3.1: the build platform's plane is XY, Z points up).
+    scene.up = Some(crate::UpAxis::Z);
     Ok(scene)
 }
 

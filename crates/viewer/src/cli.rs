@@ -90,22 +90,6 @@ pub enum Command {
     Devices(DeviceArgs),
 }
 
-/// Up axis of a scene (for an automatic camera).
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Up {
-    Y,
-    Z,
-}
-
-impl From<Up> for UpAxis {
-    fn from(u: Up) -> UpAxis {
-        match u {
-            Up::Y => UpAxis::Y,
-            Up::Z => UpAxis::Z,
-        }
-    }
-}
-
 /// `--primary`: how primary visibility is found (`crate::setup::Device::install` applies it).
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum PrimaryChoice {
@@ -368,10 +352,10 @@ pub struct RenderArgs {
     /// Image height (overrides the camera file).
     #[arg(long)]
     pub height: Option<u32>,
-    /// World up axis: the automatic camera's (default: the camera file's, else z for the bundled scene and gen:
-    /// specs, else y).
-    #[arg(long, value_enum, ignore_case = true)]
-    pub up: Option<Up>,
+    /// World up axis: x, y, z, -x, -y or -z (default: the camera file's, else z for the bundled scene and gen:
+    /// specs, else the format's: IFC and 3MF z, glTF y; else y).
+    #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
+    pub up: Option<UpAxis>,
     /// Primary visibility: measured (auto), ray queries or rasterised.
     #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
     pub primary: PrimaryChoice,
@@ -421,9 +405,11 @@ pub struct ViewArgs {
     /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
     #[arg(long)]
     pub camera: Option<PathBuf>,
-    /// World up axis (default: the camera file's, else z for the bundled scene and gen: specs, else y).
-    #[arg(long, value_enum, ignore_case = true)]
-    pub up: Option<Up>,
+    /// World up axis: x, y, z, -x, -y or -z (default: the one chosen in the panel for this file, else the
+    /// camera file's, else z for the bundled scene and gen: specs, else the format's: IFC and 3MF z, glTF y;
+    /// else y).
+    #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
+    pub up: Option<UpAxis>,
     /// Primary visibility: measured (auto), ray queries or rasterised.
     #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
     pub primary: PrimaryChoice,
@@ -478,6 +464,12 @@ pub struct ViewArgs {
     /// converged at full resolution (then the screenshots, --exit).
     #[arg(long, value_name = "N")]
     pub orbit: Option<u32>,
+    /// Scripted mode: walk the model (walk mode) from `start`, dropped onto the floor below it, through the
+    /// waypoints in turn at walking speed (one blocked for 2 s is given up), then end the script. The file:
+    /// `{"start": [x, y, z], "waypoints": [[x, y], ...]}` in the file's coordinates, x, y on the floor plane of
+    /// the up axis (for a Z-up model, plan coordinates). `--stats` records each frame's `eye` and `walk`.
+    #[arg(long, value_name = "PATH.json", conflicts_with = "orbit")]
+    pub walk_path: Option<PathBuf>,
     /// Scripted mode: write per-frame statistics (wall/GPU ms, internal and view size, moving) to this JSON.
     #[arg(long, value_name = "FILE")]
     pub stats: Option<PathBuf>,
@@ -538,9 +530,10 @@ pub struct BenchArgs {
     /// Image height (default: the camera file's, else 180).
     #[arg(long)]
     pub height: Option<u32>,
-    /// World up axis: the automatic camera's (default: the camera file's, else z for gen: specs, else y).
-    #[arg(long, value_enum, ignore_case = true)]
-    pub up: Option<Up>,
+    /// World up axis: x, y, z, -x, -y or -z (default: the camera file's, else z for the bundled scene and gen:
+    /// specs, else the format's: IFC and 3MF z, glTF y; else y).
+    #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
+    pub up: Option<UpAxis>,
     /// Primary visibility of every mode: measured (auto), ray queries or rasterised.
     #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
     pub primary: PrimaryChoice,

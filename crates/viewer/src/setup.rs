@@ -14,9 +14,11 @@
 //!   too); else an automatic camera (`--auto-camera` of `bench`, else fitted to the bounds). An explicit
 //!   `bench --auto-camera` asks for the automatic camera, so it wins over the file beside the model. The file's
 //!   camera is used as saved: `--up` never turns it.
-//! - **Up axis** (the world's: the automatic camera's, and the axis the viewer orbits about): `--up`; else the
-//!   up of the camera file in use; else z for the bundled scene and `gen:` specs (both are modelled z-up); else
-//!   y (glTF's convention, and most exporters').
+//! - **Up axis** (the world's: the automatic camera's, and the axis the viewer orbits about, walks on and sets
+//!   the sky's zenith by): `--up` (the viewer passes the axis the user chose in the panel for that file here
+//!   too); else the up of the camera file in use; else z for the bundled scene and `gen:` specs (both are
+//!   modelled z-up); else the one the format implies (`Scene::up`: IFC and 3MF z, glTF y); else y (most
+//!   exporters').
 //! - **Image size**: `--width`/`--height` of `render` and `bench`; else the camera file's; else the command's
 //!   own size for an automatic camera ([`SetupInputs::fit_size`]; the viewer adapts the camera to its window).
 //! - **AO radius**: `--radius`; else [`BUNDLED_RADIUS`] for the bundled scene (millimetres; 5 % of its diagonal
@@ -100,7 +102,7 @@ impl SetupInputs {
         SetupInputs {
             spec: args.file.clone(),
             camera: args.camera.clone(),
-            up: args.up.map(UpAxis::from),
+            up: args.up,
             radius: args.radius,
             sections: args.sections.clone(),
             primary: args.primary,
@@ -113,7 +115,7 @@ impl SetupInputs {
         SetupInputs {
             spec: args.scene.clone(),
             camera: args.camera.clone(),
-            up: args.up.map(UpAxis::from),
+            up: args.up,
             radius: args.ao.radius,
             width: args.width,
             height: args.height,
@@ -129,7 +131,7 @@ impl SetupInputs {
             spec: args.scene.clone(),
             camera: args.camera.clone(),
             auto_camera: args.auto_camera,
-            up: args.up.map(UpAxis::from),
+            up: args.up,
             radius: args.ao.radius,
             width: args.width,
             height: args.height,
@@ -191,14 +193,9 @@ pub fn default_radius(bundled: bool, scene: &Scene) -> f32 {
     (diagonal * 0.05).max(1e-6)
 }
 
-/// The world up axis a camera implies: the axis its up vector leans to most (z, else y).
+/// The world up axis a camera implies: the signed axis its up vector leans to most.
 pub fn up_axis_of(camera: &Camera) -> UpAxis {
-    let [_, y, z] = camera.up;
-    if z.abs() > y.abs() {
-        UpAxis::Z
-    } else {
-        UpAxis::Y
-    }
+    UpAxis::nearest(hrtao_scene::glam::Vec3::from(camera.up))
 }
 
 /// What [`prepare`] decided for a loaded scene.
@@ -231,6 +228,9 @@ pub fn prepare(inputs: &SetupInputs, scene: &Scene) -> Result<Prepared> {
     if bounds.is_empty() {
         bail!("scene `{spec}` has no visible geometry");
     }
+    for w in &scene.warnings {
+        log::warn!("{spec}: {w}");
+    }
     let bundled = inputs.is_bundled();
     let camera_file = match (&inputs.camera, inputs.auto_camera) {
         (Some(p), _) => Some(p.clone()),
@@ -241,10 +241,12 @@ pub fn prepare(inputs: &SetupInputs, scene: &Scene) -> Result<Prepared> {
         .as_ref()
         .map(|p| Camera::load_in(p, scene.origin).with_context(|| format!("camera {}", p.display())))
         .transpose()?;
+    // The bundled gearbox is a Z-up CAD export in a glTF (which says Y up); generated scenes are Z up; else the
+    // format's (IFC and 3MF Z, glTF Y), else Y.
     let default_up = if bundled || spec.starts_with("gen:") {
         UpAxis::Z
     } else {
-        UpAxis::Y
+        scene.up.unwrap_or(UpAxis::Y)
     };
     let up = inputs
         .up

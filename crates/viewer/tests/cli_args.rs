@@ -37,8 +37,8 @@ fn tmp(name: &str) -> PathBuf {
 #[test]
 fn parsers_refuse_bad_values_and_name_what_is_accepted() {
     let cases: &[(&[&str], &[&str])] = &[
-        (&["render", "--up", "x"], &["--up", "possible values: y, z"]),
-        (&["view", "--up", "w"], &["--up", "possible values: y, z"]),
+        (&["render", "--up", "+w"], &["--up", "x, y, z, -x, -y, -z"]),
+        (&["view", "--up", "w"], &["--up", "x, y, z, -x, -y, -z"]),
         (
             &["bench", "--scene", "a.glb", "--auto-camera", "top"],
             &["--auto-camera", "fit, corner"],
@@ -127,7 +127,8 @@ fn help_hides_scripted_flags_and_lists_examples_keys_and_environment() {
         "HRTAO_VALIDATION",
         "HRTAO_OCCT_CPU_SECONDS",
         "XDG_PICTURES_DIR",
-        "[possible values: y, z]",
+        "x, y, z, -x, -y or -z",
+        "walk mode",
         "[FILE]",
     ] {
         assert!(long.contains(w), "--help lacks `{w}`:\n{long}");

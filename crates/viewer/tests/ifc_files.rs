@@ -1,8 +1,9 @@
 //! IFC through the IfcOpenShell worker (a Python process run by the venv `scripts/install-ifc.sh` makes, which
 //! `scripts/test.sh` runs through `scripts/install-deps.sh`): assimp's AC14-FZK-Haus.ifc with its spatial tree and
 //! shared representations (counted with IfcOpenShell's own API), its AO against IfcOpenShell's own glTF export, a
-//! building generated with IfcOpenShell's API, the hostile IFC corpus, a missing interpreter, and a worker that is
-//! killed or runs out of CPU time, in `render` and in the viewer's window. Each test skips, saying why, only when the venv is absent.
+//! building generated with IfcOpenShell's API, length units (a millimetre project beside an IfcProjectLibrary, a
+//! file with no unit), the hostile IFC corpus, a missing interpreter, and a worker that is killed or runs out of
+//! CPU time, in `render` and in the viewer's window. Each test skips, saying why, only when the venv is absent.
 mod common;
 
 use std::path::{Path, PathBuf};
@@ -238,6 +239,78 @@ fn a_building_made_with_ifcopenshells_api_opens_with_its_instances() {
         .position(|n| n.name == "Ground floor (IfcBuildingStorey)")
         .expect("the storey") as u32;
     assert_eq!(s.tree.subtree_instances(storey).len(), s.instances.len());
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Writes `make_library_units.py`'s model in `mode` to `path`; the wall's true length in metres.
+fn make_library_units(python: &Path, path: &Path, mode: &str) -> f32 {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ifc/make_library_units.py");
+    let out = Command::new(python)
+        .arg(script)
+        .arg(path)
+        .arg(mode)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).trim().parse().unwrap()
+}
+
+/// The extent of a scene's bounds in metres (what the Properties panel shows as dimensions).
+fn extent_m(s: &Scene) -> glam::Vec3 {
+    let b = s.bounds();
+    (b.max - b.min) * s.unit_m.expect("a unit") as f32
+}
+
+/// A millimetre project with an IfcProjectLibrary beside it (IfcOpenShell's iterator then finds no unit and reads
+/// the coordinates as metres) opens at its true size, in millimetres, without a warning, whichever of the project
+/// and the library comes first in the file.
+#[test]
+fn a_millimetre_project_with_a_project_library_opens_at_its_true_size() {
+    let Some(python) = python() else { return };
+    let dir = tmp("library-units");
+    for mode in ["library-after", "library-first"] {
+        let path = dir.join(format!("{mode}.ifc"));
+        let length = make_library_units(&python, &path, mode);
+        let s = load(&path).unwrap();
+        let e = extent_m(&s);
+        println!("{mode}: unit {:?}, bounds {:?}, {e} m", s.unit_m, s.bounds());
+        assert_eq!(s.unit_m, Some(0.001), "{mode}");
+        assert!(
+            (e - glam::Vec3::new(length, 0.2, 3.0)).abs().max_element() < 1e-3,
+            "{mode}: the wall is {length} × 0.2 × 3 m, the scene {e} m"
+        );
+        assert!(s.warnings.is_empty(), "{mode}: {:?}", s.warnings);
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// A file that declares no length unit opens in metres with a warning in the scene (the viewer's toast) and in
+/// `hrtao render`'s log, not silently.
+#[test]
+fn an_ifc_without_a_unit_opens_in_metres_with_a_warning() {
+    let Some(python) = python() else { return };
+    let dir = tmp("no-unit");
+    let path = dir.join("no-unit.ifc");
+    let length = make_library_units(&python, &path, "no-unit");
+    let s = load(&path).unwrap();
+    let e = extent_m(&s);
+    assert_eq!(s.unit_m, Some(1.0));
+    assert!(
+        (e - glam::Vec3::new(length, 0.2, 3.0)).abs().max_element() < 1e-3,
+        "{e}"
+    );
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    let w = &s.warnings[0];
+    assert!(w.contains("no length unit") && w.contains("metres"), "{w}");
+    let (out, _) = render_small(&path, &[("RUST_LOG", "warn")]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.contains("WARN") && l.contains("no length unit")),
+        "render logs the warning:\n{stderr}"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 

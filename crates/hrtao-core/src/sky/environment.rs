@@ -97,11 +97,9 @@ pub enum Environment {
 }
 
 /// The sky frame's direction of a direction in the scene file's coordinates.
+/// The sky frame is the up axis's right-handed frame (e1, e2, up): the zenith is +z.
 pub fn sky_frame(d: DVec3, up: UpAxis) -> DVec3 {
-    match up {
-        UpAxis::Y => DVec3::new(d.x, -d.z, d.y),
-        UpAxis::Z => d,
-    }
+    up.to_frame(d)
 }
 
 /// b′ = R_z(−θ)·b: the environment turned by θ counter-clockwise seen from above.

@@ -51,6 +51,10 @@ pub enum Command {
     RenderScale(f32),
     /// Forget all cached AO.
     ClearCache,
+    /// Walk mode on (standing below the eye) or off (G, Esc, the panel's switch).
+    Walk(bool),
+    /// The scene's up axis, chosen in the panel (remembered for the file).
+    UpAxis(hrtao_core::camera::UpAxis),
     /// The camera and orbit pivot move (navigation, standard views, bookmarks).
     Camera { cam: Camera, pivot: Vec3 },
     /// The pointer's drag over the view: held (the view counts as moving), and whether it moved this frame.
@@ -97,6 +101,8 @@ pub struct ViewState<'a> {
     pub section_sides: Option<[usize; 3]>,
     pub selection: &'a Selection,
     pub nav: &'a Nav,
+    /// Walk mode is on (`walk.rs`): the keys walk and the left drag looks around.
+    pub walking: bool,
     /// The camera the scene opened with (Enter).
     pub home: Camera,
     pub prefs: &'a Prefs,

@@ -20,6 +20,8 @@ pub struct Tools<'a> {
     pub measure: &'a mut Measure,
     pub sections: &'a mut SectionState,
     pub fullscreen: &'a mut bool,
+    /// Walk mode's keys this frame (`walk.rs`).
+    pub walk: &'a mut super::walk::WalkInput,
 }
 
 /// The camera as input leaves it this frame (one `Command::Camera` if it moved).
@@ -83,6 +85,15 @@ pub fn view_input(
             let d = (-delta.x * nav::right(&m.nav.cam) + delta.y * nav::cam_up(&m.nav.cam)) * wpp;
             m.nav.pivot += d;
             m.nav.cam = nav::pan(&m.nav.cam, delta.x, delta.y, view_h);
+        } else if primary && state.walking {
+            // Walking: the left drag looks around (the body turns with the view).
+            m.nav.cam = nav::fly_look(
+                &m.nav.cam,
+                world_up,
+                -delta.x * LOOK_RAD_PER_PX,
+                -delta.y * LOOK_RAD_PER_PX,
+            );
+            m.nav.pivot = nav::target(&m.nav.cam);
         } else if primary {
             m.nav.cam = nav::orbit(
                 &m.nav.cam,
@@ -273,6 +284,7 @@ fn typing(ctx: &egui::Context) -> bool {
 
 /// The shortcuts and fly keys (not while typing into a text field).
 pub fn keyboard(ctx: &egui::Context, state: &ViewState, tools: &mut Tools) -> Vec<Command> {
+    *tools.walk = super::walk::WalkInput::default();
     if typing(ctx) {
         return Vec::new();
     }
@@ -306,6 +318,7 @@ pub fn keyboard(ctx: &egui::Context, state: &ViewState, tools: &mut Tools) -> Ve
             Key::ArrowDown,
             Key::PageUp,
             Key::PageDown,
+            Key::G,
         ];
         // Each key with the modifiers held when it was pressed (a quick Ctrl+Z can press and release Ctrl
         // within one frame's events).
@@ -365,6 +378,14 @@ pub fn keyboard(ctx: &egui::Context, state: &ViewState, tools: &mut Tools) -> Ve
             }
             Key::Escape if state.shot.as_ref().is_some_and(|s| s.2) => {
                 out.push(Command::CancelScreenshot(" (Esc)"));
+                continue;
+            }
+            Key::Escape if state.walking => {
+                out.push(Command::Walk(false));
+                continue;
+            }
+            Key::G if !mods.command => {
+                out.push(Command::Walk(!state.walking));
                 continue;
             }
             Key::Escape if tools.measure.active => {
@@ -449,7 +470,25 @@ pub fn keyboard(ctx: &egui::Context, state: &ViewState, tools: &mut Tools) -> Ve
             _ => {}
         }
     }
-    if !down.is_empty() && state.scene.is_some() {
+    // Walking: the keys move the body (walk.rs steps it at walking speed); Q/E do nothing.
+    if state.walking {
+        for k in &down {
+            match k {
+                Key::W => tools.walk.forward += 1.0,
+                Key::S => tools.walk.forward -= 1.0,
+                Key::A => tools.walk.right -= 1.0,
+                Key::D => tools.walk.right += 1.0,
+                _ => {}
+            }
+        }
+        tools.walk.run = mods.shift;
+        if *tools.walk != super::walk::WalkInput::default() {
+            out.push(Command::Drag {
+                dragging: true,
+                moved: true,
+            });
+        }
+    } else if !down.is_empty() && state.scene.is_some() {
         out.push(Command::Drag {
             dragging: true,
             moved: true,

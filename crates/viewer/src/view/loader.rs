@@ -10,7 +10,7 @@ use super::command::LoadingView;
 /// Messages from the loader thread.
 enum LoadMsg {
     Progress(String),
-    Done(Result<Scene, String>, Duration),
+    Done(Result<Box<Scene>, String>, Duration),
 }
 
 struct Loading {
@@ -55,7 +55,7 @@ impl Loader {
                 }
             })
             .map_err(|e| format!("cannot open `{s}`: {e}"));
-            let _ = tx.send(LoadMsg::Done(result, t0.elapsed()));
+            let _ = tx.send(LoadMsg::Done(result.map(Box::new), t0.elapsed()));
         });
         self.loading = Some(Loading {
             spec,
@@ -94,7 +94,7 @@ impl Loader {
         while let Ok(msg) = loading.rx.try_recv() {
             match msg {
                 LoadMsg::Progress(p) => loading.progress = p,
-                LoadMsg::Done(r, t) => done = Some((r, t)),
+                LoadMsg::Done(r, t) => done = Some((r.map(|s| *s), t)),
             }
         }
         let (result, took) = done?;

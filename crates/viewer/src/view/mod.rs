@@ -37,7 +37,9 @@ mod ui;
 mod ui_colors;
 mod ui_layer;
 mod ui_probe;
+mod up_axis;
 mod view_cube;
+mod walk;
 mod watch;
 
 use std::path::{Path, PathBuf};
@@ -332,7 +334,10 @@ impl Viewer {
             toasts: Vec::new(),
             shots: shots::Shots::default(),
             script: Script {
-                frames: args.frames.or(args.orbit.map(|_| 0)),
+                frames: args
+                    .frames
+                    .or(args.orbit.map(|_| 0))
+                    .or(args.walk_path.as_ref().map(|_| 0)),
                 orbit_left: args.orbit.unwrap_or(0),
                 wait_converged: args.orbit.is_some(),
                 stats: args.stats.clone().map(stats::StatsLog::new),
@@ -362,6 +367,12 @@ impl Viewer {
         };
         if let Some(m) = prefs_msg {
             v.toast(m, true);
+        }
+        if let Some(p) = &args.walk_path {
+            match walk::path::WalkPathFile::read(p) {
+                Ok(f) => v.panels.walk.script = Some(f),
+                Err(e) => v.fatal(format!("{e:#}")),
+            }
         }
         v.start_loading(spec);
         v
@@ -458,11 +469,17 @@ impl Viewer {
             primary: self.startup.primary,
             ..Default::default()
         };
-        let inputs = setup::SetupInputs {
+        let mut inputs = setup::SetupInputs {
             spec: Some(spec.to_string()),
             ..std::mem::replace(&mut self.startup, later)
         };
+        // The up axis the user chose for this file in the panel, unless `--up` says otherwise.
+        inputs.up = inputs.up.or(up_axis::remembered(&self.prefs.up_axes, spec));
         let p = setup::prepare(&inputs, &scene)?;
+        // What the loader assumed (an IFC file with no length unit): a warning, never silent.
+        for w in &scene.warnings {
+            self.toast(w.clone(), true);
+        }
         // The old scene's frames in flight complete before the renderer renders the new one's probes.
         self.complete_frames(0)?;
         self.gpu.wait_idle();
@@ -472,6 +489,7 @@ impl Viewer {
         self.default_radius = p.default_radius;
         let radius = p.radius;
         let world_up = p.up;
+        log::info!("up axis {world_up}");
         // The sky light's zenith is the scene's up axis.
         self.prefs.settings.light.sky_up = world_up;
         // Orient the camera with a true up vector (nav keeps it orthogonal).
@@ -660,6 +678,7 @@ impl Viewer {
             section_sides: self.scene_gpu.as_ref().map(|sg| sg.section_sides),
             selection: &self.selection,
             nav: &self.nav,
+            walking: self.panels.walk.walking(),
             home: self.home,
             prefs: &self.prefs,
             default_radius: self.default_radius,
@@ -682,6 +701,7 @@ impl Viewer {
         for c in commands {
             self.apply(c);
         }
+        self.walk_tick();
     }
 
     /// Carries out a command of a panel, the view's input, a shortcut or a scripted run.
@@ -717,6 +737,8 @@ impl Viewer {
                 self.prefs.settings = settings;
             }
             Command::RenderScale(scale) => self.render_scale = scale.clamp(0.05, 2.0),
+            Command::UpAxis(up) => self.set_up_axis(up),
+            Command::Walk(on) => self.set_walking(on, None),
             Command::ClearCache => {
                 if let Some(Err(e)) = self.renderer.as_mut().map(|r| r.clear_cache()) {
                     self.toast(format!("{e}"), true);
@@ -755,13 +777,20 @@ impl Viewer {
     /// A click or double-click in the view at `at` (fractions of the view): picks the surface under it from the
     /// last frame's G-buffer and selects, toggles, sets the pivot or measures.
     fn pick(&mut self, at: [f32; 2], purpose: PickFor) {
+        // The surface faces up: a floor to stand on.
+        let mut floor_hit = false;
         let hit = match &self.renderer {
             Some(r) if (0.0..1.0).contains(&at[0]) && (0.0..1.0).contains(&at[1]) => {
                 let (iw, ih) = r.size();
                 let (x, y) = ((at[0] * iw as f32) as u32, (at[1] * ih as f32) as u32);
                 self.gpu.wait_idle();
                 match r.pick(x, y) {
-                    Ok(px) => px.map(|px| (Vec3::from_slice(&px.position[..3]), px.instance)),
+                    Ok(px) => {
+                        floor_hit = px.is_some_and(|px| {
+                            Vec3::from(px.normal).dot(self.nav.world_up.vector()) > walk::FLOOR_COS
+                        });
+                        px.map(|px| (Vec3::from_slice(&px.position[..3]), px.instance))
+                    }
                     Err(e) => {
                         self.toast(format!("pick failed: {e}"), true);
                         return;
@@ -778,6 +807,9 @@ impl Viewer {
                 }
             }
             (PickFor::Toggle, _) => self.toggle_selected(hit.map_or(u32::MAX, |h| h.1)),
+            (PickFor::Pivot, Some((pos, _))) if floor_hit && self.walk_here() => {
+                self.set_walking(true, Some(pos));
+            }
             (PickFor::Pivot, Some((pos, _))) => {
                 self.nav.pivot = pos;
                 // Same view; the focal distance becomes the pivot's depth (zoom speed follows).
@@ -1271,6 +1303,8 @@ impl Viewer {
                 bgra: !self.presenter.blit_ok && self.presenter.is_bgra(),
                 ..Output::default()
             },
+            // The walk's gravity and collision rays (answered with this frame's report).
+            probes: self.panels.walk.rays(),
             ..FrameDesc::new(
                 sg,
                 scene.f(),
@@ -1287,7 +1321,8 @@ impl Viewer {
         // a background screenshot, where the view rests once converged as it would for a user.
         let scripted = script_running && !self.shots.in_background();
         let settling = self.pacer.settles(r.shows(&frame));
-        let render = !plan.hold && !settling && (scripted || !r.shows_final(&frame));
+        let walk = self.panels.walk.wants_frames();
+        let render = !plan.hold && !settling && (scripted || walk || !r.shows_final(&frame));
         // Each round of a still image in slices starts with the view's visibility drawn in a frame of its own
         // (`Renderer::record_visibility`): input that comes meanwhile waits for the draw alone, and the view
         // shows the last image until the round's first slice.
@@ -1297,6 +1332,7 @@ impl Viewer {
         }
         if render {
             r.record_frame(cmd, &frame)?;
+            self.panels.walk.submitted();
         }
         Ok((Some((r.output_buffer().raw, iw, ih)), render))
     }
@@ -1319,6 +1355,8 @@ impl Viewer {
             return Ok(());
         };
         let report = r.finish_frame(gpu_wall)?;
+        self.panels.walk.hits(&report.probe_hits);
+        let walk_stat = self.scene.as_ref().and_then(|s| self.panels.walk.stat(s.origin));
         let converged = pacer::image_converged(&report) && r.size() == full;
         let input_ms = input;
         let stats_index = self.script.stats.as_ref().map_or(0, |log| log.frames.len());
@@ -1376,6 +1414,8 @@ impl Viewer {
                 rays_per_frame,
                 cpu_ms: split,
                 interval_ms,
+                eye: walk_stat.map(|w| w.1),
+                walk: walk_stat.map(|w| w.0),
             });
             for (i, value) in roughness {
                 if let Some(f) = log.frames.get_mut(i) {
@@ -1396,6 +1436,7 @@ impl Viewer {
         let repaint = self.pacer.repaint(pacer::RepaintInputs {
             now: self.clock.now(),
             busy: (self.script.frames.is_some() && !self.script.done)
+                || self.panels.walk.wants_frames()
                 || self.shots.busy()
                 || self.script.ui_capture_pending,
             viewing: self.renderer.is_some() && self.scene.is_some(),
@@ -1458,7 +1499,10 @@ impl Viewer {
                 Err(e) => self.fatal(format!("--set-at-frame {n}: {e}")),
             }
         }
-        if self.script.orbit_left > 0 || (self.script.wait_converged && !self.converged_full()) {
+        if self.script.orbit_left > 0
+            || self.panels.walk.script_running()
+            || (self.script.wait_converged && !self.converged_full())
+        {
             return;
         }
         if n >= frames && self.loader.is_loading() {

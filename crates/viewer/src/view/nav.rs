@@ -48,7 +48,8 @@ pub fn distance(c: &Camera) -> f32 {
     (target(c) - eye(c)).length()
 }
 
-fn set(c: &Camera, eye: Vec3, target: Vec3, up: Vec3) -> Camera {
+/// `c` looking from `eye` at `target`, its up vector `up` made orthogonal to the view.
+pub fn set(c: &Camera, eye: Vec3, target: Vec3, up: Vec3) -> Camera {
     let fwd = (target - eye).normalize();
     let r = fwd.cross(up).normalize();
     let up = r.cross(fwd).normalize();
@@ -170,27 +171,19 @@ pub fn set_projection(c: &Camera, pivot: Vec3, projection: Projection) -> Camera
     set(c, eye(c), eye(c) + f * depth, cam_up(c)).with_projection(projection)
 }
 
-/// View direction (eye → target) and up vector of a standard view.
+/// View direction (eye → target) and up vector of a standard view, in the up axis's frame (e1, e2, up): the
+/// front view looks along e2 (+Y for a Z-up model, −Z for a Y-up one), the right view along −e1, the top view
+/// down with e2 at the top of the image, the iso view from (+e1, −e2, +up).
 pub fn std_view_dirs(view: StdView, up: UpAxis) -> (Vec3, Vec3) {
-    match up {
-        UpAxis::Z => match view {
-            StdView::Front => (Vec3::Y, Vec3::Z),
-            StdView::Back => (-Vec3::Y, Vec3::Z),
-            StdView::Right => (-Vec3::X, Vec3::Z),
-            StdView::Left => (Vec3::X, Vec3::Z),
-            StdView::Top => (-Vec3::Z, Vec3::Y),
-            StdView::Bottom => (Vec3::Z, -Vec3::Y),
-            StdView::Iso => (Vec3::new(-1.0, 1.0, -1.0).normalize(), Vec3::Z),
-        },
-        UpAxis::Y => match view {
-            StdView::Front => (-Vec3::Z, Vec3::Y),
-            StdView::Back => (Vec3::Z, Vec3::Y),
-            StdView::Right => (-Vec3::X, Vec3::Y),
-            StdView::Left => (Vec3::X, Vec3::Y),
-            StdView::Top => (-Vec3::Y, -Vec3::Z),
-            StdView::Bottom => (Vec3::Y, Vec3::Z),
-            StdView::Iso => (Vec3::new(-1.0, -1.0, -1.0).normalize(), Vec3::Y),
-        },
+    let [e1, e2, u] = up.frame().map(|v| v.as_vec3());
+    match view {
+        StdView::Front => (e2, u),
+        StdView::Back => (-e2, u),
+        StdView::Right => (-e1, u),
+        StdView::Left => (e1, u),
+        StdView::Top => (-u, e2),
+        StdView::Bottom => (u, -e2),
+        StdView::Iso => ((-e1 + e2 - u).normalize(), u),
     }
 }
 

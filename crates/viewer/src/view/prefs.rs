@@ -61,8 +61,12 @@ pub struct Prefs {
     pub mesh_load: super::load_options::MeshLoadOptions,
     /// Recently opened files, most recent first (canonical paths, at most `recent::CAP`; see `recent.rs`).
     pub recent: Vec<PathBuf>,
+    /// The up axis the user chose per file, newest first (`up_axis.rs`).
+    pub up_axes: Vec<super::up_axis::FileUp>,
     /// Reload the open file when it changes on disk (`watch.rs`).
     pub auto_reload: bool,
+    /// Walk mode's measures (`walk.rs`).
+    pub walk: super::walk::WalkSettings,
 }
 
 impl Default for Prefs {
@@ -86,7 +90,9 @@ impl Default for Prefs {
             cad_load: Default::default(),
             mesh_load: Default::default(),
             recent: Vec::new(),
+            up_axes: Vec::new(),
             auto_reload: true,
+            walk: Default::default(),
         }
     }
 }

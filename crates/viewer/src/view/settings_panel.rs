@@ -96,10 +96,12 @@ impl SettingsPanel {
             }
             if ui
                 .button("Defaults")
-                .on_hover_text("AoSettings::default() with the scene's radius")
+                .on_hover_text("AoSettings::default() with the scene's radius and up axis")
                 .clicked()
             {
                 s = hrtao_core::AoSettings::default().with_radius(state.default_radius);
+                // The sky's zenith is the scene's up axis, not a setting to reset.
+                s.light.sky_up = state.nav.world_up;
             }
             if ui
                 .button("Paper")

@@ -59,6 +59,12 @@ pub struct FrameStat {
     /// From the previous rendered frame's start to this one's (0 for the first): what a user sees as the frame
     /// time, including the event loop between frames.
     pub interval_ms: f64,
+    /// In walk mode: the eye, in the file's coordinates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eye: Option<[f64; 3]>,
+    /// In walk mode: whether the body was blocked and the floor under it (`walk::WalkStat`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub walk: Option<super::walk::WalkStat>,
 }
 
 /// The consecutive parts of a frame's wall time, in milliseconds.
@@ -319,6 +325,8 @@ mod tests {
                 rays_per_frame: 0,
                 cpu_ms: CpuSplit::default(),
                 interval_ms: 0.0,
+                eye: None,
+                walk: None,
             });
         }
         assert_eq!(log.median_wall_ms(true), Some(20.0));

@@ -32,6 +32,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "fly: forward, left, back, right / down, up",
     ),
     (
+        "G (Esc leaves)",
+        "walk mode: W A S D walk at eye height (Shift runs), left drag looks",
+    ),
+    (
         "Double-click",
         "set the orbit pivot on the surface under the cursor",
     ),
@@ -118,6 +122,8 @@ pub struct Panels {
     pub camera: CameraPanel,
     pub screenshot: ScreenshotPanel,
     pub view_cube: ViewCube,
+    /// Walk mode (`walk.rs`).
+    pub walk: super::walk::Walk,
     /// The side panel is shown (Tab).
     pub show: bool,
     fullscreen: bool,
@@ -136,6 +142,7 @@ impl Panels {
             camera: CameraPanel::default(),
             screenshot: ScreenshotPanel,
             view_cube: ViewCube,
+            walk: Default::default(),
             show,
             fullscreen: false,
         }
@@ -148,6 +155,8 @@ impl Panels {
         self.tree = TreeView::default();
         self.properties = PropertiesPanel { unit };
         self.measure = Measure::for_spec(spec);
+        // Another scene: not walking (a scripted walk still to start stays).
+        self.walk.leave();
         if let Some(u) = unit {
             self.measure.file_unit = u;
             self.measure.show_unit = u;
@@ -186,6 +195,7 @@ impl Panels {
             measure: &mut self.measure,
             sections: &mut self.sections,
             fullscreen: &mut self.fullscreen,
+            walk: &mut self.walk.input,
         };
         out.extend(input::keyboard(ctx, state, &mut tools));
         out.extend(self.shot_overlay(ctx, state));
@@ -226,6 +236,7 @@ impl Panels {
             measure: &mut self.measure,
             sections: &mut self.sections,
             fullscreen: &mut self.fullscreen,
+            walk: &mut self.walk.input,
         };
         out.extend(input::view_input(ctx, &resp, rect, state, &mut tools));
         self.measure.overlay(ui.painter(), rect, &state.view_cam());
@@ -269,8 +280,12 @@ impl Panels {
                 if let Some(scene) = state.scene {
                     ui.label(format!("{}  ({})", scene.name, state.spec));
                     self.measure.dimensions_row(ui, scene);
+                    out.extend(super::up_axis::row(ui, state));
                 }
             });
+        egui::CollapsingHeader::new("Walk")
+            .default_open(false)
+            .show(ui, |ui| out.extend(super::walk::panel(ui, state, state.walking)));
         let load_options = egui::CollapsingHeader::new("Load options")
             .default_open(false)
             .show(ui, |ui| out.extend(self.load_options.ui(ui, state)));

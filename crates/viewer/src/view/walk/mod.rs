@@ -1,0 +1,353 @@
+//! Walk mode: through a building at eye height on its floors, as BIM viewers walk (G or the panel's switch; Esc
+//! leaves it). The body (`walker.rs`) keeps the eye at the eye height above the floor, climbs steps, stops at
+//! walls and slides along them, at a walking speed in metres per second; the mouse looks around (left drag),
+//! W/A/S/D walk, Shift runs. Its gravity and collision rays are traced on the device by the renderer's own ray
+//! backend, in the frames the view renders anyway (`FrameDesc::probes`), and answered a frame later: a frame
+//! never waits for them. Hidden parts and section planes are honoured (the rays trace what the view shows).
+//! `--walk-path` scripts a walk (`path.rs`).
+pub mod path;
+pub mod walker;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use hrtao_core::camera::Projection;
+use hrtao_core::gpu::{ProbeHit, ProbeRay};
+use serde::Serialize;
+
+use super::command::{Command, ViewState};
+use super::{nav, ui_probe};
+pub use walker::{Floor, WalkInput, WalkSettings, Walker};
+
+/// How far ahead of the eye the walking camera's target lies, in metres (the orbit pivot when leaving).
+const LOOK_DISTANCE_M: f32 = 2.0;
+/// A double-clicked surface whose normal's cosine with the up axis is above this is a floor to stand on.
+pub const FLOOR_COS: f32 = 0.7;
+/// A model whose horizontal extent is at least this many metres is walked in: a double-click on its floor
+/// stands there (on a smaller one, a part on a desk, it sets the orbit pivot as always).
+const ROOM_M: f32 = 2.0;
+/// A scripted walk reaches a waypoint within this distance, in metres.
+const REACH_M: f32 = 0.15;
+
+/// What the walk records per frame of `--stats` (`"walk"`), in the file's coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct WalkStat {
+    pub blocked: bool,
+    /// The height of the floor under the body along the up axis (None: not known, or none below).
+    pub floor: Option<f64>,
+    /// Frames between the ask of the rays the body last learnt from and their answer (at least 1).
+    pub answer_lag: u32,
+}
+
+/// The walk's state (the panels own it: `ui::Panels::walk`).
+#[derive(Default)]
+pub struct Walk {
+    /// The body, while walking.
+    walker: Option<Walker>,
+    /// This frame's keys (`input.rs`).
+    pub input: WalkInput,
+    last_tick: Option<Instant>,
+    /// `--walk-path`, read at start; walked once the scene is open.
+    pub script: Option<path::WalkPathFile>,
+    running: Option<path::WalkPath>,
+    /// "no floor below" was said for this walk.
+    told_no_floor: bool,
+}
+
+impl Walk {
+    /// Stops walking (another scene opened).
+    pub fn leave(&mut self) {
+        self.walker = None;
+        self.running = None;
+    }
+
+    pub fn walking(&self) -> bool {
+        self.walker.is_some()
+    }
+
+    /// The rays the next frame should trace (none when not walking).
+    pub fn rays(&self) -> &[ProbeRay] {
+        self.walker.as_ref().map_or(&[], |w| w.rays())
+    }
+
+    /// The rays of `rays()` went into a frame.
+    pub fn submitted(&mut self) {
+        if let Some(w) = &mut self.walker {
+            w.submitted();
+        }
+    }
+
+    /// A finished frame's probe hits.
+    pub fn hits(&mut self, hits: &[ProbeHit]) {
+        if let Some(w) = &mut self.walker {
+            w.hits(hits);
+        }
+    }
+
+    /// The walk needs frames rendered (their rays): falling, moving, or waiting for an answer.
+    pub fn wants_frames(&self) -> bool {
+        match &self.walker {
+            Some(w) => {
+                w.floor() == Floor::Unknown
+                    || w.waiting() > 0
+                    || self.input != WalkInput::default()
+                    || self.running.is_some()
+                    || matches!(w.floor(), Floor::At(f) if (w.feet().dot(w_up(w)) - f).abs() > 1e-6)
+            }
+            None => false,
+        }
+    }
+
+    /// A scripted walk is under way (the script waits for it).
+    pub fn script_running(&self) -> bool {
+        self.running.is_some() || (self.script.is_some() && self.walker.is_none())
+    }
+
+    /// This frame's `--stats` record, in the file's coordinates (`origin`).
+    pub fn stat(&self, origin: [f64; 3]) -> Option<(WalkStat, [f64; 3])> {
+        let w = self.walker.as_ref()?;
+        let o = glam::DVec3::from(origin);
+        let eye = w.eye().as_dvec3() + o;
+        let up = w_up(w).as_dvec3();
+        Some((
+            WalkStat {
+                blocked: w.blocked(),
+                floor: match w.floor() {
+                    Floor::At(f) => Some(f as f64 + o.dot(up)),
+                    _ => None,
+                },
+                answer_lag: w.answer_lag,
+            },
+            eye.to_array(),
+        ))
+    }
+}
+
+fn w_up(w: &Walker) -> Vec3 {
+    w.eye() - w.feet()
+}
+
+/// The panel's row: the walk switch and the body's measures.
+pub fn panel(ui: &mut egui::Ui, state: &ViewState, walking: bool) -> Vec<Command> {
+    let mut out = Vec::new();
+    let mut on = walking;
+    let r = ui.checkbox(&mut on, "Walk (G)").on_hover_text(
+        "Walk through the model at eye height: W/A/S/D walk, Shift runs, left drag looks around, Esc \
+             leaves. Gravity holds you on the floor, steps are climbed and walls stop you. Double-click a \
+             floor to stand there.",
+    );
+    ui_probe::note("walk", r.rect, ui.ctx().pixels_per_point());
+    if on != walking {
+        out.push(Command::Walk(on));
+    }
+    let mut s = state.prefs.walk;
+    egui::Grid::new("walk settings").num_columns(2).show(ui, |ui| {
+        for (label, v, range, tip) in [
+            (
+                "eye height",
+                &mut s.eye_height_m,
+                0.3..=3.0,
+                "The eye above the floor, in metres.",
+            ),
+            (
+                "step height",
+                &mut s.step_height_m,
+                0.05..=1.0,
+                "The highest step climbed, in metres.",
+            ),
+            (
+                "body radius",
+                &mut s.radius_m,
+                0.05..=1.0,
+                "How near walls come, in metres.",
+            ),
+            (
+                "speed",
+                &mut s.speed_m_s,
+                0.2..=10.0,
+                "Walking speed in metres per second (Shift: ×3).",
+            ),
+        ] {
+            ui.label(label);
+            ui.add(
+                egui::DragValue::new(v)
+                    .range(range)
+                    .speed(0.01)
+                    .suffix(if label == "speed" { " m/s" } else { " m" }),
+            )
+            .on_hover_text(tip);
+            ui.end_row();
+        }
+    });
+    if s != state.prefs.walk {
+        let mut p = state.prefs.clone();
+        p.walk = s;
+        out.push(Command::Prefs(Box::new(p)));
+    }
+    out
+}
+
+/// Metres per scene unit of the open scene: the file's unit, millimetres for the bundled gearbox, else metres.
+fn metres_per_unit(scene: &hrtao_scene::Scene, bundled: bool) -> f32 {
+    if bundled {
+        return 1e-3;
+    }
+    scene.unit_m.filter(|u| u.is_finite() && *u > 0.0).unwrap_or(1.0) as f32
+}
+
+impl super::Viewer {
+    /// Walk mode on (standing below the camera's eye, or at `at`) or off.
+    pub(super) fn set_walking(&mut self, on: bool, at: Option<Vec3>) {
+        let Some(scene) = &self.scene else {
+            return;
+        };
+        if !on {
+            if self.panels.walk.walker.take().is_some() {
+                self.panels.walk.running = None;
+                log::info!("walk mode off");
+            }
+            return;
+        }
+        let up = self.nav.world_up;
+        let upv = up.vector();
+        let m = metres_per_unit(scene, crate::setup::is_bundled(Some(&self.scene_spec)));
+        let s = self.prefs.walk.sanitized();
+        let eye_height = s.eye_height_m / m;
+        let feet = at.unwrap_or_else(|| nav::eye(&self.nav.cam) - upv * eye_height);
+        let b = scene.bounds();
+        let height = (b.max - b.min).dot(upv).abs();
+        let walker = Walker::new(up, 1.0 / m, s, feet, height);
+        // Level the view (keep where it looks around the up axis) in perspective.
+        let fwd = nav::forward(&self.nav.cam);
+        let level = fwd - upv * fwd.dot(upv);
+        let level = if level.length() > 1e-3 {
+            level.normalize()
+        } else {
+            nav::cam_up(&self.nav.cam).normalize()
+        };
+        self.nav.cam.projection = Projection::Perspective;
+        self.set_walk_camera(walker.eye(), level, m);
+        log::info!(
+            "walk mode on at {:?} (eye height {} m, {} scene units per metre)",
+            walker.eye().to_array(),
+            s.eye_height_m,
+            1.0 / m
+        );
+        self.panels.walk.walker = Some(walker);
+        self.panels.walk.last_tick = None;
+        self.panels.walk.told_no_floor = false;
+        self.toast("walking: W/A/S/D walk, Shift runs, drag looks, Esc leaves", false);
+    }
+
+    /// Whether a double-click on a floor stands there: while walking, and on a model at least room-sized.
+    pub(super) fn walk_here(&self) -> bool {
+        let Some(scene) = &self.scene else {
+            return false;
+        };
+        if self.panels.walk.walking() {
+            return true;
+        }
+        let m = metres_per_unit(scene, crate::setup::is_bundled(Some(&self.scene_spec)));
+        let b = scene.bounds();
+        let up = self.nav.world_up.vector();
+        let d = b.max - b.min;
+        let horizontal = (d - up * d.dot(up)).abs().max_element();
+        horizontal * m >= ROOM_M
+    }
+
+    fn set_walk_camera(&mut self, eye: Vec3, forward: Vec3, metres_per_unit: f32) {
+        let d = LOOK_DISTANCE_M / metres_per_unit;
+        let forward = forward.normalize();
+        let world_up = self.nav.world_up.vector();
+        // The up vector orthogonal to the view (nav keeps it so); looking straight up or down, the camera's own.
+        let up = if forward.dot(world_up).abs() < 0.99 {
+            world_up
+        } else {
+            nav::cam_up(&self.nav.cam)
+        };
+        let cam = nav::set(&self.nav.cam, eye, eye + forward * d, up);
+        if cam != self.nav.cam && cam.validate().is_ok() {
+            self.nav.cam = cam;
+            self.nav.pivot = nav::target(&cam);
+        }
+    }
+
+    /// The walk's step of this frame: the keys (or the scripted path) move the body, the camera follows.
+    pub(super) fn walk_tick(&mut self) {
+        if self.panels.walk.walker.is_none() {
+            if let (Some(file), Some(scene)) = (self.panels.walk.script.clone(), &self.scene) {
+                if self.last_report.is_some() && !self.loader.is_loading() {
+                    let p = path::WalkPath::new(&file, scene.origin, self.nav.world_up);
+                    log::info!(
+                        "scripted walk from {:?} through {} waypoints",
+                        file.start,
+                        file.waypoints.len()
+                    );
+                    let start = p.start;
+                    self.panels.walk.script = None;
+                    self.set_walking(true, Some(start));
+                    self.panels.walk.running = Some(p);
+                }
+            }
+            return;
+        }
+        let Some(scene) = &self.scene else {
+            return;
+        };
+        let m = metres_per_unit(scene, crate::setup::is_bundled(Some(&self.scene_spec)));
+        let now = Instant::now();
+        let dt = self
+            .panels
+            .walk
+            .last_tick
+            .map_or(0.0, |t| now.duration_since(t).as_secs_f32());
+        self.panels.walk.last_tick = Some(now);
+        let walk = &mut self.panels.walk;
+        let Some(w) = walk.walker.as_mut() else {
+            return;
+        };
+        let mut forward = nav::forward(&self.nav.cam);
+        let mut input = walk.input;
+        if let Some(p) = &mut walk.running {
+            match p.heading(w.feet(), w.blocked(), dt, REACH_M / m) {
+                Some(dir) if w.floor() != Floor::Unknown => {
+                    forward = dir;
+                    input = WalkInput {
+                        forward: 1.0,
+                        ..WalkInput::default()
+                    };
+                }
+                Some(_) => {}
+                None => {
+                    log::info!(
+                        "scripted walk done: {} waypoints reached, {} given up",
+                        p.reached,
+                        p.given_up
+                    );
+                    walk.running = None;
+                }
+            }
+        }
+        w.step(dt, input, forward);
+        let eye = w.eye();
+        let no_floor = w.floor() == Floor::None;
+        let upv = self.nav.world_up.vector();
+        let walk_running = walk.running.is_some();
+        let look = if walk_running {
+            let f = forward - upv * forward.dot(upv);
+            f.normalize_or_zero()
+        } else {
+            nav::forward(&self.nav.cam)
+        };
+        let told = walk.told_no_floor;
+        walk.told_no_floor |= no_floor;
+        if no_floor && !told {
+            self.toast("no floor below: walking level", false);
+        }
+        // A body at rest leaves the camera bit for bit (a re-derived one would be a new view each frame).
+        let turned = walk_running && (look - nav::forward(&self.nav.cam)).length() > 1e-4;
+        if look != Vec3::ZERO && (eye != nav::eye(&self.nav.cam) || turned) {
+            self.set_walk_camera(eye, look, m);
+        }
+    }
+}
