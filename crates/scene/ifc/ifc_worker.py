@@ -131,6 +131,23 @@ def project_length_unit(f):
     return None
 
 
+def storey_world(storey, iterator_unit):
+    """A translation to the storey's height in the positions' unit: its placement's z (file units), else its
+    Elevation attribute, else 0."""
+    z = None
+    try:
+        import ifcopenshell.util.placement
+
+        if storey.ObjectPlacement is not None:
+            z = float(ifcopenshell.util.placement.get_local_placement(storey.ObjectPlacement)[2][3])
+    except Exception:  # noqa: BLE001 - a placement IfcOpenShell cannot compose: the attribute
+        z = None
+    if z is None or z != z:
+        e = getattr(storey, "Elevation", None)
+        z = float(e) if isinstance(e, (int, float)) else 0.0
+    return struct.pack("<16d", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, z * iterator_unit, 1)
+
+
 def children(entity):
     out = []
     for rel in getattr(entity, "IsDecomposedBy", None) or ():
@@ -239,10 +256,12 @@ def main():
         visited.add(e.id())
         shapes = by_product.get(e.id(), [])
         me = len(nodes)
-        if len(shapes) == 1:
+        if len(shapes) == 1 and not e.is_a("IfcBuildingStorey"):
             nodes.append((label(e), parent, shapes[0][0], shapes[0][1]))
         else:
-            nodes.append((label(e), parent, None, identity))
+            # A storey's node is placed at its height (its elevation: the loader lists the storeys with it).
+            world = storey_world(e, iterator_unit) if e.is_a("IfcBuildingStorey") else identity
+            nodes.append((label(e), parent, None, world))
             for k, (part, world) in enumerate(shapes):
                 nodes.append((f"{label(e)} #{k + 1}", me, part, world))
         for c in children(e):

@@ -445,7 +445,24 @@ pub(crate) fn to_scene(path: &Path, model: CadModel) -> Result<Scene, String> {
             n.name.clone()
         };
         let node = tree.add(label.clone(), n.parent);
-        let Some(part) = n.part else { continue };
+        let Some(part) = n.part else {
+            // An IFC storey's node carries its placement's height (ifc_worker.py).
+            if let Some(name) = label
+                .strip_suffix(" (IfcBuildingStorey)")
+                .or((label == "IfcBuildingStorey").then_some(""))
+            {
+                scene.storeys.push(crate::Storey {
+                    name: if name.is_empty() {
+                        label.clone()
+                    } else {
+                        name.to_string()
+                    },
+                    node,
+                    elevation: (w.w_axis.z - origin.z) as f32,
+                });
+            }
+            continue;
+        };
         let Some(p) = model.parts.get(part as usize) else {
             return Err(format!("node {id} places unknown part {part}"));
         };

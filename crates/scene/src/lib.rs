@@ -40,7 +40,7 @@ pub use generate::{MAX_INSTANCES, MAX_MESH_TRIANGLES};
 pub use guard::{default_max_memory, CadFormat, CadOptions, CadTessellation, LoadOptions};
 pub use ifc_load::{default_venv, ifc_python, install_command as ifc_install_command, IFCOPENSHELL_VERSION};
 pub use scene::{
-    Instance, LoadProgress, Mesh, Primitive, Scene, DEFAULT_BASE_COLOR, EXACT_BOUNDS_VERTEX_BUDGET,
+    Instance, LoadProgress, Mesh, Primitive, Scene, Storey, DEFAULT_BASE_COLOR, EXACT_BOUNDS_VERTEX_BUDGET,
 };
 pub use tree::{Node, NodeTree};
 pub use up::UpAxis;

@@ -136,11 +136,23 @@ pub struct Scene {
     /// What the loader could not read and assumed instead (an IFC file with no length unit): shown to the
     /// user and logged, never silent.
     pub warnings: Vec<String>,
+    /// The building storeys of an IFC file (`IfcBuildingStorey`), in the file's order.
+    pub storeys: Vec<Storey>,
     /// Animation frame identifier `F` (paper eq. 6); bumped by every edit.
     f: u32,
     /// The world bounds each recent edit changed, with the F it produced (newest last, at most
     /// `CHANGE_LOG_LEN`): what a renderer needs to invalidate only the AO near an edit.
     changes: std::collections::VecDeque<(u32, Vec<Aabb>)>,
+}
+
+/// A building storey: its node of the model tree (its elements are the node's subtree) and its elevation, the
+/// height of its placement along the file's Z axis in the scene's coordinates (the file's is
+/// `elevation + origin[2]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Storey {
+    pub name: String,
+    pub node: u32,
+    pub elevation: f32,
 }
 
 /// Edits remembered by [`Scene::changes_since`].
@@ -210,6 +222,7 @@ impl Scene {
             metadata: Vec::new(),
             up: None,
             warnings: Vec::new(),
+            storeys: Vec::new(),
             f: 0,
             changes: Default::default(),
         }

@@ -356,6 +356,10 @@ pub struct RenderArgs {
     /// specs, else the format's: IFC and 3MF z, glTF y; else y).
     #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
     pub up: Option<UpAxis>,
+    /// The plan view of a storey of an IFC building (its name, or its number from 0): only its elements, cut 1.2 m
+    /// above its elevation, seen from the top in an orthographic view framing it (over --camera and --section).
+    #[arg(long, value_name = "STOREY")]
+    pub plan: Option<String>,
     /// Primary visibility: measured (auto), ray queries or rasterised.
     #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
     pub primary: PrimaryChoice,

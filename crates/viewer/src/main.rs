@@ -3,6 +3,7 @@ mod bench;
 mod cli;
 mod common;
 mod occt_worker;
+mod plan;
 mod render_cmd;
 mod setup;
 mod view;

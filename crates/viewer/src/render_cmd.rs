@@ -61,8 +61,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // Everything that can fail before the device is needed; the device thread is joined whatever happens (no
     // exit while that thread is inside the driver).
     let prepared = (|| -> Result<_> {
-        let (scene, load_ms) = load_scene(&spec)?;
-        let prepared = setup::prepare(&inputs, &scene)?;
+        let (mut scene, load_ms) = load_scene(&spec)?;
+        let mut prepared = setup::prepare(&inputs, &scene)?;
+        if let Some(storey) = &args.plan {
+            crate::plan::apply(&mut scene, &mut prepared, storey)?;
+        }
         let mut settings = args.ao.settings(prepared.radius)?;
         // The sky's zenith is the scene's up axis (--up, the camera file's, or the scene's default).
         settings.light.sky_up = prepared.up;

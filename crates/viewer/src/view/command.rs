@@ -53,6 +53,8 @@ pub enum Command {
     ClearCache,
     /// Walk mode on (standing below the eye) or off (G, Esc, the panel's switch).
     Walk(bool),
+    /// The plan view of a storey (`storeys.rs`), or back from it (None).
+    Plan(Option<usize>),
     /// The scene's up axis, chosen in the panel (remembered for the file).
     UpAxis(hrtao_core::camera::UpAxis),
     /// The camera and orbit pivot move (navigation, standard views, bookmarks).
@@ -103,6 +105,8 @@ pub struct ViewState<'a> {
     pub nav: &'a Nav,
     /// Walk mode is on (`walk.rs`): the keys walk and the left drag looks around.
     pub walking: bool,
+    /// The storey shown in plan (`storeys.rs`; Esc leaves it).
+    pub in_plan: Option<usize>,
     /// The camera the scene opened with (Enter).
     pub home: Camera,
     pub prefs: &'a Prefs,

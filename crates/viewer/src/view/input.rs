@@ -384,6 +384,10 @@ pub fn keyboard(ctx: &egui::Context, state: &ViewState, tools: &mut Tools) -> Ve
                 out.push(Command::Walk(false));
                 continue;
             }
+            Key::Escape if state.in_plan.is_some() => {
+                out.push(Command::Plan(None));
+                continue;
+            }
             Key::G if !mods.command => {
                 out.push(Command::Walk(!state.walking));
                 continue;

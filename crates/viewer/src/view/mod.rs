@@ -31,6 +31,7 @@ mod settings_panel;
 pub mod shot;
 mod shots;
 pub mod stats;
+mod storeys;
 pub mod tree;
 mod tree_panel;
 mod ui;
@@ -679,6 +680,7 @@ impl Viewer {
             selection: &self.selection,
             nav: &self.nav,
             walking: self.panels.walk.walking(),
+            in_plan: self.panels.storeys.in_plan(),
             home: self.home,
             prefs: &self.prefs,
             default_radius: self.default_radius,
@@ -739,6 +741,7 @@ impl Viewer {
             Command::RenderScale(scale) => self.render_scale = scale.clamp(0.05, 2.0),
             Command::UpAxis(up) => self.set_up_axis(up),
             Command::Walk(on) => self.set_walking(on, None),
+            Command::Plan(storey) => self.plan_view(storey),
             Command::ClearCache => {
                 if let Some(Err(e)) = self.renderer.as_mut().map(|r| r.clear_cache()) {
                     self.toast(format!("{e}"), true);

@@ -120,6 +120,11 @@ pub fn isolate(scene: &Scene, instances: &[u32], what: String) -> Option<Edit> {
     })
 }
 
+/// Sets every instance's visibility to `visible` (one per instance; an edit named `label`).
+pub fn set_visibility(scene: &Scene, label: String, visible: &[bool]) -> Option<Edit> {
+    visibility_edit(scene, label, |i| visible.get(i as usize).copied())
+}
+
 /// Shows every instance.
 pub fn show_all(scene: &Scene) -> Option<Edit> {
     visibility_edit(scene, "show all".into(), |_| Some(true))

@@ -124,6 +124,8 @@ pub struct Panels {
     pub view_cube: ViewCube,
     /// Walk mode (`walk.rs`).
     pub walk: super::walk::Walk,
+    /// The storeys and their plan views (`storeys.rs`).
+    pub storeys: super::storeys::Storeys,
     /// The side panel is shown (Tab).
     pub show: bool,
     fullscreen: bool,
@@ -143,6 +145,7 @@ impl Panels {
             screenshot: ScreenshotPanel,
             view_cube: ViewCube,
             walk: Default::default(),
+            storeys: Default::default(),
             show,
             fullscreen: false,
         }
@@ -155,8 +158,9 @@ impl Panels {
         self.tree = TreeView::default();
         self.properties = PropertiesPanel { unit };
         self.measure = Measure::for_spec(spec);
-        // Another scene: not walking (a scripted walk still to start stays).
+        // Another scene: not walking (a scripted walk still to start stays), no plan to leave.
         self.walk.leave();
+        self.storeys.scene_opened();
         if let Some(u) = unit {
             self.measure.file_unit = u;
             self.measure.show_unit = u;
@@ -281,6 +285,7 @@ impl Panels {
                     ui.label(format!("{}  ({})", scene.name, state.spec));
                     self.measure.dimensions_row(ui, scene);
                     out.extend(super::up_axis::row(ui, state));
+                    out.extend(super::storeys::panel(ui, state, state.in_plan));
                 }
             });
         egui::CollapsingHeader::new("Walk")

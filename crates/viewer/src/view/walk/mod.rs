@@ -330,6 +330,10 @@ impl super::Viewer {
         }
         w.step(dt, input, forward);
         let eye = w.eye();
+        // Window tests follow the eye (`HRTAO_UI_PROBE`), in the file's coordinates.
+        let o = glam::DVec3::from(scene.origin);
+        let e = eye.as_dvec3() + o;
+        ui_probe::note_text("walk eye", &format!("{:.3} {:.3} {:.3}", e.x, e.y, e.z));
         let no_floor = w.floor() == Floor::None;
         let upv = self.nav.world_up.vector();
         let walk_running = walk.running.is_some();
