@@ -73,7 +73,19 @@ float sky_legendre(int l, int m, float x) {
 // cosines, m < 0 the sines).
 void sky_basis(vec3 b, out float y[SKY_COEFFS]) {
     float x = clamp(b.z, -1.0, 1.0);
-    float phi = atan(b.y, b.x);
+    // cos(m φ) and sin(m φ) by recurrence from the unit azimuth b.xy / |b.xy|, without atan: atan(0, 0) is
+    // undefined in GLSL (a GPU may return NaN on every face looking straight up); at the pole P_l^m (m > 0) is 0,
+    // so the azimuth taken there, (1, 0), changes nothing.
+    float r = length(b.xy);
+    vec2 az = r > 0.0 ? b.xy / r : vec2(1.0, 0.0);
+    float cm[int(SKY_BAND) + 1];
+    float sm[int(SKY_BAND) + 1];
+    cm[0] = 1.0;
+    sm[0] = 0.0;
+    for (int m = 1; m <= int(SKY_BAND); ++m) {
+        cm[m] = cm[m - 1] * az.x - sm[m - 1] * az.y;
+        sm[m] = sm[m - 1] * az.x + cm[m - 1] * az.y;
+    }
     for (int l = 0; l <= int(SKY_BAND); ++l) {
         int c = l * (l + 1);
         for (int m = 0; m <= l; ++m) {
@@ -85,8 +97,8 @@ void sky_basis(vec3 b, out float y[SKY_COEFFS]) {
             if (m == 0) {
                 y[c] = p;
             } else {
-                y[c + m] = sqrt(2.0) * p * cos(float(m) * phi);
-                y[c - m] = sqrt(2.0) * p * sin(float(m) * phi);
+                y[c + m] = sqrt(2.0) * p * cm[m];
+                y[c - m] = sqrt(2.0) * p * sm[m];
             }
         }
     }

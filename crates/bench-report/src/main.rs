@@ -16,6 +16,7 @@ mod results;
 mod sky_report;
 mod step_sweep_report;
 mod viewer_report;
+mod walk_report;
 
 use std::path::PathBuf;
 

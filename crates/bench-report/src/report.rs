@@ -839,6 +839,7 @@ fn render_markdown(
     first_frame_report::section(&mut m, &first_frame_report::load(&dir.join("first_frame"))?)?;
     latency_report::section(&mut m, &latency_report::load(&dir.join("latency"))?)?;
     viewer_report::section(&mut m, &viewer_report::load(&dir.join("viewer"))?)?;
+    crate::walk_report::section(&mut m, &viewer_report::load(&dir.join("walk"))?)?;
     crate::ray_backend_report::section(
         &mut m,
         &crate::ray_backend_report::load(&dir.join("ray_backend"))?,
