@@ -80,7 +80,7 @@ pub fn plan(scene: &Scene, storey: usize, cut_height: f32) -> Result<Plan, Strin
 /// top view at the prepared camera's size.
 pub fn apply(scene: &mut Scene, prepared: &mut crate::setup::Prepared, storey: &str) -> anyhow::Result<()> {
     let k = find_storey(scene, storey).map_err(|e| anyhow::anyhow!("--plan: {e}"))?;
-    let metres = scene.unit_m.filter(|u| u.is_finite() && *u > 0.0).unwrap_or(1.0) as f32;
+    let metres = crate::setup::metres_per_unit(scene, false);
     let p = plan(scene, k, CUT_HEIGHT_M / metres).map_err(|e| anyhow::anyhow!("--plan: {e}"))?;
     for (inst, v) in scene.instances.iter_mut().zip(&p.visible) {
         inst.visible = *v;

@@ -193,6 +193,15 @@ pub fn default_radius(bundled: bool, scene: &Scene) -> f32 {
     (diagonal * 0.05).max(1e-6)
 }
 
+/// Metres per scene unit: millimetres for the bundled gearbox (a CAD export whose glTF says metres), else the
+/// file's unit (STEP, IGES, IFC), else metres.
+pub fn metres_per_unit(scene: &Scene, bundled: bool) -> f32 {
+    if bundled {
+        return 1e-3;
+    }
+    scene.unit_m.filter(|u| u.is_finite() && *u > 0.0).unwrap_or(1.0) as f32
+}
+
 /// The world up axis a camera implies: the signed axis its up vector leans to most.
 pub fn up_axis_of(camera: &Camera) -> UpAxis {
     UpAxis::nearest(hrtao_scene::glam::Vec3::from(camera.up))

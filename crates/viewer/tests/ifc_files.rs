@@ -6,6 +6,8 @@
 //! CPU time, in `render` and in the viewer's window. Each test skips, saying why, only when the venv is absent.
 mod common;
 
+use common::{fzk_haus as fzk, ifc_python as python};
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -13,36 +15,10 @@ use std::time::{Duration, Instant};
 use hrtao_scene::hostile::{write_ifc_corpus, Expect};
 use hrtao_scene::{LoadOptions, Scene, SceneError};
 
-/// The venv's interpreter, or `None` (with the reason printed) when it is not installed.
-fn python() -> Option<PathBuf> {
-    let p = hrtao_scene::ifc_python();
-    if p.is_file() {
-        Some(p)
-    } else {
-        println!(
-            "skipped: no IfcOpenShell interpreter at {} (install: {})",
-            p.display(),
-            hrtao_scene::ifc_install_command()
-        );
-        None
-    }
-}
-
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("hrtao-ifc-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn fzk() -> PathBuf {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/fetch-assimp-models.sh");
-    let out = Command::new("bash").arg(script).output().unwrap();
-    assert!(
-        out.status.success(),
-        "scripts/fetch-assimp-models.sh failed (it needs apt-get and Debian's assimp-testmodels):\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim()).join("IFC/AC14-FZK-Haus.ifc")
 }
 
 fn load(path: &Path) -> Result<Scene, SceneError> {

@@ -5,6 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+
+use common::{fzk_haus, ifc_python as python};
+
 #[path = "../../scene/tests/common/threemf.rs"]
 mod threemf_writer;
 
@@ -91,21 +95,6 @@ fn gltf_opens_y_up_and_3mf_z_up() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("-x, -y, -z"));
 }
 
-/// The venv's interpreter, or `None` (with the reason printed) when it is not installed.
-fn python() -> Option<PathBuf> {
-    let p = hrtao_scene::ifc_python();
-    if p.is_file() {
-        Some(p)
-    } else {
-        println!(
-            "skipped: no IfcOpenShell interpreter at {} (install: {})",
-            p.display(),
-            hrtao_scene::ifc_install_command()
-        );
-        None
-    }
-}
-
 #[test]
 fn ifc_opens_z_up() {
     let Some(python) = python() else { return };
@@ -120,10 +109,7 @@ fn ifc_opens_z_up() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     opens_upright(&path, "z", "y");
     // assimp's AC14-FZK-Haus (Debian's assimp-testmodels).
-    let fetch = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/fetch-assimp-models.sh");
-    let out = Command::new("bash").arg(fetch).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let fzk = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim()).join("IFC/AC14-FZK-Haus.ifc");
+    let fzk = fzk_haus();
     // A copy, so that no camera file beside it can choose the view.
     let copy = dir().join("AC14-FZK-Haus.ifc");
     std::fs::copy(&fzk, &copy).unwrap();

@@ -85,8 +85,8 @@ pub fn view_input(
             let d = (-delta.x * nav::right(&m.nav.cam) + delta.y * nav::cam_up(&m.nav.cam)) * wpp;
             m.nav.pivot += d;
             m.nav.cam = nav::pan(&m.nav.cam, delta.x, delta.y, view_h);
-        } else if primary && state.walking {
-            // Walking: the left drag looks around (the body turns with the view).
+        } else if resp.dragged_by(PointerButton::Secondary) || (primary && state.walking) {
+            // Look around (walking: the left drag too; the body turns with the view).
             m.nav.cam = nav::fly_look(
                 &m.nav.cam,
                 world_up,
@@ -102,14 +102,6 @@ pub fn view_input(
                 -delta.x * ORBIT_RAD_PER_PX,
                 -delta.y * ORBIT_RAD_PER_PX,
             );
-        } else if resp.dragged_by(PointerButton::Secondary) {
-            m.nav.cam = nav::fly_look(
-                &m.nav.cam,
-                world_up,
-                -delta.x * LOOK_RAD_PER_PX,
-                -delta.y * LOOK_RAD_PER_PX,
-            );
-            m.nav.pivot = nav::target(&m.nav.cam);
         }
     }
     let scroll = wheel_points(ctx);

@@ -42,10 +42,15 @@ pub fn panel(ui: &mut egui::Ui, state: &ViewState, in_plan: Option<usize>) -> Ve
     let Some(scene) = state.scene.filter(|s| !s.storeys.is_empty()) else {
         return out;
     };
-    let unit = scene.unit_m.unwrap_or(1.0);
+    let unit = crate::setup::metres_per_unit(scene, false) as f64;
     ui.label(format!("Storeys ({})", scene.storeys.len()));
+    // Highest first, as a building's section reads.
+    let mut order: Vec<usize> = (0..scene.storeys.len()).collect();
+    order.sort_by(|&a, &b| scene.storeys[b].elevation.total_cmp(&scene.storeys[a].elevation));
+    let lowest = order.last().copied();
     egui::Grid::new("storeys").num_columns(3).show(ui, |ui| {
-        for (k, s) in scene.storeys.iter().enumerate() {
+        for k in order {
+            let s = &scene.storeys[k];
             let elevation_m = (s.elevation as f64 + scene.origin[2]) * unit;
             ui.label(format!("{}  {elevation_m:+.2} m", s.name));
             if ui
@@ -61,7 +66,8 @@ pub fn panel(ui: &mut egui::Ui, state: &ViewState, in_plan: Option<usize>) -> Ve
                 "Floor plan: this storey alone, cut {} m above its elevation, seen from the top (Esc leaves)",
                 crate::plan::CUT_HEIGHT_M
             ));
-            if k == 0 {
+            if Some(k) == lowest {
+                // Window tests click the lowest storey's plan.
                 ui_probe::note("storey plan", r.rect, ui.ctx().pixels_per_point());
             }
             if r.clicked() {
@@ -99,7 +105,7 @@ impl super::Viewer {
         let Some(scene) = &self.scene else {
             return;
         };
-        let metres = scene.unit_m.filter(|u| u.is_finite() && *u > 0.0).unwrap_or(1.0) as f32;
+        let metres = crate::setup::metres_per_unit(scene, false);
         let plan = match crate::plan::plan(scene, storey, crate::plan::CUT_HEIGHT_M / metres) {
             Ok(p) => p,
             Err(e) => {

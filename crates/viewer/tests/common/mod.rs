@@ -418,3 +418,31 @@ impl Running {
         shots[n - 1].clone()
     }
 }
+
+/// The IfcOpenShell venv's interpreter, or `None` (with the reason printed: the IFC tests skip) when it is not
+/// installed.
+pub fn ifc_python() -> Option<PathBuf> {
+    let p = hrtao_scene::ifc_python();
+    if p.is_file() {
+        Some(p)
+    } else {
+        println!(
+            "skipped: no IfcOpenShell interpreter at {} (install: {})",
+            p.display(),
+            hrtao_scene::ifc_install_command()
+        );
+        None
+    }
+}
+
+/// assimp's AC14-FZK-Haus.ifc, from Debian's assimp-testmodels (scripts/fetch-assimp-models.sh).
+pub fn fzk_haus() -> PathBuf {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/fetch-assimp-models.sh");
+    let out = Command::new("bash").arg(script).output().unwrap();
+    assert!(
+        out.status.success(),
+        "scripts/fetch-assimp-models.sh failed (it needs apt-get and Debian's assimp-testmodels):\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim()).join("IFC/AC14-FZK-Haus.ifc")
+}

@@ -17,6 +17,7 @@ use serde::Serialize;
 
 use super::command::{Command, ViewState};
 use super::{nav, ui_probe};
+use crate::setup::metres_per_unit;
 pub use walker::{Floor, WalkInput, WalkSettings, Walker};
 
 /// How far ahead of the eye the walking camera's target lies, in metres (the orbit pivot when leaving).
@@ -185,14 +186,6 @@ pub fn panel(ui: &mut egui::Ui, state: &ViewState, walking: bool) -> Vec<Command
         out.push(Command::Prefs(Box::new(p)));
     }
     out
-}
-
-/// Metres per scene unit of the open scene: the file's unit, millimetres for the bundled gearbox, else metres.
-fn metres_per_unit(scene: &hrtao_scene::Scene, bundled: bool) -> f32 {
-    if bundled {
-        return 1e-3;
-    }
-    scene.unit_m.filter(|u| u.is_finite() && *u > 0.0).unwrap_or(1.0) as f32
 }
 
 impl super::Viewer {
