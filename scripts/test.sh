@@ -1,6 +1,16 @@
 #!/usr/bin/env bash
 # Installs what is missing, then runs the whole test suite on the available Vulkan device with the Khronos
 # validation layer on (any validation error or warning fails a test). Windows run under Xvfb.
+#
+# Pipelines only (a GPU that traces with ray-tracing pipelines and has no ray queries, as NVIDIA data-centre GPUs
+# may be lent):
+#   HRTAO_HIDE_RAY_QUERY=1 bash scripts/test.sh
+# makes every device look like one without VK_KHR_ray_query, for the binary and every test: the pipeline backend
+# is chosen, `hrtao devices` lists no ray queries, and each test (or part) that needs ray queries prints
+# `skipped: ...` with its reason (see them with `-- --nocapture`, or grep the log for "skipped:").
+# Without the validation layer (a bare GPU machine): validation is skipped with a message ("validation skipped:
+# VK_LAYER_KHRONOS_validation is not installed") and the tests run unvalidated; to try it where the layer is
+# installed, hide it from the loader: VK_LAYER_PATH=$(mktemp -d) bash scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

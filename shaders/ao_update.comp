@@ -95,6 +95,11 @@ void main() {
         }
     }
     if (rays == 0u) return;
+    if (sky) {
+        // Nothing non-finite enters the pixel's or the cells' sums.
+        sky_finite(sky_all);
+        sky_finite(sky_cell);
+    }
     rays_add(RAYS_ALL, rays);
     // Cleared by the cell finder (queue_for_rays) each frame; the parts of a split budget (adaptive phases,
     // chunks) add up.

@@ -52,6 +52,16 @@ layout(buffer_reference, scalar) buffer PixelAccumRef { PixelAccum v[]; };
 const float PI = 3.14159265358979;
 
 void stat_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).counters[which], v); }
+// The non-finite guard (ours): NaN or infinity must never enter the map's sums or the still accumulation, where
+// it would spread through the filter and every later frame (a GPU may return NaN where GLSL leaves a result
+// undefined). A value found non-finite is replaced by `safe` and counted (STAT_NON_FINITE,
+// `FrameReport::non_finite`): 0 on a sound device.
+bool is_finite(float v) { return !(isnan(v) || isinf(v)); }
+float finite_or_count(float v, float safe) {
+    if (is_finite(v)) return v;
+    stat_add(STAT_NON_FINITE, 1u);
+    return safe;
+}
 // Ray counts (u64: no wrap at 4K x 1024 rays).
 void rays_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).rays[which], uint64_t(v)); }
 

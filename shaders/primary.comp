@@ -6,11 +6,15 @@
 #include "gpixel.glsl"
 #include "clear.glsl"
 
+// A band of push.w rows from row push.z (dispatch_plan.rs: an image of more pixels than a dispatch may trace is
+// cut into bands of rows, as rtao.comp's); the first band resets the frame's counters.
 void main() {
-    clear_frame_counters();
-    uvec2 pix;
-    uint index;
-    if (!pixel_coords(pix, index)) return;
+    if (push.z == 0u) clear_frame_counters();
+    // Groups round the band up to whole work groups: the threads past its push.w rows are the next band's.
+    if (THREAD_ID.y >= push.w) return;
+    uvec2 pix = (THREAD_ID.xy + uvec2(0u, push.z)) * lattice() + uvec2(g.lattice_x, g.lattice_y);
+    if (pix.x >= g.width || pix.y >= g.height) return;
+    uint index = pix.y * g.width + pix.x;
     vec3 origin, dir;
     camera_ray(pix, origin, dir);
     float tmin = 0.0;

@@ -149,6 +149,7 @@ void resolve_pixel() {
     }
     if (sky_on()) {
         if (!sky_resolved && px.t >= 0.0) sky_open_transfer(unpack_normal(px.shading), sky);
+        sky_finite(sky);
         // Where the filter starts, as store_resolved does the AO: a pixel that takes no iteration into both.
         bool odd = SKY_FILTER && (iterations & 1u) == 1u;
         SkyPixelRef pixels = SkyPixelRef(g.sky_pixels);
@@ -161,7 +162,7 @@ void resolve_pixel() {
         }
     }
     GuideRef(g.filter_guide).v[index] = make_guide(px, used < LOD_COUNT);
-    store_resolved(index, plan, clamp(ao, 0.0, 1.0), iterations);
+    store_resolved(index, plan, clamp(finite_or_count(ao, 1.0), 0.0, 1.0), iterations);
     if (filter_full_taps()) {
         SlicePriorRef(g.slice_prior).v[index] = SlicePrior(clamp(ao, 0.0, 1.0), g.frame_index);
     }

@@ -76,8 +76,10 @@ void sky_basis(vec3 b, out float y[SKY_COEFFS]) {
     // cos(m φ) and sin(m φ) by recurrence from the unit azimuth b.xy / |b.xy|, without atan: atan(0, 0) is
     // undefined in GLSL (a GPU may return NaN on every face looking straight up); at the pole P_l^m (m > 0) is 0,
     // so the azimuth taken there, (1, 0), changes nothing.
+    // FLAG_INJECT_POLE_NAN (a test hook) takes it as NaN there, as atan(0, 0) may on a GPU.
     float r = length(b.xy);
-    vec2 az = r > 0.0 ? b.xy / r : vec2(1.0, 0.0);
+    vec2 pole = (g.flags & FLAG_INJECT_POLE_NAN) != 0u ? vec2(uintBitsToFloat(0x7fc00000u)) : vec2(1.0, 0.0);
+    vec2 az = r > 0.0 ? b.xy / r : pole;
     float cm[int(SKY_BAND) + 1];
     float sm[int(SKY_BAND) + 1];
     cm[0] = 1.0;
@@ -118,6 +120,20 @@ void sky_open_transfer(vec3 n, out float t[SKY_COEFFS]) {
 // (t_0 = Y_0 times it).
 float sky_escaped(float t0) {
     return t0 * 2.0 * sqrt(PI);
+}
+
+// The non-finite guard of a transfer vector (common.glsl `finite_or_count`): a NaN or infinite coefficient
+// becomes 0 (at the pole, where an undefined azimuth is the likely cause, P_l^m with m > 0 is 0 anyway),
+// counted once per vector.
+void sky_finite(inout float t[SKY_COEFFS]) {
+    bool ok = true;
+    for (uint i = 0u; i < SKY_COEFFS; ++i) {
+        if (!is_finite(t[i])) {
+            t[i] = 0.0;
+            ok = false;
+        }
+    }
+    if (!ok) stat_add(STAT_NON_FINITE, 1u);
 }
 
 // The light of a transfer vector: Σ e_i t_i (RGB).

@@ -81,11 +81,21 @@ impl Buffer {
                 gpu.device.destroy_buffer(raw, None);
                 return Err(CoreError::from_vk("vkBindBufferMemory", e));
             }
-            gpu.device_bytes
-                .fetch_add(allocation.size(), std::sync::atomic::Ordering::Relaxed);
             let address = gpu
                 .device
                 .get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw));
+            // 64-bit atomics (the hash cells' stamps, the ray counters, the sky sums) need 8-byte aligned
+            // addresses: the layouts put them at 8-byte offsets (gpu.rs `layouts_are_scalar_compatible`), and
+            // the buffer's start must be aligned too.
+            if !address.is_multiple_of(8) {
+                let _ = gpu.allocator().free(allocation);
+                gpu.device.destroy_buffer(raw, None);
+                return Err(CoreError::Invalid(format!(
+                    "buffer `{name}` got device address {address:#x}, not 8-byte aligned: 64-bit atomics need it"
+                )));
+            }
+            gpu.device_bytes
+                .fetch_add(allocation.size(), std::sync::atomic::Ordering::Relaxed);
             Ok(Buffer {
                 gpu: gpu.clone(),
                 raw,

@@ -12,6 +12,16 @@
 /// (8.5 G rays) becomes 256 dispatches of 4 rays per pixel.
 pub const MAX_RAYS_PER_DISPATCH: u64 = 1 << 25;
 
+/// The acceleration-structure traversals one AO ray may take: one, and with the sky light a second for a ray
+/// open within R, traced on to infinity (sky.glsl `sky_escapes`). The plan's bound counts traversals.
+pub fn traversals_per_ray(sky_light: bool) -> u64 {
+    if sky_light {
+        2
+    } else {
+        1
+    }
+}
+
 /// One dispatch of a pass: rays `[first_ray, first_ray + ray_count)` of every pixel of rows
 /// `[first_row, first_row + rows)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -5,8 +5,6 @@ use ash::vk;
 pub enum CoreError {
     #[error("{0}")]
     NoDevice(String),
-    #[error("{0}")]
-    Validation(String),
     #[error("{0} failed: {1}")]
     Vulkan(&'static str, vk::Result),
     #[error("the GPU device was lost during {0} (driver crash or timeout); restart hrtao")]

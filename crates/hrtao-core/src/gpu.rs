@@ -103,6 +103,15 @@ mod tests {
         assert_eq!(std::mem::size_of::<HashTestCase>(), 56);
         assert_eq!(std::mem::size_of::<GeometryInfo>(), 40);
         assert_eq!(std::mem::size_of::<FrameGlobals>() % 8, 0);
+        // Every 64-bit atomic sits at an 8-byte offset from a buffer's start (Buffer::new checks that each
+        // buffer's address is 8-byte aligned): a misaligned one is undefined on a GPU, though lavapipe copes.
+        // HashCell::stamp (compare-and-swap, hash_map.glsl) in every element of the table;
+        assert_eq!(std::mem::offset_of!(HashCell, stamp) % 8, 0);
+        assert_eq!(std::mem::size_of::<HashCell>() % 8, 0);
+        // FrameStats::rays (atomicAdd, common.glsl `rays_add`);
+        assert_eq!(std::mem::offset_of!(FrameStats, rays) % 8, 0);
+        // the sky cells' int64 sums (sky.glsl `sky_cell_add`) and the contact detail's two sums
+        // (contact_detail.glsl `ContactDetailRef`, buffer_reference_align = 8) start their buffers.
         assert_eq!(std::mem::offset_of!(FrameGlobals, gbuffer) % 8, 0);
         assert_eq!(
             std::mem::offset_of!(FrameStats, rays),

@@ -47,6 +47,9 @@ gpu_consts! {
     /// infinity and its cells and pixels gather the transfer vector of the escaped ones (shaders/sky.glsl); the
     /// composite lights with the environment's coefficients (`FrameGlobals::sky_env`).
     FLAG_SKY: u32 = 1024;
+    /// A test hook (`Renderer::set_inject_pole_nan`): the sky basis takes the pole's azimuth as NaN, as a GPU's
+    /// atan(0, 0) may, so that a test proves the non-finite guard (STAT_NON_FINITE) keeps the image finite.
+    FLAG_INJECT_POLE_NAN: u32 = 2048;
     /// Sky light: the highest spherical-harmonic band of the transfer vectors (sky/sh.rs), and their
     /// coefficients ((SKY_BAND + 1)²).
     SKY_BAND: u32 = 3;
@@ -105,7 +108,11 @@ gpu_consts! {
     /// Pixels whose target cell still takes rays but that a fractional budget (`trace_fraction`) left out of
     /// this frame's ray queue: with the queued ones, the pixels on young cells.
     STAT_UNPICKED_PIXELS: u32 = 9;
-    // 10-13: free.
+    /// Values a guard found non-finite (NaN or infinite) and replaced before they entered the map's sky sums, a
+    /// pixel's resolved or own transfer, or the still accumulation (common.glsl `finite_or_count`): 0 on a
+    /// sound device; counted per pixel and place, reported as `FrameReport::non_finite`.
+    STAT_NON_FINITE: u32 = 10;
+    // 11-13: free.
     /// Counters below this index are reset at the start of every frame (with all of `FrameStats::rays`).
     STAT_PER_FRAME: u32 = 14;
     /// Live cells in the table: persistent (not reset per frame), incremented on insert into a free slot.

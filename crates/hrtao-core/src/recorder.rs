@@ -134,6 +134,9 @@ impl<'a> Recorder<'a> {
     /// Ends the recording with a barrier that makes every write visible to the host and to later copies and
     /// shaders; returns what was recorded.
     pub fn finish(mut self) -> Vec<Event> {
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.finish(self.cmd);
+        }
         let b = self.tracker.finish();
         record_barrier(self.gpu, self.cmd, &b);
         self.tracker.take_events()

@@ -134,6 +134,9 @@ pub struct FrameReport {
     pub longest_probe: u32,
     pub reclaimed: u32,
     pub bounds_violations: u32,
+    /// Values found non-finite (NaN, infinite) and replaced before they entered the map or the accumulation
+    /// (`gpu::STAT_NON_FINITE`): 0 on a sound device.
+    pub non_finite: u32,
     pub capped_pixels: u32,
     pub occupied_cells: u32,
     pub load_factor: f64,
@@ -207,6 +210,8 @@ pub struct Renderer {
     last_converged: bool,
     /// Shaders check buffer bounds and count violations (`FrameReport::bounds_violations`; tests).
     check_bounds: bool,
+    /// Test hook: the sky basis takes the pole's azimuth as NaN (`gpu::FLAG_INJECT_POLE_NAN`).
+    inject_pole_nan: bool,
     /// The next frame starts a new still image (`restart_still_image`).
     restart: bool,
     /// How primary visibility is found (ray queries by default; `pick_primary` measures).
@@ -269,6 +274,7 @@ impl Renderer {
             edit_still_index: 0,
             last_converged: false,
             check_bounds: false,
+            inject_pole_nan: false,
             restart: false,
             primary: Primary::default(),
             raster: None,
@@ -294,6 +300,12 @@ impl Renderer {
     /// Shaders check buffer bounds and count violations in `FrameReport::bounds_violations` (tests).
     pub fn set_check_bounds(&mut self, on: bool) {
         self.check_bounds = on;
+    }
+
+    /// Test hook: the sky basis takes the azimuth at its pole as NaN, as a GPU's atan(0, 0) may
+    /// (`gpu::FLAG_INJECT_POLE_NAN`); the non-finite guard must keep the image finite and count it.
+    pub fn set_inject_pole_nan(&mut self, on: bool) {
+        self.inject_pole_nan = on;
     }
 
     /// How primary visibility is found (`pick_primary` measures which is faster).
@@ -576,6 +588,9 @@ impl Renderer {
         if self.check_bounds {
             g.flags |= gpu::FLAG_CHECK_BOUNDS;
         }
+        if self.inject_pole_nan {
+            g.flags |= gpu::FLAG_INJECT_POLE_NAN;
+        }
         if self.map.regions.any_edit() {
             g.flags |= gpu::FLAG_REGION_EPOCHS;
         }
@@ -706,14 +721,20 @@ impl Renderer {
                     Some((gw, gh)),
                 );
             }
-            _ => rec.dispatch(Pass::PRIMARY, gw, gh, [0; 4]),
+            _ => {
+                // One ray per pixel, in bands of rows where the image holds more than a dispatch may trace.
+                for c in dispatch_plan::plan(gw, gh, 1, self.max_rays_per_dispatch) {
+                    rec.dispatch(Pass::PRIMARY, gw, c.rows, [0, 0, c.first_row, c.rows]);
+                }
+            }
         }
         additions::record_after_primary(&mut rec, &young_frame, &self.targets.additions, gw, gh);
         // The frame's probe rays (the walk's), on the TLAS the frame traces.
         crate::probes::record(&mut rec, probe_push);
         // Ray-tracing passes in dispatches of at most `max_rays_per_dispatch` rays (dispatch_plan.rs).
         let rpp = settings.map.rays_per_pixel;
-        let bound = self.max_rays_per_dispatch;
+        // The bound counts traversals: with the sky light, a ray open within R is traced on to infinity.
+        let bound = self.max_rays_per_dispatch / dispatch_plan::traversals_per_ray(settings.light.sky_light);
         if mode == Mode::Rtao {
             for c in dispatch_plan::plan(gw, gh, rpp, bound) {
                 rec.dispatch(Pass::RTAO, gw, c.rows, [0, c.rays_word(), c.first_row, c.rows]);
@@ -975,6 +996,7 @@ impl Renderer {
             longest_probe: c[gpu::STAT_MAX_PROBE as usize],
             reclaimed: c[gpu::STAT_RECLAIMED as usize],
             bounds_violations: c[gpu::STAT_BOUNDS_VIOLATIONS as usize],
+            non_finite: c[gpu::STAT_NON_FINITE as usize],
             capped_pixels: c[gpu::STAT_CAPPED_PIXELS as usize],
             occupied_cells: occupied,
             load_factor: occupied as f64 / capacity as f64,

@@ -12,13 +12,79 @@ use ash::vk;
 use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 
-const MAX_SCOPES: u32 = 64;
+/// Scopes a frame can time. Consecutive dispatches of one section share a scope (`Scopes`), so a frame uses
+/// one per change of section: ~10 for a whole frame, ~2 per filter iteration or slice chunk between other
+/// sections. Past it, the frame's later sections go untimed and the timer says so (`GpuTimer::read`).
+const MAX_SCOPES: u32 = 128;
+
+/// A timestamp to write: query `0` of a scope's pair (its start) or `1` (its end).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stamp {
+    Start(u32),
+    End(u32),
+}
+
+/// The scopes of a frame, without the device (the tests drive it): a section's scope stays open across its
+/// consecutive dispatches (the end stamp waits until another section begins or the recording finishes), so
+/// that a pass split into many dispatches (ray-tracing chunks, filter iterations) takes one scope, not one per
+/// dispatch.
+#[derive(Default)]
+struct Scopes {
+    sections: Vec<&'static str>,
+    /// A section is between `begin` and `end`.
+    open: bool,
+    /// The last scope ended but its end stamp is not written yet (the next `begin` of the same section
+    /// continues it).
+    pending_end: bool,
+    /// Scopes whose both stamps are written.
+    complete: usize,
+    /// Sections begun after the pool was full: not timed.
+    dropped: u32,
+}
+
+impl Scopes {
+    fn begin(&mut self, section: &'static str) -> Vec<Stamp> {
+        let mut out = Vec::new();
+        if self.pending_end {
+            if self.sections.last() == Some(&section) {
+                self.pending_end = false;
+                self.open = true;
+                return out;
+            }
+            out.extend(self.flush());
+        }
+        if self.sections.len() as u32 >= MAX_SCOPES {
+            self.dropped += 1;
+            return out;
+        }
+        out.push(Stamp::Start(self.sections.len() as u32 * 2));
+        self.sections.push(section);
+        self.open = true;
+        out
+    }
+
+    fn end(&mut self) {
+        if self.open {
+            self.open = false;
+            self.pending_end = true;
+        }
+    }
+
+    /// The pending end stamp, if any: before another section or the end of the recording.
+    fn flush(&mut self) -> Option<Stamp> {
+        if !self.pending_end {
+            return None;
+        }
+        self.pending_end = false;
+        self.complete = self.sections.len();
+        Some(Stamp::End((self.sections.len() as u32 - 1) * 2 + 1))
+    }
+}
 
 pub struct GpuTimer {
     gpu: Arc<Gpu>,
     pool: vk::QueryPool,
-    sections: Vec<&'static str>,
-    open: bool,
+    scopes: Scopes,
 }
 
 impl GpuTimer {
@@ -40,13 +106,12 @@ impl GpuTimer {
         Ok(Some(GpuTimer {
             gpu: gpu.clone(),
             pool,
-            sections: Vec::new(),
-            open: false,
+            scopes: Scopes::default(),
         }))
     }
 
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
-        self.sections.clear();
+        self.scopes = Scopes::default();
         unsafe {
             self.gpu
                 .device
@@ -54,36 +119,45 @@ impl GpuTimer {
         };
     }
 
+    fn write(&self, cmd: vk::CommandBuffer, stamp: Stamp) {
+        let q = match stamp {
+            Stamp::Start(q) | Stamp::End(q) => q,
+        };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, q);
+        }
+    }
+
     pub fn begin(&mut self, cmd: vk::CommandBuffer, section: &'static str) {
-        if self.sections.len() as u32 >= MAX_SCOPES {
-            return;
-        }
-        let q = self.sections.len() as u32 * 2;
-        self.sections.push(section);
-        self.open = true;
-        unsafe {
-            self.gpu
-                .device
-                .cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, q);
+        for stamp in self.scopes.begin(section) {
+            self.write(cmd, stamp);
         }
     }
 
-    pub fn end(&mut self, cmd: vk::CommandBuffer) {
-        if !self.open {
-            return;
-        }
-        self.open = false;
-        let q = (self.sections.len() as u32 - 1) * 2 + 1;
-        unsafe {
-            self.gpu
-                .device
-                .cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, q);
+    pub fn end(&mut self, _cmd: vk::CommandBuffer) {
+        self.scopes.end();
+    }
+
+    /// Writes the last scope's end stamp: called once the frame's commands are recorded.
+    pub fn finish(&mut self, cmd: vk::CommandBuffer) {
+        if let Some(stamp) = self.scopes.flush() {
+            self.write(cmd, stamp);
         }
     }
 
-    /// Milliseconds per section, in first-use order, summed over dispatches of the same section.
+    /// Milliseconds per section, in first-use order, summed over dispatches of the same section. Only scopes
+    /// whose both stamps were recorded are read (waiting on an unwritten query would never return); sections
+    /// past the pool's `MAX_SCOPES` are left out with a warning.
     pub fn read(&self) -> Result<Vec<(String, f64)>> {
-        let n = self.sections.len();
+        let n = self.scopes.complete;
+        if self.scopes.dropped > 0 {
+            log::warn!(
+                "GPU timer: {} dispatches of this frame were not timed (more than {MAX_SCOPES} scopes)",
+                self.scopes.dropped
+            );
+        }
         if n == 0 {
             return Ok(Vec::new());
         }
@@ -101,7 +175,7 @@ impl GpuTimer {
         }
         let info = &self.gpu.info;
         Ok(section_ms(
-            &self.sections,
+            &self.scopes.sections[..n],
             &raw,
             info.timestamp_valid_bits,
             info.timestamp_period_ns as f64,
@@ -156,6 +230,47 @@ mod tests {
             section_ms(&["a"], &[10, 30], 64, 1e6),
             vec![("a".to_string(), 20.0)]
         );
+    }
+
+    /// Consecutive dispatches of one section share a scope; a section that comes back after another opens a new
+    /// one; the last end stamp waits for `flush`; past MAX_SCOPES sections are counted as dropped, and what
+    /// was written is still complete.
+    #[test]
+    fn consecutive_dispatches_share_a_scope() {
+        let mut s = Scopes::default();
+        assert_eq!(s.begin("update"), vec![Stamp::Start(0)]);
+        s.end();
+        assert_eq!(s.begin("update"), vec![]);
+        s.end();
+        assert_eq!(s.begin("filter"), vec![Stamp::End(1), Stamp::Start(2)]);
+        s.end();
+        assert_eq!(s.complete, 1, "the filter's end is not written yet");
+        assert_eq!(s.begin("update"), vec![Stamp::End(3), Stamp::Start(4)]);
+        s.end();
+        assert_eq!(s.flush(), Some(Stamp::End(5)));
+        assert_eq!(s.flush(), None);
+        assert_eq!(
+            (s.sections.as_slice(), s.complete),
+            (&["update", "filter", "update"][..], 3)
+        );
+
+        let mut s = Scopes::default();
+        let names = ["a", "b"];
+        for i in 0..MAX_SCOPES + 5 {
+            s.begin(names[i as usize % 2]);
+            s.end();
+        }
+        // The last timed scope ended when the first untimed section began.
+        assert_eq!(s.flush(), None);
+        assert_eq!((s.complete as u32, s.dropped), (MAX_SCOPES, 5));
+        // A thousand chunks of one pass take one scope.
+        let mut s = Scopes::default();
+        for _ in 0..1000 {
+            s.begin("update");
+            s.end();
+        }
+        s.flush();
+        assert_eq!((s.complete, s.dropped), (1, 0));
     }
 
     /// Scopes of one name add up; with start stamps written after the previous scope's work (BOTTOM_OF_PIPE),

@@ -115,3 +115,37 @@ fn hrtao_in_chunks_matches_one_dispatch() {
     );
     assert_clean(&gpu);
 }
+
+/// The bound counts every traversal: primary visibility (one ray per pixel) is cut into bands of rows like the
+/// other passes, and gives the same image; with the sky light, whose open rays are traced on to infinity, the
+/// update takes twice the dispatches of the same budget without it.
+#[test]
+fn primary_bands_and_sky_traversals_count_against_the_bound() {
+    let gpu = gpu();
+    let settings = rtao(4, R);
+    let (one, _, n1) = render_with_bound(&gpu, settings.clone(), 1, None, Pass::PRIMARY);
+    let (split, _, n) = render_with_bound(&gpu, settings, 1, Some((W * 10) as u64), Pass::PRIMARY);
+    assert_eq!(
+        (n1, n),
+        (1, 4),
+        "primary dispatches unsplit, in bands of 10 of 36 rows"
+    );
+    let worst = worst_diff(&one, &split);
+    assert!(
+        worst <= 1e-6,
+        "AO differs by up to {worst} with primary visibility in bands"
+    );
+
+    let paper = hrtao(32, R).paper();
+    let mut sky = paper.clone();
+    sky.light.sky_light = true;
+    let bound = Some((W * H * 4) as u64);
+    let (_, _, plain) = render_with_bound(&gpu, paper, 1, bound, Pass::AO_UPDATE);
+    let (_, _, with_sky) = render_with_bound(&gpu, sky, 1, bound, Pass::AO_UPDATE);
+    assert_eq!(
+        (plain, with_sky),
+        (8, 16),
+        "update dispatches without and with the sky light"
+    );
+    assert_clean(&gpu);
+}

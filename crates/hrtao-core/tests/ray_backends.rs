@@ -3,7 +3,9 @@
 //! (primary.comp), per-pixel RTAO (rtao.comp) and the cache's ray-tracing update (ao_update.comp, with the
 //! near-field classification and adaptive sampling of our defaults, and the paper's plain first-hit rays) — on the
 //! bundled scene, validation (synchronization validation included) silent under both. And the device decides: a
-//! device without ray queries (the feature masked) picks the pipelines by itself.
+//! device without ray queries (the feature masked) picks the pipelines by itself. On a device without ray queries
+//! (a pipelines-only GPU, or `HRTAO_HIDE_RAY_QUERY=1`) the parts that need them are skipped with a message
+//! (`common::ray_queries_or_skip`).
 mod common;
 
 use std::sync::Arc;
@@ -101,7 +103,23 @@ fn frames_cut(gpu: &Arc<Gpu>, cut: Option<u64>) -> (Vec<Vec<f32>>, Vec<hrtao_cor
     (out, gbuffer)
 }
 
-/// The backends trace the same rays, so per-pixel RTAO and primary visibility agree exactly; the cache's images
+/// Pixels whose primary hit may differ between the backends: at most 0.1 % (14 of 160 x 90). Both backends run
+/// the same GLSL (trace.glsl) on the same acceleration structure, but compiled apart (a compute shader and a
+/// ray-generation shader): a GPU's compiler may contract or reorder the float operations of the ray's setup
+/// differently, moving a ray's direction by an ulp or so, which changes its hit only where it passes within about
+/// 1e-6 of an edge between two surfaces — far less than one pixel of an image this size is expected to, and
+/// lavapipe gives none. A backend that is really wrong (another instance, another distance, a missed or a
+/// culled surface) changes whole regions of the image, hundreds of pixels.
+const PRIMARY_DIFFERING: f64 = 0.001;
+/// Pixels whose per-pixel RTAO (8 rays) may differ by more than 1e-4 between the backends: at most 1 % (144). Each
+/// pixel traces the same 8 QMC rays by both; for the reason above a ray may change its verdict where it grazes an
+/// edge or leaves a surface at the self-intersection offset, moving that pixel by 1/8 (and the primary hits that
+/// may differ carry their pixel along), i.e. a few pixels of the image. Wrong rays (another sequence, another
+/// radius, missed hits) change most of the occluded pixels, thousands. Lavapipe: 0 (bit-equal).
+const RTAO_DIFFERING: f64 = 0.01;
+
+/// The backends trace the same rays, so per-pixel RTAO and primary visibility agree but for rays whose setup a
+/// GPU's compiler rounds differently (`PRIMARY_DIFFERING`, `RTAO_DIFFERING`); the cache's images
 /// differ as two runs of one backend do: which pixel of a cell claims which of its QMC rays is decided by atomics
 /// (ray_target.glsl), and a ray-generation launch runs its threads in another order than a compute dispatch.
 /// Measured on lavapipe (2 shared cores, LP_NUM_THREADS unset), MAE (`common::mae`) per image:
@@ -113,9 +131,13 @@ fn frames_cut(gpu: &Arc<Gpu>, cut: Option<u64>) -> (Vec<Vec<f32>>, Vec<hrtao_cor
 ///
 /// So each image's MAE between the backends must lie within 1.5x this run's spread (the larger of the pipelines'
 /// run to run and the interleaved claims') + 0.002, its mean signed difference within ±0.002 (three times the
-/// measured: a ray that misses what it should hit would bias it), and per-pixel RTAO within 1e-4. (4 runs.)
+/// measured: a ray that misses what it should hit would bias it), and per-pixel RTAO in all but `RTAO_DIFFERING`
+/// of the pixels within 1e-4 (and within the MAE bound above: a spread of 0 leaves 0.002). (4 runs.)
 #[test]
 fn every_tracing_pass_agrees_between_the_backends_within_the_run_to_run_spread() {
+    if !ray_queries_or_skip("the backends compared (ray queries against pipelines)") {
+        return;
+    }
     let query = device(Some(RayBackend::Query), false).expect("a device with ray queries");
     let (q, q_gbuffer) = frames(&query);
     let (qi, _) = frames_cut(&query, Some((W * H) as u64));
@@ -126,7 +148,7 @@ fn every_tracing_pass_agrees_between_the_backends_within_the_run_to_run_spread()
     let (p2, _) = frames(&pipeline);
     drop(pipeline);
 
-    // Primary visibility: the same hits (instance, distance) in every pixel.
+    // Primary visibility: the same hits (instance, distance) in every pixel but `PRIMARY_DIFFERING` of them.
     assert_eq!(q_gbuffer.len(), p_gbuffer.len());
     let mut differing = 0;
     for (a, b) in q_gbuffer.iter().zip(&p_gbuffer) {
@@ -135,9 +157,16 @@ fn every_tracing_pass_agrees_between_the_backends_within_the_run_to_run_spread()
             differing += 1;
         }
     }
-    assert_eq!(
-        differing, 0,
-        "pixels whose primary hit differs between the backends"
+    let hits = q_gbuffer.iter().filter(|a| a.t >= 0.0).count();
+    eprintln!("primary hits: {differing} of {} pixels differ", q_gbuffer.len());
+    assert!(
+        hits > q_gbuffer.len() / 4,
+        "the view shows the scene: {hits} hits"
+    );
+    assert!(
+        differing as f64 <= PRIMARY_DIFFERING * q_gbuffer.len() as f64,
+        "{differing} of {} pixels' primary hit differs between the backends",
+        q_gbuffer.len()
     );
 
     let names: Vec<String> = settings()
@@ -155,9 +184,22 @@ fn every_tracing_pass_agrees_between_the_backends_within_the_run_to_run_spread()
             mae(&q[k], &qi[k])
         );
         if name.starts_with("rtao") {
+            let differing = q[k]
+                .iter()
+                .zip(&p[k])
+                .filter(|(a, b)| (*a - *b).abs() > 1e-4)
+                .count();
+            let occluded = q[k].iter().filter(|&&a| a < 0.999).count();
+            eprintln!("{name}: {differing} of {} pixels differ", q[k].len());
+            // Enough occluded pixels (lavapipe: 2339, 16 %) that a wrong backend would show (RTAO_DIFFERING).
             assert!(
-                cross <= 1e-4,
-                "{name}: per-pixel RTAO differs between the backends by MAE {cross}"
+                occluded as f64 > 10.0 * RTAO_DIFFERING * q[k].len() as f64,
+                "{name}: {occluded} occluded pixels"
+            );
+            assert!(
+                differing as f64 <= RTAO_DIFFERING * q[k].len() as f64,
+                "{name}: per-pixel RTAO differs between the backends in {differing} of {} pixels (MAE {cross})",
+                q[k].len()
             );
         }
         assert!(
@@ -197,12 +239,14 @@ fn a_device_without_ray_queries_picks_the_pipelines() {
     let refused = device(Some(RayBackend::Query), true);
     assert!(refused.is_err(), "ray queries forced on a device without them");
 
-    let chosen = device(None, false).unwrap();
-    assert_eq!(
-        chosen.info.ray_backend,
-        RayBackend::Query,
-        "ray queries where the device has them"
-    );
+    if ray_queries_or_skip("a device with both backends picks ray queries") {
+        let chosen = device(None, false).unwrap();
+        assert_eq!(
+            chosen.info.ray_backend,
+            RayBackend::Query,
+            "ray queries where the device has them"
+        );
+    }
     assert_eq!(RayBackend::choose(None, false, false).ok(), None);
     assert_eq!(RayBackend::choose(None, true, true), Ok(RayBackend::Query));
     assert_eq!(

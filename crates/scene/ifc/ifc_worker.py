@@ -9,6 +9,11 @@
 # IfcRelNests and IfcRelContainedInSpatialStructure), labelled "Name (IfcClass)"; a product with geometry outside
 # that tree is a root.
 #
+# Before tessellating, what the products' representations expand to is counted (mapped_expansion: mapped items
+# multiplied through their nesting, a map shared by products once): past the loader's cap (HRTAO_IFC_MAX_ITEMS) the
+# answer is an error naming the count and the cap, in seconds, not a tessellation of 10^9 boxes. A file cut short
+# is read up to its last whole statement (HRTAO_IFC_COMPLETE_BYTES, open_whole_statements).
+#
 # Units: the file's length unit is the one its IfcProject declares (IfcUnitAssignment: an IfcSIUnit with its
 # prefix, or an IfcConversionBasedUnit such as the inch), found here. The iterator converts positions to metres
 # with the unit it finds itself (it.unit_magnitude()), and IfcOpenShell 0.8.4 finds none when an
@@ -159,6 +164,106 @@ def children(entity):
     return out
 
 
+BODY = ("Body", "Facetation")
+MAX_MAP_DEPTH = 64
+SATURATED = 10**18
+
+
+class ExpansionError(Exception):
+    """The file's mapped items expand past the cap, or nest too deep: the message says which."""
+
+
+def mapped_expansion(f, cap):
+    """Counts what the products' representations expand to before anything is tessellated: each IfcMappedItem
+    stands for every item of its representation map's representation, multiplied through the nesting. A product
+    whose body is one mapped item shares its map's mesh with the other products mapping it (counted once: they are
+    instances); any other representation is tessellated on its own. Returns (items, products, deepest nesting), or
+    raises ExpansionError past `cap` items or past MAX_MAP_DEPTH levels."""
+    memo = {}  # representation id -> items it expands to
+    depth_of = {}  # representation id -> mapped-item levels below it
+
+    def expand(rep, depth):
+        rid = rep.id()
+        if rid in memo:
+            return memo[rid], depth_of[rid]
+        if depth > MAX_MAP_DEPTH:
+            raise ExpansionError(
+                f"mapped items nest deeper than {MAX_MAP_DEPTH} levels (IfcMappedItem in representation #{rid})"
+            )
+        memo[rid], depth_of[rid] = 0, 0  # a cycle adds nothing
+        n, deepest = 0, 0
+        for item in rep.Items or ():
+            if item.is_a("IfcMappedItem"):
+                source = item.MappingSource
+                inner = getattr(source, "MappedRepresentation", None) if source is not None else None
+                if inner is not None:
+                    k, d = expand(inner, depth + 1)
+                    n += k
+                    deepest = max(deepest, d + 1)
+            else:
+                n += 1
+            n = min(n, SATURATED)
+        memo[rid], depth_of[rid] = n, deepest
+        return n, deepest
+
+    shared = {}  # ("map" or "rep", id) -> items
+    products = 0
+    deepest = 0
+    for product in f.by_type("IfcProduct"):
+        if product.is_a("IfcOpeningElement") or product.is_a("IfcSpace"):
+            continue
+        shape = getattr(product, "Representation", None)
+        reps = [r for r in (getattr(shape, "Representations", None) or ()) if r.is_a("IfcShapeRepresentation")]
+        body = [r for r in reps if r.RepresentationIdentifier in BODY]
+        if not (body or reps):
+            continue
+        products += 1
+        for rep in body or reps:
+            items = rep.Items or ()
+            if len(items) == 1 and items[0].is_a("IfcMappedItem") and items[0].MappingSource is not None:
+                key = ("map", items[0].MappingSource.id())
+            else:
+                key = ("rep", rep.id())
+            if key not in shared:
+                n, d = expand(rep, 0)
+                shared[key] = n
+                deepest = max(deepest, d)
+                total = min(sum(shared.values()), SATURATED)
+                if total > cap:
+                    raise ExpansionError(
+                        f"its representations expand to {'more than ' if total >= SATURATED else ''}{total} "
+                        f"geometry items (IfcMappedItem nested {deepest} levels deep), over the cap of {cap} "
+                        f"items (at most {MAX_ITEMS_DEFAULT}, and {ITEM_BYTES} bytes each within the scene memory "
+                        "limit, HRTAO_MAX_SCENE_MB): refused before tessellating"
+                    )
+    return min(sum(shared.values()), SATURATED), products, deepest
+
+
+# The loader passes the cap (HRTAO_IFC_MAX_ITEMS: crates/scene/src/ifc_load.rs); these defaults name it.
+MAX_ITEMS_DEFAULT = 10_000_000
+ITEM_BYTES = 4096
+
+
+def open_whole_statements(ifcopenshell, path):
+    """Opens the file; one cut short (the loader sets HRTAO_IFC_COMPLETE_BYTES: the length of its whole
+    statements) is read up to its last whole statement and closed, from a temporary copy: IfcOpenShell's parser
+    crashes on a string left open at the end of the file."""
+    complete = os.environ.get("HRTAO_IFC_COMPLETE_BYTES")
+    if not complete:
+        return ifcopenshell.open(path)
+    import tempfile
+
+    with open(path, "rb") as src:
+        data = src.read(int(complete))
+    tail = b"END-ISO-10303-21;\n" if data.rstrip().endswith(b"ENDSEC;") else b"\nENDSEC;\nEND-ISO-10303-21;\n"
+    with tempfile.NamedTemporaryFile(prefix="hrtao-cut-", suffix=".ifc") as copy:
+        copy.write(data)
+        copy.write(tail)
+        copy.flush()
+        del data
+        return ifcopenshell.open(copy.name)
+
+
 def main():
     if len(sys.argv) != 2:
         error("usage: ifc_worker.py FILE")
@@ -187,9 +292,18 @@ def main():
 
         time.sleep(3600)
     try:
-        f = ifcopenshell.open(path)
+        f = open_whole_statements(ifcopenshell, path)
     except Exception as e:  # noqa: BLE001
         error(f"IfcOpenShell cannot read the file: {e}")
+        return 1
+    try:
+        cap = int(os.environ.get("HRTAO_IFC_MAX_ITEMS", MAX_ITEMS_DEFAULT))
+    except ValueError:
+        cap = MAX_ITEMS_DEFAULT
+    try:
+        mapped_expansion(f, cap)
+    except ExpansionError as e:
+        error(str(e))
         return 1
     progress("transfer", 0.0)
     settings = ifcopenshell.geom.settings()

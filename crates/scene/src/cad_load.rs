@@ -65,6 +65,7 @@ pub fn load_cad(
         CadFormat::Step => crate::cad_header::step_header(&bytes),
         CadFormat::Iges => crate::cad_header::iges_header(&bytes),
     };
+    let ends_early = format == CadFormat::Step && ends_early(&bytes);
     drop(bytes);
     opts.check_cancel(path)?;
     let mut stages = StageClock::new();
@@ -75,6 +76,11 @@ pub fn load_cad(
     let read_s = started.elapsed().as_secs_f64();
     let mut scene = to_scene(path, model).map_err(err)?;
     scene.metadata = metadata;
+    if ends_early {
+        let warning = ends_early_warning(path);
+        log::warn!("{warning}");
+        scene.warnings.push(warning);
+    }
     stages.mark("scene");
     log::info!(
         "{}",
@@ -101,6 +107,21 @@ pub(crate) fn step_entities(bytes: &[u8]) -> Result<u64, String> {
         return Err("the DATA section holds no entity".into());
     }
     Ok(n)
+}
+
+/// Whether a STEP physical file (STEP, IFC) lacks its closing `END-ISO-10303-21;` (looked for in its last
+/// KiB): it was cut short, and what the kernel reads of it may be incomplete.
+pub(crate) fn ends_early(bytes: &[u8]) -> bool {
+    let tail = &bytes[bytes.len().saturating_sub(1024)..];
+    find(tail, b"END-ISO-10303-21;").is_none()
+}
+
+/// The warning for a file that [`ends_early`], as the viewer's toast and the log show it.
+pub(crate) fn ends_early_warning(path: &Path) -> String {
+    format!(
+        "{}: the file ends early: the model may be incomplete (it does not end with END-ISO-10303-21;)",
+        path.display()
+    )
 }
 
 /// Entities of an IGES file (two directory-entry lines each), or why it is no IGES file.
@@ -501,6 +522,10 @@ mod tests {
         assert!(step_entities(header).unwrap_err().contains("no DATA"));
         let ok = b"ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=A();\n#2=B(#1);\n#3=C();\nENDSEC;\nEND-ISO-10303-21;\n";
         assert_eq!(step_entities(ok).unwrap(), 5);
+        assert!(!ends_early(ok));
+        assert!(!ends_early(b"END-ISO-10303-21;\r\n\n"));
+        assert!(ends_early(&ok[..ok.len() - 20]));
+        assert!(ends_early(b""));
     }
 
     /// A closed cylinder (radius 10, height 20 mm, axis z) as the kernel hands it back: the side with radial

@@ -771,6 +771,56 @@ fn write_reference_cases(dir: &Path, good: &str) -> io::Result<Vec<HostileCase>>
     Ok(out)
 }
 
+pub use formats::threemf_whitespace;
+
+/// Bombs measured against a scene memory limit of `budget` bytes (`HRTAO_MAX_SCENE_MB`), each for its time and
+/// peak memory besides its outcome: a 3MF whose model part inflates to half the budget of whitespace (refused
+/// before it is inflated: parsing takes up to 3x the part), one inflating to a quarter (within the budget:
+/// streamed, the blanks squeezed, it opens), IFC mapped items nested 9 levels deep 10 a level (10^9 boxes from
+/// 14 kB: refused by counting before tessellating) and an IFC cut in the middle of an entity (opens with a
+/// warning). The IFC cases need the worker's venv.
+pub fn write_budget_corpus(dir: &Path, budget: u64) -> io::Result<Vec<HostileCase>> {
+    std::fs::create_dir_all(dir)?;
+    let files: Vec<(&'static str, &'static str, Vec<u8>, Expect)> = vec![
+        (
+            "3mf_whitespace_half_budget",
+            "3mf",
+            threemf_whitespace(budget / 2)?,
+            Expect::Error,
+        ),
+        (
+            "3mf_whitespace_quarter_budget",
+            "3mf",
+            threemf_whitespace(budget / 4)?,
+            Expect::Image,
+        ),
+        (
+            "ifc_mapped_items_1e9",
+            "ifc",
+            ifc_mapped_bomb(9, 10).into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ifc_truncated_mid_entity",
+            "ifc",
+            ifc_truncated_mid_entity().into_bytes(),
+            Expect::Image,
+        ),
+    ];
+    let mut out = Vec::new();
+    for (name, ext, bytes, expect) in files {
+        let path = dir.join(format!("{name}.{ext}"));
+        make(&path, &Entry::File(bytes))?;
+        out.push(HostileCase {
+            name,
+            path,
+            expect,
+            reference: None,
+        });
+    }
+    Ok(out)
+}
+
 /// Variations of the generated STEP file ([`step_boxes`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StepOptions {
@@ -998,9 +1048,12 @@ pub fn ifc_box(schema: &str, extra: &str) -> String {
     )
 }
 
-/// IFC files for the IfcOpenShell worker: garbage, empty, a header only, truncated, a STEP schema that is not
-/// IFC, an unknown IFC schema, an ifcZIP and an ifcXML named `.ifc`, a project without geometry, an aggregation
-/// cycle (the project decomposed into itself), and the valid box. Loading them needs the worker's venv.
+/// IFC files for the IfcOpenShell worker: garbage, empty, a header only, truncated (before its geometry: an
+/// error; in the middle of an entity after it: an image with a warning), a STEP schema that is not IFC, an
+/// unknown IFC schema, an ifcZIP and an ifcXML named `.ifc`, a project without geometry, an aggregation cycle
+/// (the project decomposed into itself), mapped items nested 9 levels deep 10 a level (10^9 boxes, refused by
+/// counting), ten products sharing one mapped representation, and the valid box. Loading them needs the
+/// worker's venv.
 pub fn write_ifc_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
     std::fs::create_dir_all(dir)?;
     let one = ifc_box("IFC4", "");
@@ -1051,6 +1104,21 @@ pub fn write_ifc_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
             Expect::Error,
         ),
         ("ifc_no_geometry", no_geometry.into_bytes(), Expect::Error),
+        (
+            "ifc_mapped_items_1e9",
+            ifc_mapped_bomb(9, 10).into_bytes(),
+            Expect::Error,
+        ),
+        (
+            "ifc_truncated_mid_entity",
+            ifc_truncated_mid_entity().into_bytes(),
+            Expect::Image,
+        ),
+        (
+            "ifc_shared_mapped_items",
+            ifc_shared_mapped(10).into_bytes(),
+            Expect::Image,
+        ),
     ];
     let mut out = Vec::new();
     for (name, bytes, expect) in files {
@@ -1064,4 +1132,95 @@ pub fn write_ifc_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
         });
     }
     Ok(out)
+}
+
+/// The box's geometry as representation map 0, and `levels` representation maps each placing the one below
+/// `per_level` times (IfcMappedItem, each offset along x): one IfcBuildingElementProxy whose body maps the top
+/// one expands to `per_level^levels` boxes from a file of a few hundred entities (9 levels of 10: 10^9 boxes in
+/// 14 kB).
+pub fn ifc_mapped_bomb(levels: u32, per_level: u32) -> String {
+    let mut extra = String::new();
+    // Representation of level 0: the box's own (#13); each level k adds a map of level k - 1, its items and its
+    // representation.
+    let mut below = 13u32;
+    let mut id = 100u32;
+    for k in 1..=levels {
+        let map = id;
+        extra += &format!("#{map}=IFCREPRESENTATIONMAP(#3,#{below});\n");
+        id += 1;
+        let mut items = Vec::new();
+        for j in 0..per_level {
+            let step = 2.0 * (per_level as f64).powi(k as i32 - 1);
+            extra += &format!(
+                "#{}=IFCCARTESIANPOINT(({:.1},0.,0.));\n#{}=IFCCARTESIANTRANSFORMATIONOPERATOR3D($,$,#{},$,$);\n\
+                 #{}=IFCMAPPEDITEM(#{map},#{});\n",
+                id,
+                step * j as f64,
+                id + 1,
+                id,
+                id + 2,
+                id + 1
+            );
+            items.push(format!("#{}", id + 2));
+            id += 3;
+        }
+        extra += &format!(
+            "#{id}=IFCSHAPEREPRESENTATION(#4,'Body','MappedRepresentation',({}));\n",
+            items.join(",")
+        );
+        below = id;
+        id += 1;
+    }
+    ifc_box("IFC4", &extra).replace(
+        "#14=IFCPRODUCTDEFINITIONSHAPE($,$,(#13));",
+        &format!("#14=IFCPRODUCTDEFINITIONSHAPE($,$,(#{below}));"),
+    )
+}
+
+/// `n` products (IfcBuildingElementProxy, 2 m apart) whose bodies map one representation map of the box: the
+/// legitimate sharing that must stay one mesh with `n` instances.
+pub fn ifc_shared_mapped(n: u32) -> String {
+    let mut extra = String::from("#100=IFCREPRESENTATIONMAP(#3,#13);\n");
+    for k in 0..n {
+        let b = 200 + 10 * k;
+        extra += &format!(
+            "#{b}=IFCCARTESIANPOINT(({:.1},0.,0.));\n#{}=IFCAXIS2PLACEMENT3D(#{b},$,$);\n\
+             #{}=IFCLOCALPLACEMENT($,#{});\n#{}=IFCCARTESIANTRANSFORMATIONOPERATOR3D($,$,#2,$,$);\n\
+             #{}=IFCMAPPEDITEM(#100,#{});\n#{}=IFCSHAPEREPRESENTATION(#4,'Body','MappedRepresentation',(#{}));\n\
+             #{}=IFCPRODUCTDEFINITIONSHAPE($,$,(#{}));\n\
+             #{}=IFCBUILDINGELEMENTPROXY('{:0>22}',$,'copy {k}',$,$,#{},#{},$,$);\n",
+            2.0 * k as f64,
+            b + 1,
+            b + 2,
+            b + 1,
+            b + 3,
+            b + 4,
+            b + 3,
+            b + 5,
+            b + 4,
+            b + 6,
+            b + 5,
+            b + 7,
+            format!("P{k}"),
+            b + 2,
+            b + 6
+        );
+    }
+    // The box product itself is dropped: only the mapped copies have geometry.
+    ifc_box("IFC4", &extra).replace(
+        "#15=IFCBUILDINGELEMENTPROXY('1YvctVUKr0kugbFTf53O9L',$,'box',$,$,#10,#14,$,$);\n",
+        "",
+    )
+}
+
+/// The valid box followed by a second product, cut in the middle of an entity (no `ENDSEC;`, no
+/// `END-ISO-10303-21;`): what was read (the box) opens, with a warning that the file ends early.
+pub fn ifc_truncated_mid_entity() -> String {
+    let whole = ifc_box(
+        "IFC4",
+        "#16=IFCCARTESIANPOINT((5.,0.,0.));\n#17=IFCAXIS2PLACEMENT3D(#16,$,$);\n#18=IFCLOCALPLACEMENT($,#17);\n\
+         #19=IFCBUILDINGELEMENTPROXY('2YvctVUKr0kugbFTf53O9L',$,'second box',$,$,#18,#14,$,$);\n",
+    );
+    let cut = whole.find("#19=").expect("the second product") + 30;
+    whole[..cut].to_string()
 }

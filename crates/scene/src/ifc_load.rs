@@ -7,7 +7,11 @@
 //! declares none is read in metres with a warning in [`Scene::warnings`] and the log). The scene is built as for
 //! STEP ([`crate::cad_load::to_scene`]): the file's unit, re-centred when far from the origin (georeferenced
 //! coordinates). The worker runs under the same limits as the OpenCASCADE one: address space, CPU seconds
-//! (`HRTAO_IFC_CPU_SECONDS`, default 300), killed on Cancel or with the viewer.
+//! (`HRTAO_IFC_CPU_SECONDS`, default 300), killed on Cancel or with the viewer. Before tessellating, it counts
+//! what the representation maps expand to (mapped items multiplied through their nesting; a map shared by
+//! products counted once, as it stays one mesh): over [`MAX_IFC_ITEMS`] (or [`IFC_ITEM_BYTES`] each within the
+//! scene memory limit) the load is refused as too large, naming the count and the cap. A file that does not end
+//! with `END-ISO-10303-21;` opens with a warning that the model may be incomplete.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -31,6 +35,14 @@ const MAX_IFC_ENTITIES: u64 = 10_000_000;
 /// Address space the worker may use beyond the scene memory limit (Python, NumPy, IfcOpenShell and OCCT
 /// libraries, thread stacks and heap arenas).
 const WORKER_OVERHEAD: u64 = 2 << 30;
+
+/// Most geometry items the products' representations may expand to, mapped items multiplied through their
+/// nesting (counted by the worker before it tessellates: [`crate::MAX_INSTANCES`], as for generated scenes).
+const MAX_IFC_ITEMS: u64 = crate::MAX_INSTANCES;
+
+/// Memory an expanded geometry item takes at least (IfcOpenShell's shape, its tessellation, the mesh hand-over):
+/// the item cap within the scene memory limit. Must match `ITEM_BYTES` in the worker, which names it.
+const IFC_ITEM_BYTES: u64 = 4096;
 
 /// The schemas IfcOpenShell 0.8 reads.
 const SCHEMAS: [&str; 4] = ["IFC2X3", "IFC4X3", "IFC4X1", "IFC4"];
@@ -91,6 +103,9 @@ pub fn load_ifc(
         )));
     }
     budget.reserve(entities * CAD_ENTITY_BYTES, "IfcOpenShell's entities")?;
+    let ends_early = crate::cad_load::ends_early(&bytes);
+    // A file cut short is read up to its last whole statement (IfcOpenShell crashes on a string left open).
+    let complete = ends_early.then(|| complete_statements(&bytes));
     drop(bytes);
     opts.check_cancel(path)?;
     let python = ifc_python();
@@ -106,6 +121,12 @@ pub fn load_ifc(
     let mut cmd = Command::new(&python);
     // -I: isolated (no PYTHONPATH, no user site, no current folder on the path).
     cmd.arg("-I").arg("-c").arg(WORKER_SCRIPT).arg(&abs);
+    // What the representation maps may expand to (ifc_worker.py counts it before tessellating).
+    let max_items = MAX_IFC_ITEMS.min(opts.max_memory / IFC_ITEM_BYTES).max(1);
+    cmd.env("HRTAO_IFC_MAX_ITEMS", max_items.to_string());
+    if let Some(n) = complete {
+        cmd.env("HRTAO_IFC_COMPLETE_BYTES", n.to_string());
+    }
     let limits = WorkerLimits {
         kernel: "IfcOpenShell",
         address_space: opts.max_memory.saturating_add(WORKER_OVERHEAD),
@@ -119,6 +140,10 @@ pub fn load_ifc(
             WorkerError::Failed(m) if m.contains("IfcOpenShell is not installed") => {
                 err(format!("{m} (install: {})", install_command()))
             }
+            // The worker's count of mapped items over the cap (ifc_worker.py, `mapped_expansion`).
+            WorkerError::Failed(m) if m.contains("geometry items") && m.contains("over the cap") => {
+                SceneError::TooLarge(format!("{}: {m}", path.display()))
+            }
             WorkerError::Failed(m) => err(m),
         })?;
     let read_s = started.elapsed().as_secs_f64();
@@ -127,6 +152,11 @@ pub fn load_ifc(
     let mut scene = crate::cad_load::to_scene(path, model).map_err(err)?;
     if no_unit {
         let warning = no_unit_warning(path, scene.unit_m.unwrap_or(1.0));
+        log::warn!("{warning}");
+        scene.warnings.push(warning);
+    }
+    if ends_early {
+        let warning = crate::cad_load::ends_early_warning(path);
         log::warn!("{warning}");
         scene.warnings.push(warning);
     }
@@ -175,6 +205,33 @@ fn check_header(bytes: &[u8]) -> Result<u64, String> {
     }
 }
 
+/// The length of the file's whole statements: up to the last `;` outside a string (`'…'`, where `''` is a quote)
+/// and outside a comment (`/* … */`).
+fn complete_statements(bytes: &[u8]) -> usize {
+    let (mut in_string, mut in_comment, mut end) = (false, false, 0);
+    let mut k = 0;
+    while k < bytes.len() {
+        let b = bytes[k];
+        if in_comment {
+            if b == b'*' && bytes.get(k + 1) == Some(&b'/') {
+                in_comment = false;
+                k += 1;
+            }
+        } else if b == b'\'' {
+            in_string = !in_string;
+        } else if !in_string {
+            if b == b'/' && bytes.get(k + 1) == Some(&b'*') {
+                in_comment = true;
+                k += 1;
+            } else if b == b';' {
+                end = k + 1;
+            }
+        }
+        k += 1;
+    }
+    end
+}
+
 /// The first name inside `FILE_SCHEMA(('…'))`.
 fn schema(head: &[u8]) -> Option<String> {
     let at = head
@@ -214,6 +271,15 @@ mod tests {
         assert!(check_header(header_only.as_bytes())
             .unwrap_err()
             .contains("no DATA"));
+    }
+
+    #[test]
+    fn whole_statements_end_outside_strings_and_comments() {
+        let head = "ISO-10303-21;\nDATA;\n#1=A('x;y','it''s;');\n/* a; */";
+        assert_eq!(complete_statements(head.as_bytes()), head.find("/*").unwrap() - 1);
+        let cut = format!("{head}\n#2=B('open;");
+        assert_eq!(complete_statements(cut.as_bytes()), head.find("/*").unwrap() - 1);
+        assert_eq!(complete_statements(b"no statement"), 0);
     }
 
     #[test]

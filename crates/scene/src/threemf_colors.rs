@@ -5,37 +5,14 @@
 //! colour here (per-triangle colours beyond the first are not kept). Colours are sRGB in the file, linear in the
 //! scene, as glTF's base colour.
 use std::collections::HashMap;
-use std::io::{Cursor, Read};
+use std::io::BufRead;
 
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::Reader;
 
-/// Each object's linear RGBA colour, by object id, for the objects whose colour the file gives.
-pub fn object_colors(archive: &[u8]) -> Result<HashMap<usize, [f32; 4]>, String> {
-    let mut zip =
-        zip::ZipArchive::new(Cursor::new(archive)).map_err(|e| format!("not a 3MF archive: {e}"))?;
-    let mut parts = Vec::new();
-    for i in 0..zip.len() {
-        let mut entry = zip.by_index(i).map_err(|e| format!("archive entry {i}: {e}"))?;
-        let name = entry.name().map(|n| n.into_owned()).unwrap_or_default();
-        if name.ends_with(".model") {
-            let mut text = String::new();
-            entry
-                .read_to_string(&mut text)
-                .map_err(|e| format!("{name}: {e}"))?;
-            parts.push(text);
-        }
-    }
-    let mut colors = Colors::default();
-    for text in &parts {
-        colors.read(text)?;
-    }
-    Ok(colors.by_object())
-}
-
 /// Property groups (by id: their colours) and what each object refers to.
 #[derive(Default)]
-struct Colors {
+pub(crate) struct Colors {
     groups: HashMap<usize, Vec<[f32; 4]>>,
     /// Object id → (its pid, its pindex, its first triangle's pid and p1).
     objects: HashMap<usize, ObjectProps>,
@@ -83,14 +60,17 @@ pub fn parse_color(s: &str) -> Option<[f32; 4]> {
 }
 
 impl Colors {
-    fn read(&mut self, xml: &str) -> Result<(), String> {
-        let mut reader = Reader::from_str(xml);
+    /// Reads one model part's XML as a stream (one event held at a time).
+    pub(crate) fn read(&mut self, xml: impl BufRead) -> Result<(), String> {
+        let mut reader = Reader::from_reader(xml);
+        let mut buf = Vec::new();
         // The group being read (its id) and the object being read.
         let mut group: Option<usize> = None;
         let mut object: Option<usize> = None;
         loop {
+            buf.clear();
             let event = reader
-                .read_event()
+                .read_event_into(&mut buf)
                 .map_err(|e| format!("model XML at byte {}: {e}", reader.buffer_position()))?;
             match event {
                 Event::Start(e) | Event::Empty(e) => match e.local_name().as_ref() {
@@ -145,7 +125,8 @@ impl Colors {
         }
     }
 
-    fn by_object(&self) -> HashMap<usize, [f32; 4]> {
+    /// Each object's linear RGBA colour, by object id, for the objects whose colour the file gives.
+    pub(crate) fn by_object(&self) -> HashMap<usize, [f32; 4]> {
         let color = |pid: Option<usize>, index: Option<usize>| -> Option<[f32; 4]> {
             self.groups.get(&pid?)?.get(index?).copied()
         };
@@ -179,7 +160,7 @@ mod tests {
             <object id="7" pid="9" pindex="0"/>
           </resources></model>"##;
         let mut c = Colors::default();
-        c.read(xml).unwrap();
+        c.read(xml.as_bytes()).unwrap();
         let by = c.by_object();
         // The object's own property first; sRGB 0x80 is linear 0.216.
         let grey = by[&2];
@@ -192,7 +173,7 @@ mod tests {
         assert_eq!(parse_color("#12345"), None);
         assert_eq!(parse_color("#GG0000"), None);
         assert!(
-            c.read("<model><object id='1'></model>").is_err(),
+            c.read("<model><object id='1'></model>".as_bytes()).is_err(),
             "mismatched tags"
         );
     }

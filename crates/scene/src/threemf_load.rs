@@ -6,20 +6,32 @@
 //! Shading normals: 3MF stores none; meshes get smooth normals by the load's crease angle, as STL and PLY.
 //!
 //! The archive is read through the guard like every model file, and the decompressed size of its model parts
-//! (as the zip's directory declares them) is taken from the memory budget before any XML is parsed.
+//! (as the zip's directory declares them) is taken from the memory budget, [`XML_MEMORY_FACTOR`] times, before
+//! any part is inflated: a part too large for the budget is refused at once. The parts are then parsed as
+//! streams ([`PartReader`]): no part is ever held whole, a part inflating past its declared size is an error,
+//! whitespace runs between elements are squeezed (a part inflating to gigabytes of blanks costs time, not
+//! memory) and no text or tag may be longer than [`MAX_TOKEN`], so what a part costs is what it describes.
 use std::collections::HashMap;
-use std::io::Cursor;
+use std::io::{BufReader, Cursor, Read};
 use std::path::Path;
 
 use glam::{DMat4, DVec4};
+use serde::Deserialize;
 
 use crate::error::SceneError;
 use crate::guard::{read_model, LoadOptions};
 use crate::scene::{recentre_origin, relative_transform, Instance, LoadProgress, Mesh, Primitive, Scene};
 use crate::tree::NodeTree;
 
-/// Memory per byte of model XML while it is parsed and kept (the text, then vertices and triangles).
+/// Memory per byte of model XML while it is parsed and kept: a vertex or a triangle takes at least 27 bytes of
+/// XML (`<vertex x="0" y="0" z="0"/>`) and 24 bytes parsed (48 while its list grows), then 12 in the scene's mesh
+/// and 12 of normals. The text itself is never held (the parts are streamed).
 const XML_MEMORY_FACTOR: u64 = 3;
+/// Whitespace kept of a run between elements (the rest is dropped as it streams by).
+const MAX_WHITESPACE: u64 = 256;
+/// The longest text or tag a model part may hold (a coordinate list or a name is far shorter; a longer one would
+/// be held whole by the XML reader).
+pub(crate) const MAX_TOKEN: u64 = 16 << 20;
 /// Components nested deeper than this are refused (a cycle would never end).
 const MAX_DEPTH: usize = 32;
 /// Instances a file may place (components multiply: a small file could ask for billions).
@@ -36,27 +48,51 @@ pub fn load_3mf(
         message,
     };
     let (bytes, mut budget) = read_model(path, opts, progress)?;
-    {
-        let mut zip =
-            zip::ZipArchive::new(Cursor::new(&bytes)).map_err(|e| err(format!("not a 3MF archive: {e}")))?;
-        let mut declared = 0u64;
-        for i in 0..zip.len() {
-            let entry = zip
-                .by_index_raw(i)
-                .map_err(|e| err(format!("archive entry {i}: {e}")))?;
-            if entry.name().is_ok_and(|n| n.ends_with(".model")) {
-                declared = declared.saturating_add(entry.size());
-            }
+    let mut zip =
+        zip::ZipArchive::new(Cursor::new(&bytes)).map_err(|e| err(format!("not a 3MF archive: {e}")))?;
+    // The model parts: their index in the archive, name and declared (inflated) size.
+    let mut parts = Vec::new();
+    for i in 0..zip.len() {
+        let entry = zip
+            .by_index_raw(i)
+            .map_err(|e| err(format!("archive entry {i}: {e}")))?;
+        if let Some(name) = entry.name().ok().filter(|n| n.ends_with(".model")) {
+            parts.push((i, name.to_string(), entry.size()));
         }
-        if declared == 0 {
-            return Err(err("the archive holds no model part (3D/3dmodel.model)".into()));
-        }
-        budget.reserve(declared.saturating_mul(XML_MEMORY_FACTOR), "the 3MF model parts")?;
     }
+    let declared = parts.iter().fold(0u64, |s, p| s.saturating_add(p.2));
+    if declared == 0 {
+        return Err(err("the archive holds no model part (3D/3dmodel.model)".into()));
+    }
+    // Before any part is inflated.
+    budget.reserve(
+        declared.saturating_mul(XML_MEMORY_FACTOR),
+        &format!(
+            "the 3MF model parts ({} inflated, {XML_MEMORY_FACTOR}x for parsing)",
+            crate::guard::mib(declared)
+        ),
+    )?;
     opts.check_cancel(path)?;
-    let colors = crate::threemf_colors::object_colors(&bytes).map_err(err)?;
-    let models = threemf::read(Cursor::new(bytes)).map_err(|e| err(format!("cannot read: {e}")))?;
-    opts.check_cancel(path)?;
+    let mut colors = crate::threemf_colors::Colors::default();
+    let mut models = Vec::with_capacity(parts.len());
+    for (i, name, size) in &parts {
+        let entry = zip.by_index(*i).map_err(|e| err(format!("{name}: {e}")))?;
+        colors
+            .read(BufReader::new(PartReader::new(entry, *size, name)))
+            .map_err(|e| err(format!("{name}: {e}")))?;
+        opts.check_cancel(path)?;
+        let entry = zip.by_index(*i).map_err(|e| err(format!("{name}: {e}")))?;
+        let mut de =
+            quick_xml::de::Deserializer::from_reader(BufReader::new(PartReader::new(entry, *size, name)));
+        models.push(
+            threemf::model::Model::deserialize(&mut de)
+                .map_err(|e| err(format!("cannot read {name}: {e}")))?,
+        );
+        opts.check_cancel(path)?;
+    }
+    let colors = colors.by_object();
+    drop(zip);
+    drop(bytes);
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -215,4 +251,108 @@ fn primitive(mesh: &threemf::model::Mesh, base_color: [f32; 4]) -> Result<Primit
         double_sided: false,
         normals: Vec::new(),
     })
+}
+
+/// A model part as it inflates, checked and squeezed on the way to the XML reader: more bytes than the archive
+/// declares is an error (the budget took the declared size), whitespace past [`MAX_WHITESPACE`] bytes between
+/// elements is dropped, and a text or tag longer than [`MAX_TOKEN`] is an error.
+pub(crate) struct PartReader<R> {
+    inner: R,
+    name: String,
+    declared: u64,
+    inflated: u64,
+    in_markup: bool,
+    blanks: u64,
+    token: u64,
+}
+
+impl<R: Read> PartReader<R> {
+    pub(crate) fn new(inner: R, declared: u64, name: &str) -> PartReader<R> {
+        PartReader {
+            inner,
+            name: name.to_string(),
+            declared,
+            inflated: 0,
+            in_markup: false,
+            blanks: 0,
+            token: 0,
+        }
+    }
+}
+
+impl<R: Read> Read for PartReader<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        let bad = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidData, m);
+        loop {
+            let n = self.inner.read(out)?;
+            if n == 0 {
+                return Ok(0);
+            }
+            self.inflated += n as u64;
+            if self.inflated > self.declared {
+                return Err(bad(format!(
+                    "{} inflates past the {} bytes its archive entry declares",
+                    self.name, self.declared
+                )));
+            }
+            let mut kept = 0;
+            for k in 0..n {
+                let b = out[k];
+                match b {
+                    b'<' => (self.in_markup, self.token, self.blanks) = (true, 0, 0),
+                    b'>' => (self.in_markup, self.token, self.blanks) = (false, 0, 0),
+                    b' ' | b'\t' | b'\r' | b'\n' if !self.in_markup => {
+                        self.blanks += 1;
+                        if self.blanks > MAX_WHITESPACE {
+                            continue;
+                        }
+                    }
+                    _ => self.blanks = 0,
+                }
+                self.token += 1;
+                if self.token > MAX_TOKEN {
+                    return Err(bad(format!(
+                        "{} holds a text or tag longer than {} MiB (at byte {})",
+                        self.name,
+                        MAX_TOKEN >> 20,
+                        self.inflated - (n - k) as u64
+                    )));
+                }
+                out[kept] = b;
+                kept += 1;
+            }
+            if kept > 0 {
+                return Ok(kept);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn squeeze(text: &[u8], declared: u64) -> std::io::Result<Vec<u8>> {
+        let mut out = Vec::new();
+        PartReader::new(text, declared, "3D/3dmodel.model").read_to_end(&mut out)?;
+        Ok(out)
+    }
+
+    #[test]
+    fn parts_stream_squeezed_within_their_declared_size() {
+        let blanks = " ".repeat(10_000);
+        let xml = format!("<a x=\"1  2\">{blanks}<b/>\n\n<c>t  u</c>{blanks}</a>");
+        let out = squeeze(xml.as_bytes(), xml.len() as u64).unwrap();
+        let want = format!(
+            "<a x=\"1  2\">{}<b/>\n\n<c>t  u</c>{}</a>",
+            " ".repeat(MAX_WHITESPACE as usize),
+            " ".repeat(MAX_WHITESPACE as usize)
+        );
+        assert_eq!(String::from_utf8(out).unwrap(), want);
+        let e = squeeze(xml.as_bytes(), 100).unwrap_err().to_string();
+        assert!(e.contains("inflates past the 100 bytes"), "{e}");
+        let long = vec![b'x'; MAX_TOKEN as usize + 1];
+        let e = squeeze(&long, u64::MAX).unwrap_err().to_string();
+        assert!(e.contains("longer than 16 MiB"), "{e}");
+    }
 }

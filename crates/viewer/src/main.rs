@@ -36,6 +36,10 @@ const ENVIRONMENT: &[(&str, &str)] = &[
         "the Khronos validation layer on (as --validation)",
     ),
     (
+        "HRTAO_HIDE_RAY_QUERY=1",
+        "every device looks like one without ray queries (ray-tracing pipelines only, as a data-centre GPU)",
+    ),
+    (
         "HRTAO_RAY_BACKEND",
         "trace rays with ray queries (query) or ray-tracing pipelines (pipeline), as --ray-backend",
     ),

@@ -116,6 +116,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 String::new()
             }
         );
+        if report.non_finite > 0 {
+            log::warn!(
+                "frame {i}: the device produced {} non-finite values (NaN or infinite); replaced before they \
+                 reached the map or the image",
+                report.non_finite
+            );
+        }
         frames.push(report);
         bar.inc(1);
     }

@@ -257,3 +257,52 @@ fn stl_and_ply_render_the_same_ao_as_gltf() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Validation asked for (`HRTAO_VALIDATION=1`, as scripts/test.sh and these tests ask) where the Khronos layer is
+/// not installed, as on a bare GPU machine: the loader's explicit layer folders replaced by an empty one
+/// (`VK_LAYER_PATH`), so it lists no validation layer. The render still succeeds and writes its image, says that
+/// validation was skipped because the layer is missing, and its stats say the device ran without it; with the
+/// layer found (the control) the same run says nothing of the kind and runs validated.
+#[test]
+fn a_missing_validation_layer_is_skipped_with_a_message() {
+    let run = |name: &str, env: &[(&str, &str)]| {
+        let (png, stats) = (tmp(&format!("{name}.png")), tmp(&format!("{name}.json")));
+        let out = cli::hrtao_with(
+            &rod_view(&[
+                "--mode",
+                "rtao",
+                "--frames",
+                "1",
+                "--out",
+                png.to_str().unwrap(),
+                "--stats",
+                stats.to_str().unwrap(),
+            ]),
+            env,
+        );
+        let log = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{name}: {log}");
+        assert!(
+            std::fs::metadata(&png).is_ok_and(|m| m.len() > 1000),
+            "{name}: the image is written"
+        );
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        (log, v)
+    };
+    let empty = tmp("no-layers");
+    std::fs::create_dir_all(&empty).unwrap();
+    let (log, v) = run("no-layer", &[("VK_LAYER_PATH", empty.to_str().unwrap())]);
+    assert!(
+        log.contains("validation skipped: VK_LAYER_KHRONOS_validation is not installed"),
+        "{log}"
+    );
+    assert_eq!(v["device"]["validation"], false, "{v:#}");
+    assert_eq!(v["validation_messages"], 0);
+
+    let (log, v) = run("layer", &[]);
+    if v["device"]["validation"] == true {
+        assert!(!log.contains("validation skipped"), "{log}");
+    } else {
+        eprintln!("skipped: the control run with the validation layer: it is not installed here");
+    }
+}

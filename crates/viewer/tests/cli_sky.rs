@@ -140,7 +140,9 @@ fn what_cannot_be_lit_is_a_clear_error() {
 }
 
 /// The sky light traced by ray queries and by ray-tracing pipelines (the backend a GPU without ray queries
-/// takes): the same contract, errors against the reference within 10 % of each other, validation clean.
+/// takes): the same contract, errors against the reference within 10 % of each other, validation clean. Without
+/// ray queries (a pipelines-only GPU, `HRTAO_HIDE_RAY_QUERY=1`) the pipelines' light is held to the contract
+/// alone and the comparison is skipped with a message.
 #[test]
 fn both_ray_backends_light_alike() {
     let error = |backend: &str| {
@@ -164,7 +166,13 @@ fn both_ray_backends_light_alike() {
         rays_per_frame(&stats);
         light_error(&img)
     };
-    let (query, pipeline) = (error("query"), error("pipeline"));
+    let pipeline = error("pipeline");
+    if !cli::ray_queries_or_skip("the sky light by ray queries against pipelines") {
+        println!("rod lobe 90°, frame 32: pipelines MAE {:.4}", pipeline.mae);
+        assert!(pipeline.relative() <= 0.02, "{pipeline:?}");
+        return;
+    }
+    let query = error("query");
     println!(
         "rod lobe 90°, frame 32: ray queries MAE {:.4}, pipelines {:.4}",
         query.mae, pipeline.mae

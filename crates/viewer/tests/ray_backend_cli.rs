@@ -1,6 +1,9 @@
 //! `--ray-backend query|pipeline` in `hrtao render`, `hrtao bench` and `hrtao view`: each runs with each backend,
 //! validation silent, the device reports the backend it traced with, and per-pixel RTAO renders the same image by
 //! both (the backends trace the same rays: crates/hrtao-core/tests/ray_backends.rs compares every tracing pass).
+//! Where the device has no ray queries (a pipelines-only GPU, or `HRTAO_HIDE_RAY_QUERY=1`, which makes any device
+//! look like one: `hiding_ray_queries_leaves_the_pipelines`) the ray-query runs are skipped with a message
+//! (`cli::ray_queries_or_skip`).
 mod cli;
 /// The test data helpers of the scene crate's tests (`testdata/`), shared rather than copied.
 #[path = "../../scene/tests/common/mod.rs"]
@@ -37,8 +40,26 @@ fn read_pfm(path: &std::path::Path) -> Vec<f32> {
         .collect()
 }
 
+/// The backends this machine's device runs: both, or pipelines alone where it has no ray queries (the skip said
+/// for `test`).
+fn backends(test: &str) -> &'static [&'static str] {
+    if cli::ray_queries_or_skip(&format!("{test} by ray queries")) {
+        &["query", "pipeline"]
+    } else {
+        &["pipeline"]
+    }
+}
+
+/// Per-pixel RTAO by the two backends: the same 8 rays per pixel, compiled apart. On lavapipe bit-equal; a GPU's
+/// compiler may round a ray's setup differently by an ulp, which changes the verdict of a ray only where it grazes
+/// an edge (crates/hrtao-core/tests/ray_backends.rs, `RTAO_DIFFERING`): so at most 1 % of the pixels (144 of
+/// 160×90) may differ by more than 1e-4, and the MAE stays within 0.002 (such a pixel moves by 1/8). Rays that are
+/// really wrong (another sequence or radius, missed hits) change most of the occluded pixels.
 #[test]
 fn render_with_each_backend_gives_the_same_per_pixel_rtao() {
+    if !cli::ray_queries_or_skip("per-pixel RTAO by ray queries against pipelines") {
+        return;
+    }
     let dir = tmp_dir();
     let mut images = Vec::new();
     for backend in ["query", "pipeline"] {
@@ -71,24 +92,34 @@ fn render_with_each_backend_gives_the_same_per_pixel_rtao() {
         assert_eq!(v["validation_messages"], 0, "{backend}: validation messages");
         images.push(read_pfm(&pfm));
     }
-    assert_eq!(images[0].len(), 160 * 90);
-    let worst = images[0]
+    let n = 160 * 90;
+    assert_eq!((images[0].len(), images[1].len()), (n, n));
+    let differences: Vec<f32> = images[0]
         .iter()
         .zip(&images[1])
         .map(|(a, b)| (a - b).abs())
-        .fold(0.0f32, f32::max);
+        .collect();
+    let differing = differences.iter().filter(|&&d| d > 1e-4).count();
+    let mae = differences.iter().sum::<f32>() / n as f32;
+    eprintln!("per-pixel RTAO: {differing} of {n} pixels differ, MAE {mae:.5}");
     assert!(
-        worst <= 1e-4,
-        "per-pixel RTAO differs between the backends by up to {worst}"
+        differing * 100 <= n && mae <= 0.002,
+        "per-pixel RTAO differs between the backends in {differing} of {n} pixels, MAE {mae}"
     );
-    assert!(images[0].iter().any(|&a| a < 0.9), "some occlusion");
+    // Rod's view at 160×90 shows 697 occluded pixels (AO < 0.999; lavapipe): more than 4× the 144 that may differ,
+    // so a backend that is wrong in most of them cannot pass.
+    let occluded = images[0].iter().filter(|&&a| a < 0.999).count();
+    assert!(
+        occluded > 4 * n / 100,
+        "occlusion enough for a wrong backend to show: {occluded} pixels"
+    );
 }
 
 #[test]
 fn bench_runs_with_each_backend() {
     let dir = tmp_dir();
     let scene = common::test_scene("rod");
-    for backend in ["query", "pipeline"] {
+    for &backend in backends("bench") {
         let json = dir.join(format!("bench-{backend}.json"));
         cli::hrtao_ok(&[
             "bench",
@@ -151,7 +182,7 @@ fn view_runs_with_each_backend() {
         return;
     }
     let dir = tmp_dir();
-    for backend in ["query", "pipeline"] {
+    for &backend in backends("view") {
         let shot = dir.join(format!("view-{backend}.png"));
         cli::hrtao_ok(&[
             "view",
@@ -183,7 +214,11 @@ fn the_viewer_opens_the_device_with_the_saved_backend() {
     let dir = tmp_dir();
     let config = dir.join("viewer.json");
     std::fs::write(&config, r#"{ "ray_backend": "pipeline" }"#).unwrap();
-    for (forced, traced) in [(None, "pipeline"), (Some("query"), "query")] {
+    let mut cases = vec![(None, "pipeline")];
+    if cli::ray_queries_or_skip("the command line's ray queries over the saved pipelines") {
+        cases.push((Some("query"), "query"));
+    }
+    for (forced, traced) in cases {
         let mut args = vec![
             "view",
             "gen:box",
@@ -209,4 +244,77 @@ fn the_viewer_opens_the_device_with_the_saved_backend() {
     // The saved choice is kept as it was (the run rewrote the file with the viewer's state).
     let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&config).unwrap()).unwrap();
     assert_eq!(saved["ray_backend"], "pipeline");
+}
+
+/// `HRTAO_HIDE_RAY_QUERY=1` makes the device look like a GPU that traces with ray-tracing pipelines only, for
+/// every context of the process: `hrtao devices` lists no ray queries (the device it opens traces by pipelines;
+/// with ray queries forced no device is usable, and the listing says they are hidden), and `hrtao render` picks
+/// the pipelines by itself and renders validation-clean.
+#[test]
+fn hiding_ray_queries_leaves_the_pipelines() {
+    if !cli::hrtao(&["devices", "--ray-backend", "pipeline"])
+        .status
+        .success()
+    {
+        eprintln!("skipped: hiding ray queries: the device has no ray-tracing pipelines to fall back on");
+        return;
+    }
+    let hidden = [("HRTAO_HIDE_RAY_QUERY", "1")];
+    let text = |o: &std::process::Output| {
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    };
+    let out = cli::hrtao_with(&["devices"], &hidden);
+    let t = text(&out);
+    assert!(out.status.success(), "{t}");
+    let opened = t
+        .lines()
+        .find(|l| l.starts_with("opened: "))
+        .expect("the device opened");
+    assert!(opened.ends_with("rays traced by pipeline"), "{t}");
+    assert!(!t.contains("traced by query"), "{t}");
+
+    let out = cli::hrtao_with(&["devices", "--ray-backend", "query"], &hidden);
+    let t = text(&out);
+    assert!(!out.status.success(), "ray queries forced while hidden: {t}");
+    let listed: Vec<&str> = t
+        .lines()
+        .filter(|l| l.starts_with("  ") && l.contains("): "))
+        .collect();
+    assert!(!listed.is_empty(), "{t}");
+    for l in &listed {
+        assert!(
+            l.contains("lacks rayQuery") && l.contains("hidden by HRTAO_HIDE_RAY_QUERY")
+                || l.contains("not usable") && !l.contains("rayQuery"),
+            "every device is listed without ray queries: {l}\n{t}"
+        );
+    }
+    assert!(
+        listed
+            .iter()
+            .any(|l| l.contains("hidden by HRTAO_HIDE_RAY_QUERY")),
+        "{t}"
+    );
+    assert!(t.contains("chosen: none"), "{t}");
+
+    let dir = tmp_dir();
+    let stats = dir.join("hidden.json");
+    let args = cli::rod_view(&[
+        "--mode",
+        "rtao",
+        "--frames",
+        "1",
+        "--out",
+        dir.join("hidden.png").to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    let out = cli::hrtao_with(&args, &hidden);
+    assert!(out.status.success(), "{}", text(&out));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(v["device"]["ray_backend"], "pipeline", "{v:#}");
+    assert_eq!(v["validation_messages"], 0);
 }

@@ -9,7 +9,8 @@ use hrtao_core::{
 use hrtao_scene::glam::{Mat4, Vec3};
 use hrtao_scene::{Instance, Mesh, Primitive, Scene};
 
-/// A GPU context with the Khronos validation layer on (tests fail on any message: see `assert_clean`).
+/// A GPU context with the Khronos validation layer on where it is installed (tests fail on any message: see
+/// `assert_clean`; without the layer the context says that validation is skipped and runs without it).
 pub fn gpu() -> Arc<Gpu> {
     let _ = env_logger::builder().is_test(true).try_init();
     let opts = ContextOptions {
@@ -17,7 +18,43 @@ pub fn gpu() -> Arc<Gpu> {
         device: std::env::var("HRTAO_DEVICE").ok(),
         ..Default::default()
     };
-    Gpu::new(&opts).expect("a Vulkan device with ray queries (run scripts/install-deps.sh)")
+    Gpu::new(&opts)
+        .expect("a Vulkan device with ray queries or ray-tracing pipelines (run scripts/install-deps.sh)")
+}
+
+/// Whether the device the tests open (`HRTAO_DEVICE`) can trace with ray queries, judged as `Gpu::new` judges it
+/// with the query backend forced: false on a GPU that traces with pipelines only, or under
+/// `HRTAO_HIDE_RAY_QUERY=1`. Then prints why `test` (the test or the part of it that needs ray queries) is
+/// skipped. A machine with no usable device at all is not a reason to skip: true, and the test fails as before.
+pub fn ray_queries_or_skip(test: &str) -> bool {
+    let device = std::env::var("HRTAO_DEVICE").ok();
+    let listing = |ray_backend| {
+        hrtao_core::context::list_devices(&ContextOptions {
+            device: device.clone(),
+            ray_backend,
+            ..Default::default()
+        })
+        .unwrap_or_default()
+    };
+    let forced = listing(Some(hrtao_core::RayBackend::Query));
+    if forced.iter().any(|d| d.chosen) || !listing(None).iter().any(|d| d.chosen) {
+        return true;
+    }
+    let why: Vec<String> = forced
+        .iter()
+        .map(|d| format!("{}: {}", d.name, d.problem.as_deref().unwrap_or("usable")))
+        .collect();
+    eprintln!("skipped: {test}: no device with ray queries ({})", why.join("; "));
+    false
+}
+
+/// Whether `gpu` runs with the validation layer; prints why `test` is skipped when it does not (asked for, but the
+/// layer is not installed: the context runs without it, `hrtao_core::context::VALIDATION_SKIPPED`).
+pub fn validation_or_skip(gpu: &Gpu, test: &str) -> bool {
+    if !gpu.info.validation {
+        eprintln!("skipped: {test}: the Khronos validation layer is not installed");
+    }
+    gpu.info.validation
 }
 
 pub fn assert_clean(gpu: &Gpu) {

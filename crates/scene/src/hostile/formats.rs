@@ -65,6 +65,34 @@ fn compressed_gltf(data: &[u8], prim_ext: &str, view_ext: &str, count: u64, requ
     )
 }
 
+/// A valid 3MF (the corner, one build item) whose model part holds `blanks` bytes of whitespace between its
+/// resources and its build, deflated: a few kB on disk per MB inflated (1.5 GB of blanks is about 1.5 MB).
+pub fn threemf_whitespace(blanks: u64) -> io::Result<Vec<u8>> {
+    let model = model_xml(CORNER_TRIANGLES, "", r#"<item objectid="1"/>"#);
+    let at = model.find("<build>").expect("a build element");
+    let mut z = zip::ZipWriter::new(Cursor::new(Vec::new()));
+    let stored = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    for (name, bytes) in [("[Content_Types].xml", CONTENT_TYPES), ("_rels/.rels", RELS)] {
+        z.start_file(name, stored).map_err(io::Error::other)?;
+        z.write_all(bytes)?;
+    }
+    let deflated = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated)
+        .large_file(blanks > u32::MAX as u64 / 2);
+    z.start_file("3D/3dmodel.model", deflated)
+        .map_err(io::Error::other)?;
+    z.write_all(&model.as_bytes()[..at])?;
+    let chunk = vec![b' '; 1 << 20];
+    let mut left = blanks;
+    while left > 0 {
+        let n = left.min(chunk.len() as u64) as usize;
+        z.write_all(&chunk[..n])?;
+        left -= n as u64;
+    }
+    z.write_all(&model.as_bytes()[at..])?;
+    Ok(z.finish().map_err(io::Error::other)?.into_inner())
+}
+
 pub(super) fn write(dir: &Path) -> io::Result<Vec<HostileCase>> {
     let garbage: Vec<u8> = (0..512u32)
         .map(|i| (i.wrapping_mul(2654435761) >> 11) as u8)

@@ -1415,6 +1415,7 @@ impl Viewer {
                 roughness: None,
                 rays: report.rays,
                 rays_per_frame,
+                non_finite: report.non_finite,
                 cpu_ms: split,
                 interval_ms,
                 eye: walk_stat.map(|w| w.1),

@@ -54,6 +54,9 @@ pub struct FrameStat {
     /// The ray budget the frame was rendered with (rays per frame, `budget.rs`): what the frame-time target
     /// set; the rays traced may be fewer (a cell with all its samples takes none).
     pub rays_per_frame: u32,
+    /// Values the renderer's guard found non-finite (NaN, infinite) and replaced before they entered the map or
+    /// the still accumulation (`FrameReport::non_finite`): 0 on a sound device.
+    pub non_finite: u32,
     /// Where `wall_ms` went on the CPU clock (consecutive spans: their sum is at most `wall_ms`).
     pub cpu_ms: CpuSplit,
     /// From the previous rendered frame's start to this one's (0 for the first): what a user sees as the frame
@@ -177,6 +180,8 @@ struct StatsFile<'a> {
     converged_frame: Option<usize>,
     /// Per-field medians of the moving frames' `cpu_ms`.
     median_moving_cpu_ms: Option<CpuSplit>,
+    /// Non-finite values the guard replaced over the run (the frames' `non_finite`): 0 on a sound device.
+    non_finite: u64,
     /// A background screenshot (--screenshot-size) written during the run.
     screenshot: Option<&'a ShotSummary>,
     /// Frames the viewer kept in flight (1 or 2), and how many completed after the next frame began.
@@ -235,6 +240,7 @@ impl StatsLog {
             median_moving_cpu_ms: CpuSplit::medians(
                 self.frames.iter().filter(|f| f.moving).map(|f| &f.cpu_ms),
             ),
+            non_finite: self.frames.iter().map(|f| f.non_finite as u64).sum(),
             screenshot: self.screenshot.as_ref(),
             frames_in_flight: in_flight.0,
             overlapped_frames: in_flight.1,
@@ -323,6 +329,7 @@ mod tests {
                 roughness: None,
                 rays: 0,
                 rays_per_frame: 0,
+                non_finite: 0,
                 cpu_ms: CpuSplit::default(),
                 interval_ms: 0.0,
                 eye: None,

@@ -39,6 +39,26 @@ pub fn hrtao_ok_with<S: AsRef<OsStr> + Debug>(args: &[S], env: &[(&str, &str)]) 
     out
 }
 
+/// Whether `hrtao` can trace with ray queries on this machine's device (`hrtao devices --ray-backend query`
+/// succeeds): false on a GPU that traces with pipelines only, or under `HRTAO_HIDE_RAY_QUERY=1`. Then prints why
+/// `test` (the test or the part of it that needs ray queries) is skipped, with the device listing's verdict. A
+/// machine where `hrtao devices` finds no usable device at all is not a reason to skip: true, and the test fails
+/// as before.
+pub fn ray_queries_or_skip(test: &str) -> bool {
+    let forced = hrtao(&["devices", "--ray-backend", "query"]);
+    if forced.status.success() || !hrtao(&["devices"]).status.success() {
+        return true;
+    }
+    let listing = String::from_utf8_lossy(&forced.stdout);
+    let why: Vec<&str> = listing
+        .lines()
+        .filter(|l| l.starts_with("  ") && l.contains("): "))
+        .map(str::trim)
+        .collect();
+    eprintln!("skipped: {test}: no device with ray queries ({})", why.join("; "));
+    false
+}
+
 /// `render` of rod's 160×90 reference view (its committed camera, R = 10) at 8 rays per pixel, then `extra`.
 pub fn rod_view(extra: &[&str]) -> Vec<String> {
     let scene = crate::common::test_scene("rod");
