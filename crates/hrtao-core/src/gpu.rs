@@ -110,8 +110,8 @@ mod tests {
         assert_eq!(std::mem::size_of::<HashCell>() % 8, 0);
         // FrameStats::rays (atomicAdd, common.glsl `rays_add`);
         assert_eq!(std::mem::offset_of!(FrameStats, rays) % 8, 0);
-        // the sky cells' int64 sums (sky.glsl `sky_cell_add`) and the contact detail's two sums
-        // (contact_detail.glsl `ContactDetailRef`, buffer_reference_align = 8) start their buffers.
+        // the sky cells' int64 sums (sky.glsl `sky_cell_add`) and an addition's fitted sums (declared with
+        // buffer_reference_align = 8) start their buffers.
         assert_eq!(std::mem::offset_of!(FrameGlobals, gbuffer) % 8, 0);
         assert_eq!(
             std::mem::offset_of!(FrameStats, rays),
