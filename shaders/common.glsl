@@ -62,6 +62,9 @@ float finite_or_count(float v, float safe) {
     stat_add(STAT_NON_FINITE, 1u);
     return safe;
 }
+// The same without the count, for the composite: its inputs were counted where they were made (the update, the
+// resolve), and it writes no statistics (the frame's statistics copy shares its barrier).
+float finite_or(float v, float safe) { return is_finite(v) ? v : safe; }
 // Ray counts (u64: no wrap at 4K x 1024 rays).
 void rays_add(uint which, uint v) { atomicAdd(StatsRef(g.stats).rays[which], uint64_t(v)); }
 

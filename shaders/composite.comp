@@ -284,9 +284,9 @@ vec3 sky_pixel_light(uint index, GPixel px, float wc, float frames, float k, boo
         float w = own_rays > 0.0 ? monotone_weight(own_rays, own_rays, k) : 0.0;
         float t[SKY_COEFFS];
         for (uint i = 0u; i < SKY_COEFFS; ++i) {
-            // The guard (common.glsl): nothing non-finite enters the accumulation.
-            float resolved = finite_or_count(sp.v[base + SKY_RESOLVED + i], 0.0);
-            float own = traced ? finite_or_count(sp.v[base + SKY_OWN + i], 0.0) : 0.0;
+            // The guard (common.glsl `finite_or`): nothing non-finite enters the accumulation.
+            float resolved = finite_or(sp.v[base + SKY_RESOLVED + i], 0.0);
+            float own = traced ? finite_or(sp.v[base + SKY_OWN + i], 0.0) : 0.0;
             float acc_cell = (restart ? 0.0 : sp.v[base + SKY_ACC_CELL + i]) + wc * resolved;
             float acc_own = (restart ? 0.0 : sp.v[base + SKY_ACC_OWN + i]) + own;
             sp.v[base + SKY_ACC_CELL + i] = acc_cell;
@@ -412,8 +412,8 @@ void main() {
         vec3 s = mix(plain, EDGE_COLOR, 0.85 * edge(pix, px));
         // This sample: its cell estimate and its own rays (a miss counts as rays_per_pixel open rays, so
         // partly covered pixels weigh background and surface by coverage).
-        // The guard (common.glsl): nothing non-finite enters the accumulation.
-        float c = hashed && px.t >= 0.0 ? clamp(finite_or_count(FloatRef(g.ao).v[index], 1.0), 0.0, 1.0) : 1.0;
+        // The guard (common.glsl `finite_or`): nothing non-finite enters the accumulation.
+        float c = hashed && px.t >= 0.0 ? clamp(finite_or(FloatRef(g.ao).v[index], 1.0), 0.0, 1.0) : 1.0;
         PixelRays pr = PixelRaysRef(g.pixel_rays).v[index];
         float traced = float(pr.traced);
         float open = float(pr.unoccluded);

@@ -108,9 +108,10 @@ gpu_consts! {
     /// Pixels whose target cell still takes rays but that a fractional budget (`trace_fraction`) left out of
     /// this frame's ray queue: with the queued ones, the pixels on young cells.
     STAT_UNPICKED_PIXELS: u32 = 9;
-    /// Values a guard found non-finite (NaN or infinite) and replaced before they entered the map's sky sums, a
-    /// pixel's resolved or own transfer, or the still accumulation (common.glsl `finite_or_count`): 0 on a
-    /// sound device; counted per pixel and place, reported as `FrameReport::non_finite`.
+    /// Values a guard found non-finite (NaN or infinite) and replaced where they were made, before they entered
+    /// the map's sky sums, a pixel's own or resolved transfer or its resolved AO (common.glsl
+    /// `finite_or_count`): 0 on a sound device; reported as `FrameReport::non_finite`. The composite's last
+    /// guard before the still accumulation replaces without counting (`finite_or`: it writes no statistics).
     STAT_NON_FINITE: u32 = 10;
     // 11-13: free.
     /// Counters below this index are reset at the start of every frame (with all of `FrameStats::rays`).
