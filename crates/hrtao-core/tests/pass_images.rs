@@ -158,6 +158,16 @@ fn on_a_cpu_device_with_one_thread_images_equal_the_recorded_ones() {
         eprintln!("skipped: {} is not a CPU device", gpu.info.name);
         return;
     }
+    // Recorded with ray queries: the pipeline backend's invocations claim a cell's rays in another order, so its
+    // frames differ bit for bit (6,201 pixels of the defaults' first frame, by up to 0.29, under
+    // HRTAO_HIDE_RAY_QUERY=1) though they are as close to the references (the test above).
+    if gpu.info.ray_backend != hrtao_core::RayBackend::Query {
+        eprintln!(
+            "skipped: {}: the recorded images are the ray-query backend's, this device traces with {:?}",
+            gpu.info.name, gpu.info.ray_backend
+        );
+        return;
+    }
     let flat = rendered(&gpu);
     let path = reference_path();
     if std::env::var_os("HRTAO_BLESS_PASS_IMAGES").is_some() {
