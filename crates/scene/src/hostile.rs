@@ -36,6 +36,25 @@ enum Entry {
 }
 
 /// Creates `path` as `entry`, replacing whatever is there (never writing into a stale FIFO).
+/// Writes each (name, extension, bytes, expected outcome) into `dir` as NAME.EXT: cases with no reference.
+fn write_files(
+    dir: &Path,
+    files: Vec<(&'static str, &'static str, Vec<u8>, Expect)>,
+) -> io::Result<Vec<HostileCase>> {
+    let mut out = Vec::new();
+    for (name, ext, bytes, expect) in files {
+        let path = dir.join(format!("{name}.{ext}"));
+        make(&path, &Entry::File(bytes))?;
+        out.push(HostileCase {
+            name,
+            path,
+            expect,
+            reference: None,
+        });
+    }
+    Ok(out)
+}
+
 fn make(path: &Path, entry: &Entry) -> io::Result<()> {
     match std::fs::symlink_metadata(path) {
         Ok(m) if m.is_dir() => std::fs::remove_dir_all(path)?,
@@ -807,18 +826,7 @@ pub fn write_budget_corpus(dir: &Path, budget: u64) -> io::Result<Vec<HostileCas
             Expect::Image,
         ),
     ];
-    let mut out = Vec::new();
-    for (name, ext, bytes, expect) in files {
-        let path = dir.join(format!("{name}.{ext}"));
-        make(&path, &Entry::File(bytes))?;
-        out.push(HostileCase {
-            name,
-            path,
-            expect,
-            reference: None,
-        });
-    }
-    Ok(out)
+    write_files(dir, files)
 }
 
 /// Variations of the generated STEP file ([`step_boxes`]).
@@ -1014,18 +1022,7 @@ pub fn write_cad_corpus(dir: &Path) -> io::Result<Vec<HostileCase>> {
             Expect::Error,
         ),
     ];
-    let mut out = Vec::new();
-    for (name, ext, bytes, expect) in files {
-        let path = dir.join(format!("{name}.{ext}"));
-        make(&path, &Entry::File(bytes))?;
-        out.push(HostileCase {
-            name,
-            path,
-            expect,
-            reference: None,
-        });
-    }
-    Ok(out)
+    write_files(dir, files)
 }
 
 /// A one-box IFC4 file written by hand: a project and an IfcBuildingElementProxy (outside any spatial structure)

@@ -5,7 +5,7 @@
 use std::io::{self, Cursor, Write};
 use std::path::Path;
 
-use super::{b64, floats, make, Entry, Expect, HostileCase, CORNER};
+use super::{b64, floats, write_files, Expect, HostileCase, CORNER};
 
 const CONTENT_TYPES: &[u8] = br#"<?xml version="1.0" encoding="UTF-8"?><Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types"><Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/><Default Extension="model" ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/></Types>"#;
 const RELS: &[u8] = br#"<?xml version="1.0" encoding="UTF-8"?><Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships"><Relationship Target="/3D/3dmodel.model" Id="rel0" Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>"#;
@@ -189,16 +189,5 @@ pub(super) fn write(dir: &Path) -> io::Result<Vec<HostileCase>> {
             Expect::Error,
         ),
     ];
-    let mut cases = Vec::new();
-    for (name, ext, bytes, expect) in files {
-        let path = dir.join(format!("{name}.{ext}"));
-        make(&path, &Entry::File(bytes))?;
-        cases.push(HostileCase {
-            name,
-            path,
-            expect,
-            reference: None,
-        });
-    }
-    Ok(cases)
+    write_files(dir, files)
 }
