@@ -435,6 +435,14 @@ def preflight(hrtao, report, allow_cpu):
             continue
         if q.returncode == 0:
             report.data["device"]["ray_backends"].append(backend)
+        else:
+            # A backend the device does not offer (an NVIDIA GPU has no ray queries) is what the probe asks, not
+            # a failure: the checks run on the backends it offers.
+            probe = next(e for e in reversed(report.data["steps"]) if e["name"] == f"devices_{backend}")
+            probe.update(status="not offered", note=q.stderr.strip()[-600:])
+            report.save()
+    if not report.data["device"]["ray_backends"]:
+        raise Missing("a ray backend: `hrtao devices` opened a device, but neither --ray-backend query nor pipeline")
     report.data["device"]["cpu"] = is_cpu(opened)
     report.save()
 

@@ -28,6 +28,16 @@ void add_rays(CellRef cells, uint c, uvec3 rays) {
     }
 }
 
+// One AO ray of the pixel's, counted (open, open within r_near) in `all_rays` and, when it is one of the target
+// cell's, in `cell_rays`.
+uint trace_counted(vec3 origin, vec3 dir, bool cells_ray, inout uvec3 all_rays, inout uvec3 cell_rays) {
+    uint e = trace_ao_ray(origin, dir);
+    uvec2 counts = uvec2(e == RAY_OPEN ? 1u : 0u, e != RAY_NEAR_HIT ? 1u : 0u);
+    all_rays.yz += counts;
+    if (cells_ray) cell_rays.yz += counts;
+    return e;
+}
+
 void main() {
     uint q;
     if (!queue_entry(StatsRef(g.stats).counters[STAT_RAY_QUEUE], q)) return;
@@ -71,27 +81,31 @@ void main() {
     vec3 origin = offset_ray(px.position, px.normal);
     uvec3 all_rays = uvec3(rays, 0u, 0u);   // traced, open, open within r_near
     uvec3 cell_rays = uvec3(claimed, 0u, 0u);   // the same among the first `claimed` rays (the target cell's)
-    // Sky light (sky.glsl): the basis values of the rays that escape, of all rays and of the target cell's.
+    // Sky light (sky.glsl): the basis values of the rays that escape, of all rays and of the target cell's. Two
+    // loops, so that with the sky off its sums are not live across each traced ray (a ray-tracing pipeline
+    // keeps what is live across traceRayEXT in its stack).
     bool sky = sky_on();
     float sky_all[SKY_COEFFS];
     float sky_cell[SKY_COEFFS];
-    for (uint i = 0u; i < SKY_COEFFS; ++i) {
-        sky_all[i] = 0.0;
-        sky_cell[i] = 0.0;
-    }
-    for (uint r = 0u; r < rays; ++r) {
-        vec3 dir = cosine_direction(px.normal, r2_point(seq0 + r, shift));
-        uint e = trace_ao_ray(origin, dir);
-        uvec2 counts = uvec2(e == RAY_OPEN ? 1u : 0u, e != RAY_NEAR_HIT ? 1u : 0u);
-        all_rays.yz += counts;
-        if (r < claimed) cell_rays.yz += counts;
-        if (sky && e == RAY_OPEN && sky_escapes(origin, dir)) {
-            float y[SKY_COEFFS];
-            sky_basis(sky_frame(dir), y);
-            for (uint i = 0u; i < SKY_COEFFS; ++i) {
-                sky_all[i] += y[i];
-                if (r < claimed) sky_cell[i] += y[i];
+    if (sky) {
+        for (uint i = 0u; i < SKY_COEFFS; ++i) {
+            sky_all[i] = 0.0;
+            sky_cell[i] = 0.0;
+        }
+        for (uint r = 0u; r < rays; ++r) {
+            vec3 dir = cosine_direction(px.normal, r2_point(seq0 + r, shift));
+            if (trace_counted(origin, dir, r < claimed, all_rays, cell_rays) == RAY_OPEN && sky_escapes(origin, dir)) {
+                float y[SKY_COEFFS];
+                sky_basis(sky_frame(dir), y);
+                for (uint i = 0u; i < SKY_COEFFS; ++i) {
+                    sky_all[i] += y[i];
+                    if (r < claimed) sky_cell[i] += y[i];
+                }
             }
+        }
+    } else {
+        for (uint r = 0u; r < rays; ++r) {
+            trace_counted(origin, cosine_direction(px.normal, r2_point(seq0 + r, shift)), r < claimed, all_rays, cell_rays);
         }
     }
     if (rays == 0u) return;

@@ -1,8 +1,9 @@
 // The one traversal behind every traced ray (included by common.glsl in passes that `#define HRTAO_TRACES`),
 // with two implementations chosen at compile time (build.rs): a ray query in the pass's compute shader, or, in
 // the pass's ray-generation variant (HRTAO_RAYGEN, the ray-tracing pipeline backend: pass.rs, rt_pipeline.rs),
-// traceRayEXT with the miss shader trace_miss.rmiss and the closest-hit shader trace_hit.rchit, which only the
-// rays that need a hit's attributes or distance invoke. Every ray is opaque (no any-hit shader).
+// traceRayEXT: the rays that need a hit's attributes with the miss shader trace_miss.rmiss and the closest-hit
+// shader trace_hit.rchit (a 72-byte payload), the others with their own pair and a 4-byte payload. Every ray is
+// opaque (no any-hit shader).
 #ifndef HRTAO_TRACE_GLSL
 #define HRTAO_TRACE_GLSL
 #include "trace_record.glsl"
@@ -21,22 +22,26 @@ bool trace_closest(vec3 p, vec3 dir, float tmin, float tmax, out HitRecord h) {
     return h.t >= 0.0;
 }
 
+// The rays that ask only a distance or whether they hit carry a 4-byte payload to their own miss shader (index 1)
+// and hit group (record offset 1): trace_distance_miss.rmiss, trace_distance_hit.rchit.
+layout(location = 1) rayPayloadEXT float trace_t;
+
 // The distance of some hit (not necessarily the closest: the traversal stops at the first it finds) on the
 // segment [tmin, tmax], or -1 when the segment hits nothing (no section clipping).
 float segment_first_hit(vec3 p, vec3 dir, float tmin, float tmax) {
     if (tmax <= tmin) return -1.0;
-    trace_payload.t = -1.0;
-    traceRayEXT(tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, 0, 0, 0, p, tmin, dir, tmax, 0);
-    return trace_payload.t;
+    trace_t = -1.0;
+    traceRayEXT(tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, 1, 0, 1, p, tmin, dir, tmax, 1);
+    return trace_t;
 }
 
 // Whether the segment hits anything: the miss shader alone answers (a hit leaves the payload as set here).
 bool segment_occluded(vec3 p, vec3 dir, float tmin, float tmax) {
     if (tmax <= tmin) return false;
-    trace_payload.t = 0.0;
+    trace_t = 0.0;
     traceRayEXT(tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsSkipClosestHitShaderEXT,
-                0xFF, 0, 0, 0, p, tmin, dir, tmax, 0);
-    return trace_payload.t >= 0.0;
+                0xFF, 1, 0, 1, p, tmin, dir, tmax, 1);
+    return trace_t >= 0.0;
 }
 #else
 bool trace_closest(vec3 p, vec3 dir, float tmin, float tmax, out HitRecord h) {

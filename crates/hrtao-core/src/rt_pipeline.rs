@@ -1,7 +1,8 @@
 //! The ray-tracing pipeline of a pass that traces rays, under `RayBackend::Pipeline`: the pass's ray-generation
 //! variant (`<shader>.rgen`, compiled by build.rs from the pass's own compute source, trace.glsl), the shared miss
-//! shader (trace_miss.rmiss) and closest-hit shader (trace_hit.rchit), on the one pipeline layout of every pass
-//! (pass.rs), and its shader binding table. `RtPipeline` owns the pipeline and the table's buffer.
+//! and closest-hit shaders (trace.glsl: the hit record's pair, index 0, and the distance-only pair, index 1), on
+//! the one pipeline layout of every pass (pass.rs), and its shader binding table. `RtPipeline` owns the pipeline
+//! and the table's buffer.
 use std::sync::Arc;
 
 use ash::vk;
@@ -12,16 +13,17 @@ use crate::context::Gpu;
 use crate::error::{CoreError, Result};
 use crate::pass::shader_module;
 
-/// The miss and closest-hit shaders every traced pass shares.
-const MISS_SHADER: &str = "trace_miss.rmiss";
-const HIT_SHADER: &str = "trace_hit.rchit";
+/// The miss and closest-hit shaders every traced pass shares, by the index trace.glsl's `traceRayEXT` calls give
+/// them (miss index, hit record offset): 0 fills a hit record, 1 only a distance.
+const MISS_SHADERS: [&str; 2] = ["trace_miss.rmiss", "trace_distance_miss.rmiss"];
+const HIT_SHADERS: [&str; 2] = ["trace_hit.rchit", "trace_distance_hit.rchit"];
 
-/// One pass's ray-tracing pipeline and its shader binding table (one ray-generation record, one miss record,
-/// one triangle hit group).
+/// One pass's ray-tracing pipeline and its shader binding table (one ray-generation record, the miss records,
+/// one triangle hit group per closest-hit shader).
 pub struct RtPipeline {
     gpu: Arc<Gpu>,
     pub(crate) pipeline: vk::Pipeline,
-    /// Holds the three records, each region starting at `shaderGroupBaseAlignment`.
+    /// Holds the records, each region starting at `shaderGroupBaseAlignment`.
     _table: Buffer,
     /// The ray-generation, miss, hit and (empty) callable regions, as `vkCmdTraceRaysKHR` takes them.
     pub(crate) regions: [vk::StridedDeviceAddressRegionKHR; 4],
@@ -38,14 +40,20 @@ impl RtPipeline {
             CoreError::Invalid("ray-tracing pipelines are not enabled on this device".into())
         })?;
         let device = &gpu.device;
-        let names = [rgen, MISS_SHADER, HIT_SHADER];
-        let kinds = [
-            vk::ShaderStageFlags::RAYGEN_KHR,
-            vk::ShaderStageFlags::MISS_KHR,
-            vk::ShaderStageFlags::CLOSEST_HIT_KHR,
-        ];
+        // Stages and groups in the table's order: ray generation, misses, hit groups.
+        let names: Vec<&str> = [rgen]
+            .into_iter()
+            .chain(MISS_SHADERS)
+            .chain(HIT_SHADERS)
+            .collect();
+        let misses = MISS_SHADERS.len() as u32;
+        let kinds = (0..names.len() as u32).map(|i| match i {
+            0 => vk::ShaderStageFlags::RAYGEN_KHR,
+            i if i <= misses => vk::ShaderStageFlags::MISS_KHR,
+            _ => vk::ShaderStageFlags::CLOSEST_HIT_KHR,
+        });
         let mut modules = Vec::new();
-        for name in names {
+        for &name in &names {
             match shader_module(gpu, name) {
                 Ok(m) => modules.push(m),
                 Err(e) => {
@@ -74,16 +82,19 @@ impl RtPipeline {
                 .any_hit_shader(vk::SHADER_UNUSED_KHR)
                 .intersection_shader(vk::SHADER_UNUSED_KHR)
         };
-        let groups = [
-            general(0),
-            general(1),
+        let hit_group = |i: u32| {
             vk::RayTracingShaderGroupCreateInfoKHR::default()
                 .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
                 .general_shader(vk::SHADER_UNUSED_KHR)
-                .closest_hit_shader(2)
+                .closest_hit_shader(i)
                 .any_hit_shader(vk::SHADER_UNUSED_KHR)
-                .intersection_shader(vk::SHADER_UNUSED_KHR),
-        ];
+                .intersection_shader(vk::SHADER_UNUSED_KHR)
+        };
+        let groups: Vec<_> = (0..names.len() as u32)
+            .map(|i| if i <= misses { general(i) } else { hit_group(i) })
+            .collect();
+        // Records per region: ray generation, miss, hit.
+        let counts = [1, MISS_SHADERS.len(), HIT_SHADERS.len()];
         let info = [vk::RayTracingPipelineCreateInfoKHR::default()
             .stages(&stages)
             .groups(&groups)
@@ -115,9 +126,10 @@ impl RtPipeline {
             };
             let base = rt.base_alignment as u64;
             let stride = align_up(rt.handle_size as u64, rt.handle_alignment as u64);
-            let region_size = align_up(stride, base);
+            let sizes = counts.map(|n| align_up(n as u64 * stride, base));
+            let offsets = [0, sizes[0], sizes[0] + sizes[1]];
             // The buffer's own address need not meet the base alignment: room to move the table up to it.
-            let mut bytes = vec![0u8; (base + 3 * region_size) as usize];
+            let mut bytes = vec![0u8; (base + sizes.iter().sum::<u64>()) as usize];
             let buffer = Buffer::new(
                 gpu,
                 &format!("shader binding table ({rgen})"),
@@ -126,16 +138,21 @@ impl RtPipeline {
                 vk::BufferUsageFlags::SHADER_BINDING_TABLE_KHR,
             )?;
             let start = align_up(buffer.address, base) - buffer.address;
-            for g in 0..3 {
-                let at = (start + g as u64 * region_size) as usize;
-                bytes[at..at + handle_size].copy_from_slice(&handles[g * handle_size..(g + 1) * handle_size]);
+            let mut g = 0;
+            for (region, &n) in counts.iter().enumerate() {
+                for record in 0..n {
+                    let at = (start + offsets[region] + record as u64 * stride) as usize;
+                    bytes[at..at + handle_size]
+                        .copy_from_slice(&handles[g * handle_size..(g + 1) * handle_size]);
+                    g += 1;
+                }
             }
             let mut buffer = buffer;
             buffer.write_bytes(0, &bytes)?;
-            let region = |g: u64| vk::StridedDeviceAddressRegionKHR {
-                device_address: buffer.address + start + g * region_size,
+            let region = |r: usize| vk::StridedDeviceAddressRegionKHR {
+                device_address: buffer.address + start + offsets[r],
                 stride,
-                size: stride,
+                size: counts[r] as u64 * stride,
             };
             // The ray-generation region's size equals its stride (VUID-vkCmdTraceRaysKHR-size-04023).
             let regions = [

