@@ -174,6 +174,8 @@ uint find_or_insert(CellKey key) {
         uint64_t prev = atomicCompSwap(cells.v[candidate].stamp, expected, mine);
         if (prev == expected) {
             reset_counters(cells, candidate);
+            // Before any later pass looks the key up (find_cell), its home slot bounds the run to it.
+            atomicMax(cells.v[key.slot].probe_run, length);
             if (stamp_checksum(expected) == EMPTY_CELL) {
                 stat_add(STAT_CELLS_INSERTED, 1u);
                 stat_add(STAT_OCCUPIED, 1u);
@@ -194,16 +196,27 @@ uint find_or_insert(CellKey key) {
     return INVALID_CELL;
 }
 
-// Returns the slot holding `key`, or INVALID_CELL when absent (read only; stops at the first free slot,
-// which ends the key's run since slots are reclaimed but never emptied).
+// Returns the slot holding `key`, or INVALID_CELL when absent (read only). Scans the longest run any key homed
+// at the key's slot was claimed at (`HashCell::probe_run`, set by find_or_insert before the passes that look up),
+// and stops early at a free slot: slots are reclaimed but never emptied, so on a table crowded with old cells an
+// absent key would otherwise scan all max_probe slots, and the resolve looks up 8 neighbours per pixel, most of
+// them absent where the view moves into new cells (walking: 8-12x an orbit's resolve on lavapipe).
 uint find_cell(CellKey key) {
     CellRef cells = CellRef(g.hash_cells);
     uint mask = g.hash_capacity - 1u;
-    for (uint i = 0u; i < g.max_probe; ++i) {
+    if (!slot_in_bounds(key.slot)) return INVALID_CELL;
+    uint run = min(cells.v[key.slot].probe_run, g.max_probe);
+    // In assertion mode (FLAG_CHECK_BOUNDS) the scan goes on to max_probe and a key found past its home's run
+    // counts as a bounds violation.
+    bool check = (g.flags & FLAG_CHECK_BOUNDS) != 0u;
+    for (uint i = 0u; i < (check ? g.max_probe : run); ++i) {
         uint slot = (key.slot + i) & mask;
         if (!slot_in_bounds(slot)) return INVALID_CELL;
         uint c = stamp_checksum(cells.v[slot].stamp);
-        if (c == key.checksum) return slot;
+        if (c == key.checksum) {
+            if (i >= run) stat_add(STAT_BOUNDS_VIOLATIONS, 1u);
+            return slot;
+        }
         if (c == EMPTY_CELL) return INVALID_CELL;
     }
     return INVALID_CELL;

@@ -409,8 +409,11 @@ gpu_structs! {
         /// r_n (only in frames of a young map, `FLAG_NEAR_FIELD`), and those of them that hit nothing there.
         near_traced: u32,
         near_open: u32,
-        /// Rounds the cell to its 8-byte alignment (32 bytes, as std430 lays it out).
-        _pad: u32,
+        /// The longest probe run (slots from this home slot to where the key lies, 1 = here) of any key whose home
+        /// slot this is, ever claimed since the table was emptied: a read-only lookup (`find_cell`) of a key
+        /// homed here scans no further, so that an absent key costs what a present one does rather than a scan to
+        /// the first free slot (hash_map.glsl). Also rounds the cell to 32 bytes.
+        probe_run: u32,
     }
 
     /// One CPU-vs-GPU hash test case: inputs, then the GPU's outputs (hash_test.comp).

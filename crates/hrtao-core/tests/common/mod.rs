@@ -443,7 +443,8 @@ pub struct MapCheck {
 
 /// Checks the hash map after the last frame rendered by `r` with `cam` and F = `scene_f`, against the CPU
 /// mirror of the hash (not against what holds by construction):
-/// - every cell a pixel uses holds that pixel's key (CPU `cell_key`, the current F) and was stamped this frame;
+/// - every cell a pixel uses holds that pixel's key (CPU `cell_key`, the current F), was stamped this frame and
+///   lies within its home slot's probe run (what the resolve's lookups scan);
 /// - no key is held twice within its probe run (no duplicates);
 /// - counters stay within their bounds (target cells at most max_samples + one frame's claims, every cell at
 ///   most SAMPLE_CAP + one frame's rays, unoccluded <= samples);
@@ -484,6 +485,14 @@ pub fn check_map(
             assert!(
                 dist < hrtao_core::settings::MAX_PROBE,
                 "cell {c} lies {dist} slots from its key's home"
+            );
+            // The home slot bounds the lookups of its keys (`HashCell::probe_run`, find_cell): a key beyond
+            // it would be missed by the resolve.
+            let run = cells[keys[level].slot as usize].probe_run;
+            assert!(
+                dist < run,
+                "cell {c} lies {dist} slots from its key's home {}, whose probe run is {run}",
+                keys[level].slot
             );
             assert_eq!(cell.last_frame(), now, "a cell used this frame was not stamped");
             used.insert(c);
