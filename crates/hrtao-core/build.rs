@@ -206,7 +206,7 @@ fn write_corrections(shader_dir: &Path, out_dir: &Path) {
         let _ = writeln!(glsl, "#include \"{}.glsl\"", c.name);
         let _ = writeln!(
             rust,
-            "/// shaders/{}.glsl: `order={}`, phases {:?}.\npub const {}: super::Correction = super::Correction {{ name: \"{}\", mask: {}, phases: {} }};",
+            "/// shaders/{}.glsl: `order={}`, phases `{:?}`.\npub const {}: super::Correction = super::Correction {{ name: \"{}\", mask: {}, phases: {} }};",
             c.name,
             c.order,
             c.phases,

@@ -406,22 +406,20 @@ pub(crate) fn to_scene(path: &Path, model: CadModel) -> Result<Scene, String> {
         primitives: p
             .primitives
             .iter()
-            .map(|q| Primitive {
-                positions: q
+            .map(|q| {
+                let positions = q
                     .positions
                     .iter()
                     .map(|v| (Vec3::from(*v) * scale as f32).to_array())
-                    .collect(),
-                indices: q.indices.clone(),
-                base_color: match (q.face_color, color, q.color) {
+                    .collect();
+                let base_color = match (q.face_color, color, q.color) {
                     (true, _, Some(c)) => c,
                     (_, Some(c), _) => c,
                     (_, None, Some(c)) => c,
                     _ => DEFAULT_BASE_COLOR,
-                },
-                double_sided: true,
+                };
                 // The unit scale is uniform: directions stay as the kernel gave them.
-                normals: q.normals.clone(),
+                Primitive::new(positions, q.indices.clone(), base_color).with_normals(q.normals.clone())
             })
             .collect(),
     };

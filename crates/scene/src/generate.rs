@@ -202,13 +202,11 @@ impl MeshBuilder {
     fn into_mesh(self, name: &str, color: [f32; 3]) -> Mesh {
         Mesh {
             name: name.to_owned(),
-            primitives: vec![Primitive {
-                positions: self.positions,
-                indices: self.indices,
-                base_color: [color[0], color[1], color[2], 1.0],
-                double_sided: true,
-                normals: Vec::new(),
-            }],
+            primitives: vec![Primitive::new(
+                self.positions,
+                self.indices,
+                [color[0], color[1], color[2], 1.0],
+            )],
         }
     }
 }

@@ -287,13 +287,12 @@ fn load_primitive(
         let bytes = |v: &gltf::buffer::View| view_bytes(v, buffers).map(<[u8]>::to_vec);
         match gltf_compressed::decode_draco(prim, doc, &bytes) {
             Ok(Some(g)) => {
-                return Ok(Some(Primitive {
-                    positions: g.positions,
-                    indices: to_triangle_list(mode, g.indices),
-                    base_color: base_color(prim, g.mean_color),
-                    double_sided: prim.material().double_sided(),
-                    normals: g.normals.unwrap_or_default(),
-                }))
+                let indices = to_triangle_list(mode, g.indices);
+                return Ok(Some(
+                    Primitive::new(g.positions, indices, base_color(prim, g.mean_color))
+                        .with_double_sided(prim.material().double_sided())
+                        .with_normals(g.normals.unwrap_or_default()),
+                ));
             }
             Ok(None) => {}
             // Used but not required: the uncompressed accessors stand in (glTF 2.0 §3.12).
@@ -350,13 +349,11 @@ fn load_primitive(
         Some(acc) => mean_color(&acc, buffers)?,
         None => None,
     };
-    Ok(Some(Primitive {
-        positions,
-        indices,
-        base_color: base_color(prim, mean),
-        double_sided: prim.material().double_sided(),
-        normals,
-    }))
+    Ok(Some(
+        Primitive::new(positions, indices, base_color(prim, mean))
+            .with_double_sided(prim.material().double_sided())
+            .with_normals(normals),
+    ))
 }
 
 /// The material's base colour factor times the mean vertex colour, either alone, or the default.

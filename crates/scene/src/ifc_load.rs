@@ -56,14 +56,12 @@ pub fn install_command() -> String {
     )
 }
 
-/// `${XDG_DATA_HOME:-$HOME/.local/share}/hrtao/ifc-venv`: where the install script puts the venv.
+/// `${XDG_DATA_HOME:-$HOME/.local/share}/hrtao/ifc-venv`: where the install script puts the venv
+/// (`dirs::data_dir`: an empty or relative `XDG_DATA_HOME` is ignored, as the XDG specification says).
 pub fn default_venv() -> PathBuf {
-    let data = std::env::var_os("XDG_DATA_HOME")
-        .filter(|v| !v.is_empty())
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
-        .unwrap_or_else(|| PathBuf::from(".local/share"));
-    data.join("hrtao/ifc-venv")
+    dirs::data_dir()
+        .unwrap_or_else(|| PathBuf::from(".local/share"))
+        .join("hrtao/ifc-venv")
 }
 
 /// The interpreter that runs the worker: `HRTAO_IFC_PYTHON`, else the venv's `bin/python3`.

@@ -133,7 +133,7 @@ impl Hasher for Mix {
 ///   normal of a neighbour (or +z), so the count stays one per position.
 ///
 /// Expected O(n) time (a hash map for the weld, vertex-to-face lists; each vertex compares the distinct face
-/// normals around it, at most [`MAX_FAN`]).
+/// normals around it, at most `MAX_FAN`).
 pub fn smooth(
     positions: &[[f32; 3]],
     indices: &[u32],

@@ -118,13 +118,7 @@ pub fn load_obj(
             .and_then(|mat| mat.diffuse)
             .map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 1.0])
             .unwrap_or(DEFAULT_BASE_COLOR);
-        let mut prim = Primitive {
-            positions,
-            indices: m.indices,
-            base_color,
-            double_sided: true,
-            normals: Vec::new(),
-        };
+        let mut prim = Primitive::new(positions, m.indices, base_color);
         if !m.normals.is_empty() && m.normals.len() != m.positions.len() {
             log::warn!(
                 "{}: model {mi} ({}): {} of its {} vertices have a `vn`; smoothing the whole model instead",

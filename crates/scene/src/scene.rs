@@ -31,6 +31,29 @@ pub struct Primitive {
 }
 
 impl Primitive {
+    /// A triangle list of one colour, double-sided and flat-shaded (no shading normals): what a format that says
+    /// nothing else (OBJ, STL, PLY, generated scenes) builds. The other fields come from `with_…`, so that a new
+    /// field changes this constructor and the loaders that set it, not every place a primitive is built.
+    pub fn new(positions: Vec<[f32; 3]>, indices: Vec<u32>, base_color: [f32; 4]) -> Primitive {
+        Primitive {
+            positions,
+            indices,
+            base_color,
+            double_sided: true,
+            normals: Vec::new(),
+        }
+    }
+
+    /// Whether both faces are seen (glTF's `doubleSided`; false lets a rasteriser cull back faces).
+    pub fn with_double_sided(self, double_sided: bool) -> Primitive {
+        Primitive { double_sided, ..self }
+    }
+
+    /// Shading normals, one per position (empty: flat shading; see [`Primitive::check_normals`]).
+    pub fn with_normals(self, normals: Vec<[f32; 3]>) -> Primitive {
+        Primitive { normals, ..self }
+    }
+
     pub fn triangle_count(&self) -> u64 {
         (self.indices.len() / 3) as u64
     }
@@ -238,13 +261,7 @@ impl Scene {
         let mut scene = Scene::new(name.clone());
         scene.meshes.push(Mesh {
             name: name.clone(),
-            primitives: vec![Primitive {
-                positions,
-                indices,
-                base_color: DEFAULT_BASE_COLOR,
-                double_sided: true,
-                normals: Vec::new(),
-            }],
+            primitives: vec![Primitive::new(positions, indices, DEFAULT_BASE_COLOR)],
         });
         scene.instances.push(Instance {
             mesh: 0,
@@ -564,12 +581,13 @@ mod tests {
     /// normals) and says why.
     #[test]
     fn unusable_normals_fall_back_to_face_normals() {
-        let prim = |normals: Vec<[f32; 3]>| Primitive {
-            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            indices: vec![0, 1, 2],
-            base_color: DEFAULT_BASE_COLOR,
-            double_sided: true,
-            normals,
+        let prim = |normals: Vec<[f32; 3]>| {
+            Primitive::new(
+                vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                vec![0, 1, 2],
+                DEFAULT_BASE_COLOR,
+            )
+            .with_normals(normals)
         };
         let mut ok = prim(vec![[0.0, 0.0, 2.0], [0.0, 3.0, 4.0], [0.0, 0.0, -0.5]]);
         assert_eq!(ok.check_normals(), None);
@@ -598,13 +616,11 @@ mod tests {
         let mut s = Scene::new("t");
         s.meshes.push(Mesh {
             name: "tri".into(),
-            primitives: vec![Primitive {
-                positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-                indices: vec![0, 1, 2],
-                base_color: DEFAULT_BASE_COLOR,
-                double_sided: true,
-                normals: Vec::new(),
-            }],
+            primitives: vec![Primitive::new(
+                vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                vec![0, 1, 2],
+                DEFAULT_BASE_COLOR,
+            )],
         });
         for x in 0..3 {
             s.instances.push(Instance {

@@ -244,13 +244,7 @@ fn primitive(mesh: &threemf::model::Mesh, base_color: [f32; 4]) -> Result<Primit
             indices.push(v as u32);
         }
     }
-    Ok(Primitive {
-        positions,
-        indices,
-        base_color,
-        double_sided: false,
-        normals: Vec::new(),
-    })
+    Ok(Primitive::new(positions, indices, base_color).with_double_sided(false))
 }
 
 /// A model part as it inflates, checked and squeezed on the way to the XML reader: more bytes than the archive

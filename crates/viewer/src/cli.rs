@@ -88,7 +88,142 @@ pub enum Command {
     Render(RenderArgs),
     /// List every Vulkan device, whether hrtao can use it, and which one it chooses and why.
     Devices(DeviceArgs),
+    /// A file manager's preview: a small PNG with AO, bounded in file size, memory and time (the desktop's
+    /// thumbnailer, packaging/hrtao.thumbnailer, runs it).
+    Thumbnail(ThumbnailArgs),
+    /// Write the shell completions (bash, zsh, fish) and the man pages into DIR (packaging/install.sh).
+    #[command(hide = true)]
+    GenerateShellFiles(ShellFilesArgs),
 }
+
+/// The model formats, as the help and the Open dialog list them: every extension of
+/// [`hrtao_scene::SUPPORTED_EXTENSIONS`], e.g. `.gltf, .glb, .obj`.
+pub fn formats() -> String {
+    hrtao_scene::SUPPORTED_EXTENSIONS
+        .iter()
+        .map(|e| format!(".{e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The help of an option that names a model: `WHAT: FORMATS, or a generator spec such as EXAMPLE` and `tail`.
+fn model_help(what: &str, example: &str, tail: &str) -> String {
+    format!(
+        "{what}: {}, or a generator spec such as {example}{tail}.",
+        formats()
+    )
+}
+
+/// An environment variable hrtao reads: its name (with the values it takes, if few), and what it does. The one
+/// list behind `hrtao --help` and docs/command-line.md (whose table has exactly these rows: tests/formats.rs).
+pub struct EnvVar {
+    pub name: &'static str,
+    pub text: &'static str,
+}
+
+/// Every environment variable hrtao and its tests read, in the order `--help` and docs/command-line.md list them.
+pub const ENVIRONMENT: &[EnvVar] = &[
+    EnvVar {
+        name: "RUST_LOG",
+        text: "log filter (env_logger), e.g. RUST_LOG=debug or RUST_LOG=hrtao_core=debug; default info (-v: \
+               debug, -q: warn)",
+    },
+    EnvVar {
+        name: "HRTAO_DEVICE",
+        text: "use the best device whose name contains this text (as --device)",
+    },
+    EnvVar {
+        name: "HRTAO_VALIDATION=1",
+        text: "the Khronos validation layer on (as --validation); messages are logged and counted, and scripted \
+               runs exit 1 on any",
+    },
+    EnvVar {
+        name: "HRTAO_RAY_BACKEND=query|pipeline",
+        text: "trace rays with ray queries or ray-tracing pipelines (as --ray-backend; default: ray queries where \
+               the device has them)",
+    },
+    EnvVar {
+        name: "HRTAO_HIDE_RAY_QUERY=1",
+        text: "every device looks like one without ray queries (as the pipelines-only data-centre GPUs): the \
+               binary and the test suite run on ray-tracing pipelines, and the tests that need ray queries skip \
+               with a message",
+    },
+    EnvVar {
+        name: "HRTAO_MAX_SCENE_MB",
+        text: "memory a scene may take while it loads, in MiB (default: half the physical memory, at most 16 GiB)",
+    },
+    EnvVar {
+        name: "HRTAO_DEVICE_MEMORY_LIMIT",
+        text: "refuse device allocations past this many MiB (simulates a small GPU)",
+    },
+    EnvVar {
+        name: "HRTAO_OCCT_CPU_SECONDS",
+        text: "CPU seconds the STEP/IGES worker process may use per file (default 300); past it the load fails \
+               with an error naming the file",
+    },
+    EnvVar {
+        name: "HRTAO_IFC_PYTHON",
+        text: "the Python interpreter that runs the IFC worker (default: bin/python3 of the venv \
+               scripts/install-ifc.sh makes, hrtao/ifc-venv in the XDG data directory, ~/.local/share); without \
+               it an .ifc file is an error naming the install command",
+    },
+    EnvVar {
+        name: "HRTAO_IFC_CPU_SECONDS",
+        text: "CPU seconds the IFC worker process may use per file (default 300); past it the load fails with an \
+               error naming the file",
+    },
+    EnvVar {
+        name: "HRTAO_FRAMES_IN_FLIGHT=1|2",
+        text: "frames the viewer submits before it waits for the oldest, over the settings file's \
+               frames_in_flight (default: 2 on a GPU, 1 on a software device)",
+    },
+    EnvVar {
+        name: "HRTAO_SWAPCHAIN_FORMAT=unorm|srgb",
+        text: "the viewer chooses its swapchain format among those of one kind only (default: 8-bit UNORM, else \
+               8-bit sRGB); for tests of both paths",
+    },
+    EnvVar {
+        name: "HRTAO_UI_PROBE=1",
+        text: "the viewer logs where named panel controls are (`ui probe: NAME at X,Y WxH`, window pixels) \
+               whenever they move: the window tests click them with xdotool",
+    },
+    EnvVar {
+        name: "XDG_CONFIG_HOME",
+        text: "the viewer's settings file is hrtao/viewer.json there (default ~/.config); a relative path is \
+               ignored, as the XDG specification says",
+    },
+    EnvVar {
+        name: "XDG_DATA_HOME",
+        text: "the IFC worker's venv is hrtao/ifc-venv there (default ~/.local/share); a relative path is ignored",
+    },
+    EnvVar {
+        name: "XDG_CACHE_HOME",
+        text: "the bundled scene is written as a file to hrtao/bundled there (default ~/.cache, else the \
+               temporary directory)",
+    },
+    EnvVar {
+        name: "XDG_PICTURES_DIR",
+        text: "where F12 saves screenshots unless the panel names a folder (default: the XDG pictures directory, \
+               else ~/Pictures)",
+    },
+    EnvVar {
+        name: "DISPLAY, WAYLAND_DISPLAY",
+        text: "the viewer needs one; without either it says so (run scripted runs under xvfb-run)",
+    },
+    EnvVar {
+        name: "HRTAO_SHARED",
+        text: "benchmarks and measurement tools only: a folder of extra scenes and references not in the \
+               repository; the test suite never reads it",
+    },
+    EnvVar {
+        name: "HRTAO_SOAK_FRAMES",
+        text: "tests only: frames of the soak test (default 200)",
+    },
+    EnvVar {
+        name: "MESA_SHADER_CACHE_DISABLE, MESA_SHADER_CACHE_DIR",
+        text: "Mesa's own; scripts/test.sh keeps the shader cache in target/mesa-shader-cache",
+    },
+];
 
 /// `--primary`: how primary visibility is found (`crate::setup::Device::install` applies it).
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -337,9 +472,8 @@ impl AoArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene: .step/.stp, .iges/.igs, .gltf, .glb, .obj, .stl, .ply, or a generator spec such as
-    /// gen:racks?rows=10&cols=10 (default: the bundled gearbox with its camera).
-    #[arg(long)]
+    // Scene: every format (`formats`), or a generator spec; the bundled gearbox by default.
+    #[arg(long, help = model_help("Scene", "gen:racks?rows=10&cols=10", " (default: the bundled gearbox with its camera)"))]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
     /// "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's
@@ -402,9 +536,8 @@ pub struct RenderArgs {
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct ViewArgs {
-    /// Model to open: .step/.stp, .iges/.igs, .gltf, .glb, .obj, .stl, .ply, or a generator spec such as
-    /// gen:city (default: the bundled gearbox).
-    #[arg(value_name = "FILE")]
+    // Model to open: every format (`formats`), or a generator spec; the bundled gearbox by default.
+    #[arg(value_name = "FILE", help = model_help("Model to open", "gen:city", " (default: the bundled gearbox)"))]
     pub file: Option<String>,
     /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
     #[arg(long)]
@@ -508,11 +641,58 @@ pub struct ViewArgs {
     pub device: DeviceArgs,
 }
 
+/// `hrtao thumbnail`: the limits that keep a file manager from waiting on a file too big or too slow.
+#[derive(Args, Debug, Clone)]
+pub struct ThumbnailArgs {
+    /// Longest side of the PNG in pixels (the thumbnailer's %s: 128, 256, 512 or 1024).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(16..=2048))]
+    pub size: u32,
+    // The model: every format (`formats`), or a generator spec.
+    #[arg(value_name = "INPUT", help = model_help("The model", "gen:city", ""))]
+    pub input: String,
+    /// The PNG to write: written whole (through a temporary file beside it) or not at all.
+    #[arg(value_name = "OUTPUT.png")]
+    pub output: PathBuf,
+    /// Frames of AO to render at most (fewer when half of --timeout has passed).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub frames: u32,
+    /// Give up after this many seconds (exit status 1, no PNG): loading, the device and the frames together.
+    #[arg(long, value_name = "SECONDS", default_value_t = 30.0, value_parser = parse_timeout)]
+    pub timeout: f64,
+    /// Refuse a model file larger than this many MiB.
+    #[arg(long, value_name = "MIB", default_value_t = 256)]
+    pub max_file_mb: u64,
+    /// Memory the scene may take while it loads, in MiB (HRTAO_MAX_SCENE_MB, when lower, wins); the device's
+    /// allocations are capped at twice this plus 512 MiB.
+    #[arg(long, value_name = "MIB", default_value_t = 1024, value_parser = clap::value_parser!(u64).range(16..))]
+    pub max_memory_mb: u64,
+    /// Tests: the AO mode (`none` shows what the AO adds).
+    #[arg(long, default_value = "hrtao", value_parser = mode_parser(), hide = true)]
+    pub mode: Mode,
+    #[command(flatten)]
+    pub device: DeviceArgs,
+}
+
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if !(0.1..=3600.0).contains(&v) {
+        return Err(format!("{v} is not within 0.1..=3600 seconds"));
+    }
+    Ok(v)
+}
+
+/// `hrtao generate-shell-files DIR`.
+#[derive(Args, Debug, Clone)]
+pub struct ShellFilesArgs {
+    /// The folder to write into: hrtao.bash, _hrtao (zsh), hrtao.fish and man1/hrtao*.1.
+    #[arg(value_name = "DIR")]
+    pub dir: PathBuf,
+}
+
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// Scene: .step/.stp, .iges/.igs, .gltf, .glb, .obj, .stl, .ply, or a generator spec such as
-    /// gen:racks?rows=10&cols=10.
-    #[arg(long, required = true)]
+    // Scene: every format (`formats`), or a generator spec.
+    #[arg(long, required = true, help = model_help("Scene", "gen:racks?rows=10&cols=10", ""))]
     pub scene: Option<String>,
     /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
     /// "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's

@@ -6,6 +6,8 @@ mod occt_worker;
 mod plan;
 mod render_cmd;
 mod setup;
+mod shell_files;
+mod thumbnail;
 mod view;
 
 use clap::{CommandFactory, FromArgMatches};
@@ -14,65 +16,17 @@ use clap::{CommandFactory, FromArgMatches};
 const EXAMPLES: &str = "\
 Examples:
   hrtao                               open the bundled gearbox in the viewer
-  hrtao model.step                    open a model (STEP, IGES, glTF, OBJ, STL, PLY)
+  hrtao model.step                    open a model (any format listed under [FILE])
   hrtao render --scene model.glb --out shot.png --ao-out ao.exr --frames 8
+  hrtao thumbnail --size 256 model.step preview.png
   hrtao bench --scene gen:racks?rows=10&cols=10 --json racks.json
   hrtao devices                       which Vulkan device hrtao uses, and why
 
 `hrtao --help` also lists the viewer's keys and the environment variables.";
 
-/// The environment variables the commands read.
-const ENVIRONMENT: &[(&str, &str)] = &[
-    (
-        "RUST_LOG",
-        "log filter: error, warn, info, debug (e.g. RUST_LOG=hrtao=debug)",
-    ),
-    (
-        "HRTAO_DEVICE",
-        "use the best device whose name contains this text (as --device)",
-    ),
-    (
-        "HRTAO_VALIDATION=1",
-        "the Khronos validation layer on (as --validation)",
-    ),
-    (
-        "HRTAO_HIDE_RAY_QUERY=1",
-        "every device looks like one without ray queries (ray-tracing pipelines only, as a data-centre GPU)",
-    ),
-    (
-        "HRTAO_RAY_BACKEND",
-        "trace rays with ray queries (query) or ray-tracing pipelines (pipeline), as --ray-backend",
-    ),
-    (
-        "HRTAO_MAX_SCENE_MB",
-        "memory a scene may take while it loads, in MiB (default: from the machine's RAM)",
-    ),
-    (
-        "HRTAO_DEVICE_MEMORY_LIMIT",
-        "refuse device allocations past this many MiB (simulates a small GPU)",
-    ),
-    (
-        "HRTAO_OCCT_CPU_SECONDS",
-        "CPU seconds the STEP/IGES kernel's worker process may use per file (default 300)",
-    ),
-    (
-        "XDG_CONFIG_HOME",
-        "the viewer's settings are $XDG_CONFIG_HOME/hrtao/viewer.json (default ~/.config)",
-    ),
-    (
-        "XDG_PICTURES_DIR",
-        "where F12 saves screenshots unless the panel names a folder (default: the XDG pictures \
-         directory, else ~/Pictures)",
-    ),
-    (
-        "HRTAO_SHARED",
-        "a folder of extra benchmark scenes for the measurement scripts (no test needs it)",
-    ),
-];
-
 /// `  NAME` then the text wrapped at 76 columns, indented: narrow enough that clap's own wrapping at the
 /// terminal's width leaves it alone.
-fn two_column(rows: &[(&str, &str)]) -> String {
+fn two_column<'a>(rows: impl IntoIterator<Item = (&'a str, &'a str)>) -> String {
     let mut out = String::new();
     for (name, text) in rows {
         out.push_str(&format!("  {name}\n"));
@@ -97,8 +51,8 @@ fn cli_command() -> clap::Command {
     cli::Cli::command().after_help(EXAMPLES).after_long_help(format!(
         "{}\n\nViewer keys and mouse (the panel's Help lists them too):\n{}\nEnvironment:\n{}",
         examples.collect::<Vec<_>>().join("\n").trim_end(),
-        two_column(view::BINDINGS),
-        two_column(ENVIRONMENT)
+        two_column(view::BINDINGS.iter().copied()),
+        two_column(cli::ENVIRONMENT.iter().map(|v| (v.name, v.text)))
     ))
 }
 
@@ -138,6 +92,8 @@ fn main() {
         Some(cli::Command::Devices(d)) => render_cmd::list_devices(&d),
         Some(cli::Command::View(v)) => view::run(&v),
         Some(cli::Command::Bench(b)) => bench::run(&b),
+        Some(cli::Command::Thumbnail(t)) => thumbnail::run(&t),
+        Some(cli::Command::GenerateShellFiles(g)) => shell_files::write(cli_command(), &g.dir),
         None => view::run(&args.view),
     };
     if let Err(e) = result {

@@ -120,18 +120,16 @@ mod tests {
         let mut s = Scene::new("b");
         s.meshes.push(Mesh {
             name: "slab".into(),
-            primitives: vec![Primitive {
-                positions: vec![
+            primitives: vec![Primitive::new(
+                vec![
                     [0.0, 0.0, 0.0],
                     [10.0, 0.0, 0.0],
                     [10.0, 8.0, 0.2],
                     [0.0, 8.0, 0.2],
                 ],
-                indices: vec![0, 1, 2, 0, 2, 3],
-                base_color: [1.0; 4],
-                double_sided: true,
-                normals: Vec::new(),
-            }],
+                vec![0, 1, 2, 0, 2, 3],
+                [1.0; 4],
+            )],
         });
         let project = s.tree.add("Project (IfcProject)", None);
         for (k, z) in [0.0f32, 3.0, 6.0].into_iter().enumerate() {

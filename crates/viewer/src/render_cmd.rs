@@ -48,8 +48,20 @@ fn reference<T>(
     Ok(data)
 }
 
-pub fn run(args: &RenderArgs) -> Result<()> {
-    let set_at_frame = crate::cli::set_at_frame(&args.set_at_frame)?;
+/// A scene loaded, set up and installed on a device as `render` does it, ready for its frames (`hrtao thumbnail`
+/// renders through it too).
+pub struct Ready {
+    /// The scene as loaded (path or `gen:` spec; the bundled scene's file).
+    pub spec: String,
+    pub scene: hrtao_scene::Scene,
+    pub load_ms: f64,
+    pub prepared: setup::Prepared,
+    pub settings: hrtao_core::AoSettings,
+    pub installed: Installed,
+}
+
+/// Loads `args`' scene while the device opens, applies the setup rules and the AO options, and installs both.
+pub fn ready(args: &RenderArgs) -> Result<Ready> {
     let inputs = SetupInputs::from_render(args);
     let spec = inputs.load_spec();
     // The device opens and the renderer makes its pipelines while the scene loads (a STEP file loads in a worker
@@ -80,13 +92,34 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Ok((scene, load_ms, prepared, settings))
     })();
     let device = early.join().map_err(|_| anyhow!("the device thread panicked"))?;
-    let (scene, load_ms, prepared, mut settings) = prepared?;
-    let Installed {
-        gpu,
-        scene_gpu,
-        mut renderer,
-        ..
-    } = device?.install(&scene, &prepared, &settings)?;
+    let (scene, load_ms, prepared, settings) = prepared?;
+    let installed = device?.install(&scene, &prepared, &settings)?;
+    Ok(Ready {
+        spec,
+        scene,
+        load_ms,
+        prepared,
+        settings,
+        installed,
+    })
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let set_at_frame = crate::cli::set_at_frame(&args.set_at_frame)?;
+    let Ready {
+        spec,
+        scene,
+        load_ms,
+        prepared,
+        mut settings,
+        installed:
+            Installed {
+                gpu,
+                scene_gpu,
+                mut renderer,
+                ..
+            },
+    } = ready(args)?;
     let (camera, sections) = (prepared.camera, &prepared.sections);
     let t0 = Instant::now();
     let mut frames = Vec::new();

@@ -142,6 +142,24 @@ impl SetupInputs {
         }
     }
 
+    /// The viewer's inputs for the scene `spec` it opens now: the command line's camera, radius and sections
+    /// are the first scene's; its up axis and primary visibility hold for every scene (`self` keeps those for
+    /// the next). The up axis the user chose for this file in the panel (`remembered`) applies unless `--up`
+    /// says otherwise.
+    pub fn for_next_scene(&mut self, spec: &str, remembered: Option<UpAxis>) -> SetupInputs {
+        let later = SetupInputs {
+            up: self.up,
+            primary: self.primary,
+            ..Default::default()
+        };
+        let mut inputs = SetupInputs {
+            spec: Some(spec.to_string()),
+            ..std::mem::replace(self, later)
+        };
+        inputs.up = inputs.up.or(remembered);
+        inputs
+    }
+
     /// What to load: the spec, or the bundled scene's file.
     pub fn load_spec(&self) -> String {
         match &self.spec {
@@ -154,6 +172,28 @@ impl SetupInputs {
     /// opens it by path).
     pub fn is_bundled(&self) -> bool {
         is_bundled(self.spec.as_deref())
+    }
+}
+
+/// The viewer's preferences as its command line overrides them: `--mode`, `--rays-per-frame` (a fixed budget),
+/// `--no-auto-budget`, and the tessellation and smoothing flags, which become the panel's load options.
+pub(crate) fn view_prefs(args: &ViewArgs, prefs: &mut crate::view::prefs::Prefs) {
+    use crate::view::{load_options, pacer};
+    if let Some(m) = args.mode {
+        prefs.settings.display.mode = m;
+    }
+    if let Some(r) = args.rays_per_frame {
+        prefs.rays_per_frame = r.clamp(pacer::MIN_RAYS_PER_FRAME, pacer::MAX_RAYS_PER_FRAME);
+        prefs.auto_budget = false;
+    }
+    if args.no_auto_budget {
+        prefs.auto_budget = false;
+    }
+    if let Some(t) = hrtao_scene::command_line_cad_tessellation() {
+        prefs.cad_load = load_options::CadLoadOptions::from_tessellation(t);
+    }
+    if let Some(c) = hrtao_scene::normals::command_line_crease_deg() {
+        prefs.mesh_load = load_options::MeshLoadOptions::from_crease(c);
     }
 }
 
@@ -293,6 +333,42 @@ pub fn prepare(inputs: &SetupInputs, scene: &Scene) -> Result<Prepared> {
         primary: inputs.primary,
         pass_times: inputs.pass_times,
     })
+}
+
+impl Prepared {
+    /// The viewer's first camera for its 3D view of `view_aspect` (width / height; None: not laid out): oriented
+    /// with a true up vector (the viewer's navigation keeps it orthogonal), and a camera file framed for a wider
+    /// image backed off so that the view shows the same horizontal extent.
+    pub fn view_camera(&self, view_aspect: Option<f32>) -> Camera {
+        use crate::view::nav;
+        let p = &self.camera;
+        let mut cam = nav::orbit(p, nav::target(p), self.up.vector(), 0.0, 0.0);
+        let file_aspect = cam.width as f32 / cam.height.max(1) as f32;
+        match view_aspect {
+            Some(view_aspect) if self.camera_file.is_some() && view_aspect < file_aspect => {
+                let widen = file_aspect / view_aspect;
+                if cam.is_orthographic() {
+                    cam.ortho_height *= widen;
+                } else {
+                    let t = nav::target(&cam);
+                    cam.eye = (t + (nav::eye(&cam) - t) * widen).to_array();
+                }
+            }
+            _ => {}
+        }
+        cam
+    }
+
+    /// The unit the viewer measures in: STEP and IGES declare their length unit; the bundled gearbox is a CAD
+    /// export in millimetres (its glTF says metres).
+    pub fn unit(&self, scene: &Scene) -> Option<crate::view::measure::Unit> {
+        use crate::view::measure::Unit;
+        if self.bundled {
+            Some(Unit::Mm)
+        } else {
+            scene.unit_m.and_then(Unit::from_metres)
+        }
+    }
 }
 
 /// `bench --auto-camera corner`: a camera at the `min` corner of the box (outside it by 2 % of the diagonal), at

@@ -126,7 +126,11 @@ fn help_hides_scripted_flags_and_lists_examples_keys_and_environment() {
         "HRTAO_DEVICE",
         "HRTAO_VALIDATION",
         "HRTAO_OCCT_CPU_SECONDS",
+        "HRTAO_IFC_PYTHON",
+        "HRTAO_IFC_CPU_SECONDS",
+        "HRTAO_FRAMES_IN_FLIGHT",
         "XDG_PICTURES_DIR",
+        "hrtao thumbnail --size 256",
         "x, y, z, -x, -y or -z",
         "walk mode",
         "[FILE]",
@@ -141,11 +145,7 @@ fn help_hides_scripted_flags_and_lists_examples_keys_and_environment() {
         short.contains("Examples:") && !short.contains("Environment:"),
         "{short}"
     );
-    let render = text(&hrtao(&["render", "--help"]));
-    assert!(
-        render.contains(".stl, .ply"),
-        "render's help names every format:\n{render}"
-    );
+    // Every format in each command's help: tests/formats.rs.
 }
 
 #[test]
@@ -300,6 +300,60 @@ fn set_at_frame_changes_the_radius_from_the_next_frame() {
     assert!(
         moved > 0.8 && moved < 1.2,
         "radius 8 {at_8:.4}, 8 then 24 {changed:.4}, 24 {at_24:.4}: moved {moved:.2} of the way"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Relative XDG_* values are ignored, as the XDG Base Directory specification says: with XDG_CACHE_HOME and
+/// XDG_DATA_HOME relative, the bundled scene goes to ~/.cache and the IFC worker is looked for under
+/// ~/.local/share.
+#[test]
+fn relative_xdg_directories_are_ignored() {
+    let dir = tmp("relative-xdg");
+    let home = dir.join("home");
+    std::fs::create_dir_all(&home).unwrap();
+    let stats = dir.join("stats.json");
+    let env = [
+        ("HOME", home.to_str().unwrap()),
+        ("XDG_CACHE_HOME", "relative/cache"),
+        ("XDG_DATA_HOME", "relative/data"),
+        ("HRTAO_IFC_PYTHON", ""),
+    ];
+    let o = hrtao_in(
+        &dir,
+        &[
+            "-q",
+            "render",
+            "--width",
+            "32",
+            "--height",
+            "20",
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+        &env,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(
+        PathBuf::from(s["scene"].as_str().unwrap()),
+        home.join(".cache/hrtao/bundled/default.glb")
+    );
+    assert!(!dir.join("relative").exists());
+    // An IFC file is checked, then its worker's interpreter is looked for in the venv under ~/.local/share.
+    let ifc = dir.join("wall.ifc");
+    std::fs::write(
+        &ifc,
+        "ISO-10303-21;\nHEADER;\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n#1=IFCWALL('x',$,$,$,$,$,$,$,$);\nENDSEC;\n\
+         END-ISO-10303-21;\n",
+    )
+    .unwrap();
+    let o = hrtao_in(&dir, &["render", "--scene", ifc.to_str().unwrap()], &env);
+    let t = text(&o);
+    let venv = home.join(".local/share/hrtao/ifc-venv/bin/python3");
+    assert!(
+        !o.status.success() && t.contains(&format!("{} does not exist", venv.display())),
+        "{t}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,6 +1,8 @@
 //! packaging/hrtao.desktop: a valid desktop entry (desktop-file-validate too where it is installed) that launches
 //! `hrtao FILE`, names the icon beside it and the window's application id, and offers exactly the formats the
-//! loaders read.
+//! loaders read. packaging/install.sh installs it with the MIME types, the thumbnailer, the metainfo (valid for
+//! appstreamcli where it is installed), the completions and the man pages, and the MIME database it updates
+//! gives every extension its type.
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
@@ -47,21 +49,16 @@ fn loader_extensions() -> BTreeSet<&'static str> {
         .collect()
 }
 
-/// The MIME type a file manager gives each extension (shared-mime-info / IANA names).
-fn mime_of(ext: &str) -> &'static str {
-    match ext {
-        "gltf" => "model/gltf+json",
-        "glb" => "model/gltf-binary",
-        "obj" => "model/obj",
-        "stl" => "model/stl",
-        "ply" => "application/x-ply",
-        "3mf" => "model/3mf",
-        "step" | "stp" => "model/step",
-        "iges" | "igs" => "model/iges",
-        // No registered type: the name FreeCAD and file managers give .ifc.
-        "ifc" => "application/x-extension-ifc",
-        other => panic!("no MIME type known for .{other}: add it here and to packaging/hrtao.desktop"),
-    }
+/// The MIME type of each extension: packaging/hrtao-mime.xml's (which install.sh installs for the desktops that
+/// lack some of them).
+fn mime_of(ext: &str) -> String {
+    let xml = std::fs::read_to_string(packaging().join("hrtao-mime.xml")).unwrap();
+    xml.split("<mime-type type=\"")
+        .skip(1)
+        .find(|block| block.contains(&format!("<glob pattern=\"*.{ext}\"/>")))
+        .and_then(|block| block.split('"').next())
+        .unwrap_or_else(|| panic!("no MIME type for .{ext} in packaging/hrtao-mime.xml: add one"))
+        .to_string()
 }
 
 #[test]
@@ -121,9 +118,83 @@ fn desktop_entry_offers_exactly_the_formats_the_loaders_read() {
             "the probe finds the .{must} loader: {exts:?}"
         );
     }
-    let read: BTreeSet<String> = exts.iter().map(|e| mime_of(e).to_string()).collect();
+    assert_eq!(
+        exts,
+        hrtao_scene::SUPPORTED_EXTENSIONS.into_iter().collect(),
+        "the loaders dispatch on exactly SUPPORTED_EXTENSIONS"
+    );
+    let read: BTreeSet<String> = exts.iter().map(|e| mime_of(e)).collect();
     let missing: Vec<&String> = read.difference(&offered).collect();
     assert!(missing.is_empty(), "read but not offered: {missing:?}");
     let extra: Vec<&String> = offered.difference(&read).collect();
     assert!(extra.is_empty(), "offered but not read: {extra:?}");
+}
+
+/// `packaging/install.sh` with PREFIX in a temporary folder and HRTAO_BIN the binary under test: every file in its
+/// place, the thumbnailer naming the binary by its absolute path, and (where update-mime-database is installed)
+/// the MIME database built from hrtao-mime.xml maps each extension to its type.
+#[test]
+fn install_sh_installs_the_desktop_files_completions_and_man_pages() {
+    let prefix = std::env::temp_dir().join(format!("hrtao-install-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&prefix);
+    let out = std::process::Command::new("bash")
+        .arg(packaging().join("install.sh"))
+        .env("PREFIX", &prefix)
+        .env("HRTAO_BIN", env!("CARGO_BIN_EXE_hrtao"))
+        .output()
+        .unwrap();
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "{said}");
+    let share = prefix.join("share");
+    for f in [
+        "applications/hrtao.desktop",
+        "icons/hicolor/scalable/apps/hrtao.svg",
+        "mime/packages/hrtao.xml",
+        "metainfo/io.github.hrtao.hrtao.metainfo.xml",
+        "thumbnailers/hrtao.thumbnailer",
+        "bash-completion/completions/hrtao",
+        "zsh/site-functions/_hrtao",
+        "fish/vendor_completions.d/hrtao.fish",
+        "man/man1/hrtao.1",
+        "man/man1/hrtao-thumbnail.1",
+    ] {
+        assert!(share.join(f).is_file(), "{f} not installed: {said}");
+    }
+    let bin = std::fs::canonicalize(env!("CARGO_BIN_EXE_hrtao")).unwrap();
+    let thumbnailer = std::fs::read_to_string(share.join("thumbnailers/hrtao.thumbnailer")).unwrap();
+    assert!(
+        thumbnailer.contains(&format!("Exec={} thumbnail --size %s %i %o", bin.display()))
+            && thumbnailer.contains(&format!("TryExec={}", bin.display())),
+        "{thumbnailer}"
+    );
+    match std::fs::read_to_string(share.join("mime/globs2")) {
+        Ok(globs) => {
+            for ext in hrtao_scene::SUPPORTED_EXTENSIONS {
+                let line = format!(":{}:*.{ext}", mime_of(ext));
+                assert!(
+                    globs.lines().any(|l| l.ends_with(&line)),
+                    "no `{line}` in globs2:\n{globs}"
+                );
+            }
+        }
+        Err(_) => println!("update-mime-database is not installed: the MIME database is not checked"),
+    }
+    match std::process::Command::new("appstreamcli")
+        .args(["validate", "--no-net"])
+        .arg(share.join("metainfo/io.github.hrtao.hrtao.metainfo.xml"))
+        .output()
+    {
+        Ok(o) => assert!(
+            o.status.success(),
+            "appstreamcli validate: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+        Err(_) => println!("appstreamcli is not installed: the metainfo is not validated"),
+    }
+    std::fs::remove_dir_all(&prefix).unwrap();
 }

@@ -245,7 +245,9 @@ fn a_bundle_runs_its_small_check_and_reports_every_check() {
         // A backend probe the device refuses (HRTAO_HIDE_RAY_QUERY=1, an NVIDIA GPU: no ray queries).
         let probe = s["name"].as_str().unwrap().starts_with("devices_")
             && s["status"] == "not offered"
-            && !backends.iter().any(|b| s["name"] == format!("devices_{}", b.as_str().unwrap()));
+            && !backends
+                .iter()
+                .any(|b| s["name"] == format!("devices_{}", b.as_str().unwrap()));
         if probe {
             continue;
         }

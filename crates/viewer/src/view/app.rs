@@ -1,15 +1,16 @@
 //! The window's event loop (winit's `ApplicationHandler`) and egui's platform glue (egui-winit). On `resumed` it
 //! opens the window, the device, the presenter and the viewer; it hands window events to egui and the viewer,
-//! and paints (UI pass, then `Viewer::draw`, which records the view and egui through egui-ash-renderer) on
-//! `RedrawRequested` and when a repaint egui was asked for comes due. Otherwise it waits: for input, or until
-//! that time (`ControlFlow::WaitUntil`), so a viewer at rest sleeps.
+//! and paints (UI pass, then `Viewer::paint`, whose frame loop records the view and egui through
+//! egui-ash-renderer) on `RedrawRequested` and when a repaint egui was asked for comes due. Otherwise it waits:
+//! for input, or until that time (`ControlFlow::WaitUntil`), so a viewer at rest sleeps. `run` is `hrtao view`:
+//! the arguments checked, the loop, and the process's outcome (the first error, the validation messages).
 use std::cell::Cell;
 use std::process::ExitCode;
 use std::rc::Rc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use hrtao_core::{ContextOptions, Gpu};
 use winit::application::ApplicationHandler;
 use winit::event::{DeviceEvent, DeviceId, StartCause, WindowEvent};
@@ -18,7 +19,8 @@ use winit::raw_window_handle::HasDisplayHandle;
 use winit::window::{Window, WindowId};
 
 use super::present::Presenter;
-use super::{Outcome, ScriptHooks, Viewer};
+use super::script::ScriptHooks;
+use super::Viewer;
 use crate::cli::ViewArgs;
 
 /// How the viewer asks the loop to end (the first code asked for is the process's).
@@ -34,6 +36,27 @@ impl ExitSignal {
 
     fn requested(&self) -> Option<ExitCode> {
         self.0.get()
+    }
+}
+
+/// How the viewer ends the run: the event loop's exit request, and the outcome the process reports.
+pub(super) struct Exit {
+    pub signal: ExitSignal,
+    outcome: Arc<Mutex<Outcome>>,
+}
+
+impl Exit {
+    /// Remembers the first error for the exit status.
+    pub fn error(&self, msg: &str) {
+        let mut o = self.outcome.lock().unwrap_or_else(|p| p.into_inner());
+        if o.error.is_none() {
+            o.error = Some(msg.to_string());
+        }
+    }
+
+    /// An error was remembered.
+    pub fn failed(&self) -> bool {
+        self.outcome.lock().map(|o| o.error.is_some()).unwrap_or(true)
     }
 }
 
@@ -110,16 +133,57 @@ struct App {
     running: Option<Running>,
 }
 
-/// What ties the viewer to the app and the scripted run: the script's hooks, the exit request and the outcome
-/// the process reports.
+/// What ties the viewer to the app and the scripted run: the script's hooks, and the exit request and the
+/// outcome the process reports.
 pub(super) struct Links {
     pub hooks: ScriptHooks,
-    pub exit: ExitSignal,
-    pub outcome: Arc<Mutex<Outcome>>,
+    pub exit: Exit,
+}
+
+/// What the process reports when the window closes.
+#[derive(Default)]
+pub(super) struct Outcome {
+    error: Option<String>,
+    gpu: Option<Arc<Gpu>>,
+}
+
+/// Checks the arguments, runs the window and reports how it ended: the first error, the validation layer's
+/// messages, or the exit code.
+pub(super) fn run(args: &ViewArgs) -> Result<()> {
+    let hooks = ScriptHooks::parse(args)?;
+    if args.sections.section.len() > hrtao_core::gpu::MAX_SECTIONS as usize {
+        bail!(
+            "at most {} section planes are supported",
+            hrtao_core::gpu::MAX_SECTIONS
+        );
+    }
+    let unset = |v: &str| std::env::var_os(v).is_none_or(|x| x.is_empty());
+    if unset("DISPLAY") && unset("WAYLAND_DISPLAY") {
+        bail!(
+            "no display: set DISPLAY (e.g. run under `xvfb-run -a`) or use `hrtao render` for headless use"
+        );
+    }
+    let outcome = Arc::new(Mutex::new(Outcome::default()));
+    let code = run_loop(args, hooks, outcome.clone());
+    let mut out = outcome.lock().unwrap_or_else(|p| p.into_inner());
+    // The last Arc<Gpu> goes here, after the window and the viewer released everything they held.
+    let gpu = out.gpu.take();
+    let validation = gpu.as_ref().map(|g| g.validation_messages()).unwrap_or(0);
+    drop(gpu);
+    if let Some(e) = out.error.take() {
+        bail!("{e}");
+    }
+    if validation > 0 {
+        bail!("the validation layer reported {validation} messages");
+    }
+    if code? != ExitCode::SUCCESS {
+        bail!("the viewer exited with an error");
+    }
+    Ok(())
 }
 
 /// Opens the window and runs the loop until the viewer or the user ends it.
-pub(super) fn run(args: &ViewArgs, hooks: ScriptHooks, outcome: Arc<Mutex<Outcome>>) -> Result<ExitCode> {
+fn run_loop(args: &ViewArgs, hooks: ScriptHooks, outcome: Arc<Mutex<Outcome>>) -> Result<ExitCode> {
     let event_loop = EventLoop::<Wake>::with_user_event()
         .build()
         .context("cannot open the window system's event loop")?;
@@ -213,8 +277,10 @@ impl App {
             &self.args,
             Links {
                 hooks: self.hooks.clone(),
-                exit: self.exit.clone(),
-                outcome: self.outcome.clone(),
+                exit: Exit {
+                    signal: self.exit.clone(),
+                    outcome: self.outcome.clone(),
+                },
             },
             self.ctx.clone(),
             (prefs_file, prefs, prefs_msg),
@@ -260,7 +326,7 @@ impl App {
             );
         }
         let primitives = self.ctx.tessellate(output.shapes, output.pixels_per_point);
-        let frame = super::UiFrame {
+        let frame = super::frame_loop::UiFrame {
             primitives,
             pixels_per_point: output.pixels_per_point,
             textures: output.textures_delta,
@@ -279,7 +345,7 @@ impl App {
 impl ApplicationHandler<Wake> for App {
     fn new_events(&mut self, _: &ActiveEventLoop, cause: StartCause) {
         if let (Some(r), false) = (self.running.as_mut(), matches!(cause, StartCause::Init)) {
-            r.viewer.latency.wake();
+            r.viewer.frame_loop.latency.wake();
         }
     }
 
@@ -324,7 +390,7 @@ impl ApplicationHandler<Wake> for App {
                 return;
             }
             WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } => {
-                r.viewer.presenter.dirty = true;
+                r.viewer.frame_loop.presenter.dirty = true;
                 r.info_stale = true;
             }
             WindowEvent::Moved(_) | WindowEvent::Focused(_) | WindowEvent::Occluded(_) => r.info_stale = true,
@@ -337,14 +403,14 @@ impl ApplicationHandler<Wake> for App {
         // Events egui consumed (typing in a field) are not the 3D view's input; the pointer over the view is
         // seen in egui's input (`Latency::ui_pass`).
         if !response.consumed {
-            r.viewer.latency.event(&event);
+            r.viewer.frame_loop.latency.event(&event);
         }
         self.check_exit(event_loop);
     }
 
     fn device_event(&mut self, _: &ActiveEventLoop, _: DeviceId, event: DeviceEvent) {
         if let Some(r) = self.running.as_mut() {
-            r.viewer.latency.device_event(&event);
+            r.viewer.frame_loop.latency.device_event(&event);
         }
     }
 

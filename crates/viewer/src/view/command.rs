@@ -75,6 +75,22 @@ pub enum Command {
     ViewRect([i32; 4]),
     /// A message for the user.
     Toast { text: String, error: bool },
+    // Scripted runs (`script.rs`).
+    /// The window's inner size in pixels (`--resize-at-frame`).
+    WindowSize(u32, u32),
+    /// Settings overrides (JSON, as `--set` takes them) on the settings in force; an error is fatal (`what`
+    /// names the option).
+    SetJson { json: String, what: String },
+    /// Capture the window (3D view and UI) with the next presented frame (`--screenshot-ui`).
+    CaptureWindow(std::path::PathBuf),
+    /// A screenshot of `size` rendered in the background (`--screenshot-size`).
+    BackgroundShot {
+        size: (u32, u32),
+        path: std::path::PathBuf,
+    },
+    /// The scripted run's frames are done: its screenshot, its statistics, the exit (once the background
+    /// screenshot is written, with `after_shot`).
+    FinishScript { after_shot: bool },
 }
 
 impl Command {

@@ -473,6 +473,36 @@ pub fn run_action(
     Ok(done)
 }
 
+/// Runs `action` as the viewer does (`run_action`, with the selection highlighted), logging it: the selection
+/// to make when the edit changed the number of instances (deletes and their undo shift later ids: the node
+/// selected again, or nothing), or the user's message when it failed.
+pub fn run_logged(
+    stack: &mut EditStack,
+    scene: &mut Scene,
+    scene_gpu: &mut hrtao_core::SceneGpu,
+    selection: &super::tree::Selection,
+    action: Action,
+) -> Result<Option<super::tree::Selection>, String> {
+    use super::tree::Selection;
+    let count = scene.instances.len();
+    let result = run_action(stack, scene, scene_gpu, selection.instances.as_slice(), action);
+    match result {
+        Ok(Some(label)) => {
+            log::info!(
+                "edit: {label}: F = {}, {} instances",
+                scene.f(),
+                scene.instances.len()
+            );
+            Ok((scene.instances.len() != count).then(|| match selection.node {
+                Some(n) if selection.instances.len() > 1 => Selection::of_node(&scene.tree, n),
+                _ => Selection::default(),
+            }))
+        }
+        Ok(None) => Ok(None),
+        Err(e) => Err(format!("edit failed: {e:#}")),
+    }
+}
+
 #[cfg(test)]
 mod gpu_tests {
     use super::*;

@@ -17,6 +17,11 @@ pub type DialogResult = (Option<PathBuf>, Duration);
 /// The extensions the loaders read (STEP and IGES through OpenCASCADE).
 pub const MODEL_EXTENSIONS: &[&str] = &hrtao_scene::SUPPORTED_EXTENSIONS;
 
+/// The Open dialog's filter: its label names every extension it shows (`Models (.gltf, .glb, …)`).
+pub fn filter_label() -> String {
+    format!("Models ({})", crate::cli::formats())
+}
+
 /// The file to open from the paths dropped on the window: the first with a model extension (so dropping a
 /// model with its .mtl or textures opens the model); None when nothing was dropped; an error naming the
 /// paths when none is a model file.
@@ -67,7 +72,7 @@ impl FilesPanel {
         ui.horizontal(|ui| {
             let edit = ui.add(
                 egui::TextEdit::singleline(&mut self.open_path)
-                    .hint_text("file.glb / .gltf / .obj / gen:city")
+                    .hint_text("model.step / .glb / .ifc / gen:city")
                     .desired_width(200.0),
             );
             let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
@@ -83,9 +88,10 @@ impl FilesPanel {
             }
         })
         .response
-        .on_hover_text(
-            "Open a glTF/GLB/OBJ file or a generator spec (drag & drop a file onto the window too)",
-        );
+        .on_hover_text(format!(
+            "Open a model ({}) or a generator spec (drag & drop a file onto the window too)",
+            crate::cli::formats()
+        ));
         if ui.button("Open the bundled scene").clicked() && idle {
             out.push(Command::Open(super::default_spec()));
         }
@@ -143,7 +149,7 @@ impl FilesPanel {
             .spawn(move || {
                 let mut dialog = rfd::FileDialog::new()
                     .set_title("Open a model")
-                    .add_filter("Models (glTF, OBJ, STL, PLY, STEP, IGES)", MODEL_EXTENSIONS)
+                    .add_filter(filter_label(), MODEL_EXTENSIONS)
                     .add_filter("All files", &["*"]);
                 if let Some(dir) = start {
                     dialog = dialog.set_directory(dir);
@@ -259,6 +265,19 @@ fn recent_row(ui: &mut egui::Ui, state: &ViewState) -> Vec<Command> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The dialog shows every extension the loaders read, and its label names each of them.
+    #[test]
+    fn the_dialog_filter_names_every_format() {
+        assert_eq!(MODEL_EXTENSIONS, hrtao_scene::SUPPORTED_EXTENSIONS);
+        let label = filter_label();
+        for ext in hrtao_scene::SUPPORTED_EXTENSIONS {
+            assert!(
+                label.split([' ', '(', ')', ',']).any(|w| w == format!(".{ext}")),
+                ".{ext} is missing from the label `{label}`"
+            );
+        }
+    }
 
     /// A real file on disk, as a drop delivers it: the model is picked among the dropped paths and loads.
     #[test]

@@ -5,7 +5,8 @@
 use std::collections::VecDeque;
 use std::time::Instant;
 
-use super::{pacer, stats, UiCapture};
+use super::frame_loop::UiCapture;
+use super::{pacer, stats};
 
 /// A frame submitted to the device.
 pub(super) struct Submitted {

@@ -397,13 +397,7 @@ mod gpu_tests {
         let mut s = Scene::new("box");
         s.meshes.push(Mesh {
             name: "box".into(),
-            primitives: vec![Primitive {
-                positions,
-                indices,
-                base_color: DEFAULT_BASE_COLOR,
-                double_sided: true,
-                normals: Vec::new(),
-            }],
+            primitives: vec![Primitive::new(positions, indices, DEFAULT_BASE_COLOR)],
         });
         s.instances.push(Instance {
             mesh: 0,

@@ -100,11 +100,6 @@ impl Default for Prefs {
 /// The frame-time target every older version wrote by default.
 const LEGACY_DEFAULT_TARGET_MS: f32 = 100.0;
 
-/// The user's pictures directory: `$XDG_PICTURES_DIR`, else the XDG user directory (`user-dirs.dirs`), else
-/// `~/Pictures`; relative paths and a missing home give None.
-/// The frames in flight the viewer keeps: `HRTAO_FRAMES_IN_FLIGHT` (`env`) if it names 1 or 2, else the
-/// user's choice, else 2 on a GPU and 1 on a software device (whose frames run on the host's cores: recording
-/// the next frame meanwhile only takes cores from this one).
 /// The ray backend the device is opened with: the command line's or environment's (`--ray-backend`,
 /// `HRTAO_RAY_BACKEND`), else the saved one, else None (the device chooses).
 pub fn ray_backend(
@@ -114,6 +109,9 @@ pub fn ray_backend(
     command_line.or(saved)
 }
 
+/// The frames in flight the viewer keeps: `HRTAO_FRAMES_IN_FLIGHT` (`env`) if it names 1 or 2, else the
+/// user's choice, else 2 on a GPU and 1 on a software device (whose frames run on the host's cores: recording
+/// the next frame meanwhile only takes cores from this one).
 pub fn frames_in_flight(env: Option<&str>, chosen: Option<u32>, software: bool) -> usize {
     let max = super::present::MAX_FRAMES_IN_FLIGHT as u32;
     let valid = |n: u32| (1..=max).contains(&n).then_some(n as usize);
@@ -123,6 +121,8 @@ pub fn frames_in_flight(env: Option<&str>, chosen: Option<u32>, software: bool) 
         .unwrap_or(if software { 1 } else { 2 })
 }
 
+/// The user's pictures directory: `$XDG_PICTURES_DIR`, else the XDG user directory (`user-dirs.dirs`), else
+/// `~/Pictures`; relative paths and a missing home give None.
 pub fn pictures_dir() -> Option<PathBuf> {
     let from_env = std::env::var_os("XDG_PICTURES_DIR").map(PathBuf::from);
     let home_pictures = dirs::home_dir().map(|h| h.join("Pictures"));
@@ -132,15 +132,13 @@ pub fn pictures_dir() -> Option<PathBuf> {
         .find(|p| p.is_absolute())
 }
 
-/// `$XDG_CONFIG_HOME/hrtao/viewer.json`, else `~/.config/hrtao/viewer.json`, else `./hrtao-viewer.json`.
+/// `$XDG_CONFIG_HOME/hrtao/viewer.json`, else `~/.config/hrtao/viewer.json` (`dirs::config_dir`: an empty or
+/// relative `XDG_CONFIG_HOME` is ignored, as the XDG specification says), else `./hrtao-viewer.json`.
 pub fn default_path() -> PathBuf {
-    if let Some(x) = std::env::var_os("XDG_CONFIG_HOME").filter(|v| !v.is_empty()) {
-        return PathBuf::from(x).join("hrtao/viewer.json");
+    match dirs::config_dir() {
+        Some(dir) => dir.join("hrtao/viewer.json"),
+        None => PathBuf::from("hrtao-viewer.json"),
     }
-    if let Some(h) = std::env::var_os("HOME").filter(|v| !v.is_empty()) {
-        return PathBuf::from(h).join(".config/hrtao/viewer.json");
-    }
-    PathBuf::from("hrtao-viewer.json")
 }
 
 /// Loads the preferences; on a corrupt file returns defaults and the error message.

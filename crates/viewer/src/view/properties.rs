@@ -166,13 +166,7 @@ mod tests {
     /// Two instances of a 2-triangle square and one of a triangle, under "asm / left" and "asm / right".
     fn scene() -> Scene {
         let mut s = Scene::new("asm");
-        let prim = |positions: Vec<[f32; 3]>, indices: Vec<u32>| Primitive {
-            positions,
-            indices,
-            base_color: [1.0; 4],
-            double_sided: true,
-            normals: Vec::new(),
-        };
+        let prim = |positions: Vec<[f32; 3]>, indices: Vec<u32>| Primitive::new(positions, indices, [1.0; 4]);
         s.meshes.push(Mesh {
             name: "square".into(),
             primitives: vec![prim(

@@ -6,7 +6,7 @@ use hrtao_scene::{NodeTree, Scene};
 
 use super::nav::Nav;
 use super::sections::SectionState;
-use super::{recent, tree, watch, Viewer};
+use super::{recent, tree, watch};
 use hrtao_core::Camera;
 
 /// What a reload keeps of the view.
@@ -77,85 +77,45 @@ pub(super) fn carry_selection(
     }
 }
 
-impl Viewer {
-    /// Reloads the open file in the background, keeping the view (nothing when no file is open or a load runs).
-    pub(super) fn reload(&mut self) {
-        if self.loader.is_loading() {
-            return;
-        }
-        let spec = self.scene_spec.clone();
-        let Some(scene) = &self.scene else {
-            return;
-        };
-        if !std::path::Path::new(&spec).is_file() {
-            self.toast(format!("nothing to reload: {spec} is not a file on disk"), true);
-            return;
-        }
-        let keep = Keep {
-            spec: spec.clone(),
-            nav: self.nav,
-            home: self.home,
-            sections: self.panels.sections.clone(),
-            node: self.selection.node.map(|n| names(&scene.tree, n)),
-            instances: self
-                .selection
-                .instances
-                .iter()
-                .map(|&i| instance_key(scene, i))
-                .collect(),
-        };
-        log::info!("reloading {spec}");
-        self.reloading = Some(keep);
-        self.start_loading(spec);
+/// The reloads' state: the view a running reload keeps, and the watch on the open file.
+#[derive(Default)]
+pub(super) struct Reload {
+    keep: Option<Keep>,
+    watch: Option<watch::FileWatch>,
+}
+
+/// What a reload gives back once the new scene is installed.
+pub(super) struct Restored {
+    pub nav: Nav,
+    pub home: Camera,
+    pub sections: SectionState,
+    pub selection: tree::Selection,
+    /// The toast.
+    pub message: String,
+}
+
+impl Reload {
+    /// A reload of `spec` starts, keeping the view (`Keep::of`).
+    pub fn start(&mut self, keep: Keep) {
+        log::info!("reloading {}", keep.spec);
+        self.keep = Some(keep);
     }
 
     /// A load finished: the view kept by a reload of the same file (None when it was not a reload).
-    pub(super) fn take_reload(&mut self, spec: &str) -> Option<Keep> {
-        self.reloading.take().filter(|k| k.spec == spec)
+    pub fn take(&mut self, spec: &str) -> Option<Keep> {
+        self.keep.take().filter(|k| k.spec == spec)
     }
 
-    /// After a reload installed the new scene: the old camera, sections and selection, and the toast.
-    pub(super) fn reloaded(&mut self, keep: Keep) {
-        self.nav = keep.nav;
-        self.home = keep.home;
-        let Some(scene) = &self.scene else {
-            return;
-        };
-        let parts = scene.instances.len();
-        let selection = carry_selection(scene, &keep.node, &keep.instances);
-        let mut sections = keep.sections;
-        sections.bounds = scene.bounds();
-        let planes = sections.sections();
-        self.panels.sections = sections;
-        self.apply_sections(planes);
-        self.panels.tree.reveal(selection.node);
-        self.apply_selection(selection);
-        let name = std::path::Path::new(&keep.spec)
-            .file_name()
-            .map(|f| f.to_string_lossy().into_owned())
-            .unwrap_or(keep.spec);
-        self.toast(format!("Reloaded {name} ({parts} parts)"), false);
-    }
-
-    /// A reload failed: the old model stays, the toast says why.
-    pub(super) fn reload_failed(&mut self, error: &str) {
-        self.toast(format!("reload failed, the previous model stays: {error}"), true);
-    }
-
-    /// A scene was opened from `spec`: a file joins the recent list (saved now) and is watched for changes.
-    pub(super) fn opened_file(&mut self, spec: &str) {
+    /// A scene was opened from `spec`: a file is watched for changes (a change repaints through `ctx`).
+    pub fn watch(&mut self, spec: &str, ctx: &egui::Context) {
         let Some(path) = recent::entry_for(spec) else {
             self.watch = None;
             return;
         };
-        if spec != super::default_spec() {
-            recent::push(&mut self.prefs.recent, path.clone(), recent::CAP);
-            self.maybe_save_prefs(true);
-        }
         if self.watch.as_ref().is_some_and(|w| w.path == path) {
             return;
         }
-        let ctx = self.egui_ctx.clone();
+        let ctx = ctx.clone();
         self.watch = match watch::FileWatch::start(path.clone(), move || ctx.request_repaint()) {
             Ok(w) => Some(w),
             Err(e) => {
@@ -168,13 +128,66 @@ impl Viewer {
         };
     }
 
-    /// The UI pass: a settled change of the open file reloads it (with auto-reload on, once no load runs).
-    pub(super) fn poll_watch(&mut self) {
-        if !self.prefs.auto_reload || self.loader.is_loading() {
-            return;
+    /// The open file changed and the change has settled (taken once).
+    pub fn changed(&self) -> bool {
+        self.watch.as_ref().is_some_and(|w| w.take_change())
+    }
+}
+
+/// A scene was opened from `spec`: a file (not the bundled scene) joins the recent list; whether it did (the
+/// preferences are saved then).
+pub(super) fn remember_opened(spec: &str, recent_files: &mut Vec<std::path::PathBuf>) -> bool {
+    match recent::entry_for(spec) {
+        Some(path) if spec != super::default_spec() => {
+            recent::push(recent_files, path, recent::CAP);
+            true
         }
-        if self.watch.as_ref().is_some_and(|w| w.take_change()) {
-            self.reload();
+        _ => false,
+    }
+}
+
+impl Keep {
+    /// What a reload of the open file `spec` keeps of the view; the user's message when it is not a file.
+    pub fn of(
+        spec: &str,
+        scene: &Scene,
+        (nav, home): (Nav, Camera),
+        sections: &SectionState,
+        selection: &tree::Selection,
+    ) -> Result<Keep, String> {
+        if !std::path::Path::new(spec).is_file() {
+            return Err(format!("nothing to reload: {spec} is not a file on disk"));
+        }
+        Ok(Keep {
+            spec: spec.to_string(),
+            nav,
+            home,
+            sections: sections.clone(),
+            node: selection.node.map(|n| names(&scene.tree, n)),
+            instances: selection
+                .instances
+                .iter()
+                .map(|&i| instance_key(scene, i))
+                .collect(),
+        })
+    }
+
+    /// After a reload installed the new scene: the old camera, sections and selection, and the toast.
+    pub fn restore(self, scene: &Scene) -> Restored {
+        let parts = scene.instances.len();
+        let selection = carry_selection(scene, &self.node, &self.instances);
+        let mut sections = self.sections;
+        sections.bounds = scene.bounds();
+        let name = std::path::Path::new(&self.spec)
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or(self.spec);
+        Restored {
+            nav: self.nav,
+            home: self.home,
+            sections,
+            selection,
+            message: format!("Reloaded {name} ({parts} parts)"),
         }
     }
 }

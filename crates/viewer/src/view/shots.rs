@@ -1,7 +1,8 @@
 //! The viewer's screenshots in flight: one at the window's size asked for by F12 or the button (taken before
 //! the next frame), or one custom-size `shot::BackgroundShot` rendering tile by tile inside the viewer's frames,
-//! then its PNG written on a thread. One at a time.
-use std::path::PathBuf;
+//! then its PNG written on a thread. One at a time. Also where a screenshot goes (`path`: the panel's folder,
+//! the model's name and the time).
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver};
 
 use anyhow::{Context, Result};
@@ -140,5 +141,80 @@ impl Shots {
                 .map(|()| saving.summary)
                 .map_err(|e| format!("screenshot failed: {e}")),
         )
+    }
+}
+
+/// Creates the folder `path` goes into.
+pub fn create_folder(path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    Ok(())
+}
+
+/// Writes a screenshot's RGBA pixels as a PNG (its folder created first).
+pub fn write_png(path: &Path, (w, h): (u32, u32), rgba: &[u8]) -> Result<()> {
+    create_folder(path)?;
+    hrtao_core::imageio::write_png(path, w, h, rgba)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// `MODEL-YYYYMMDD-HHMMSS.png` in `folder` (the panel's), else the pictures directory, else the working
+/// directory.
+pub fn path(folder: Option<PathBuf>, model: &str) -> PathBuf {
+    let folder = folder.or_else(super::prefs::pictures_dir).unwrap_or_default();
+    unique_path(&folder, &screenshot_name(model, jiff::Zoned::now()))
+}
+
+/// `MODEL-YYYYMMDD-HHMMSS` in local time, the model's name made safe for a file name.
+fn screenshot_name(model: &str, t: jiff::Zoned) -> String {
+    let model: String = model
+        .chars()
+        .map(|c| {
+            if c.is_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let model = model.trim_start_matches('.');
+    let model = if model.is_empty() { "hrtao" } else { model };
+    format!("{model}-{}", t.strftime("%Y%m%d-%H%M%S"))
+}
+
+/// `folder/NAME.png`, or `folder/NAME-2.png`, `-3`… when that file exists (two shots in one second).
+fn unique_path(folder: &Path, name: &str) -> PathBuf {
+    (1..)
+        .map(|i| match i {
+            1 => folder.join(format!("{name}.png")),
+            _ => folder.join(format!("{name}-{i}.png")),
+        })
+        .find(|p| !p.exists())
+        .expect("a free name")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dates_and_sizes() {
+        let t = jiff::Timestamp::from_second(1_704_067_200)
+            .unwrap()
+            .to_zoned(jiff::tz::TimeZone::UTC);
+        assert_eq!(screenshot_name("gearbox", t.clone()), "gearbox-20240101-000000");
+        assert_eq!(screenshot_name("../a b", t.clone()), "_a_b-20240101-000000");
+        assert_eq!(screenshot_name("", t), "hrtao-20240101-000000");
+        let dir = std::env::temp_dir().join(format!("hrtao-unique-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let first = unique_path(&dir, "m");
+        assert_eq!(first, dir.join("m.png"));
+        std::fs::write(&first, b"").unwrap();
+        assert_eq!(unique_path(&dir, "m"), dir.join("m-2.png"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        use crate::cli::parse_size;
+        assert_eq!(parse_size("480x270").unwrap(), (480, 270));
+        assert!(parse_size("0x10").is_err() && parse_size("abc").is_err());
     }
 }

@@ -129,7 +129,7 @@ impl Laps {
 
 /// The wall-clock stamps of the view's frames: when the viewer started (the pacer's clock counts from it), when
 /// this frame's UI pass started and ended, and when the previous rendered frame's UI pass started.
-pub struct FrameClock {
+pub struct FrameStamps {
     epoch: std::time::Instant,
     /// The frame's wall time runs from here to the present.
     pub ui_started: std::time::Instant,
@@ -138,10 +138,10 @@ pub struct FrameClock {
     last_rendered_start: Option<std::time::Instant>,
 }
 
-impl FrameClock {
-    pub fn new() -> FrameClock {
+impl FrameStamps {
+    pub fn new() -> FrameStamps {
         let now = std::time::Instant::now();
-        FrameClock {
+        FrameStamps {
             epoch: now,
             ui_started: now,
             ui_done: now,

@@ -4,10 +4,12 @@
 //! view, the section planes and what was shown; leaving it (its button, Esc) restores them.
 use glam::Vec3;
 use hrtao_core::{Camera, Sections};
+use hrtao_scene::Scene;
 
 use super::command::{Command, ViewState};
 use super::edits::Action;
-use super::{nav, tree, ui_probe};
+use super::nav::{self, Nav};
+use super::{tree, ui_probe};
 
 /// What a plan view replaced, restored when it is left.
 struct Keep {
@@ -79,66 +81,67 @@ pub fn panel(ui: &mut egui::Ui, state: &ViewState, in_plan: Option<usize>) -> Ve
     out
 }
 
-impl super::Viewer {
-    /// Into the plan view of `storey` (from the view before, or from another storey's plan), or out of it (None).
-    pub(super) fn plan_view(&mut self, storey: Option<usize>) {
-        let Some(scene) = &self.scene else {
-            return;
-        };
-        // Leave the plan shown first: its view, sections and visibility come back.
-        if let Some(k) = self.panels.storeys.keep.take() {
+impl Storeys {
+    /// Into the plan view of `storey` (from the view before, or from another storey's plan), or out of it
+    /// (None): the commands that show it (`nav`: the camera now, `sections`: the section planes now).
+    pub fn plan(
+        &mut self,
+        storey: Option<usize>,
+        scene: &Scene,
+        nav: &Nav,
+        sections: Sections,
+    ) -> Vec<Command> {
+        let mut out = Vec::new();
+        // Leave the plan shown first: its view, sections and visibility come back (then the next plan is
+        // entered from them).
+        if let Some(k) = self.keep.take() {
             let restore = (k.visible.len() == scene.instances.len())
                 .then(|| tree::set_visibility(scene, "leave the plan".into(), &k.visible))
                 .flatten();
-            self.nav.cam = k.cam;
-            self.nav.pivot = k.pivot;
-            self.apply_sections(k.sections);
-            if let Some(e) = restore {
-                self.edit(Action::Apply(e));
-            }
+            out.push(Command::Camera {
+                cam: k.cam,
+                pivot: k.pivot,
+            });
+            out.push(Command::Sections(k.sections));
+            out.extend(restore.map(|e| Command::Edit(Action::Apply(e))));
             log::info!("plan view left");
-            if storey.is_none() {
-                return;
-            }
+            out.extend(storey.map(|s| Command::Plan(Some(s))));
+            return out;
         }
-        let Some(storey) = storey else { return };
-        let Some(scene) = &self.scene else {
-            return;
+        let Some(storey) = storey else {
+            return out;
         };
         let metres = crate::setup::metres_per_unit(scene, false);
         let plan = match crate::plan::plan(scene, storey, crate::plan::CUT_HEIGHT_M / metres) {
             Ok(p) => p,
             Err(e) => {
-                self.toast(format!("plan: {e}"), true);
-                return;
+                out.push(Command::toast(format!("plan: {e}"), true));
+                return out;
             }
         };
         let keep = Keep {
             storey,
-            cam: self.nav.cam,
-            pivot: self.nav.pivot,
-            sections: self
-                .scene_gpu
-                .as_ref()
-                .map(|sg| sg.sections().clone())
-                .unwrap_or_default(),
+            cam: nav.cam,
+            pivot: nav.pivot,
+            sections,
             visible: scene.instances.iter().map(|i| i.visible).collect(),
         };
         let name = scene.storeys[storey].name.clone();
         let shown = plan.visible.iter().filter(|v| **v).count();
         let edit = tree::set_visibility(scene, format!("plan of {name}"), &plan.visible);
-        let cam = crate::plan::top_view(&self.nav.cam, &plan.bounds);
-        self.set_walking(false, None);
-        if let Some(e) = edit {
-            self.edit(Action::Apply(e));
-        }
-        self.apply_sections(plan.sections.clone());
-        self.nav.cam = cam;
-        self.nav.pivot = nav::target(&cam);
-        self.panels.storeys.keep = Some(keep);
+        let cam = crate::plan::top_view(&nav.cam, &plan.bounds);
+        out.push(Command::Walk(false));
+        out.extend(edit.map(|e| Command::Edit(Action::Apply(e))));
+        out.push(Command::Sections(plan.sections.clone()));
+        out.push(Command::Camera {
+            cam,
+            pivot: nav::target(&cam),
+        });
+        self.keep = Some(keep);
         log::info!(
             "plan view of storey `{name}`: section at z = {} (file), {shown} instances shown",
-            plan.cut as f64 + self.scene.as_ref().map_or(0.0, |s| s.origin[2])
+            plan.cut as f64 + scene.origin[2]
         );
+        out
     }
 }

@@ -37,6 +37,31 @@ impl Selection {
 
     /// Shift/Ctrl+click on an instance (u32::MAX: the background, which changes nothing): adds it to the
     /// selection, or removes it when it is selected.
+    /// A pick's selection, logged: `instance` alone (u32::MAX: nothing), with its node's path in the tree.
+    pub fn picked(tree: &NodeTree, instance: u32) -> Self {
+        let selection = Self::of_instance(tree, instance);
+        if let Some(node) = selection.node {
+            let path: Vec<&str> = tree
+                .path(node)
+                .iter()
+                .map(|&n| tree.nodes[n as usize].name.as_str())
+                .collect();
+            log::info!("selected instance {instance} (tree: {})", path.join(" / "));
+        }
+        selection
+    }
+
+    /// Shift/Ctrl+click's selection, logged: `toggled`.
+    pub fn toggled_logged(&self, tree: &NodeTree, instance: u32) -> Self {
+        let selection = self.toggled(tree, instance);
+        log::info!(
+            "selection: {} instances {:?}",
+            selection.instances.len(),
+            selection.instances
+        );
+        selection
+    }
+
     pub fn toggled(&self, tree: &NodeTree, instance: u32) -> Self {
         if instance == u32::MAX {
             return self.clone();

@@ -8,6 +8,7 @@ use hrtao_core::Camera;
 use serde::{Deserialize, Serialize};
 
 use super::command::{Command, ViewState};
+use super::prefs::Prefs;
 use super::{nav, recent, ui_probe};
 
 /// The most files whose up axis is remembered.
@@ -84,33 +85,35 @@ pub fn refit(cam: &Camera, up: UpAxis, min: glam::Vec3, max: glam::Vec3) -> Came
     }
 }
 
-impl super::Viewer {
-    /// The panel's choice: the scene turns upright about `up` (a fitted view from the new side, which is also
-    /// home), the sky's zenith follows (the map re-keys: its transfer vectors live in the sky frame), and the
-    /// choice is remembered for the open file.
-    pub(super) fn set_up_axis(&mut self, up: UpAxis) {
-        let Some(scene) = &self.scene else {
-            return;
-        };
-        if up == self.nav.world_up {
-            return;
+/// The panel's choice: the scene turns upright about `up` (a fitted view from the new side, which is also
+/// home), the sky's zenith follows (the map re-keys: its transfer vectors live in the sky frame), and the choice
+/// is remembered for the open file `spec` (then the preferences are saved: true).
+pub fn choose(
+    up: UpAxis,
+    scene: &hrtao_scene::Scene,
+    spec: &str,
+    (nav, home): (&mut nav::Nav, &mut Camera),
+    prefs: &mut Prefs,
+) -> bool {
+    if up == nav.world_up {
+        return false;
+    }
+    let b = scene.bounds();
+    let cam = refit(&nav.cam, up, b.min, b.max);
+    *nav = nav::Nav {
+        cam,
+        pivot: nav::target(&cam),
+        world_up: up,
+    };
+    *home = cam;
+    prefs.settings.light.sky_up = up;
+    log::info!("up axis: {up} for {spec}");
+    match recent::entry_for(spec) {
+        Some(path) => {
+            remember(&mut prefs.up_axes, path, up);
+            true
         }
-        let b = scene.bounds();
-        let cam = refit(&self.nav.cam, up, b.min, b.max);
-        self.nav = nav::Nav {
-            cam,
-            pivot: nav::target(&cam),
-            world_up: up,
-        };
-        self.home = cam;
-        let mut s = self.prefs.settings.clone();
-        s.light.sky_up = up;
-        self.prefs.settings = s;
-        log::info!("up axis: {up} for {}", self.scene_spec);
-        if let Some(path) = recent::entry_for(&self.scene_spec) {
-            remember(&mut self.prefs.up_axes, path, up);
-            self.maybe_save_prefs(true);
-        }
+        None => false,
     }
 }
 

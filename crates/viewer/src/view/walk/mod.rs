@@ -13,10 +13,13 @@ use std::time::Instant;
 use glam::Vec3;
 use hrtao_core::camera::Projection;
 use hrtao_core::gpu::{ProbeHit, ProbeRay};
+use hrtao_core::Camera;
+use hrtao_scene::Scene;
 use serde::Serialize;
 
 use super::command::{Command, ViewState};
-use super::{nav, ui_probe};
+use super::nav::{self, Nav};
+use super::ui_probe;
 use crate::setup::metres_per_unit;
 pub use walker::{Floor, WalkInput, WalkSettings, Walker};
 
@@ -188,120 +191,112 @@ pub fn panel(ui: &mut egui::Ui, state: &ViewState, walking: bool) -> Vec<Command
     out
 }
 
-impl super::Viewer {
-    /// Walk mode on (standing below the camera's eye, or at `at`) or off.
-    pub(super) fn set_walking(&mut self, on: bool, at: Option<Vec3>) {
-        let Some(scene) = &self.scene else {
-            return;
-        };
+/// What the walk reads of the viewer.
+pub struct WalkView<'a> {
+    pub scene: &'a Scene,
+    /// The open scene's file or spec (the bundled scene is in millimetres).
+    pub spec: &'a str,
+    pub nav: &'a Nav,
+    pub settings: &'a WalkSettings,
+}
+
+impl WalkView<'_> {
+    fn metres_per_unit(&self) -> f32 {
+        metres_per_unit(self.scene, crate::setup::is_bundled(Some(self.spec)))
+    }
+}
+
+impl Walk {
+    /// Walk mode on (standing below the camera's eye, or at `at`) or off: the camera to walk with and the
+    /// toast.
+    pub fn set(&mut self, on: bool, at: Option<Vec3>, v: &WalkView) -> Vec<Command> {
         if !on {
-            if self.panels.walk.walker.take().is_some() {
-                self.panels.walk.running = None;
+            if self.walker.take().is_some() {
+                self.running = None;
                 log::info!("walk mode off");
             }
-            return;
+            return Vec::new();
         }
-        let up = self.nav.world_up;
+        let up = v.nav.world_up;
         let upv = up.vector();
-        let m = metres_per_unit(scene, crate::setup::is_bundled(Some(&self.scene_spec)));
-        let s = self.prefs.walk.sanitized();
+        let m = v.metres_per_unit();
+        let s = v.settings.sanitized();
         let eye_height = s.eye_height_m / m;
-        let feet = at.unwrap_or_else(|| nav::eye(&self.nav.cam) - upv * eye_height);
-        let b = scene.bounds();
+        let feet = at.unwrap_or_else(|| nav::eye(&v.nav.cam) - upv * eye_height);
+        let b = v.scene.bounds();
         let height = (b.max - b.min).dot(upv).abs();
         let walker = Walker::new(up, 1.0 / m, s, feet, height);
         // Level the view (keep where it looks around the up axis) in perspective.
-        let fwd = nav::forward(&self.nav.cam);
+        let fwd = nav::forward(&v.nav.cam);
         let level = fwd - upv * fwd.dot(upv);
         let level = if level.length() > 1e-3 {
             level.normalize()
         } else {
-            nav::cam_up(&self.nav.cam).normalize()
+            nav::cam_up(&v.nav.cam).normalize()
         };
-        self.nav.cam.projection = Projection::Perspective;
-        self.set_walk_camera(walker.eye(), level, m);
+        let mut at_eye = *v.nav;
+        at_eye.cam.projection = Projection::Perspective;
+        let (cam, pivot) = walk_camera(&at_eye, walker.eye(), level, m);
         log::info!(
             "walk mode on at {:?} (eye height {} m, {} scene units per metre)",
             walker.eye().to_array(),
             s.eye_height_m,
             1.0 / m
         );
-        self.panels.walk.walker = Some(walker);
-        self.panels.walk.last_tick = None;
-        self.panels.walk.told_no_floor = false;
-        self.toast("walking: W/A/S/D walk, Shift runs, drag looks, Esc leaves", false);
+        self.walker = Some(walker);
+        self.last_tick = None;
+        self.told_no_floor = false;
+        vec![
+            Command::Camera { cam, pivot },
+            Command::toast("walking: W/A/S/D walk, Shift runs, drag looks, Esc leaves", false),
+        ]
     }
 
     /// Whether a double-click on a floor stands there: while walking, and on a model at least room-sized.
-    pub(super) fn walk_here(&self) -> bool {
-        let Some(scene) = &self.scene else {
-            return false;
-        };
-        if self.panels.walk.walking() {
+    pub fn here(&self, v: &WalkView) -> bool {
+        if self.walking() {
             return true;
         }
-        let m = metres_per_unit(scene, crate::setup::is_bundled(Some(&self.scene_spec)));
-        let b = scene.bounds();
-        let up = self.nav.world_up.vector();
+        let m = v.metres_per_unit();
+        let b = v.scene.bounds();
+        let up = v.nav.world_up.vector();
         let d = b.max - b.min;
         let horizontal = (d - up * d.dot(up)).abs().max_element();
         horizontal * m >= ROOM_M
     }
 
-    fn set_walk_camera(&mut self, eye: Vec3, forward: Vec3, metres_per_unit: f32) {
-        let d = LOOK_DISTANCE_M / metres_per_unit;
-        let forward = forward.normalize();
-        let world_up = self.nav.world_up.vector();
-        // The up vector orthogonal to the view (nav keeps it so); looking straight up or down, the camera's own.
-        let up = if forward.dot(world_up).abs() < 0.99 {
-            world_up
-        } else {
-            nav::cam_up(&self.nav.cam)
-        };
-        let cam = nav::set(&self.nav.cam, eye, eye + forward * d, up);
-        if cam != self.nav.cam && cam.validate().is_ok() {
-            self.nav.cam = cam;
-            self.nav.pivot = nav::target(&cam);
-        }
-    }
-
-    /// The walk's step of this frame: the keys (or the scripted path) move the body, the camera follows.
-    pub(super) fn walk_tick(&mut self) {
-        if self.panels.walk.walker.is_none() {
-            if let (Some(file), Some(scene)) = (self.panels.walk.script.clone(), &self.scene) {
-                if self.last_report.is_some() && !self.loader.is_loading() {
-                    let p = path::WalkPath::new(&file, scene.origin, self.nav.world_up);
-                    log::info!(
-                        "scripted walk from {:?} through {} waypoints",
-                        file.start,
-                        file.waypoints.len()
-                    );
-                    let start = p.start;
-                    self.panels.walk.script = None;
-                    self.set_walking(true, Some(start));
-                    self.panels.walk.running = Some(p);
-                }
+    /// The walk's step of this frame: the keys (or the scripted path, started once the view shows an image
+    /// and no load runs) move the body, the camera follows.
+    pub fn tick(&mut self, v: &WalkView, ready: bool) -> Vec<Command> {
+        if self.walker.is_none() {
+            if let Some(file) = self.script.clone().filter(|_| ready) {
+                let p = path::WalkPath::new(&file, v.scene.origin, v.nav.world_up);
+                log::info!(
+                    "scripted walk from {:?} through {} waypoints",
+                    file.start,
+                    file.waypoints.len()
+                );
+                let start = p.start;
+                self.script = None;
+                let out = self.set(true, Some(start), v);
+                self.running = Some(p);
+                return out;
             }
-            return;
+            return Vec::new();
         }
-        let Some(scene) = &self.scene else {
-            return;
-        };
-        let m = metres_per_unit(scene, crate::setup::is_bundled(Some(&self.scene_spec)));
+        let mut out = Vec::new();
+        let m = v.metres_per_unit();
         let now = Instant::now();
         let dt = self
-            .panels
-            .walk
             .last_tick
             .map_or(0.0, |t| now.duration_since(t).as_secs_f32());
-        self.panels.walk.last_tick = Some(now);
-        let walk = &mut self.panels.walk;
-        let Some(w) = walk.walker.as_mut() else {
-            return;
+        self.last_tick = Some(now);
+        let Some(w) = self.walker.as_mut() else {
+            return out;
         };
-        let mut forward = nav::forward(&self.nav.cam);
-        let mut input = walk.input;
-        if let Some(p) = &mut walk.running {
+        let mut forward = nav::forward(&v.nav.cam);
+        let mut input = self.input;
+        if let Some(p) = &mut self.running {
             match p.heading(w.feet(), w.blocked(), dt, REACH_M / m) {
                 Some(dir) if w.floor() != Floor::Unknown => {
                     forward = dir;
@@ -317,34 +312,56 @@ impl super::Viewer {
                         p.reached,
                         p.given_up
                     );
-                    walk.running = None;
+                    self.running = None;
                 }
             }
         }
         w.step(dt, input, forward);
         let eye = w.eye();
         // Window tests follow the eye (`HRTAO_UI_PROBE`), in the file's coordinates.
-        let o = glam::DVec3::from(scene.origin);
+        let o = glam::DVec3::from(v.scene.origin);
         let e = eye.as_dvec3() + o;
         ui_probe::note_text("walk eye", &format!("{:.3} {:.3} {:.3}", e.x, e.y, e.z));
         let no_floor = w.floor() == Floor::None;
-        let upv = self.nav.world_up.vector();
-        let walk_running = walk.running.is_some();
+        let upv = v.nav.world_up.vector();
+        let walk_running = self.running.is_some();
         let look = if walk_running {
             let f = forward - upv * forward.dot(upv);
             f.normalize_or_zero()
         } else {
-            nav::forward(&self.nav.cam)
+            nav::forward(&v.nav.cam)
         };
-        let told = walk.told_no_floor;
-        walk.told_no_floor |= no_floor;
+        let told = self.told_no_floor;
+        self.told_no_floor |= no_floor;
         if no_floor && !told {
-            self.toast("no floor below: walking level", false);
+            out.push(Command::toast("no floor below: walking level", false));
         }
         // A body at rest leaves the camera bit for bit (a re-derived one would be a new view each frame).
-        let turned = walk_running && (look - nav::forward(&self.nav.cam)).length() > 1e-4;
-        if look != Vec3::ZERO && (eye != nav::eye(&self.nav.cam) || turned) {
-            self.set_walk_camera(eye, look, m);
+        let turned = walk_running && (look - nav::forward(&v.nav.cam)).length() > 1e-4;
+        if look != Vec3::ZERO && (eye != nav::eye(&v.nav.cam) || turned) {
+            let (cam, pivot) = walk_camera(v.nav, eye, look, m);
+            out.push(Command::Camera { cam, pivot });
         }
+        out
+    }
+}
+
+/// The walking camera at `eye` looking along `forward` (its target a few metres ahead), and its pivot; `nav`'s
+/// own when that camera is the same or not valid.
+fn walk_camera(nav: &Nav, eye: Vec3, forward: Vec3, metres_per_unit: f32) -> (Camera, Vec3) {
+    let d = LOOK_DISTANCE_M / metres_per_unit;
+    let forward = forward.normalize();
+    let world_up = nav.world_up.vector();
+    // The up vector orthogonal to the view (nav keeps it so); looking straight up or down, the camera's own.
+    let up = if forward.dot(world_up).abs() < 0.99 {
+        world_up
+    } else {
+        nav::cam_up(&nav.cam)
+    };
+    let cam = nav::set(&nav.cam, eye, eye + forward * d, up);
+    if cam != nav.cam && cam.validate().is_ok() {
+        (cam, nav::target(&cam))
+    } else {
+        (nav.cam, nav.pivot)
     }
 }
