@@ -11,11 +11,11 @@
 # A JSON that exists is skipped unless FORCE=1, so a run resumes where it stopped. Run it on an idle machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib.sh
 
 OUT=${OUT:-docs/bench/first_frame}
-: "${HRTAO_SHARED:=/work/shared}"
 KEYS=${KEYS:-"sf duplex"}
-export MESA_SHADER_CACHE_DISABLE=false MESA_SHADER_CACHE_DIR=$PWD/target/mesa-shader-cache
+bench_environment
 unset HRTAO_VALIDATION
 
 cargo build --release -q -p hrtao-viewer
@@ -24,10 +24,8 @@ CONFIGS=$(target/release/examples/ablation --configs | awk -F'|' '$1 == "default
 
 mkdir -p "$OUT"
 for key in $KEYS; do
-    scene=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]]['scene'])" \
-        "$HRTAO_SHARED/refs/index.json" "$key")
-    radius=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]]['radius'])" \
-        "$HRTAO_SHARED/refs/index.json" "$key")
+    scene=$(index_field "$HRTAO_SHARED/refs/index.json" "$key" scene)
+    radius=$(index_field "$HRTAO_SHARED/refs/index.json" "$key" radius)
     while IFS='|' read -r name _base set; do
         if [ $# -gt 0 ] && ! printf '%s\n' "$@" | grep -qx -- "$name"; then
             continue

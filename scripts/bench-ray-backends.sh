@@ -10,13 +10,13 @@
 # Run it on an idle machine; a backend the device lacks is an error of `hrtao bench`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib.sh
 
 OUT=${OUT:-docs/bench/ray_backend}
-: "${HRTAO_SHARED:=/work/shared}"
 KEYS=${KEYS:-"duplex rod"}
 RUNS=${RUNS:-3}
 ORBIT=${ORBIT:-8}
-export MESA_SHADER_CACHE_DISABLE=false MESA_SHADER_CACHE_DIR=$PWD/target/mesa-shader-cache
+bench_environment
 unset HRTAO_VALIDATION HRTAO_RAY_BACKEND
 
 if [ -z "${HRTAO:-}" ]; then
@@ -26,10 +26,8 @@ fi
 
 mkdir -p "$OUT"
 for key in $KEYS; do
-    scene=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]]['scene'])" \
-        "$HRTAO_SHARED/refs/index.json" "$key")
-    radius=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]]['radius'])" \
-        "$HRTAO_SHARED/refs/index.json" "$key")
+    scene=$(index_field "$HRTAO_SHARED/refs/index.json" "$key" scene)
+    radius=$(index_field "$HRTAO_SHARED/refs/index.json" "$key" radius)
     for run in $(seq 1 "$RUNS"); do
         for backend in query pipeline; do
             echo "== $key run $run: $backend $(date -u +%H:%M:%S)"

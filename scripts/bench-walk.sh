@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Walking against orbiting, one build, side by side: `hrtao view --walk-path` (the scripted walk of
 # crates/viewer/tests/building.rs through the two-storey IFC building tests/ifc/make_two_storey.py makes: into a
-# wall, through the door, up the stair) and `hrtao view --orbit N` of about as many moving frames, both with
-# `--stats` at 1280x800 with the panel, runs alternating between the two (this machine's drift falls on both).
+# wall, through the door, up the stair), `--orbit 180` from a camera inside the building (the east room: every
+# pixel shows geometry, as in the walk, and the camera moves 87 mm a frame, the walk 140 mm) and `--orbit 180` of
+# the fitted view (the building fills about half of it: background pixels take no AO work), all with `--stats`
+# at 1280x800 with the panel, runs alternating between the modes (this machine's drift falls on all).
 # Each result is summarised into docs/bench/walk/<mode>_building_<run>.json (schema hrtao-viewer-run/1, as
 # scripts/bench-viewer.sh's); `cargo run -p bench-report -- docs/bench` tabulates them ("Walking against orbiting").
 #
@@ -36,14 +38,18 @@ cat >"$tmp/walk.json" <<'JSON'
 {"start": [2000, 1500, 1200],
  "waypoints": [[6000, 1500], [2000, 3500], [5500, 3500], [6000, 7300], [12500, 7300]]}
 JSON
+cat >"$tmp/room.camera.json" <<'JSON'
+{"eye": [6500, 4000, 1700], "target": [9000, 4000, 1200], "up": [0, 0, 1], "fov_y_deg": 60,
+ "width": 1280, "height": 800}
+JSON
 for run in $(seq 1 "$runs"); do
-    for mode in walk orbit; do
+    for mode in walk room_orbit orbit; do
         stats="$tmp/${mode}_$run.json"
-        if [ "$mode" = walk ]; then
-            how=(--walk-path "$tmp/walk.json")
-        else
-            how=(--orbit 180)
-        fi
+        case "$mode" in
+            walk) how=(--walk-path "$tmp/walk.json") ;;
+            room_orbit) how=(--camera "$tmp/room.camera.json" --orbit 180) ;;
+            orbit) how=(--orbit 180) ;;
+        esac
         "$bin" view --no-config --size 1280x800 "${how[@]}" --exit --stats "$stats" "$tmp/building.ifc" \
             >"$tmp/log" 2>&1 || { cat "$tmp/log" >&2; exit 1; }
         python3 scripts/viewer_run_summary.py "$stats" "$out/${mode}_building_$run.json" "$mode" building "$run"

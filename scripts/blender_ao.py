@@ -33,34 +33,57 @@ for _name, _type in (("bool", bool), ("int", int), ("float", float), ("object", 
 GLTF_TO_BLENDER = Matrix(((1.0, 0.0, 0.0), (0.0, 0.0, -1.0), (0.0, 1.0, 0.0)))
 
 
-def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    p = argparse.ArgumentParser(prog="blender_ao.py", description="Cycles AO reference of a glTF scene")
+def argument_parser(prog, description):
+    """The reference scripts' parser: --scene and --camera; the script's own options follow (then
+    `add_render_args`)."""
+    p = argparse.ArgumentParser(prog=prog, description=description)
     p.add_argument("--scene", required=True, help=".glb or .gltf")
     p.add_argument("--camera", required=True, help="camera JSON in the scene file's coordinates")
-    p.add_argument("--radius", type=float, required=True, help="AO radius R in scene units")
+    return p
+
+
+def add_render_args(p, samples_help):
+    """--out, --samples, --seed and --threads; returns the arguments after Blender's `--`."""
     p.add_argument("--out", required=True, help="output prefix: writes PREFIX.exr and PREFIX.json")
-    p.add_argument("--samples", type=int, default=1024, help="AO rays per pixel (render samples)")
+    p.add_argument("--samples", type=int, default=1024, help=samples_help)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=0, help="CPU threads (0 = all)")
-    a = p.parse_args(argv)
+    return p.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
+
+
+def parse_args():
+    p = argument_parser("blender_ao.py", "Cycles AO reference of a glTF scene")
+    p.add_argument("--radius", type=float, required=True, help="AO radius R in scene units")
+    a = add_render_args(p, "AO rays per pixel (render samples)")
     if not a.radius > 0 or a.samples < 1:
         p.error("--radius must be > 0 and --samples >= 1")
     return a
 
 
-def white_true_normal_material():
-    mat = bpy.data.materials.new("hrtao_ao_white")
-    mat.use_nodes = True
-    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+def node_tree(owner, output_type):
+    """The cleared node tree of a material or world (`use_nodes`): its nodes, links and a new output node."""
+    owner.use_nodes = True
+    nodes, links = owner.node_tree.nodes, owner.node_tree.links
     nodes.clear()
-    out = nodes.new("ShaderNodeOutputMaterial")
+    return nodes, links, nodes.new(output_type)
+
+
+def white_diffuse_material(name):
+    """A two-sided white diffuse material: it and its BSDF node (its Normal input unconnected: the mesh's own
+    normals)."""
+    mat = bpy.data.materials.new(name)
+    nodes, links, out = node_tree(mat, "ShaderNodeOutputMaterial")
     bsdf = nodes.new("ShaderNodeBsdfDiffuse")
     bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    geometry = nodes.new("ShaderNodeNewGeometry")
-    links.new(geometry.outputs["True Normal"], bsdf.inputs["Normal"])
     links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
     mat.use_backface_culling = False
+    return mat, bsdf
+
+
+def white_true_normal_material():
+    mat, bsdf = white_diffuse_material("hrtao_ao_white")
+    geometry = mat.node_tree.nodes.new("ShaderNodeNewGeometry")
+    mat.node_tree.links.new(geometry.outputs["True Normal"], bsdf.inputs["Normal"])
     return mat
 
 
@@ -261,6 +284,13 @@ def render_facts(scene, args, cam, cam_blender, meshes, t0, t_render):
     }
 
 
+def finish(args, facts, summary):
+    """Writes PREFIX.json (the render facts) and prints the script's summary line."""
+    with open(args.out + ".json", "w") as f:
+        json.dump(facts, f, indent=1)
+    print(summary, flush=True)
+
+
 def main():
     t0 = time.perf_counter()
     args = parse_args()
@@ -286,9 +316,7 @@ def main():
             "ao_max": float(ao.max()),
         },
     })
-    with open(args.out + ".json", "w") as f:
-        json.dump(facts, f, indent=1)
-    print("[blender_ao] %s: %dx%d, %d rays/pixel, %.1f s" % (args.out, w, h, args.samples, t_render), flush=True)
+    finish(args, facts, "[blender_ao] %s: %dx%d, %d rays/pixel, %.1f s" % (args.out, w, h, args.samples, t_render))
 
 
 if __name__ == "__main__":

@@ -18,8 +18,6 @@
 #   interpolation), which reads u = 0.5 - atan2(b'_y, b'_x)/2pi and t = 0.5 - asin(b'_z)/pi from the top row.
 # - Standard view transform, no look, no denoising, no adaptive sampling; the world is importance sampled.
 
-import argparse
-import json
 import math
 import os
 import sys
@@ -36,19 +34,12 @@ GROUND = (0.4, 0.3, 0.2)
 
 
 def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    p = argparse.ArgumentParser(prog="blender_sky.py", description="Cycles sky-light reference of a glTF scene")
-    p.add_argument("--scene", required=True, help=".glb or .gltf")
-    p.add_argument("--camera", required=True, help="camera JSON in the scene file's coordinates")
+    p = blender_ao.argument_parser("blender_sky.py", "Cycles sky-light reference of a glTF scene")
     p.add_argument("--environment", required=True, help="uniform, gradient or an equirectangular .hdr")
     p.add_argument("--rotation", type=float, default=0.0, help="degrees, counter-clockwise seen from above")
     p.add_argument("--intensity", type=float, default=1.0, help="K, the environment's scale")
     p.add_argument("--up", choices=("y", "z"), default="y", help="the scene file's up axis (the zenith)")
-    p.add_argument("--out", required=True, help="output prefix: writes PREFIX.exr and PREFIX.json")
-    p.add_argument("--samples", type=int, default=1024, help="samples per pixel")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--threads", type=int, default=0, help="CPU threads (0 = all)")
-    a = p.parse_args(argv)
+    a = blender_ao.add_render_args(p, "samples per pixel")
     if a.samples < 1 or not a.intensity >= 0.0:
         p.error("--samples must be >= 1 and --intensity >= 0")
     if a.environment not in ("uniform", "gradient") and not os.path.isfile(a.environment):
@@ -58,25 +49,14 @@ def parse_args():
 
 def white_material():
     """Diffuse white with the mesh's own (smooth or custom) normals: the Normal input left unconnected."""
-    mat = bpy.data.materials.new("hrtao_sky_white")
-    mat.use_nodes = True
-    nodes, links = mat.node_tree.nodes, mat.node_tree.links
-    nodes.clear()
-    out = nodes.new("ShaderNodeOutputMaterial")
-    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    mat, bsdf = blender_ao.white_diffuse_material("hrtao_sky_white")
     bsdf.inputs["Roughness"].default_value = 0.0
-    links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
-    mat.use_backface_culling = False
     return mat
 
 
 def world(args):
     w = bpy.data.worlds.new("hrtao_sky_world")
-    w.use_nodes = True
-    nodes, links = w.node_tree.nodes, w.node_tree.links
-    nodes.clear()
-    out = nodes.new("ShaderNodeOutputWorld")
+    nodes, links, out = blender_ao.node_tree(w, "ShaderNodeOutputWorld")
     bg = nodes.new("ShaderNodeBackground")
     bg.inputs["Strength"].default_value = args.intensity
     links.new(bg.outputs["Background"], out.inputs["Surface"])
@@ -162,9 +142,8 @@ def main():
             "light_max": float(rgb.max()),
         },
     })
-    with open(args.out + ".json", "w") as f:
-        json.dump(facts, f, indent=1)
-    print("[blender_sky] %s: %dx%d, %d samples, %.1f s" % (args.out, w, h, args.samples, t_render), flush=True)
+    summary = "[blender_sky] %s: %dx%d, %d samples, %.1f s" % (args.out, w, h, args.samples, t_render)
+    blender_ao.finish(args, facts, summary)
 
 
 if __name__ == "__main__":

@@ -12,12 +12,8 @@ if [ $missing = 0 ]; then
   echo "$dir"
   exit 0
 fi
-mkdir -p "$dir/deb"
-(cd "$dir/deb" && rm -f assimp-testmodels_*.deb && apt-get download assimp-testmodels >/dev/null 2>&1) || {
-  echo "fetch-assimp-models: apt-get download assimp-testmodels failed (run apt-get update?)" >&2
-  exit 1
-}
-dpkg -x "$dir"/deb/assimp-testmodels_*.deb "$dir/deb/root"
+. "$(dirname "$0")/lib.sh"
+unpack_deb fetch-assimp-models assimp-testmodels "$dir"
 for f in $files; do
   mkdir -p "$dir/$(dirname "$f")"
   cp "$dir/deb/root/usr/share/assimp/models/$f" "$dir/$f"

@@ -8,12 +8,8 @@ if [ -s "$dir/as1-tu-203.stp" ] && [ -s "$dir/t20_data.step" ] && [ -s "$dir/ste
   echo "$dir"
   exit 0
 fi
-mkdir -p "$dir/deb"
-(cd "$dir/deb" && rm -f gmsh-doc_*.deb && apt-get download gmsh-doc >/dev/null 2>&1) || {
-  echo "fetch-step-data: apt-get download gmsh-doc failed (run apt-get update?)" >&2
-  exit 1
-}
-dpkg -x "$dir"/deb/gmsh-doc_*.deb "$dir/deb/root"
+. "$(dirname "$0")/lib.sh"
+unpack_deb fetch-step-data gmsh-doc "$dir"
 for f in as1-tu-203.stp t20_data.step step_boundary_colors.stp; do
   src=$(find "$dir/deb/root" -name "$f" -o -name "$f.gz" | head -n 1)
   [ -n "$src" ] || { echo "fetch-step-data: $f not in gmsh-doc" >&2; exit 1; }

@@ -15,8 +15,8 @@ set -euo pipefail
 CALLER=$PWD
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-# Paths given on the command line are relative to where the script was started.
-abs() { case "$1" in /*) echo "$1" ;; *) echo "$CALLER/$1" ;; esac; }
+# abs (paths given on the command line are relative to where the script was started), ensure_blender, run_blender.
+. scripts/blender-lib.sh
 
 usage() { sed -n '4,13p' "$0" | sed 's/^# \{0,1\}//'; }
 
@@ -39,28 +39,11 @@ while [ $# -gt 0 ]; do
   shift
 done
 
-BLENDER=${BLENDER:-blender}
-if ! command -v "$BLENDER" >/dev/null 2>&1; then
-  SUDO=""
-  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-  echo "[make-references] installing blender and python3-numpy"
-  $SUDO apt-get update
-  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends blender python3-numpy
-fi
+ensure_blender make-references
 
 # render SCENE CAMERA RADIUS PREFIX
 render() {
-  local log="$4.log"
-  mkdir -p "$(dirname "$4")"
-  if ! "$BLENDER" -b --factory-startup -noaudio --python-exit-code 3 -P "$ROOT/scripts/blender_ao.py" -- \
-      --scene "$1" --camera "$2" --radius "$3" --out "$4" --samples "$samples" --threads "${THREADS:-0}" \
-      </dev/null >"$log" 2>&1; then
-    echo "[make-references] Blender failed on $4; the end of $log:" >&2
-    tail -n 30 "$log" >&2
-    exit 1
-  fi
-  grep '^\[blender_ao\]' "$log"
-  rm -f "$log"
+  run_blender make-references blender_ao "$4" --scene "$1" --camera "$2" --radius "$3"
 }
 
 if [ -n "$scene$camera$radius$out" ]; then

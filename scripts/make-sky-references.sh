@@ -17,7 +17,9 @@ set -euo pipefail
 CALLER=$PWD
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-abs() { case "$1" in /*) echo "$1" ;; *) echo "$CALLER/$1" ;; esac; }
+# abs, ensure_blender, run_blender.
+. scripts/blender-lib.sh
+. scripts/lib.sh
 usage() { sed -n '5,16p' "$0" | sed 's/^# \{0,1\}//'; }
 
 samples=2048
@@ -41,21 +43,14 @@ while [ $# -gt 0 ]; do
 done
 [ ${#keys[@]} -gt 0 ] || keys=(rod cycloidal)
 
-BLENDER=${BLENDER:-blender}
-if ! command -v "$BLENDER" >/dev/null 2>&1; then
-  SUDO=""
-  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-  echo "[make-sky-references] installing blender and python3-numpy"
-  $SUDO apt-get update
-  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends blender python3-numpy
-fi
+ensure_blender make-sky-references
 
 hdr=testdata/env/sky_lobe_64x32.hdr
 [ -f "$hdr" ] || python3 scripts/make-sky-hdr.py "$hdr"
 mkdir -p "$out_dir"
 views=()
 for key in "${keys[@]}"; do
-  scene=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]]['scene'])" "$refs/index.json" "$key")
+  scene=$(index_field "$refs/index.json" "$key" scene)
   camera="$refs/${key}_${size}.camera.json"
   up=$(python3 -c "import json,sys; u=json.load(open(sys.argv[1]))['up']; print('z' if abs(u[2]) > abs(u[1]) else 'y')" "$camera")
   for v in $views_list; do
@@ -64,17 +59,8 @@ for key in "${keys[@]}"; do
     [ "$env" = lobe ] && env=$hdr
     name=$(basename "$env" .hdr)
     view="${key}_${size}_${name}_${rot}"
-    log="$out_dir/$view.log"
-    if ! "$BLENDER" -b --factory-startup -noaudio --python-exit-code 3 -P "$ROOT/scripts/blender_sky.py" -- \
-        --scene "$refs/../$scene" --camera "$camera" --environment "$env" \
-        --rotation "$rot" --up "$up" --out "$out_dir/$view" --samples "$samples" --threads "${THREADS:-0}" \
-        </dev/null >"$log" 2>&1; then
-      echo "[make-sky-references] Blender failed on $view; the end of $log:" >&2
-      tail -n 30 "$log" >&2
-      exit 1
-    fi
-    grep '^\[blender_sky\]' "$log"
-    rm -f "$log"
+    run_blender make-sky-references blender_sky "$out_dir/$view" --scene "$refs/../$scene" --camera "$camera" \
+      --environment "$env" --rotation "$rot" --up "$up"
     views+=("$key|$scene|$name|$rot|$view|$up")
   done
 done

@@ -5,7 +5,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use crate::report::table_header;
+use anyhow::Result;
 use serde::Deserialize;
 
 pub const FORMAT_SCHEMA: &str = "hrtao-format-compare/1";
@@ -27,12 +28,7 @@ pub struct Open {
 
 /// Every open-time result of `dir`, by name.
 pub fn load_opens(dir: &Path) -> Result<Vec<Open>> {
-    let mut out: Vec<Open> = crate::results::load_schema(dir, OPEN_SCHEMA)?
-        .into_iter()
-        .map(|(path, v)| {
-            serde_json::from_value(v).with_context(|| format!("{}: bad open time", path.display()))
-        })
-        .collect::<Result<_>>()?;
+    let mut out: Vec<Open> = crate::results::load_typed(dir, OPEN_SCHEMA, "open time")?;
     out.sort_by(|a, b| a.name.cmp(&b.name));
     Ok(out)
 }
@@ -48,11 +44,10 @@ pub fn open_section(m: &mut String, rows: &[Open]) -> Result<()> {
         "`scripts/bench-formats.sh`: the process's `load_ms` of `hrtao render` (the IfcOpenShell worker's start, \
          its tessellation, the transfer, the scene), with the machine's load average at the time.\n"
     )?;
-    writeln!(
+    table_header(
         m,
-        "| file | format | open ms | meshes | instances | unique triangles | instanced triangles | load |"
+        "file | format | open ms | meshes | instances | unique triangles | instanced triangles | load",
     )?;
-    writeln!(m, "|---|---|---|---|---|---|---|---|")?;
     for r in rows {
         writeln!(
             m,
@@ -94,12 +89,7 @@ pub struct Compare {
 
 /// Every comparison of `dir`, by name (none when the directory does not exist).
 pub fn load(dir: &Path) -> Result<Vec<Compare>> {
-    let mut out: Vec<Compare> = crate::results::load_schema(dir, FORMAT_SCHEMA)?
-        .into_iter()
-        .map(|(path, v)| {
-            serde_json::from_value(v).with_context(|| format!("{}: bad comparison", path.display()))
-        })
-        .collect::<Result<_>>()?;
+    let mut out: Vec<Compare> = crate::results::load_typed(dir, FORMAT_SCHEMA, "comparison")?;
     out.sort_by(|a, b| a.name.cmp(&b.name));
     Ok(out)
 }
@@ -121,11 +111,7 @@ pub fn section(m: &mut String, rows: &[Compare]) -> Result<()> {
          either covers; where the view has a Blender Cycles reference, each file's MAE against it too. Open time: \
          the process's `load_ms` (read, decode, scene) on a shared CPU. Results in `docs/bench/formats/`.\n"
     )?;
-    writeln!(
-        m,
-        "| file | encoding | against | size | unique triangles (twin) | instances (twin) | AO MAE to twin | MAE to Cycles (twin) | open ms (twin) |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|---|---|")?;
+    table_header(m, "file | encoding | against | size | unique triangles (twin) | instances (twin) | AO MAE to twin | MAE to Cycles (twin) | open ms (twin)")?;
     for r in rows {
         writeln!(
             m,

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use crate::report::table_header;
 use anyhow::{Context, Result};
 use serde_json::Value;
 
@@ -104,7 +105,7 @@ pub fn section(m: &mut String, report: Option<&Value>) -> Result<()> {
     }
     let checks = r["checks"].as_array().cloned().unwrap_or_default();
     if !checks.is_empty() {
-        writeln!(m, "| check | result | figures |\n|---|---|---|")?;
+        table_header(m, "check | result | figures")?;
         for c in &checks {
             writeln!(
                 m,

@@ -7,6 +7,7 @@ use std::path::Path;
 use anyhow::Result;
 use serde_json::Value;
 
+use crate::report::table_header;
 use hrtao_core::stats::median;
 
 pub const LATENCY_SCHEMA: &str = "hrtao-latency/1";
@@ -80,12 +81,7 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
          (AO < 0.95) flat pixels, per frame of `--orbit 1 --ao-out` at the view's size. The frame-time target is \
          100 ms. Versions of one scene ran back to back (`load` is the load average at the start).\n"
     )?;
-    writeln!(
-        m,
-        "| scene | version | drag latency, ms (median / p95 / max) | still frame, ms (median / p95 / max) | \
-         converged after the last drag | drags that moved nothing | load |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|")?;
+    table_header(m, "scene | version | drag latency, ms (median / p95 / max) | still frame, ms (median / p95 / max) | converged after the last drag | drags that moved nothing | load")?;
     for r in results {
         let j = &r.json;
         if j["latency_ms"].is_null() {
@@ -109,12 +105,7 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
         )?;
     }
     writeln!(m)?;
-    writeln!(
-        m,
-        "| scene | version | moving frame, ms (median) | still frame, ms (median / p95 / max) | still frames until \
-         converged | time to converge | largest frame after the first image |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|")?;
+    table_header(m, "scene | version | moving frame, ms (median) | still frame, ms (median / p95 / max) | still frames until converged | time to converge | largest frame after the first image")?;
     for r in results {
         let o = &r.json["orbit"];
         if o.is_null() {
@@ -137,11 +128,7 @@ pub fn section(m: &mut String, results: &[LatencyResult]) -> Result<()> {
     writeln!(m)?;
     converge_runs(m, results)?;
     if results.iter().any(|r| !r.json["roughness"].is_null()) {
-        writeln!(
-            m,
-            "| scene | version | roughness: first frame | still frames' largest | converged | largest / converged |"
-        )?;
-        writeln!(m, "|---|---|---|---|---|---|")?;
+        table_header(m, "scene | version | roughness: first frame | still frames' largest | converged | largest / converged")?;
         for r in results {
             let g = &r.json["roughness"];
             if g.is_null() {
@@ -192,11 +179,10 @@ fn converge_runs(m: &mut String, results: &[LatencyResult]) -> Result<()> {
         "Time to converge with the versions' `--orbit 20` runs alternating back to back (a ratio of medians to \
          `before-ab`, the code before the still refinement in slices, is a ratio measured side by side):\n"
     )?;
-    writeln!(
+    table_header(
         m,
-        "| scene | version | time to converge, each run | median | against before-ab |"
+        "scene | version | time to converge, each run | median | against before-ab",
     )?;
-    writeln!(m, "|---|---|---|---|---|")?;
     for (r, v) in &rows {
         let base = rows
             .iter()

@@ -34,24 +34,21 @@ const MARGIN_B: i32 = 30;
 const MARGIN_T: i32 = 12;
 const MARGIN_R: i32 = 16;
 
+/// The digits' 3×5 glyphs, 15 bits each: an octal digit per row, the top row first (bit 2 of a row = left).
+const DIGITS: [u16; 10] = [
+    0o75557, 0o26227, 0o71747, 0o71717, 0o55711, 0o74717, 0o74757, 0o71111, 0o75757, 0o75717,
+];
+
 /// 3×5 glyphs, rows top first, 3 bits per row (MSB = left).
 fn glyph(c: char) -> Option<[u8; 5]> {
-    Some(match c {
-        '0' => [7, 5, 5, 5, 7],
-        '1' => [2, 6, 2, 2, 7],
-        '2' => [7, 1, 7, 4, 7],
-        '3' => [7, 1, 7, 1, 7],
-        '4' => [5, 5, 7, 1, 1],
-        '5' => [7, 4, 7, 1, 7],
-        '6' => [7, 4, 7, 5, 7],
-        '7' => [7, 1, 1, 1, 1],
-        '8' => [7, 5, 7, 5, 7],
-        '9' => [7, 5, 7, 1, 7],
-        '.' => [0, 0, 0, 0, 2],
-        '-' => [0, 0, 7, 0, 0],
-        'e' => [0, 7, 7, 4, 7],
+    let bits = match c {
+        '0'..='9' => DIGITS[c as usize - '0' as usize],
+        '.' => 0o00002,
+        '-' => 0o00700,
+        'e' => 0o07747,
         _ => return None,
-    })
+    };
+    Some(std::array::from_fn(|row| ((bits >> (3 * (4 - row))) & 7) as u8))
 }
 
 struct Canvas {
@@ -267,6 +264,16 @@ impl Plot {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn glyphs_unpack_top_row_first() {
+        assert_eq!(glyph('0'), Some([7, 5, 5, 5, 7]));
+        assert_eq!(glyph('4'), Some([5, 5, 7, 1, 1]));
+        assert_eq!(glyph('9'), Some([7, 5, 7, 1, 7]));
+        assert_eq!(glyph('e'), Some([0, 7, 7, 4, 7]));
+        assert_eq!(glyph('.'), Some([0, 0, 0, 0, 2]));
+        assert_eq!(glyph('x'), None);
+    }
 
     #[test]
     fn ticks_labels_and_image() {

@@ -10,6 +10,7 @@ use anyhow::Result;
 use hrtao_core::bench_json::BenchResult;
 use hrtao_core::stats::median;
 
+use crate::report::table_header;
 use crate::results::load_results;
 
 /// How a run traced its rays: the device record's `ray_backend` (`query` or `pipeline`).
@@ -48,11 +49,10 @@ pub fn section(m: &mut String, results: &[BenchResult]) -> Result<()> {
          runs of each run's median whole-frame wall time (first frame from an empty map; navigation frame of an \
          orbit); the ratio is pipeline over query.\n"
     )?;
-    writeln!(
+    table_header(
         m,
-        "| scene | runs | first frame: query / pipeline | ratio | navigation frame: query / pipeline | ratio |"
+        "scene | runs | first frame: query / pipeline | ratio | navigation frame: query / pipeline | ratio",
     )?;
-    writeln!(m, "|---|---|---|---|---|---|")?;
     for scene in scenes {
         let of = |b: &str| -> Vec<&BenchResult> {
             results

@@ -46,6 +46,13 @@ fn mib(b: u64) -> String {
     format!("{:.0}", b as f64 / 1048576.0)
 }
 
+/// A Markdown table's header row, `columns` separated by " | ", and its separator row (every column
+/// left-aligned).
+pub fn table_header(m: &mut String, columns: &str) -> std::fmt::Result {
+    writeln!(m, "| {columns} |")?;
+    writeln!(m, "|{}", "---|".repeat(columns.split(" | ").count()))
+}
+
 fn file_stem_safe(label: &str) -> String {
     label
         .chars()
@@ -208,7 +215,7 @@ fn render_markdown(
 
     // Targets.
     writeln!(m, "## Targets\n")?;
-    writeln!(m, "| target | measured | met? |\n|---|---|---|")?;
+    table_header(&mut m, "target | measured | met?")?;
     let ratios: Vec<(String, f64, MatchKind)> = scenes
         .iter()
         .filter_map(|r| {
@@ -512,11 +519,7 @@ fn render_markdown(
         all.iter().map(|r| r.hrtao.settle.len()).min().unwrap_or(0),
         all.iter().map(|r| r.hrtao.settle.len()).max().unwrap_or(0)
     )?;
-    writeln!(
-        m,
-        "| scene | size | instanced triangles | instances | HRTAO 0s (ms) | HRTAO nav. (ms) | nav/first | nav/first (late half) | frame 0s (ms) | frame nav. (ms) | wall 0s / nav (ms) | RTAO frame (ms) |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+    table_header(&mut m, "scene | size | instanced triangles | instances | HRTAO 0s (ms) | HRTAO nav. (ms) | nav/first | nav/first (late half) | frame 0s (ms) | frame nav. (ms) | wall 0s / nav (ms) | RTAO frame (ms)")?;
     for r in &all {
         let s = &r.summary;
         writeln!(
@@ -542,11 +545,7 @@ fn render_markdown(
 
     // Table 2.
     writeln!(m, "## Table 2: first-frame breakdown (GPU ms)\n")?;
-    writeln!(
-        m,
-        "| scene | cell finder | ray-tracing update | per-pixel AO | filtering | non-ray share | primary visibility | rays |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|---|")?;
+    table_header(&mut m, "scene | cell finder | ray-tracing update | per-pixel AO | filtering | non-ray share | primary visibility | rays")?;
     for r in &all {
         let s = &r.summary;
         writeln!(
@@ -572,11 +571,7 @@ fn render_markdown(
          \"primary + B AO rays, no hashing\"; the stricter column divides by the AO pass alone. HRTAO = \
          first-frame rays / ray-tracing update.\n"
     )?;
-    writeln!(
-        m,
-        "| scene | raw (Mrays/s) | raw AO pass (Mrays/s) | HRTAO ray pass (Mrays/s) | HRTAO / raw | HRTAO / raw AO pass |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|")?;
+    table_header(&mut m, "scene | raw (Mrays/s) | raw AO pass (Mrays/s) | HRTAO ray pass (Mrays/s) | HRTAO / raw | HRTAO / raw AO pass")?;
     for r in &all {
         let s = &r.summary;
         writeln!(
@@ -742,11 +737,7 @@ fn render_markdown(
              HRTAO timing only. Host memory is the process peak (VmHWM: includes the generated scene on the CPU); \
              device memory is what the allocator holds after the scene upload and with the renderer.\n"
         )?;
-        writeln!(
-            m,
-            "| scene | instanced triangles | unique triangles | instances | load (ms) | BLAS (ms) | TLAS (ms) | host peak (MiB) | device scene / total (MiB) | HRTAO 0s / nav (ms) | frame 0s / nav (ms) |"
-        )?;
-        writeln!(m, "|---|---|---|---|---|---|---|---|---|---|---|")?;
+        table_header(&mut m, "scene | instanced triangles | unique triangles | instances | load (ms) | BLAS (ms) | TLAS (ms) | host peak (MiB) | device scene / total (MiB) | HRTAO 0s / nav (ms) | frame 0s / nav (ms)")?;
         for r in &scale {
             let b = |k: &str| r.build.get(k).and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
             writeln!(
@@ -954,11 +945,10 @@ fn step_table(m: &mut String, results: &[StepResult]) -> Result<()> {
             format!(" on {}", r0.date)
         },
     )?;
-    writeln!(
+    table_header(
         m,
-        "| file | tessellation | triangles hrtao / F3D | wall hrtao / F3D (s) | ratio | goal | met |"
+        "file | tessellation | triangles hrtao / F3D | wall hrtao / F3D (s) | ratio | goal | met",
     )?;
-    writeln!(m, "|---|---|---|---|---|---|---|")?;
     for r in results {
         let quality = match r.quality.as_str() {
             "f3d" => "F3D's",

@@ -60,3 +60,12 @@ pub fn load_schema(dir: &Path, schema: &str) -> Result<Vec<(PathBuf, serde_json:
     }
     Ok(out)
 }
+
+/// Every result of `schema` in `dir` as a `T` (`what` names one in the error of a file that is not), in file
+/// order (none when the directory does not exist).
+pub fn load_typed<T: serde::de::DeserializeOwned>(dir: &Path, schema: &str, what: &str) -> Result<Vec<T>> {
+    load_schema(dir, schema)?
+        .into_iter()
+        .map(|(path, v)| serde_json::from_value(v).with_context(|| format!("{}: bad {what}", path.display())))
+        .collect()
+}

@@ -9,6 +9,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde_json::Value;
 
+use crate::report::table_header;
 use hrtao_core::stats::median;
 
 /// One render: its scene key, mode (`ao` or `ENV_ROT`), frames and statistics.
@@ -92,11 +93,7 @@ pub fn section(m: &mut String, runs: &[Run]) -> Result<()> {
          the AO's over the pixels not open. Frame times: wall ms of the first frame from an empty map and the \
          median of the still frames after it, sky light / AO, from the 32-frame runs.\n"
     )?;
-    writeln!(
-        m,
-        "| scene | environment | rotation | frame 1 MAE (AO's) | ratio | frame 32 MAE | ÷ mean | first frame ms: sky / AO | still frame ms: sky / AO |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|---|---|")?;
+    table_header(m, "scene | environment | rotation | frame 1 MAE (AO's) | ratio | frame 32 MAE | ÷ mean | first frame ms: sky / AO | still frame ms: sky / AO")?;
     for (key, modes) in views {
         let ao1 = find(key, "ao", 1).and_then(|s| f(s, &["ao_error", "mae"]));
         let ao_ms = find(key, "ao", 32).and_then(frame_ms);

@@ -5,7 +5,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use crate::report::table_header;
+use anyhow::Result;
 use hrtao_scene::CadTessellation;
 use serde::Deserialize;
 
@@ -36,10 +37,7 @@ pub struct Sweep {
 
 /// Every sweep of `dir`, by file name (none when the directory does not exist).
 pub fn load(dir: &Path) -> Result<Vec<Sweep>> {
-    let mut out: Vec<Sweep> = crate::results::load_schema(dir, SWEEP_SCHEMA)?
-        .into_iter()
-        .map(|(path, v)| serde_json::from_value(v).with_context(|| format!("{}: bad sweep", path.display())))
-        .collect::<Result<_>>()?;
+    let mut out: Vec<Sweep> = crate::results::load_typed(dir, SWEEP_SCHEMA, "sweep")?;
     out.sort_by(|a, b| a.file.cmp(&b.file));
     Ok(out)
 }
@@ -75,11 +73,7 @@ pub fn section(m: &mut String, sweeps: &[Sweep]) -> Result<()> {
     for s in sweeps {
         let finest = reference(s).map(|r| r.instanced_triangles);
         writeln!(m, "**`{}`**\n", s.file)?;
-        writeln!(
-            m,
-            "| linear (× diagonal) | angular | triangles (instanced) | unique | AO MAE | shaded MAE | load ms | BLAS+TLAS ms |"
-        )?;
-        writeln!(m, "|---|---|---|---|---|---|---|---|")?;
+        table_header(m, "linear (× diagonal) | angular | triangles (instanced) | unique | AO MAE | shaded MAE | load ms | BLAS+TLAS ms")?;
         for r in &s.rows {
             let name = if Some(r.instanced_triangles) == finest {
                 " reference"
@@ -117,11 +111,7 @@ pub fn section(m: &mut String, sweeps: &[Sweep]) -> Result<()> {
         fine.relative,
         fine.angular_deg
     )?;
-    writeln!(
-        m,
-        "| file | triangles default / fine | share | AO MAE default / fine | shaded MAE default / fine | BLAS+TLAS ms default / fine | load ms default / fine |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|")?;
+    table_header(m, "file | triangles default / fine | share | AO MAE default / fine | shaded MAE default / fine | BLAS+TLAS ms default / fine | load ms default / fine")?;
     for s in sweeps {
         let (Some(d), Some(f)) = (
             s.rows.iter().find(|r| is(r, &default)),

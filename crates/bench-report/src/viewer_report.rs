@@ -6,9 +6,10 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde::Deserialize;
 
+use crate::report::table_header;
 use hrtao_core::stats::median;
 
 pub const VIEWER_SCHEMA: &str = "hrtao-viewer-run/1";
@@ -44,12 +45,7 @@ pub struct ViewerRun {
 
 /// Every result of `dir` with [`VIEWER_SCHEMA`] (none when the directory does not exist).
 pub fn load(dir: &Path) -> Result<Vec<ViewerRun>> {
-    crate::results::load_schema(dir, VIEWER_SCHEMA)?
-        .into_iter()
-        .map(|(path, v)| {
-            serde_json::from_value(v).with_context(|| format!("{}: bad viewer run", path.display()))
-        })
-        .collect()
+    crate::results::load_typed(dir, VIEWER_SCHEMA, "viewer run")
 }
 
 /// The medians over one build's runs of a scene.
@@ -100,12 +96,7 @@ pub fn section(m: &mut String, runs: &[ViewerRun]) -> Result<()> {
          egui's tessellation and texture uploads, recording egui's draw, and presenting. The ratio row divides \
          the last build's medians by `before`'s.\n"
     )?;
-    writeln!(
-        m,
-        "| scene | build | runs | moving frame, ms | converge, s | UI pass, ms | tessellate, ms | egui record, ms \
-         | present, ms | UI in all, ms |"
-    )?;
-    writeln!(m, "|---|---|---|---|---|---|---|---|---|---|")?;
+    table_header(m, "scene | build | runs | moving frame, ms | converge, s | UI pass, ms | tessellate, ms | egui record, ms | present, ms | UI in all, ms")?;
     for (scene, versions) in &by_scene {
         let rows: Vec<(&str, Medians)> = versions
             .iter()

@@ -12,6 +12,64 @@ use ash::vk;
 
 use crate::pass::{Pass, Resource};
 
+/// The colour aspect of a single-level, single-layer image: what the barriers of the renderer's and the viewer's
+/// 2D colour images cover.
+pub const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
+    aspect_mask: vk::ImageAspectFlags::COLOR,
+    base_mip_level: 0,
+    level_count: 1,
+    base_array_layer: 0,
+    layer_count: 1,
+};
+
+/// `COLOR_RANGE` as the layers of a copy or blit.
+pub const COLOR_LAYERS: vk::ImageSubresourceLayers = vk::ImageSubresourceLayers {
+    aspect_mask: vk::ImageAspectFlags::COLOR,
+    mip_level: 0,
+    base_array_layer: 0,
+    layer_count: 1,
+};
+
+/// A layout transition of the whole colour image `image` (`COLOR_RANGE`), with no queue family transfer.
+pub fn color_image_barrier(
+    image: vk::Image,
+    (old, new): (vk::ImageLayout, vk::ImageLayout),
+    src_access: vk::AccessFlags,
+    dst_access: vk::AccessFlags,
+) -> vk::ImageMemoryBarrier<'static> {
+    vk::ImageMemoryBarrier::default()
+        .image(image)
+        .old_layout(old)
+        .new_layout(new)
+        .src_access_mask(src_access)
+        .dst_access_mask(dst_access)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .subresource_range(COLOR_RANGE)
+}
+
+/// A global memory barrier: `src` accesses made available and visible to `dst` accesses.
+pub fn memory_barrier(src: vk::AccessFlags, dst: vk::AccessFlags) -> vk::MemoryBarrier<'static> {
+    vk::MemoryBarrier::default()
+        .src_access_mask(src)
+        .dst_access_mask(dst)
+}
+
+/// Records `vkCmdPipelineBarrier` from the `src` to the `dst` stages with global `memory` barriers and `images`
+/// barriers (no buffer barriers).
+///
+/// # Safety
+/// `cmd` is a command buffer of `device` in the recording state, and the images are alive.
+pub unsafe fn record(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    (src, dst): (vk::PipelineStageFlags, vk::PipelineStageFlags),
+    memory: &[vk::MemoryBarrier],
+    images: &[vk::ImageMemoryBarrier],
+) {
+    device.cmd_pipeline_barrier(cmd, src, dst, vk::DependencyFlags::empty(), memory, &[], images);
+}
+
 /// Where in the pipeline a buffer is accessed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Stage {

@@ -69,7 +69,7 @@ impl FrameRecord {
 
 /// Medians of a set of frames.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct FrameStats {
+pub struct FrameSummary {
     pub frames: usize,
     pub wall_ms: f64,
     pub gpu_total_ms: f64,
@@ -78,8 +78,8 @@ pub struct FrameStats {
     pub passes: BTreeMap<String, f64>,
 }
 
-impl FrameStats {
-    pub fn of(frames: &[FrameRecord]) -> FrameStats {
+impl FrameSummary {
+    pub fn of(frames: &[FrameRecord]) -> FrameSummary {
         let m = |f: &dyn Fn(&FrameRecord) -> f64| median(&frames.iter().map(f).collect::<Vec<_>>());
         let mut names: Vec<&String> = frames.iter().flat_map(|f| f.passes.keys()).collect();
         names.sort();
@@ -91,7 +91,7 @@ impl FrameStats {
                 (n.clone(), median(&v))
             })
             .collect();
-        FrameStats {
+        FrameSummary {
             frames: frames.len(),
             wall_ms: m(&|f| f.wall_ms),
             gpu_total_ms: m(&|f| f.gpu_total_ms),
@@ -115,10 +115,10 @@ pub struct ModeRun {
     pub settle: Vec<FrameRecord>,
     /// Navigation frames along the path.
     pub nav: Vec<FrameRecord>,
-    pub first_stats: FrameStats,
-    pub nav_stats: FrameStats,
+    pub first_stats: FrameSummary,
+    pub nav_stats: FrameSummary,
     /// Medians over the second half of the navigation (the cache has settled).
-    pub nav_late_stats: FrameStats,
+    pub nav_late_stats: FrameSummary,
 }
 
 impl ModeRun {
@@ -127,9 +127,9 @@ impl ModeRun {
         let late = &nav[nav.len() / 2..];
         ModeRun {
             settle,
-            first_stats: FrameStats::of(&first),
-            nav_stats: FrameStats::of(&nav),
-            nav_late_stats: FrameStats::of(late),
+            first_stats: FrameSummary::of(&first),
+            nav_stats: FrameSummary::of(&nav),
+            nav_late_stats: FrameSummary::of(late),
             first,
             nav,
         }

@@ -57,13 +57,7 @@ impl Buffer {
                 .create_buffer(&vk::BufferCreateInfo::default().size(size).usage(usage), None)
                 .map_err(|e| CoreError::from_vk("vkCreateBuffer", e))?;
             let requirements = gpu.device.get_buffer_memory_requirements(raw);
-            let allocation = gpu.allocator().allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
+            let allocation = allocate(gpu, name, requirements, location, true);
             let allocation = match allocation {
                 Ok(a) => a,
                 Err(e) => {
@@ -220,33 +214,46 @@ pub fn human_bytes(b: u64) -> String {
     }
 }
 
+/// Device memory for a resource with `requirements` from the gpu-allocator, in its own-managed blocks; `linear`
+/// for a buffer or a linearly tiled image.
+pub fn allocate(
+    gpu: &Gpu,
+    name: &str,
+    requirements: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+) -> std::result::Result<Allocation, gpu_allocator::AllocationError> {
+    gpu.allocator().allocate(&AllocationCreateDesc {
+        name,
+        requirements,
+        location,
+        linear,
+        allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+    })
+}
+
 /// Records a full memory barrier between shader/transfer/AS work (the passes form a simple linear chain).
 pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
-    let barrier = [vk::MemoryBarrier::default()
-        .src_access_mask(
-            vk::AccessFlags::SHADER_WRITE
-                | vk::AccessFlags::TRANSFER_WRITE
-                | vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR,
-        )
-        .dst_access_mask(
-            vk::AccessFlags::SHADER_READ
-                | vk::AccessFlags::SHADER_WRITE
-                | vk::AccessFlags::TRANSFER_READ
-                | vk::AccessFlags::TRANSFER_WRITE
-                | vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR
-                | vk::AccessFlags::INDIRECT_COMMAND_READ,
-        )];
+    let barrier = [crate::barrier::memory_barrier(
+        vk::AccessFlags::SHADER_WRITE
+            | vk::AccessFlags::TRANSFER_WRITE
+            | vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR,
+        vk::AccessFlags::SHADER_READ
+            | vk::AccessFlags::SHADER_WRITE
+            | vk::AccessFlags::TRANSFER_READ
+            | vk::AccessFlags::TRANSFER_WRITE
+            | vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR
+            | vk::AccessFlags::INDIRECT_COMMAND_READ,
+    )];
     let stages = vk::PipelineStageFlags::COMPUTE_SHADER
         | vk::PipelineStageFlags::TRANSFER
         | vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR;
     unsafe {
-        gpu.device.cmd_pipeline_barrier(
+        crate::barrier::record(
+            &gpu.device,
             cmd,
-            stages,
-            stages | vk::PipelineStageFlags::DRAW_INDIRECT,
-            vk::DependencyFlags::empty(),
+            (stages, stages | vk::PipelineStageFlags::DRAW_INDIRECT),
             &barrier,
-            &[],
             &[],
         );
     }
@@ -254,17 +261,17 @@ pub fn full_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
 
 /// Makes all device writes visible to the host (end of a command buffer whose results are read back).
 pub fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
-    let barrier = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-        .dst_access_mask(vk::AccessFlags::HOST_READ)];
+    let barrier = [crate::barrier::memory_barrier(
+        vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE,
+        vk::AccessFlags::HOST_READ,
+    )];
+    let stages = vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER;
     unsafe {
-        gpu.device.cmd_pipeline_barrier(
+        crate::barrier::record(
+            &gpu.device,
             cmd,
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::HOST,
-            vk::DependencyFlags::empty(),
+            (stages, vk::PipelineStageFlags::HOST),
             &barrier,
-            &[],
             &[],
         );
     }
@@ -276,12 +283,7 @@ pub fn whole_image_copy(width: u32, height: u32) -> vk::BufferImageCopy {
         buffer_offset: 0,
         buffer_row_length: 0,
         buffer_image_height: 0,
-        image_subresource: vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        },
+        image_subresource: crate::barrier::COLOR_LAYERS,
         image_offset: vk::Offset3D::default(),
         image_extent: vk::Extent3D {
             width,
@@ -289,6 +291,28 @@ pub fn whole_image_copy(width: u32, height: u32) -> vk::BufferImageCopy {
             depth: 1,
         },
     }
+}
+
+/// The creation info of a single-level, single-sample 2D image of `format`, optimal tiling, starting UNDEFINED.
+pub fn image_2d_info(
+    format: vk::Format,
+    usage: vk::ImageUsageFlags,
+    (width, height): (u32, u32),
+) -> vk::ImageCreateInfo<'static> {
+    vk::ImageCreateInfo::default()
+        .image_type(vk::ImageType::TYPE_2D)
+        .format(format)
+        .extent(vk::Extent3D {
+            width,
+            height,
+            depth: 1,
+        })
+        .mip_levels(1)
+        .array_layers(1)
+        .samples(vk::SampleCountFlags::TYPE_1)
+        .tiling(vk::ImageTiling::OPTIMAL)
+        .usage(usage)
+        .initial_layout(vk::ImageLayout::UNDEFINED)
 }
 
 /// Records a write of `bytes` into the start of the device buffer `dst` by the command buffer itself

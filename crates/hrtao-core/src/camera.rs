@@ -269,6 +269,26 @@ impl Camera {
 }
 
 impl Camera {
+    /// A perspective camera at `eye` looking at `target`, `up` up, its vertical field of view `fov_y_deg` spanning
+    /// an image of `width` x `height` pixels.
+    pub fn perspective(
+        eye: [f32; 3],
+        target: [f32; 3],
+        up: [f32; 3],
+        fov_y_deg: f32,
+        (width, height): (u32, u32),
+    ) -> Camera {
+        Camera {
+            eye,
+            target,
+            up,
+            fov_y_deg,
+            width,
+            height,
+            ..Default::default()
+        }
+    }
+
     /// A camera that frames the box `min..max` from an isometric-like direction (front-right-above).
     /// An empty or non-finite box (a scene with nothing visible) frames the unit cube.
     pub fn fit(min: Vec3, max: Vec3, up: UpAxis, fov_y_deg: f32, width: u32, height: u32) -> Camera {
@@ -292,14 +312,14 @@ impl Camera {
         let dist = radius / half.atan().sin();
         let eye = center + dir * dist;
         Camera {
-            eye: eye.to_array(),
-            target: center.to_array(),
-            up: upv.to_array(),
-            fov_y_deg,
-            width,
-            height,
-            projection: Projection::Perspective,
             ortho_height: 2.0 * radius / aspect.min(1.0),
+            ..Camera::perspective(
+                eye.to_array(),
+                center.to_array(),
+                upv.to_array(),
+                fov_y_deg,
+                (width, height),
+            )
         }
     }
 }
@@ -310,15 +330,7 @@ mod tests {
 
     #[test]
     fn centre_ray_looks_at_target_and_corners_span_fov() {
-        let cam = Camera {
-            eye: [0.0, 0.0, 5.0],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            fov_y_deg: 90.0,
-            width: 2,
-            height: 2,
-            ..Default::default()
-        };
+        let cam = Camera::perspective([0.0, 0.0, 5.0], [0.0; 3], [0.0, 1.0, 0.0], 90.0, (2, 2));
         let f = cam.frame();
         assert!((f.w - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
         // With 90 deg vertical fov, the top edge of the image is at 45 deg.
@@ -329,14 +341,9 @@ mod tests {
 
     fn ortho() -> Camera {
         Camera {
-            eye: [0.0, 0.0, 5.0],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            width: 200,
-            height: 100,
             projection: Projection::Orthographic,
             ortho_height: 4.0,
-            ..Default::default()
+            ..Camera::perspective([0.0, 0.0, 5.0], [0.0; 3], [0.0, 1.0, 0.0], 45.0, (200, 100))
         }
     }
 
@@ -428,15 +435,7 @@ mod tests {
 
     #[test]
     fn rejects_bad_cameras() {
-        let mut cam = Camera {
-            eye: [0.0; 3],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            fov_y_deg: 45.0,
-            width: 4,
-            height: 4,
-            ..Default::default()
-        };
+        let mut cam = Camera::perspective([0.0; 3], [0.0; 3], [0.0, 1.0, 0.0], 45.0, (4, 4));
         assert!(cam.validate().is_err());
         cam.target = [0.0, 1.0, 0.0];
         assert!(cam.validate().is_err(), "up parallel to view");

@@ -350,27 +350,21 @@ unsafe fn check_candidate(
         });
         return cand;
     }
-    let mut lacking = Vec::new();
-    if asf.acceleration_structure == 0 {
-        lacking.push("accelerationStructure");
-    }
-    if v12.buffer_device_address == 0 {
-        lacking.push("bufferDeviceAddress");
-    }
-    if v12.scalar_block_layout == 0 {
-        lacking.push("scalarBlockLayout");
-    }
-    if features.shader_int64 == 0 {
-        lacking.push("shaderInt64");
-    }
-    if features.shader_clip_distance == 0 {
+    let required = [
+        (asf.acceleration_structure, "accelerationStructure"),
+        (v12.buffer_device_address, "bufferDeviceAddress"),
+        (v12.scalar_block_layout, "scalarBlockLayout"),
+        (features.shader_int64, "shaderInt64"),
         // Section planes clip the rasterised primary visibility.
-        lacking.push("shaderClipDistance");
-    }
-    if v12.shader_buffer_int64_atomics == 0 {
+        (features.shader_clip_distance, "shaderClipDistance"),
         // The hash map claims and stamps a cell with one 64-bit compare-and-swap (hash_map.glsl).
-        lacking.push("shaderBufferInt64Atomics");
-    }
+        (v12.shader_buffer_int64_atomics, "shaderBufferInt64Atomics"),
+    ];
+    let lacking: Vec<&str> = required
+        .iter()
+        .filter(|(f, _)| *f == 0)
+        .map(|(_, name)| *name)
+        .collect();
     if !lacking.is_empty() {
         cand.problem = Some(format!("lacks features {}", lacking.join(", ")));
         return cand;

@@ -10,7 +10,7 @@
 use std::sync::Arc;
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 use hrtao_scene::Scene;
 
@@ -271,20 +271,7 @@ impl Image {
             let raw = gpu
                 .device
                 .create_image(
-                    &vk::ImageCreateInfo::default()
-                        .image_type(vk::ImageType::TYPE_2D)
-                        .format(format)
-                        .extent(vk::Extent3D {
-                            width,
-                            height,
-                            depth: 1,
-                        })
-                        .mip_levels(1)
-                        .array_layers(1)
-                        .samples(vk::SampleCountFlags::TYPE_1)
-                        .tiling(vk::ImageTiling::OPTIMAL)
-                        .usage(usage)
-                        .initial_layout(vk::ImageLayout::UNDEFINED),
+                    &crate::buffer::image_2d_info(format, usage, (width, height)),
                     None,
                 )
                 .map_err(|e| CoreError::from_vk("vkCreateImage", e))?;
@@ -296,15 +283,7 @@ impl Image {
                 view: vk::ImageView::null(),
             };
             let requirements = gpu.device.get_image_memory_requirements(raw);
-            let allocation = gpu
-                .allocator()
-                .allocate(&AllocationCreateDesc {
-                    name,
-                    requirements,
-                    location: MemoryLocation::GpuOnly,
-                    linear: false,
-                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-                })
+            let allocation = crate::buffer::allocate(gpu, name, requirements, MemoryLocation::GpuOnly, false)
                 .map_err(|e| CoreError::Memory(format!("image `{name}` ({width}x{height}): {e}")))?;
             let (memory, offset) = (allocation.memory(), allocation.offset());
             gpu.device_bytes
@@ -368,22 +347,20 @@ struct VisTargets {
 
 impl VisTargets {
     fn new(gpu: &Arc<Gpu>, render_pass: vk::RenderPass, size: (u32, u32)) -> Result<VisTargets> {
-        let vis = Image::new(
-            gpu,
-            "visibility",
-            VIS_FORMAT,
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-            vk::ImageAspectFlags::COLOR,
-            size,
-        )?;
-        let depth = Image::new(
-            gpu,
-            "visibility depth",
-            DEPTH_FORMAT,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-            vk::ImageAspectFlags::DEPTH,
-            size,
-        )?;
+        // The two attachments of the render pass: (name, format, usage, aspect).
+        let color_usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+        let depth_usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT;
+        let [vis, depth] = [
+            ("visibility", VIS_FORMAT, color_usage, vk::ImageAspectFlags::COLOR),
+            (
+                "visibility depth",
+                DEPTH_FORMAT,
+                depth_usage,
+                vk::ImageAspectFlags::DEPTH,
+            ),
+        ]
+        .map(|(name, format, usage, aspect)| Image::new(gpu, name, format, usage, aspect, size));
+        let (vis, depth) = (vis?, depth?);
         let vis_buffer = Buffer::new(
             gpu,
             "visibility buffer",
@@ -763,25 +740,29 @@ impl Drop for Rasterizer {
 /// One subpass writing the visibility and depth attachments; the visibility image ends ready to be copied.
 /// The external dependencies order it after the previous frame's copy and resolve, and the copy after it.
 fn create_render_pass(gpu: &Gpu) -> Result<vk::RenderPass> {
+    // Both cleared at the start, no stencil; the visibility image is kept for the copy, the depth is not.
+    let attachment = |format, store_op, final_layout| {
+        vk::AttachmentDescription::default()
+            .format(format)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(store_op)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(final_layout)
+    };
     let attachments = [
-        vk::AttachmentDescription::default()
-            .format(VIS_FORMAT)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
-            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .initial_layout(vk::ImageLayout::UNDEFINED)
-            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
-        vk::AttachmentDescription::default()
-            .format(DEPTH_FORMAT)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
-            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .initial_layout(vk::ImageLayout::UNDEFINED)
-            .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL),
+        attachment(
+            VIS_FORMAT,
+            vk::AttachmentStoreOp::STORE,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        ),
+        attachment(
+            DEPTH_FORMAT,
+            vk::AttachmentStoreOp::DONT_CARE,
+            vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+        ),
     ];
     let color_ref = [vk::AttachmentReference {
         attachment: 0,

@@ -157,15 +157,7 @@ mod tests {
 
     #[test]
     fn a_tile_pixel_gets_the_full_image_ray() {
-        let cam = Camera {
-            eye: [1.0, 2.0, 3.0],
-            target: [0.0, 0.0, 0.0],
-            up: [0.0, 0.0, 1.0],
-            fov_y_deg: 50.0,
-            width: 400,
-            height: 300,
-            ..Camera::default()
-        };
+        let cam = Camera::perspective([1.0, 2.0, 3.0], [0.0; 3], [0.0, 0.0, 1.0], 50.0, (400, 300));
         let full = cam.frame();
         let tile = Tile {
             full: (400, 300),

@@ -2,13 +2,11 @@
 //! pixels traces each frame; the cells, which pool the rays of all their pixels (§3), still fill and converge.
 mod common;
 use common::*;
-use hrtao_core::{AoSettings, FrameDesc, RayBudget, SceneGpu};
+use hrtao_core::{AoSettings, FrameDesc, RayBudget};
 
 #[test]
 fn a_quarter_of_the_pixels_trace_and_the_cells_still_converge() {
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("rod", 160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("rod", 160, 90);
     let run = |settings: AoSettings, fraction: f32, frames: u32| {
         let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
         r.budget = Some(RayBudget {

@@ -12,15 +12,7 @@ fn blocks() -> Scene {
 }
 
 fn camera() -> Camera {
-    Camera {
-        eye: [0.0, -12.0, 14.0],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 60.0,
-        width: 160,
-        height: 90,
-        ..Camera::default()
-    }
+    z_up_camera_fov([0.0, -12.0, 14.0], [0.0; 3], 60.0, (160, 90))
 }
 
 /// The paper's mode (refinement off) at 4 rays and R = 3, with `overrides`.
@@ -82,10 +74,7 @@ fn min_samples_zero_shows_no_white_holes() {
 /// the write and leaves the descriptor on a destroyed acceleration structure.
 #[test]
 fn the_tlas_descriptor_is_rewritten_after_every_rebuild() {
-    let gpu = gpu();
-    let mut scene = blocks();
-    let cam = camera();
-    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, mut scene, cam, mut sg) = on_gpu((blocks(), camera()));
     let mut r = Headless::new(&gpu, cam.width, cam.height, cells_only("{}")).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
@@ -145,10 +134,7 @@ fn a_new_tlas_generation_is_written_even_with_the_same_handle_value() {
 /// (`rays == 0`) called the image final although its cells were still filling.
 #[test]
 fn the_papers_mode_never_reports_convergence_with_young_cells_on_screen() {
-    let gpu = gpu();
-    let scene = blocks();
-    let cam = camera();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu((blocks(), camera()));
     // Cells that fill in a few frames of the full budget until some thousand pixels are left on young cells,
     // then a fractional budget that picks none of them in most frames.
     let s = cells_only(r#"{"max_samples": 256, "rays_per_pixel": 8}"#);
@@ -209,21 +195,13 @@ fn the_papers_mode_never_reports_convergence_with_young_cells_on_screen() {
 /// the edited scene.
 #[test]
 fn a_deleted_parts_contact_shadow_does_not_come_back_when_the_radius_crosses_a_power_of_two() {
-    let gpu = gpu();
-    let mut scene = blocks();
-    let cam = camera();
-    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, mut scene, cam, mut sg) = on_gpu((blocks(), camera()));
     let s = cells_only(r#"{"max_samples": 64}"#);
     let mut r = Headless::new(&gpu, cam.width, cam.height, s.clone()).unwrap();
     for _ in 0..24 {
         r.render(&sg, scene.f(), &cam).unwrap();
     }
-    let part = 2;
-    let bounds = scene.instance_bounds(part);
-    let ring = ring_pixels(&r, bounds, 0.6);
-    let with_part = mean_at(&r.read_ao().unwrap(), &ring);
-    scene.set_visible(part, false).unwrap();
-    sg.update_instances(&scene, u32::MAX).unwrap();
+    let (ring, with_part) = remove_part(&r, &mut scene, &mut sg, 2);
     for _ in 0..8 {
         r.render(&sg, scene.f(), &cam).unwrap();
     }
@@ -237,16 +215,9 @@ fn a_deleted_parts_contact_shadow_does_not_come_back_when_the_radius_crosses_a_p
     r.set_settings(wider.clone()).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     assert_ne!(r.region_lod(), lod, "the region grids change");
-    let after = mean_at(&r.read_ao().unwrap(), &ring);
-    let (fresh, _sg) = render(&gpu, &scene, &cam, wider, 1);
-    let expected = mean_at(&fresh.read_ao().unwrap(), &ring);
-    eprintln!(
-        "{} floor pixels by the deleted block: AO {with_part:.3} with it, {after:.3} after the radius change, \
-         {expected:.3} fresh",
-        ring.len()
-    );
-    assert!(ring.len() > 50);
-    assert!(with_part < expected - 0.1, "the block cast a contact shadow");
+    let (after, expected) = mean_against_fresh(&r, &gpu, (&scene, &cam), (wider, 1), &ring);
+    let ao = (with_part, after, expected);
+    check_contact_shadow(ring.len(), ao, "after the radius change", 50);
     assert!(
         (after - expected).abs() < 0.05,
         "the deleted block's contact shadow came back: AO {after:.3}, fresh {expected:.3}"
@@ -262,10 +233,7 @@ fn a_deleted_parts_contact_shadow_does_not_come_back_when_the_radius_crosses_a_p
 /// 1.000).
 #[test]
 fn a_local_edit_with_refinement_shows_no_ghost_of_the_removed_part() {
-    let gpu = gpu();
-    let mut scene = blocks();
-    let cam = camera();
-    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, mut scene, cam, mut sg) = on_gpu((blocks(), camera()));
     // Cells wider than the contact shadow: the pixels' own rays find it darker than their cells, and their
     // residuals (pooled with the neighbours') hold it.
     let mut s = hrtao(4, 3.0);
@@ -275,28 +243,16 @@ fn a_local_edit_with_refinement_shows_no_ghost_of_the_removed_part() {
     for _ in 0..24 {
         r.render(&sg, scene.f(), &cam).unwrap();
     }
-    let part = 2;
-    let bounds = scene.instance_bounds(part);
-    let ring = ring_pixels(&r, bounds, 0.6);
-    let with_part = mean_at(&r.read_ao().unwrap(), &ring);
-    scene.set_visible(part, false).unwrap();
-    sg.update_instances(&scene, u32::MAX).unwrap();
+    let (ring, with_part) = remove_part(&r, &mut scene, &mut sg, 2);
     let rep = r.render(&sg, scene.f(), &cam).unwrap();
     assert!(
         rep.accumulated_frames > 1,
         "a local edit keeps the still image elsewhere"
     );
-    let after = mean_at(&r.read_ao().unwrap(), &ring);
     // The edited scene, still for as many frames: no trace of the block.
-    let (fresh, _sg) = render(&gpu, &scene, &cam, s, 25);
-    let expected = mean_at(&fresh.read_ao().unwrap(), &ring);
-    eprintln!(
-        "{} floor pixels by the deleted block: AO {with_part:.3} with it, {after:.3} the frame after the edit, \
-         {expected:.3} fresh",
-        ring.len()
-    );
-    assert!(ring.len() > 50);
-    assert!(with_part < expected - 0.1, "the block cast a contact shadow");
+    let (after, expected) = mean_against_fresh(&r, &gpu, (&scene, &cam), (s, 25), &ring);
+    let ao = (with_part, after, expected);
+    check_contact_shadow(ring.len(), ao, "the frame after the edit", 50);
     assert!(
         after > expected - 0.05,
         "the removed block's contact shadow flashed: AO {after:.3}, fresh {expected:.3}"
@@ -310,10 +266,7 @@ fn a_local_edit_with_refinement_shows_no_ghost_of_the_removed_part() {
 /// copy (the report would read zeros) and per-frame counters that are not cleared (they would add up).
 #[test]
 fn ray_counts_reach_the_report_exactly_each_frame() {
-    let gpu = gpu();
-    let scene = blocks();
-    let cam = camera();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu((blocks(), camera()));
     let s = {
         let mut s = hrtao(7, 3.0);
         s.display.mode = hrtao_core::Mode::Rtao;

@@ -3,12 +3,10 @@ mod common;
 use common::*;
 use hrtao_core::gpu::NO_INSTANCE;
 use hrtao_core::SceneGpu;
-use hrtao_scene::glam::{Mat4, Vec3};
-use hrtao_scene::{Instance, Mesh};
+use hrtao_scene::glam::Vec3;
 
 /// A floor and a 4 x 4 x 2 box (its own instance) seen from above.
 fn floor_and_box() -> hrtao_scene::Scene {
-    let mut scene = scene_of(vec![floor()]);
     let (h, a) = (2.0, 2.0);
     let sides = vec![
         quad(Vec3::new(0.0, 0.0, h), Vec3::X * a, Vec3::Y * a),
@@ -17,17 +15,7 @@ fn floor_and_box() -> hrtao_scene::Scene {
         quad(Vec3::new(0.0, a, h / 2.0), Vec3::X * a, Vec3::Z * h / 2.0),
         quad(Vec3::new(0.0, -a, h / 2.0), Vec3::X * a, Vec3::Z * h / 2.0),
     ];
-    scene.meshes.push(Mesh {
-        name: "box".into(),
-        primitives: sides,
-    });
-    scene.instances.push(Instance {
-        mesh: 1,
-        transform: Mat4::from_translation(Vec3::new(3.0, 1.0, 0.0)),
-        name: "box".into(),
-        visible: true,
-    });
-    scene
+    floor_with_part("box", sides, Vec3::new(3.0, 1.0, 0.0))
 }
 
 #[test]

@@ -5,7 +5,7 @@ mod common;
 
 use ash::vk;
 use common::*;
-use hrtao_core::{FrameReport, Gpu, SceneGpu};
+use hrtao_core::{FrameReport, Gpu};
 use hrtao_scene::glam::{Quat, Vec3};
 
 /// Command buffers and fences of its own: frames submitted without waiting, waited for oldest first.
@@ -110,9 +110,7 @@ fn turned(cam: &hrtao_core::Camera, i: usize, step: f32) -> hrtao_core::Camera {
 /// a slot an unfinished frame holds (the third frame is recorded instead of refused).
 #[test]
 fn two_frames_in_flight_report_their_own_frames_and_match_one_at_a_time() {
-    let gpu = gpu();
-    let (scene, cam) = bundled(160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(bundled(160, 90));
     let settings = hrtao(4, scene.bounds().diagonal().length() * 0.1);
     let frames = 8 + 24;
     let frame_cam = |i: usize| turned(&cam, i.min(8), 3.0);

@@ -4,7 +4,6 @@ mod common;
 use common::*;
 use hrtao_core::{gpu, SceneGpu};
 use hrtao_scene::glam::{Mat4, Vec3};
-use hrtao_scene::{Instance, Mesh};
 
 fn quality_on(key: &str) {
     let gpu = gpu();
@@ -51,9 +50,7 @@ fn quality_cycloidal() {
 
 #[test]
 fn navigation_reuses_capped_cells() {
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("cycloidal", 320, 180);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("cycloidal", 320, 180);
     let settings = {
         let mut s = hrtao(16, radius);
         s.map.max_samples = 64;
@@ -96,27 +93,13 @@ fn navigation_reuses_capped_cells() {
 fn edits_bump_f_and_old_cells_are_never_read() {
     let gpu = gpu();
     // A floor and, 1 unit above it, a 6 x 6 plate (its own mesh and instance, so it can move).
-    let mut scene = scene_of(vec![floor()]);
-    scene.meshes.push(Mesh {
-        name: "plate".into(),
-        primitives: vec![quad(Vec3::ZERO, Vec3::X * 3.0, Vec3::Y * 3.0)],
-    });
-    scene.instances.push(Instance {
-        mesh: 1,
-        transform: Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)),
-        name: "plate".into(),
-        visible: true,
-    });
+    let mut scene = floor_with_part(
+        "plate",
+        vec![quad(Vec3::ZERO, Vec3::X * 3.0, Vec3::Y * 3.0)],
+        Vec3::new(0.0, 0.0, 1.0),
+    );
     // Look at the floor from below the plate's height, slanted, so the shadowed floor is visible.
-    let cam = hrtao_core::Camera {
-        eye: [0.0, -9.0, 0.8],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width: 160,
-        height: 90,
-        ..Default::default()
-    };
+    let cam = z_up_camera([0.0, -9.0, 0.8], [0.0; 3], 160, 90);
     let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
     let settings = {
         let mut s = hrtao(8, 4.0);
@@ -170,9 +153,7 @@ fn edits_bump_f_and_old_cells_are_never_read() {
 
 #[test]
 fn overloaded_map_stays_finite_and_falls_back_to_coarser_levels() {
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("cycloidal", 320, 180);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("cycloidal", 320, 180);
     let reference = reference(&gpu, &scene, &cam, radius, 32, 4);
     // How many cells this view needs, with room to spare.
     // Small cells (s_p = 1.5) so the view needs many of them.
@@ -217,9 +198,7 @@ fn overloaded_map_stays_finite_and_falls_back_to_coarser_levels() {
 
 #[test]
 fn debug_views_show_cells_lods_and_samples() {
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("cycloidal", 160, 90);
     let mut r = Headless::new(&gpu, cam.width, cam.height, hrtao(4, radius)).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     let mut colours = Vec::new();
@@ -252,9 +231,7 @@ fn debug_views_show_cells_lods_and_samples() {
 
 #[test]
 fn stale_cells_are_reclaimed_so_the_map_never_fills() {
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("cycloidal", 160, 90);
     // A small map and a short cache lifetime (2 s, frames 1 s apart: 2 frames); the camera visits new places
     // every frame.
     let settings = {
@@ -347,9 +324,7 @@ fn map_stays_consistent_under_edits_stale_cells_and_overload() {
 fn a_still_view_converges_and_then_reports_it() {
     // Refinement: converged once every pixel has still_samples rays of its own (own rays start at the second
     // still frame); the paper's behaviour: once no cell takes rays. A camera move starts over.
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("rod", 160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("rod", 160, 90);
     let settings = {
         let mut s = hrtao(8, radius);
         s.still.still_samples = 32;

@@ -20,15 +20,7 @@ fn yard_on(floor: Primitive) -> Scene {
 const RADIUS: f32 = 3.0;
 
 fn camera() -> Camera {
-    Camera {
-        eye: [0.0, -30.0, 40.0],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 60.0,
-        width: 240,
-        height: 135,
-        ..Camera::default()
-    }
+    z_up_camera_fov([0.0, -30.0, 40.0], [0.0; 3], 60.0, (240, 135))
 }
 
 /// Distance from `p` to the box (lo, hi) (0 inside).

@@ -5,32 +5,20 @@ mod common;
 use common::*;
 use hrtao_core::camera::UpAxis;
 use hrtao_core::AoSettings;
-use hrtao_scene::glam::{Mat4, Vec3};
-use hrtao_scene::{Instance, Mesh};
+use hrtao_scene::glam::Vec3;
 
 /// A Y-up floor whose up-facing normals are exactly (0, 1, 0) (axis-aligned edges: the cross product has no
 /// rounding), with a block standing on it, seen from above at an angle.
 fn y_up_floor() -> (hrtao_scene::Scene, hrtao_core::Camera) {
     let mut scene = scene_of(vec![quad(Vec3::ZERO, Vec3::Z * 10.0, Vec3::X * 10.0)]);
-    scene.meshes.push(Mesh {
-        name: "block".into(),
-        primitives: vec![cube(Vec3::ONE)],
-    });
-    scene.instances.push(Instance {
-        mesh: 1,
-        transform: Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0)),
-        name: "block".into(),
-        visible: true,
-    });
-    let camera = hrtao_core::Camera {
-        eye: [3.0, 7.0, 6.0],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov_y_deg: 50.0,
-        width: 96,
-        height: 64,
-        ..Default::default()
-    };
+    add_part(
+        &mut scene,
+        "block",
+        vec![cube(Vec3::ONE)],
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+    let camera =
+        hrtao_core::Camera::perspective([3.0, 7.0, 6.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 50.0, (96, 64));
     (scene, camera)
 }
 

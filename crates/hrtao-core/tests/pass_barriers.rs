@@ -7,7 +7,7 @@ mod common;
 use common::*;
 
 use hrtao_core::barrier::{uncovered_hazards, Event};
-use hrtao_core::{AoSettings, Primary, SceneGpu};
+use hrtao_core::{AoSettings, Primary};
 
 const R: f32 = 8.0;
 
@@ -34,9 +34,7 @@ fn sequence(events: &[Event]) -> String {
 
 /// Records a young frame and a navigation frame with `primary` and checks both; returns their counts.
 fn young_and_navigation(settings: AoSettings, primary: Primary) -> [(usize, usize); 2] {
-    let gpu = gpu();
-    let (scene, cam) = bundled(160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(bundled(160, 90));
     let mut r = Headless::new(&gpu, cam.width, cam.height, settings).unwrap();
     r.set_primary(primary);
     let mut out = Vec::new();
@@ -115,9 +113,7 @@ fn raster_visibility_hands_off_to_compute_behind_a_barrier() {
 /// before the frame's first command and after its last, it reports a hazard.
 #[test]
 fn checker_reports_a_removed_barrier() {
-    let gpu = gpu();
-    let (scene, cam) = bundled(160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(bundled(160, 90));
     let mut r = Headless::new(&gpu, cam.width, cam.height, defaults()).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     let events = r.last_frame_events().to_vec();

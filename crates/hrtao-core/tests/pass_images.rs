@@ -12,7 +12,7 @@ mod common;
 
 use common::*;
 
-use hrtao_core::{AoSettings, Camera, SceneGpu};
+use hrtao_core::{AoSettings, SceneGpu};
 
 /// The AO radius used with the bundled scene (assets/README.md).
 const R: f32 = 8.0;
@@ -26,29 +26,10 @@ fn reference_path() -> std::path::PathBuf {
 /// Per setting: the AO of frame 1 (a young map), frame 3 (still frames on a settling map) and frame 5 (the
 /// second frame of a moving camera: navigation over a settled map).
 fn frames(gpu: &std::sync::Arc<hrtao_core::Gpu>, settings: AoSettings) -> Vec<Vec<f32>> {
-    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
-    let scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
-    let cam = Camera {
-        width: W,
-        height: H,
-        ..Camera::load(&assets.join("default.camera.json")).unwrap()
-    };
+    let (scene, cam) = bundled(W, H);
     let sg = SceneGpu::new(gpu, &scene).unwrap();
     let mut r = Headless::new(gpu, W, H, settings).unwrap();
-    let mut out = Vec::new();
-    for i in 0..5u32 {
-        let mut c = cam;
-        if i >= 3 {
-            // Orbit a little: a new view every frame.
-            c.eye[0] += 0.5 * (i - 2) as f32;
-        }
-        let report = r.render(&sg, scene.f(), &c).unwrap();
-        assert!(report.rays > 0, "frame {i} traced rays");
-        if matches!(i, 0 | 2 | 4) {
-            out.push(r.read_ao().unwrap());
-        }
-    }
-    out
+    five_frames(&mut r, &sg, &scene, &cam, |_, _| {})
 }
 
 const NAMES: [&str; 6] = [

@@ -105,12 +105,18 @@ fn check_cut_scene(
     );
 }
 
+/// A small generated city (3 x 3 blocks of 2 x 2 towers, 8 floors) framed by a `w` x `h` camera.
+fn small_city(w: u32, h: u32) -> (hrtao_scene::Scene, Camera) {
+    let scene = hrtao_scene::generate("gen:city?blocks=3&per_block=2&floors=8", &mut |_| {}).unwrap();
+    let b = scene.bounds();
+    let cam = Camera::fit(b.min, b.max, UpAxis::Z, 45.0, w, h);
+    (scene, cam)
+}
+
 #[test]
 fn raster_gbuffer_matches_ray_queries_on_a_generated_city() {
     let gpu = gpu();
-    let scene = hrtao_scene::generate("gen:city?blocks=3&per_block=2&floors=8", &mut |_| {}).unwrap();
-    let b = scene.bounds();
-    let cam = Camera::fit(b.min, b.max, UpAxis::Z, 45.0, 320, 200);
+    let (scene, cam) = small_city(320, 200);
     check_scene(&gpu, "gen:city", &scene, &cam, 4.0);
     assert_clean(&gpu);
 }
@@ -190,10 +196,7 @@ fn indirect_and_single_draws_give_the_same_visibility() {
     let extra = scene.meshes[1].primitives.clone();
     scene.meshes[0]
         .primitives
-        .extend(extra.into_iter().map(|p| hrtao_scene::Primitive {
-            double_sided: true,
-            ..p
-        }));
+        .extend(extra.into_iter().map(|p| p.with_double_sided(true)));
     // Half the instances mirrored: fronts of those wind clockwise, a second culling pipeline.
     for inst in scene.instances.iter_mut().step_by(2) {
         let c = inst.transform.w_axis.x;
@@ -239,10 +242,10 @@ fn indirect_and_single_draws_give_the_same_visibility() {
 
 #[test]
 fn hidden_instances_vanish_from_both_primaries() {
-    let gpu = gpu();
-    let mut scene = hrtao_scene::generate("gen:slab?h=1&size=10&ground=100", &mut |_| {}).unwrap();
-    let cam = top_down_camera(20.0, 96, 64);
-    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, mut scene, cam, mut sg) = on_gpu((
+        hrtao_scene::generate("gen:slab?h=1&size=10&ground=100", &mut |_| {}).unwrap(),
+        top_down_camera(20.0, 96, 64),
+    ));
     let settings = rtao(1, 1.0);
     let seen = |sg: &SceneGpu, scene: &Scene, primary| {
         let (g, _) = render_with(&gpu, sg, scene, &cam, &settings, primary, 1);
@@ -311,9 +314,7 @@ fn raster_follows_resizes_and_mode_switches() {
 #[test]
 fn jittered_still_frames_sample_the_same_surfaces() {
     // Anti-aliasing moves each still frame's sample within the pixel: the rasteriser must move with the rays.
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("cycloidal", 160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("cycloidal", 160, 90);
     let gbuffer = |primary| {
         let mut r = Headless::new(&gpu, cam.width, cam.height, rtao(1, radius)).unwrap();
         r.set_primary(primary);
@@ -348,11 +349,7 @@ fn jittered_still_frames_sample_the_same_surfaces() {
 
 #[test]
 fn primary_visibility_is_picked_by_measurement_and_massive_scenes_keep_ray_queries() {
-    let gpu = gpu();
-    let scene = hrtao_scene::generate("gen:city?blocks=3&per_block=2&floors=8", &mut |_| {}).unwrap();
-    let b = scene.bounds();
-    let cam = Camera::fit(b.min, b.max, UpAxis::Z, 45.0, 160, 100);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(small_city(160, 100));
     let mut r = Headless::new(&gpu, cam.width, cam.height, hrtao(4, 4.0)).unwrap();
     let (picked, rq_ms, raster_ms) = r.pick_primary(&sg, scene.f(), &cam).unwrap();
     println!("city: {picked:?} (ray queries {rq_ms:.1} ms, raster {raster_ms:.1} ms)");

@@ -11,7 +11,7 @@ mod common;
 use std::sync::Arc;
 
 use common::*;
-use hrtao_core::{AoSettings, Camera, ContextOptions, Gpu, Primary, RayBackend, SceneGpu};
+use hrtao_core::{AoSettings, ContextOptions, Gpu, Primary, RayBackend, SceneGpu};
 
 /// The AO radius used with the bundled scene (assets/README.md).
 const R: f32 = 8.0;
@@ -27,17 +27,6 @@ fn device(ray_backend: Option<RayBackend>, mask_ray_query: bool) -> hrtao_core::
         mask_ray_query,
         ..Default::default()
     })
-}
-
-fn bundled() -> (hrtao_scene::Scene, Camera) {
-    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
-    let scene = hrtao_scene::load(assets.join("default.glb").to_str().unwrap(), &mut |_| {}).unwrap();
-    let cam = Camera {
-        width: W,
-        height: H,
-        ..Camera::load(&assets.join("default.camera.json")).unwrap()
-    };
-    (scene, cam)
 }
 
 /// The settings whose frames `frames` renders: ours (defaults), the paper's, and per-pixel RTAO.
@@ -58,7 +47,7 @@ fn frames(gpu: &Arc<Gpu>) -> (Vec<Vec<f32>>, Vec<hrtao_core::gpu::GPixel>) {
 }
 
 fn frames_cut(gpu: &Arc<Gpu>, cut: Option<u64>) -> (Vec<Vec<f32>>, Vec<hrtao_core::gpu::GPixel>) {
-    let (scene, cam) = bundled();
+    let (scene, cam) = bundled(W, H);
     let sg = SceneGpu::new(gpu, &scene).unwrap();
     let mut out = Vec::new();
     let mut gbuffer = Vec::new();
@@ -68,13 +57,7 @@ fn frames_cut(gpu: &Arc<Gpu>, cut: Option<u64>) -> (Vec<Vec<f32>>, Vec<hrtao_cor
         if let Some(c) = cut {
             r.r.set_max_rays_per_dispatch(c);
         }
-        for i in 0..5u32 {
-            let mut c = cam;
-            if i >= 3 {
-                c.eye[0] += 0.5 * (i - 2) as f32;
-            }
-            let report = r.render(&sg, scene.f(), &c).unwrap();
-            assert!(report.rays > 0, "frame {i} traced rays");
+        out.extend(five_frames(&mut r, &sg, &scene, &cam, |i, r| {
             // The barriers the recorder derived cover every hazard, in whichever stage the passes ran.
             let events = r.r.last_frame_events();
             let problems = hrtao_core::barrier::uncovered_hazards(events);
@@ -94,10 +77,7 @@ fn frames_cut(gpu: &Arc<Gpu>, cut: Option<u64>) -> (Vec<Vec<f32>>, Vec<hrtao_cor
             if i == 0 && gbuffer.is_empty() {
                 gbuffer = r.read_gbuffer().unwrap();
             }
-            if matches!(i, 0 | 2 | 4) {
-                out.push(r.read_ao().unwrap());
-            }
-        }
+        }));
     }
     assert_clean(gpu);
     (out, gbuffer)
@@ -220,7 +200,7 @@ fn every_tracing_pass_agrees_between_the_backends_within_the_run_to_run_spread()
 fn a_device_without_ray_queries_picks_the_pipelines() {
     let masked = device(None, true).expect("a device with ray-tracing pipelines");
     assert_eq!(masked.info.ray_backend, RayBackend::Pipeline);
-    let (scene, cam) = bundled();
+    let (scene, cam) = bundled(W, H);
     let sg = SceneGpu::new(&masked, &scene).unwrap();
     for (name, s) in settings() {
         let mut r = Headless::new(&masked, W, H, s).unwrap();

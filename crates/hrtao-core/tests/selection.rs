@@ -16,10 +16,7 @@ use hrtao_core::section::{SectionPlane, Sections};
 /// (no pixel changes) and with the highlight left out of `FrameKey` (the converged image is shown again).
 #[test]
 fn a_selection_changes_the_selected_pixels_only_without_a_tlas_or_a_wait() {
-    let gpu = gpu();
-    let scene = row_of_blocks(floor(), 3, 4.0);
-    let cam = top_down_camera(14.0, 96, 64);
-    let mut sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, mut sg) = on_gpu((row_of_blocks(floor(), 3, 4.0), top_down_camera(14.0, 96, 64)));
     let settings = {
         let mut s = hrtao(4, 2.0);
         s.still.still_samples = 8;

@@ -148,9 +148,7 @@ fn changed_values() -> Vec<(&'static str, serde_json::Value)> {
 /// and any setting classified above what it invalidates (the map would be emptied for nothing).
 #[test]
 fn every_setting_changed_mid_run_gives_a_fresh_renderers_image() {
-    let gpu = gpu();
-    let (scene, cam) = bundled(160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, _scene, cam, sg) = on_gpu(bundled(160, 90));
     let base = base();
     let fields = serde_json::to_value(&base).unwrap();
     let mut values: Vec<(String, serde_json::Value)> = changed_values()
@@ -228,9 +226,7 @@ fn every_setting_changed_mid_run_gives_a_fresh_renderers_image() {
 /// cells kept the AO gathered at R (`set_settings` re-keyed nothing).
 #[test]
 fn a_radius_change_mid_run_ends_at_a_fresh_renders_image() {
-    let gpu = gpu();
-    let (scene, cam) = bundled(160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, _scene, cam, sg) = on_gpu(bundled(160, 90));
     let from = base();
     let to = {
         let mut s = from.clone();

@@ -2,6 +2,8 @@
 //! primary-visibility paths, also as a mirrored or non-uniformly scaled instance; face normals where a mesh has
 //! none.
 mod common;
+#[path = "../../scene/tests/common/mod.rs"]
+mod scene_common;
 use common::*;
 use hrtao_core::gpu::NO_INSTANCE;
 use hrtao_core::{Camera, Mode, Primary, SceneGpu};
@@ -11,59 +13,14 @@ use hrtao_scene::{Instance, Mesh, Primitive, Scene};
 const W: u32 = 640;
 const H: u32 = 360;
 
-/// A capped cylinder along z (z from -1 to 1) whose side is the curve (a cos θ, b sin θ) over `segments`
-/// steps; with `normals`, the side's vertices carry the curve's normals and the caps ±z (their own vertices),
-/// without, the mesh has none (face normals).
+/// The shared capped cylinder (the scene tests' `cylinder`: the curve (a cos θ, b sin θ)); with `normals`, the
+/// side's vertices carry the curve's normals and the caps ±z (their own vertices), without, the mesh has none
+/// (face normals).
 fn cylinder(segments: u32, a: f32, b: f32, normals: bool) -> Primitive {
-    let mut positions = Vec::new();
-    let mut ns = Vec::new();
-    let mut indices = Vec::new();
-    let ring = |k: u32| {
-        let t = std::f32::consts::TAU * k as f32 / segments as f32;
-        (
-            a * t.cos(),
-            b * t.sin(),
-            Vec3::new(t.cos() / a, t.sin() / b, 0.0).normalize(),
-        )
-    };
-    // Side: two vertices per step.
-    for k in 0..segments {
-        let (x, y, n) = ring(k);
-        positions.push([x, y, -1.0]);
-        positions.push([x, y, 1.0]);
-        ns.push(n.to_array());
-        ns.push(n.to_array());
-    }
-    for k in 0..segments {
-        let (i, j) = (2 * k, 2 * ((k + 1) % segments));
-        indices.extend_from_slice(&[i, j, j + 1, i, j + 1, i + 1]);
-    }
-    // Caps: a centre and a ring each.
-    for (z, nz) in [(-1.0f32, -1.0f32), (1.0, 1.0)] {
-        let centre = positions.len() as u32;
-        positions.push([0.0, 0.0, z]);
-        ns.push([0.0, 0.0, nz]);
-        for k in 0..segments {
-            let (x, y, _) = ring(k);
-            positions.push([x, y, z]);
-            ns.push([0.0, 0.0, nz]);
-        }
-        for k in 0..segments {
-            let (i, j) = (centre + 1 + k, centre + 1 + (k + 1) % segments);
-            if nz > 0.0 {
-                indices.extend_from_slice(&[centre, i, j]);
-            } else {
-                indices.extend_from_slice(&[centre, j, i]);
-            }
-        }
-    }
-    Primitive {
-        positions,
-        indices,
-        base_color: [0.8, 0.8, 0.8, 1.0],
-        double_sided: false,
-        normals: if normals { ns } else { Vec::new() },
-    }
+    let (positions, ns, indices) = scene_common::cylinder(segments, a, b);
+    Primitive::new(positions, indices, [0.8, 0.8, 0.8, 1.0])
+        .with_double_sided(false)
+        .with_normals(if normals { ns } else { Vec::new() })
 }
 
 fn scene_with(prim: Primitive, transform: Mat4) -> Scene {
@@ -83,15 +40,7 @@ fn scene_with(prim: Primitive, transform: Mat4) -> Scene {
 
 /// From the side and a little above, so the top cap shows too.
 fn camera() -> Camera {
-    Camera {
-        eye: [0.5, -6.0, 2.5],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 40.0,
-        width: W,
-        height: H,
-        ..Default::default()
-    }
+    z_up_camera_fov([0.5, -6.0, 2.5], [0.0; 3], 40.0, (W, H))
 }
 
 /// The shaded image without AO or edges (sRGB luminance in 0..1) and which pixels show the cylinder.
@@ -112,41 +61,6 @@ fn shade(gpu: &std::sync::Arc<hrtao_core::Gpu>, scene: &Scene, primary: Primary)
     let hit = gb.iter().map(|p| p.instance != NO_INSTANCE).collect();
     assert_clean(gpu);
     (lum, hit)
-}
-
-/// Pixels at least 3 pixels from every silhouette of all the masks given (covered in all of them).
-fn interior(masks: &[&[bool]]) -> Vec<bool> {
-    let (w, h) = (W as i32, H as i32);
-    let covered =
-        |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && masks.iter().all(|m| m[(y * w + x) as usize]);
-    (0..h)
-        .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| (-3..=3).all(|dy| (-3..=3).all(|dx| covered(x + dx, y + dy))))
-        .collect()
-}
-
-fn mae(a: &[f32], b: &[f32], mask: &[bool]) -> f32 {
-    let (sum, n) = a
-        .iter()
-        .zip(b)
-        .zip(mask)
-        .filter(|(_, &m)| m)
-        .fold((0.0f64, 0usize), |(s, n), ((x, y), _)| {
-            (s + (x - y).abs() as f64, n + 1)
-        });
-    assert!(n > 10_000, "only {n} pixels to compare");
-    (sum / n as f64) as f32
-}
-
-/// The 99th percentile of the luminance step between horizontal neighbours inside `mask`.
-fn step_p99(lum: &[f32], mask: &[bool]) -> f32 {
-    let w = W as usize;
-    let mut steps: Vec<f32> = (0..lum.len() - 1)
-        .filter(|&i| (i + 1) % w != 0 && mask[i] && mask[i + 1])
-        .map(|i| (lum[i + 1] - lum[i]).abs())
-        .collect();
-    steps.sort_by(f32::total_cmp);
-    steps[steps.len() * 99 / 100]
 }
 
 /// The issue's measure of facets: 12 segments with normals shade within MAE 0.01 of 384 segments and have no
@@ -171,20 +85,14 @@ fn a_coarse_cylinder_with_normals_shades_like_a_fine_one() {
             &scene_with(cylinder(12, 1.0, 1.0, false), Mat4::IDENTITY),
             primary,
         );
-        let mask = interior(&[&fine_hit, &smooth_hit, &flat_hit]);
-        let (e_smooth, e_flat) = (mae(&smooth, &fine, &mask), mae(&flat, &fine, &mask));
-        let (p_smooth, p_fine, p_flat) = (
-            step_p99(&smooth, &mask),
-            step_p99(&fine, &mask),
-            step_p99(&flat, &mask),
+        let what = format!("{primary:?}");
+        let p_flat = scene_common::facet_measure(
+            &what,
+            &(fine, fine_hit),
+            &(smooth, smooth_hit),
+            &(flat, flat_hit),
+            W as usize,
         );
-        eprintln!(
-            "{primary:?}: MAE to 384 segments: normals {e_smooth:.4}, face normals {e_flat:.4}; \
-             p99 step: normals {p_smooth:.4}, 384 segments {p_fine:.4}, face normals {p_flat:.4}"
-        );
-        assert!(e_smooth <= 0.01, "{primary:?}: {e_smooth}");
-        assert!(e_flat >= 3.0 * e_smooth, "{primary:?}: {e_flat} vs {e_smooth}");
-        assert!(p_smooth <= 0.015, "{primary:?}: facet steps {p_smooth}");
         assert!(
             p_flat > 0.03,
             "{primary:?}: face normals show their facets ({p_flat})"
@@ -206,8 +114,8 @@ fn normals_follow_scaled_and_mirrored_instances() {
     );
     let scaled = Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0));
     let (stretched, stretched_hit) = shade(&gpu, &scene_with(cylinder(384, 1.0, 1.0, true), scaled), primary);
-    let mask = interior(&[&ellipse_hit, &stretched_hit]);
-    let e = mae(&ellipse, &stretched, &mask);
+    let mask = scene_common::interior(&[&ellipse_hit, &stretched_hit], W as usize);
+    let e = scene_common::mae(&ellipse, &stretched, &mask);
     assert!(e < 0.004, "scaled instance: {e}");
 
     let (plain, plain_hit) = shade(
@@ -217,7 +125,7 @@ fn normals_follow_scaled_and_mirrored_instances() {
     );
     let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
     let (mirrored, mirrored_hit) = shade(&gpu, &scene_with(cylinder(384, 1.0, 1.0, true), mirror), primary);
-    let mask = interior(&[&plain_hit, &mirrored_hit]);
-    let e = mae(&plain, &mirrored, &mask);
+    let mask = scene_common::interior(&[&plain_hit, &mirrored_hit], W as usize);
+    let e = scene_common::mae(&plain, &mirrored, &mask);
     assert!(e < 0.004, "mirrored instance: {e}");
 }

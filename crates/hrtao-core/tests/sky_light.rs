@@ -121,9 +121,7 @@ fn sky_light_converges_to_cycles_and_starts_as_close_as_the_ao() {
 /// error of a fresh 48-frame render at 90° against the 90° reference.
 #[test]
 fn turning_the_environment_traces_no_new_rays() {
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("rod", 160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("rod", 160, 90);
     let lobe = testdata("env/sky_lobe_64x32.hdr").to_str().unwrap().to_string();
     let reference = views("rod")
         .into_iter()
@@ -175,9 +173,7 @@ fn turning_the_environment_traces_no_new_rays() {
 /// fixed; asking for the light of a frame that was not lit by the sky is an error too.
 #[test]
 fn a_missing_environment_is_a_clear_error() {
-    let gpu = gpu();
-    let (scene, cam, radius) = shared_scene("rod", 160, 90);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, radius, sg) = shared_scene_gpu("rod", 160, 90);
     let mut r = Headless::new(&gpu, 32, 18, hrtao(2, radius)).unwrap();
     r.render(&sg, scene.f(), &cam).unwrap();
     assert!(r.read_light().is_err(), "the AO look has no sky light to read");

@@ -47,9 +47,7 @@ fn until_converged(
 /// other slices, and a round that ends early.
 #[test]
 fn a_round_of_slices_accumulates_as_a_whole_frame() {
-    let gpu = gpu();
-    let (scene, cam) = blocks_scene();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(blocks_scene());
     let reference = reference(&gpu, &scene, &cam, 3.0, 64, 16);
 
     let mut whole = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
@@ -92,9 +90,7 @@ fn a_round_of_slices_accumulates_as_a_whole_frame() {
 /// frame-time target) for a whole round, and a later round cut short.
 #[test]
 fn a_larger_lattice_restarts_only_the_first_round() {
-    let gpu = gpu();
-    let (scene, cam) = blocks_scene();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(blocks_scene());
     let mut r = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
     r.lattice = 2;
     for i in 0..2 {
@@ -135,9 +131,7 @@ fn a_larger_lattice_restarts_only_the_first_round() {
 /// at a time beside the grid's reconstruction.
 #[test]
 fn the_first_slice_of_a_view_shows_all_of_it() {
-    let gpu = gpu();
-    let (scene, cam) = blocks_scene();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(blocks_scene());
     let mut r = Headless::new(&gpu, cam.width, cam.height, settings()).unwrap();
     r.lattice = 3;
     // The previous view: the scene from the other side, several rounds.
@@ -235,9 +229,7 @@ fn the_first_slice_of_a_view_shows_all_of_it() {
 /// frame draws them. Catches kept colours that include the edges, and edges never drawn over the held image.
 #[test]
 fn the_held_rounds_draw_edges_per_pixel_not_on_the_grid() {
-    let gpu = gpu();
-    let (scene, cam) = blocks_scene();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(blocks_scene());
     let mut no_edges = settings();
     no_edges.display.edges = false;
     let held = |s: &AoSettings, lattice: u32, frames: u32| -> Vec<Vec<u8>> {
@@ -296,9 +288,7 @@ fn the_held_rounds_draw_edges_per_pixel_not_on_the_grid() {
 /// exactly that blur).
 #[test]
 fn a_final_round_shows_its_pixels_not_the_held_reconstruction() {
-    let gpu = gpu();
-    let (scene, cam) = blocks_scene();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(blocks_scene());
     let mut s = settings();
     s.still.still_samples = 4;
     let mut r = Headless::new(&gpu, cam.width, cam.height, s).unwrap();
@@ -336,9 +326,7 @@ fn a_final_round_shows_its_pixels_not_the_held_reconstruction() {
 /// scene's rounds after the held ones were 1.40x rougher than the final image at 4 rays per visit of 8).
 #[test]
 fn fewer_rays_per_visit_hold_the_preview_for_as_many_own_rays() {
-    let gpu = gpu();
-    let (scene, cam) = blocks_scene();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(blocks_scene());
     let s = settings();
     assert_eq!(hrtao_core::renderer::held_own_rays(s.still.still_samples), 8);
     let mut r = Headless::new(&gpu, cam.width, cam.height, s).unwrap();
@@ -384,9 +372,7 @@ fn fewer_rays_per_visit_hold_the_preview_for_as_many_own_rays() {
 /// (the round-1 image), 1.88x also with each slice filtered on its own sub-grid.
 #[test]
 fn the_path_to_a_still_image_is_monotone() {
-    let gpu = gpu();
-    let (scene, cam) = bundled(403, 400);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(bundled(403, 400));
     let settings = hrtao(4, 8.0);
     let mut r = Headless::new(&gpu, 161, 160, settings.clone()).unwrap();
     (r.jitter, r.view_height) = (true, cam.height);
@@ -449,9 +435,7 @@ fn orbited(c: &Camera, degrees: f32) -> Camera {
 /// (1.17x).
 #[test]
 fn slices_filter_the_field_a_whole_frame_does() {
-    let gpu = gpu();
-    let (scene, cam) = bundled(LATTICE_TEST_W, LATTICE_TEST_H);
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(bundled(LATTICE_TEST_W, LATTICE_TEST_H));
     let mut settings = hrtao(4, 8.0);
     settings.still.still_samples = 64;
     // As in the viewer: a moving frame at 0.4 of the size (cells of the view's pixels), then the still image.
@@ -515,13 +499,7 @@ fn a_local_edit_mid_round_reaches_every_slice() {
     let gpu = gpu();
     let (mut scene, cam, mut sg, s, mut r) = mid_round_still_image(&gpu);
     assert!(s.edits.local_edits);
-    let part = 2;
-    let bounds = scene.instance_bounds(part);
-    let ring = ring_pixels(&r, bounds, 0.6);
-    let mean = |ao: &[f32]| mean_at(ao, &ring);
-    let with_part = mean(&r.read_ao().unwrap());
-    scene.set_visible(part, false).unwrap();
-    sg.update_instances(&scene, u32::MAX).unwrap();
+    let (ring, with_part) = remove_part(&r, &mut scene, &mut sg, 2);
     // The rest of this round and the next: every slice drawn once more since the edit, and again.
     for _ in 0..6 {
         let rep = r.render(&sg, scene.f(), &cam).unwrap();
@@ -530,15 +508,9 @@ fn a_local_edit_mid_round_reaches_every_slice() {
             "a local edit keeps the still image elsewhere"
         );
     }
-    let after = mean(&r.read_ao().unwrap());
-    let (fresh, _sg) = render(&gpu, &scene, &cam, s, 3);
-    let expected = mean(&fresh.read_ao().unwrap());
-    eprintln!(
-        "{} floor pixels by the removed block: AO {with_part:.3} with it, {after:.3} 6 slices after, {expected:.3} fresh",
-        ring.len()
-    );
-    assert!(ring.len() > 40, "{}", ring.len());
-    assert!(with_part < expected - 0.1, "the block cast a contact shadow");
+    let (after, expected) = mean_against_fresh(&r, &gpu, (&scene, &cam), (s, 3), &ring);
+    let ao = (with_part, after, expected);
+    check_contact_shadow(ring.len(), ao, "6 slices after", 40);
     assert!(
         after > expected - 0.04,
         "the removed block's contact shadow stayed in some slices: AO {after:.3}, fresh {expected:.3}"
@@ -565,9 +537,7 @@ fn the_slice_after_a_local_edit_taps_no_stale_prior() {
         .copied()
         .filter(|&i| (i % w) as u32 % 2 == ox && (i / w) as u32 % 2 == oy)
         .collect();
-    let after = mean_at(&r.read_ao().unwrap(), &drawn);
-    let (fresh, _sg) = render(&gpu, &scene, &cam, s, 3);
-    let expected = mean_at(&fresh.read_ao().unwrap(), &drawn);
+    let (after, expected) = mean_against_fresh(&r, &gpu, (&scene, &cam), (s, 3), &drawn);
     eprintln!(
         "{} pixels of the slice drawn after the edit: AO {after:.3}, fresh {expected:.3}",
         drawn.len()
@@ -690,9 +660,7 @@ fn raster_draws(r: &Headless) -> usize {
 /// advances the slices or touches the output, and a draw for frames that start no round.
 #[test]
 fn a_round_of_slices_can_start_with_its_visibility_drawn_ahead() {
-    let gpu = gpu();
-    let (scene, cam) = blocks_scene();
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu(blocks_scene());
     let still = orbited(&cam, 20.0);
     let draws = raster_draws;
     let rounds = 3;

@@ -97,9 +97,7 @@ fn still_wedge_flickers_no_more_than_the_paper_and_converges_at_the_crease() {
 /// and the next frame was the still image's next refinement frame (the bench timed those as first frames).
 #[test]
 fn clear_cache_starts_from_an_empty_map_and_a_new_still_image() {
-    let gpu = gpu();
-    let (scene, cam) = (wedge(), wedge_camera([6.0, 0.0, 8.0], [2.0, 0.0, 0.0]));
-    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    let (gpu, scene, cam, sg) = on_gpu((wedge(), wedge_camera([6.0, 0.0, 8.0], [2.0, 0.0, 0.0])));
     let settings = hrtao(4, RADIUS);
     assert!(settings.still.refine, "refinement on by default");
     let fresh = {

@@ -3,39 +3,24 @@
 mod common;
 use common::*;
 use hrtao_core::tile::TileGrid;
-use hrtao_core::{AoSettings, Camera, Mode, Primary, SceneGpu};
-use hrtao_scene::glam::{Mat4, Vec3};
-use hrtao_scene::{Instance, Mesh};
+use hrtao_core::{AoSettings, Mode, Primary, SceneGpu};
+use hrtao_scene::glam::Vec3;
 
 #[test]
 fn tiles_assemble_into_the_whole_image() {
     let gpu = gpu();
-    let mut scene = scene_of(vec![floor()]);
-    scene.meshes.push(Mesh {
-        name: "box".into(),
-        primitives: vec![
+    let scene = floor_with_part(
+        "box",
+        vec![
             quad(Vec3::new(0.0, 0.0, 2.0), Vec3::X * 2.0, Vec3::Y * 2.0),
             quad(Vec3::new(0.0, -2.0, 1.0), Vec3::X * 2.0, Vec3::Z),
             quad(Vec3::new(-2.0, 0.0, 1.0), Vec3::Y * 2.0, Vec3::Z),
         ],
-    });
-    scene.instances.push(Instance {
-        mesh: 1,
-        transform: Mat4::from_translation(Vec3::new(3.0, 1.0, 0.0)),
-        name: "box".into(),
-        visible: true,
-    });
+        Vec3::new(3.0, 1.0, 0.0),
+    );
     let sg = SceneGpu::new(&gpu, &scene).unwrap();
     // Looking across the floor: the horizon and the background gradient are in view.
-    let perspective = Camera {
-        eye: [-4.0, -14.0, 5.0],
-        target: [3.0, 1.0, 1.0],
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 60.0,
-        width: 160,
-        height: 90,
-        ..Camera::default()
-    };
+    let perspective = z_up_camera_fov([-4.0, -14.0, 5.0], [3.0, 1.0, 1.0], 60.0, (160, 90));
     let ortho = perspective.with_projection(hrtao_core::camera::Projection::Orthographic);
     for cam in [perspective, ortho] {
         let settings = {

@@ -200,13 +200,11 @@ extern "C" fn on_primitive(
     let normals = unsafe { copied(nrm as *const [f32; 3], nverts) };
     let indices = unsafe { copied(idx, nidx) };
     match ctx.model.parts.get_mut(part as usize) {
-        Some(p) => p.primitives.push(Primitive {
-            positions,
-            normals,
-            indices,
-            color: rgba(color),
-            face_color: face != 0,
-        }),
+        Some(p) => p.primitives.push(
+            Primitive::new(positions, indices)
+                .with_normals(normals)
+                .with_color(rgba(color), face != 0),
+        ),
         None => ctx.bad = Some(format!("primitive of unknown part {part}")),
     }
 }

@@ -33,6 +33,31 @@ pub struct CadPrimitive {
     pub face_color: bool,
 }
 
+impl CadPrimitive {
+    /// Triangles without normals (flat shading) or colour; the other fields come from `with_…`.
+    pub fn new(positions: Vec<[f32; 3]>, indices: Vec<u32>) -> CadPrimitive {
+        CadPrimitive {
+            positions,
+            indices,
+            ..Default::default()
+        }
+    }
+
+    /// The B-rep surface's normals, one per position (empty: flat shading).
+    pub fn with_normals(self, normals: Vec<[f32; 3]>) -> CadPrimitive {
+        CadPrimitive { normals, ..self }
+    }
+
+    /// The colour (`None`: none) and whether it was set on the part's faces.
+    pub fn with_color(self, color: Option<[f32; 4]>, face_color: bool) -> CadPrimitive {
+        CadPrimitive {
+            color,
+            face_color,
+            ..self
+        }
+    }
+}
+
 /// A unique part (one shape definition), tessellated once.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CadPart {
@@ -353,13 +378,11 @@ impl Cursor<'_> {
                 for _ in 0..ni {
                     indices.push(u32::from_le_bytes(self.take(4)?.try_into().unwrap()));
                 }
-                primitives.push(CadPrimitive {
-                    positions,
-                    normals,
-                    indices,
-                    color,
-                    face_color,
-                });
+                primitives.push(
+                    CadPrimitive::new(positions, indices)
+                        .with_normals(normals)
+                        .with_color(color, face_color),
+                );
             }
             parts.push(CadPart { name, primitives });
         }
@@ -404,13 +427,12 @@ mod tests {
         CadModel {
             parts: vec![CadPart {
                 name: "bolt".into(),
-                primitives: vec![CadPrimitive {
-                    positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-                    normals: vec![[0.0, 0.0, 1.0]; 3],
-                    indices: vec![0, 1, 2],
-                    color: Some([1.0, 0.0, 0.0, 1.0]),
-                    face_color: true,
-                }],
+                primitives: vec![CadPrimitive::new(
+                    vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                    vec![0, 1, 2],
+                )
+                .with_normals(vec![[0.0, 0.0, 1.0]; 3])
+                .with_color(Some([1.0, 0.0, 0.0, 1.0]), true)],
             }],
             nodes: vec![CadNode {
                 name: "bolt1".into(),

@@ -552,15 +552,15 @@ mod tests {
             side.indices.extend([a, b, d, a, d, c]);
         }
         let cap = |z: f32, up: bool| {
-            let mut q = CadPrimitive {
-                positions: ring(z),
-                ..Default::default()
-            };
-            q.normals = vec![[0.0, 0.0, if up { 1.0 } else { -1.0 }]; q.positions.len()];
-            for k in 1..segments - 1 {
-                q.indices.extend(if up { [0, k, k + 1] } else { [0, k + 1, k] });
-            }
-            q
+            let indices = (1..segments - 1).flat_map(|k| if up { [0, k, k + 1] } else { [0, k + 1, k] });
+            CadPrimitive::new(ring(z), indices.collect()).with_normals(vec![
+                [
+                    0.0,
+                    0.0,
+                    if up { 1.0 } else { -1.0 }
+                ];
+                segments as usize
+            ])
         };
         crate::cad::CadPart {
             name: "cylinder".into(),

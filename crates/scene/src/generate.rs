@@ -27,6 +27,35 @@ pub const MAX_MESH_TRIANGLES: u64 = 50_000_000;
 /// Upper bound of generated instances.
 pub const MAX_INSTANCES: u64 = 10_000_000;
 
+/// The six faces of an axis-aligned box (-x, +x, -y, +y, -z, +z) as loops of its corners, each counter-clockwise
+/// seen from outside; corner `i` is the one [`box_corners`] returns at `i`.
+pub const BOX_FACES: [[u32; 4]; 6] = [
+    [0, 4, 6, 2],
+    [1, 3, 7, 5],
+    [0, 1, 5, 4],
+    [2, 6, 7, 3],
+    [0, 2, 3, 1],
+    [4, 5, 7, 6],
+];
+
+/// The eight corners of the axis-aligned box `min..max`: corner `i` takes its x from `max` where bit 0 of `i` is set
+/// (else from `min`), its y where bit 1 is, its z where bit 2 is. [`BOX_FACES`] and [`box_triangles`] index them.
+pub fn box_corners(min: [f32; 3], max: [f32; 3]) -> [[f32; 3]; 8] {
+    std::array::from_fn(|i| std::array::from_fn(|k| if i >> k & 1 != 0 { max[k] } else { min[k] }))
+}
+
+/// The box's twelve outward triangles over [`box_corners`]: each face of [`BOX_FACES`] split along its first diagonal.
+pub fn box_triangles() -> [[u32; 3]; 12] {
+    std::array::from_fn(|t| {
+        let f = BOX_FACES[t / 2];
+        if t % 2 == 0 {
+            [f[0], f[1], f[2]]
+        } else {
+            [f[0], f[2], f[3]]
+        }
+    })
+}
+
 /// Generates a scene from a `gen:...` spec (the `gen:` prefix is optional).
 pub fn generate(spec: &str, progress: &mut dyn FnMut(LoadProgress)) -> Result<Scene, SceneError> {
     let body = spec.strip_prefix("gen:").unwrap_or(spec);
@@ -170,32 +199,9 @@ impl MeshBuilder {
     /// Closed axis-aligned box with outward-facing triangles (8 vertices, 12 triangles).
     fn cuboid(&mut self, min: Vec3, max: Vec3) {
         let base = self.positions.len() as u32;
-        for i in 0..8 {
-            let p = Vec3::new(
-                if i & 1 != 0 { max.x } else { min.x },
-                if i & 2 != 0 { max.y } else { min.y },
-                if i & 4 != 0 { max.z } else { min.z },
-            );
-            self.positions.push(p.to_array());
-        }
-        // Counter-clockwise seen from outside.
-        const FACES: [[u32; 4]; 6] = [
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-        ];
-        for f in FACES {
-            self.indices.extend_from_slice(&[
-                base + f[0],
-                base + f[1],
-                base + f[2],
-                base + f[0],
-                base + f[2],
-                base + f[3],
-            ]);
+        self.positions.extend(box_corners(min.to_array(), max.to_array()));
+        for t in box_triangles() {
+            self.indices.extend(t.map(|i| base + i));
         }
     }
 
@@ -518,56 +524,26 @@ fn facade(b: &mut MeshBuilder, origin: Vec3, n: Vec3, len: f32, cols: u32, rows:
             let (u0, u1) = (i as f32 * cw, (i + 1) as f32 * cw);
             let (v0, v1) = (j as f32 * ch, (j + 1) as f32 * ch);
             let (wu0, wu1, wv0, wv1) = (u0 + mu, u1 - mu, v0 + mv, v1 - mv);
-            let rect = |b: &mut MeshBuilder, a0: f32, a1: f32, c0: f32, c1: f32| {
-                b.quad(
-                    at(a0, c0, 0.0),
-                    at(a1, c0, 0.0),
-                    at(a1, c1, 0.0),
-                    at(a0, c1, 0.0),
-                    n,
-                )
+            // A wall rectangle facing out, `d` into the recess.
+            let rect = |b: &mut MeshBuilder, (a0, a1): (f32, f32), (c0, c1): (f32, f32), d: f32| {
+                b.quad(at(a0, c0, d), at(a1, c0, d), at(a1, c1, d), at(a0, c1, d), n)
             };
-            rect(b, u0, u1, v0, wv0);
-            rect(b, u0, u1, wv1, v1);
-            rect(b, u0, wu0, wv0, wv1);
-            rect(b, wu1, u1, wv0, wv1);
+            rect(b, (u0, u1), (v0, wv0), 0.0);
+            rect(b, (u0, u1), (wv1, v1), 0.0);
+            rect(b, (u0, wu0), (wv0, wv1), 0.0);
+            rect(b, (wu1, u1), (wv0, wv1), 0.0);
             // Window pane at the back of the recess.
-            b.quad(
-                at(wu0, wv0, depth),
-                at(wu1, wv0, depth),
-                at(wu1, wv1, depth),
-                at(wu0, wv1, depth),
-                n,
-            );
-            // Sill, lintel, jambs.
-            b.quad(
-                at(wu0, wv0, 0.0),
-                at(wu1, wv0, 0.0),
-                at(wu1, wv0, depth),
-                at(wu0, wv0, depth),
-                v,
-            );
-            b.quad(
-                at(wu0, wv1, 0.0),
-                at(wu1, wv1, 0.0),
-                at(wu1, wv1, depth),
-                at(wu0, wv1, depth),
-                -v,
-            );
-            b.quad(
-                at(wu0, wv0, 0.0),
-                at(wu0, wv1, 0.0),
-                at(wu0, wv1, depth),
-                at(wu0, wv0, depth),
-                u,
-            );
-            b.quad(
-                at(wu1, wv0, 0.0),
-                at(wu1, wv1, 0.0),
-                at(wu1, wv1, depth),
-                at(wu1, wv0, depth),
-                -u,
-            );
+            rect(b, (wu0, wu1), (wv0, wv1), depth);
+            // Sill, lintel, jambs: from the window's edge `p`-`q` at the facade into the recess.
+            for ((p, q), facing) in [
+                (((wu0, wv0), (wu1, wv0)), v),
+                (((wu0, wv1), (wu1, wv1)), -v),
+                (((wu0, wv0), (wu0, wv1)), u),
+                (((wu1, wv0), (wu1, wv1)), -u),
+            ] {
+                let (p0, q0) = (at(p.0, p.1, 0.0), at(q.0, q.1, 0.0));
+                b.quad(p0, q0, at(q.0, q.1, depth), at(p.0, p.1, depth), facing);
+            }
         }
     }
 }

@@ -81,21 +81,9 @@ fn make(path: &Path, entry: &Entry) -> io::Result<()> {
     }
 }
 
+/// Standard base64 with padding (glTF `data:` URIs): the encoder of the crate the loader decodes them with.
 fn b64(data: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for chunk in data.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for i in 0..4 {
-            s.push(if i <= chunk.len() {
-                T[((n >> (18 - 6 * i)) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    s
+    base64::encode(data)
 }
 
 fn floats(v: &[f32]) -> Vec<u8> {
@@ -608,87 +596,51 @@ fn write_reference_cases(dir: &Path, good: &str) -> io::Result<Vec<HostileCase>>
         Expect,
     );
     let text = |s: String| Entry::File(s.into_bytes());
+    // A glTF whose buffer is at `uri` (declaring `len` bytes), refused naming it; `beside` its files.
+    let bad_buffer = |name, uri, len, beside| -> Case {
+        (
+            name,
+            "gltf",
+            text(external(uri, len)),
+            Some(uri),
+            beside,
+            Expect::Error,
+        )
+    };
+    // An OBJ whose material library is `uri`, refused naming it.
+    let bad_mtllib =
+        |name, uri, beside| -> Case { (name, "obj", text(obj_body(uri)), Some(uri), beside, Expect::Error) };
     let cases: Vec<Case> = vec![
-        (
-            "buffer_dev_zero",
-            "gltf",
-            text(external("/dev/zero", HUGE)),
-            Some("/dev/zero"),
-            vec![],
-            Expect::Error,
-        ),
-        (
-            "buffer_file_uri_dev_zero",
-            "gltf",
-            text(external("file:///dev/zero", HUGE)),
-            Some("file:///dev/zero"),
-            vec![],
-            Expect::Error,
-        ),
-        (
-            "buffer_dev_urandom",
-            "gltf",
-            text(external("/dev/urandom", HUGE)),
-            Some("/dev/urandom"),
-            vec![],
-            Expect::Error,
-        ),
-        (
+        bad_buffer("buffer_dev_zero", "/dev/zero", HUGE, vec![]),
+        bad_buffer("buffer_file_uri_dev_zero", "file:///dev/zero", HUGE, vec![]),
+        bad_buffer("buffer_dev_urandom", "/dev/urandom", HUGE, vec![]),
+        bad_buffer(
             "buffer_fifo",
-            "gltf",
-            text(external("buffer_fifo.bin", 72)),
-            Some("buffer_fifo.bin"),
+            "buffer_fifo.bin",
+            72,
             vec![("buffer_fifo.bin", Entry::Fifo)],
-            Expect::Error,
         ),
-        (
+        bad_buffer(
             "buffer_symlink_to_dev_zero",
-            "gltf",
-            text(external("zero_link.bin", HUGE)),
-            Some("zero_link.bin"),
+            "zero_link.bin",
+            HUGE,
             vec![("zero_link.bin", Entry::Link("/dev/zero"))],
-            Expect::Error,
         ),
-        (
-            "buffer_etc_passwd",
-            "gltf",
-            text(external("../../../../../../etc/passwd", 72)),
-            Some("../../../../../../etc/passwd"),
-            vec![],
-            Expect::Error,
-        ),
-        (
+        bad_buffer("buffer_etc_passwd", "../../../../../../etc/passwd", 72, vec![]),
+        bad_buffer(
             "buffer_directory",
-            "gltf",
-            text(external("a_directory.bin", 72)),
-            Some("a_directory.bin"),
+            "a_directory.bin",
+            72,
             vec![("a_directory.bin", Entry::Dir)],
-            Expect::Error,
         ),
-        (
-            "buffer_missing_file",
-            "gltf",
-            text(external("no_such_file.bin", 72)),
-            Some("no_such_file.bin"),
-            vec![],
-            Expect::Error,
-        ),
-        (
+        bad_buffer("buffer_missing_file", "no_such_file.bin", 72, vec![]),
+        bad_buffer(
             "buffer_shorter_than_byte_length",
-            "gltf",
-            text(external("short.bin", 72)),
-            Some("short.bin"),
+            "short.bin",
+            72,
             vec![("short.bin", Entry::File(floats(&CORNER[..9])))],
-            Expect::Error,
         ),
-        (
-            "buffer_http_uri",
-            "gltf",
-            text(external("http://example.com/part.bin", 72)),
-            Some("http://example.com/part.bin"),
-            vec![],
-            Expect::Error,
-        ),
+        bad_buffer("buffer_http_uri", "http://example.com/part.bin", 72, vec![]),
         (
             "buffer_external_valid",
             "gltf",
@@ -729,38 +681,18 @@ fn write_reference_cases(dir: &Path, good: &str) -> io::Result<Vec<HostileCase>>
             vec![],
             Expect::Error,
         ),
-        (
-            "obj_mtllib_dev_zero",
-            "obj",
-            text(obj_body("/dev/zero")),
-            Some("/dev/zero"),
-            vec![],
-            Expect::Error,
-        ),
-        (
+        bad_mtllib("obj_mtllib_dev_zero", "/dev/zero", vec![]),
+        bad_mtllib(
             "obj_mtllib_fifo",
-            "obj",
-            text(obj_body("mtl_fifo.mtl")),
-            Some("mtl_fifo.mtl"),
+            "mtl_fifo.mtl",
             vec![("mtl_fifo.mtl", Entry::Fifo)],
-            Expect::Error,
         ),
-        (
+        bad_mtllib(
             "obj_mtllib_symlink_to_dev_zero",
-            "obj",
-            text(obj_body("zero_link.mtl")),
-            Some("zero_link.mtl"),
+            "zero_link.mtl",
             vec![("zero_link.mtl", Entry::Link("/dev/zero"))],
-            Expect::Error,
         ),
-        (
-            "obj_mtllib_etc_passwd",
-            "obj",
-            text(obj_body("../../../../../../etc/passwd")),
-            Some("../../../../../../etc/passwd"),
-            vec![],
-            Expect::Error,
-        ),
+        bad_mtllib("obj_mtllib_etc_passwd", "../../../../../../etc/passwd", vec![]),
         (
             "obj_mtllib_valid",
             "obj",
@@ -869,9 +801,10 @@ pub fn step_boxes(n: usize, o: StepOptions) -> String {
          #14=(NAMED_UNIT(*) SI_UNIT($,.STERADIAN.) SOLID_ANGLE_UNIT());\n\
          #15=UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-07),#{unit},'distance_accuracy_value','');\n"
     );
-    // Face normals (-z, +z, -y, +y, -x, +x) and reference directions (+x, +z) of the faces' planes.
-    s += "#30=DIRECTION('',(0.,0.,-1.));\n#31=DIRECTION('',(0.,0.,1.));\n#32=DIRECTION('',(0.,-1.,0.));\n\
-          #33=DIRECTION('',(0.,1.,0.));\n#34=DIRECTION('',(-1.,0.,0.));\n#35=DIRECTION('',(1.,0.,0.));\n\
+    // Face normals in the order of `BOX_FACES` (-x, +x, -y, +y, -z, +z) and reference directions (+z, +x) of the
+    // faces' planes.
+    s += "#30=DIRECTION('',(-1.,0.,0.));\n#31=DIRECTION('',(1.,0.,0.));\n#32=DIRECTION('',(0.,-1.,0.));\n\
+          #33=DIRECTION('',(0.,1.,0.));\n#34=DIRECTION('',(0.,0.,-1.));\n#35=DIRECTION('',(0.,0.,1.));\n\
           #36=DIRECTION('',(1.,0.,0.));\n#37=DIRECTION('',(0.,0.,1.));\n";
     if o.self_reference {
         s += "#20=NEXT_ASSEMBLY_USAGE_OCCURRENCE('1','self','',#7,#7,$);\n\
@@ -884,35 +817,26 @@ pub fn step_boxes(n: usize, o: StepOptions) -> String {
               #27=CARTESIAN_POINT('',(0.,0.,0.));\n#28=CARTESIAN_POINT('',(50.,0.,0.));\n";
     }
     let side = (n as f64).sqrt().ceil().max(1.0) as usize;
-    // Corners 0-7 (bit 0: x, bit 1: y, bit 2: z) and the faces as outward corner loops.
-    const FACES: [[usize; 4]; 6] = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
     for i in 0..n {
         let h = if o.flat && i > 0 { 0.0 } else { 10.0 };
         let b = first + i * per;
-        let (x0, y0) = (20.0 * (i % side) as f64, 20.0 * (i / side) as f64);
-        for c in 0..8 {
-            let x = x0 + if c & 1 != 0 { 10.0 } else { 0.0 };
-            let y = y0 + if c & 2 != 0 { 10.0 } else { 0.0 };
-            let z = if c & 4 != 0 { h } else { 0.0 };
+        let (x0, y0) = (20.0 * (i % side) as f32, 20.0 * (i / side) as f32);
+        for (c, [x, y, z]) in crate::generate::box_corners([x0, y0, 0.0], [x0 + 10.0, y0 + 10.0, h])
+            .into_iter()
+            .enumerate()
+        {
             s += &format!("#{}=CARTESIAN_POINT('',({x:.1},{y:.1},{z:.1}));\n", b + c);
         }
-        for (f, corners) in FACES.iter().enumerate() {
-            let pts: Vec<String> = corners.iter().map(|c| format!("#{}", b + c)).collect();
+        for (f, corners) in crate::generate::BOX_FACES.iter().enumerate() {
+            let pts: Vec<String> = corners.iter().map(|&c| format!("#{}", b + c as usize)).collect();
             s += &format!("#{}=POLY_LOOP('',({}));\n", b + 8 + f, pts.join(","));
             s += &format!("#{}=FACE_OUTER_BOUND('',#{},.T.);\n", b + 14 + f, b + 8 + f);
-            let origin = [0, 4, 0, 2, 0, 1][f];
-            let reference = if f < 4 { 36 } else { 37 };
+            // The plane through the loop's first corner; the x faces take +z as reference direction, the others +x.
+            let reference = if f < 2 { 37 } else { 36 };
             s += &format!(
                 "#{}=AXIS2_PLACEMENT_3D('',#{},#{},#{reference});\n",
                 b + 28 + f,
-                b + origin,
+                b + corners[0] as usize,
                 30 + f
             );
             s += &format!("#{}=PLANE('',#{});\n", b + 34 + f, b + 28 + f);

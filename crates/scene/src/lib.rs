@@ -36,7 +36,7 @@ pub use glam;
 
 pub use aabb::Aabb;
 pub use error::SceneError;
-pub use generate::{MAX_INSTANCES, MAX_MESH_TRIANGLES};
+pub use generate::{box_corners, box_triangles, BOX_FACES, MAX_INSTANCES, MAX_MESH_TRIANGLES};
 pub use guard::{default_max_memory, CadFormat, CadOptions, CadTessellation, LoadOptions};
 pub use ifc_load::{default_venv, ifc_python, install_command as ifc_install_command, IFCOPENSHELL_VERSION};
 pub use scene::{

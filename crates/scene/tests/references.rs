@@ -11,7 +11,7 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use common::{no_progress, split_glb, temp_dir, test_scene};
-use hrtao_scene::hostile::{write_corpus, Expect};
+use hrtao_scene::hostile::{write_corpus, Expect, HostileCase};
 use hrtao_scene::{load_with, LoadOptions, SceneError};
 
 fn load(path: &Path, opts: &LoadOptions) -> Result<hrtao_scene::Scene, SceneError> {
@@ -19,6 +19,12 @@ fn load(path: &Path, opts: &LoadOptions) -> Result<hrtao_scene::Scene, SceneErro
 }
 
 /// Peak resident memory of this test process (VmHWM), in bytes.
+/// The hostile corpus's case `name` loaded with the default options.
+fn load_case(cases: &[HostileCase], name: &str) -> Result<hrtao_scene::Scene, SceneError> {
+    let c = cases.iter().find(|c| c.name == name).unwrap();
+    load(&c.path, &LoadOptions::default())
+}
+
 fn peak_rss() -> u64 {
     let status = std::fs::read_to_string("/proc/self/status").unwrap();
     let kb: u64 = status
@@ -78,10 +84,7 @@ fn every_reference_case_ends_with_an_error_naming_the_reference() {
 fn errors_say_what_the_reference_is() {
     let dir = temp_dir("refkinds");
     let cases = write_corpus(&dir).unwrap();
-    let msg = |name: &str| {
-        let c = cases.iter().find(|c| c.name == name).unwrap();
-        load(&c.path, &LoadOptions::default()).unwrap_err().to_string()
-    };
+    let msg = |name: &str| load_case(&cases, name).unwrap_err().to_string();
     for (name, says) in [
         ("buffer_dev_zero", "outside the model's folder"),
         ("buffer_file_uri_dev_zero", "outside the model's folder"),
@@ -307,10 +310,7 @@ fn world_triangles(s: &hrtao_scene::Scene) -> Vec<[u32; 9]> {
 fn stl_and_gltf_of_the_same_model_agree() {
     let dir = temp_dir("stl");
     let cases = write_corpus(&dir).unwrap();
-    let get = |name: &str| {
-        let c = cases.iter().find(|c| c.name == name).unwrap();
-        load(&c.path, &LoadOptions::default()).unwrap()
-    };
+    let get = |name: &str| load_case(&cases, name).unwrap();
     let gltf = get("valid_reference");
     for name in [
         "stl_binary",

@@ -66,35 +66,15 @@ fn face_normal(p: &Primitive, t: usize) -> Vec3 {
 /// A capped cylinder of radius 1 along z (-1..1) as triangles (counter-clockwise seen from outside), and for
 /// each vertex of its side and caps the exact normal.
 fn cylinder(segments: u32) -> (Vec<[f32; 3]>, Vec<u32>, Vec<[f32; 3]>) {
-    let (mut p, mut n, mut ix) = (Vec::new(), Vec::new(), Vec::new());
-    let ring = |k: u32| {
-        let t = std::f32::consts::TAU * k as f32 / segments as f32;
-        (t.cos(), t.sin())
-    };
-    for k in 0..segments {
-        let (x, y) = ring(k);
-        p.extend([[x, y, -1.0], [x, y, 1.0]]);
-        n.extend([[x, y, 0.0], [x, y, 0.0]]);
-    }
-    for k in 0..segments {
-        let (i, j) = (2 * k, 2 * ((k + 1) % segments));
-        ix.extend([i, j, j + 1, i, j + 1, i + 1]);
-    }
-    for z in [-1.0f32, 1.0] {
-        let centre = p.len() as u32;
-        p.push([0.0, 0.0, z]);
-        n.push([0.0, 0.0, z]);
-        for k in 0..segments {
-            let (x, y) = ring(k);
-            p.push([x, y, z]);
-            n.push([0.0, 0.0, z]);
-        }
-        for k in 0..segments {
-            let (i, j) = (centre + 1 + k, centre + 1 + (k + 1) % segments);
-            ix.extend(if z > 0.0 { [centre, i, j] } else { [centre, j, i] });
-        }
-    }
+    let (p, n, ix) = common::cylinder(segments, 1.0, 1.0);
     (p, ix, n)
+}
+
+/// The 12-segment cylinder as a .gltf at `path` with `normals` as its NORMAL.
+fn cylinder_gltf(path: &Path, normals: &[[f32; 3]]) -> PathBuf {
+    let (p, ix, _) = cylinder(12);
+    let attributes = [("POSITION", f32_acc(&p)), ("NORMAL", f32_acc(normals))];
+    write_gltf(path, &attributes, &ix, 4, None, "")
 }
 
 fn write_stl(path: &Path, p: &[[f32; 3]], ix: &[u32]) {
@@ -373,14 +353,7 @@ fn write_gltf(
 fn gltf_normal_is_read_and_its_absence_is_flat() {
     let dir = temp_dir("normals-gltf");
     let (p, ix, n) = cylinder(12);
-    let path = write_gltf(
-        &dir.join("with.gltf"),
-        &[("POSITION", f32_acc(&p)), ("NORMAL", f32_acc(&n))],
-        &ix,
-        4,
-        None,
-        "",
-    );
+    let path = cylinder_gltf(&dir.join("with.gltf"), &n);
     let prim = load(&path, Some(40.0)).unwrap();
     assert_eq!(prim.normals.len(), n.len());
     for (got, want) in prim.normals.iter().zip(&n) {
@@ -532,14 +505,7 @@ fn nan_normals_shade_flat_with_a_warning() {
     let dir = temp_dir("normals-nan");
     let (p, ix, mut n) = cylinder(12);
     n[5] = [f32::NAN, 0.0, 1.0];
-    let path = write_gltf(
-        &dir.join("nan_normals.gltf"),
-        &[("POSITION", f32_acc(&p)), ("NORMAL", f32_acc(&n))],
-        &ix,
-        4,
-        None,
-        "",
-    );
+    let path = cylinder_gltf(&dir.join("nan_normals.gltf"), &n);
     let prim = load(&path, Some(40.0)).unwrap();
     assert!(prim.normals.is_empty());
     let w = warnings_about("nan_normals.gltf");

@@ -3,8 +3,7 @@
 //! instances and geometry; broken archives are clear errors.
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
 use glam::Vec3;
 
@@ -12,14 +11,7 @@ use glam::Vec3;
 mod threemf_writer;
 
 fn assimp_models() -> PathBuf {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/fetch-assimp-models.sh");
-    let out = Command::new("bash").arg(script).output().unwrap();
-    assert!(
-        out.status.success(),
-        "scripts/fetch-assimp-models.sh failed (it needs apt-get and Debian's assimp-testmodels):\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
+    common::fetched_data("fetch-assimp-models.sh", "apt-get and Debian's assimp-testmodels")
 }
 
 /// assimp's box: one 10 × 20 × 30 mm box of 12 triangles, in millimetres. Fails with the unit dropped.

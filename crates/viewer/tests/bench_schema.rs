@@ -42,35 +42,8 @@ fn tiny_bench_writes_the_schema_the_report_reads() {
     let dir = tmp_dir("schema");
     let json = dir.join("tiny.json");
     let scene = scene();
-    hrtao(&[
-        "bench",
-        "--scene",
-        &scene,
-        "--width",
-        "64",
-        "--height",
-        "36",
-        "--orbit",
-        "3",
-        "--repeat",
-        "1",
-        "--settle",
-        "2",
-        "--rays",
-        "4",
-        "--step",
-        "4",
-        "--max-rays",
-        "8",
-        "--ref-rays",
-        "16",
-        "--hrtao-frames",
-        "2",
-        "--label",
-        "tiny",
-        "--json",
-        json.to_str().unwrap(),
-    ]);
+    let extra = ["--step", "4", "--label", "tiny", "--json", json.to_str().unwrap()];
+    hrtao(&cli::tiny_bench(&scene, ("3", "2"), &extra));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["schema"], "hrtao-bench/1");
     for key in [

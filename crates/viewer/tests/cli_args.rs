@@ -32,6 +32,14 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// `tmp(name)` and a fresh HOME folder in it.
+fn tmp_with_home(name: &str) -> (PathBuf, PathBuf) {
+    let dir = tmp(name);
+    let home = dir.join("home");
+    std::fs::create_dir_all(&home).unwrap();
+    (dir, home)
+}
+
 /// Bad values are refused by the parser (exit status 2, before any file or device is touched), and the message
 /// names the option and what it accepts.
 #[test]
@@ -230,9 +238,7 @@ fn devices_lists_every_device_and_the_choice() {
 /// scene file is the embedded copy in the cache, and it is byte for byte the repository's asset.
 #[test]
 fn render_of_the_bundled_scene_needs_no_source_tree() {
-    let dir = tmp("bundled");
-    let home = dir.join("home");
-    std::fs::create_dir_all(&home).unwrap();
+    let (dir, home) = tmp_with_home("bundled");
     let png = dir.join("bundled.png");
     let stats = dir.join("stats.json");
     let o = hrtao_in(
@@ -309,9 +315,7 @@ fn set_at_frame_changes_the_radius_from_the_next_frame() {
 /// ~/.local/share.
 #[test]
 fn relative_xdg_directories_are_ignored() {
-    let dir = tmp("relative-xdg");
-    let home = dir.join("home");
-    std::fs::create_dir_all(&home).unwrap();
+    let (dir, home) = tmp_with_home("relative-xdg");
     let stats = dir.join("stats.json");
     let env = [
         ("HOME", home.to_str().unwrap()),

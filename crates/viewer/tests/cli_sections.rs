@@ -3,6 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod cli;
+mod common;
+
 fn dir() -> PathBuf {
     let d = std::env::temp_dir().join(format!("hrtao-cli-sections-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -11,34 +14,8 @@ fn dir() -> PathBuf {
 
 /// Closed, outward-facing boxes (min, max) as OBJ, with a floor quad at z = 0 for x in -6..0.
 fn write_obj(path: &Path, boxes: &[([f32; 3], [f32; 3])]) {
-    let mut s = String::from("v -6 -6 0\nv 0 -6 0\nv 0 6 0\nv -6 6 0\nf 1 2 3 4\n");
-    let mut base = 4;
-    for (lo, hi) in boxes {
-        for i in 0..8 {
-            let x = if i & 1 == 0 { lo[0] } else { hi[0] };
-            let y = if i & 2 == 0 { lo[1] } else { hi[1] };
-            let z = if i & 4 == 0 { lo[2] } else { hi[2] };
-            s += &format!("v {x} {y} {z}\n");
-        }
-        // Corners: bit 0 = x, bit 1 = y, bit 2 = z; each face counter-clockwise seen from outside.
-        for f in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            s += &format!(
-                "f {} {} {} {}\n",
-                base + f[0] + 1,
-                base + f[1] + 1,
-                base + f[2] + 1,
-                base + f[3] + 1
-            );
-        }
-        base += 8;
-    }
+    let boxes: Vec<_> = boxes.iter().map(|(lo, hi)| ("", *lo, *hi)).collect();
+    let s = "v -6 -6 0\nv 0 -6 0\nv 0 6 0\nv -6 6 0\nf 1 2 3 4\n".to_string() + &common::boxes_obj(&boxes, 4);
     std::fs::write(path, s).unwrap();
 }
 
@@ -65,16 +42,7 @@ fn render(obj: &Path, camera: &Path, sections: &[&str], tag: &str) -> (Vec<f32>,
         args.push("--section".into());
         args.push(s.to_string());
     }
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(&args)
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{tag}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    cli::hrtao_ok(&args);
     let (_, _, ao) = hrtao_core::imageio::read_pfm(&pfm).unwrap();
     (ao, image::open(&png).unwrap().to_rgba8())
 }

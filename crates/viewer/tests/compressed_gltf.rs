@@ -2,8 +2,8 @@
 //! rod.glb: per-pixel RTAO (each pixel's own deterministic ray sequence) of the files from one camera,
 //! MAE ≤ 0.005.
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
+mod common;
 #[path = "../../scene/tests/common/threemf.rs"]
 mod threemf_writer;
 
@@ -21,22 +21,7 @@ fn dir() -> PathBuf {
 
 /// `hrtao render --mode rtao` of `scene` from `camera`: the linear AO image.
 fn render(scene: &Path, camera: &Path, radius: f32) -> Vec<f32> {
-    let pfm = dir().join(format!("{}.pfm", scene.file_name().unwrap().to_string_lossy()));
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(["render", "--scene", scene.to_str().unwrap()])
-        .args(["--camera", camera.to_str().unwrap(), "--mode", "rtao"])
-        .args(["--rays", "16", "--frames", "8", "--radius", &radius.to_string()])
-        .args(["--ao-out", pfm.to_str().unwrap()])
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .expect("run hrtao");
-    assert!(
-        out.status.success(),
-        "{}: {}",
-        scene.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    hrtao_core::imageio::read_pfm(&pfm).unwrap().2
+    common::render_rtao(scene, camera, radius, (16, 8), &dir())
 }
 
 #[test]

@@ -2,7 +2,8 @@
 //! the same model at the origin, through `hrtao render` with cameras in the file's own coordinates: glTF with
 //! a root translation, and OBJ with far vertex coordinates.
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+mod cli;
 
 /// UTM-like offset of the issue: (690 000, 0, 5 340 000).
 const FAR: [f64; 3] = [690_000.0, 0.0, 5_340_000.0];
@@ -114,24 +115,13 @@ fn render(scene: &Path, camera: &Path, tag: &str) -> Vec<Vec<f32>> {
         .iter()
         .map(|mode| {
             let pfm = dir().join(format!("{tag}-{mode}.pfm"));
-            let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-                .args([
-                    "render",
-                    "--scene",
-                    scene.to_str().unwrap(),
-                    "--camera",
-                    camera.to_str().unwrap(),
-                ])
-                .args(["--radius", "2", "--rays", "8", "--frames", "8", "--mode", mode])
-                .args(["--ao-out", pfm.to_str().unwrap()])
-                .env("HRTAO_VALIDATION", "1")
-                .output()
-                .unwrap();
-            assert!(
-                out.status.success(),
-                "{tag}: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
+            let (scene, camera) = (scene.to_str().unwrap(), camera.to_str().unwrap());
+            let args: [&[&str]; 3] = [
+                &["render", "--scene", scene, "--camera", camera],
+                &["--radius", "2", "--rays", "8", "--frames", "8", "--mode", mode],
+                &["--ao-out", pfm.to_str().unwrap()],
+            ];
+            cli::hrtao_ok(&args.concat());
             hrtao_core::imageio::read_pfm(&pfm).unwrap().2
         })
         .collect()
@@ -150,34 +140,26 @@ fn compare(near: &[Vec<f32>], far: &[Vec<f32>], what: &str) {
     }
 }
 
+/// The model `write` writes, at the origin and at `FAR` (`ext` files, each with its camera), renders the same
+/// images (`compare`).
+fn near_and_far_agree(ext: &str, write: fn(&Path, [f64; 3]), what: &str) {
+    let d = dir();
+    let [near, far] = [("near", [0.0; 3]), ("far", FAR)].map(|(tag, offset)| {
+        let scene = d.join(format!("{tag}.{ext}"));
+        let camera = d.join(format!("{tag}-{ext}.camera.json"));
+        write(&scene, offset);
+        write_camera(&camera, offset);
+        render(&scene, &camera, &format!("{ext}-{tag}"))
+    });
+    compare(&near, &far, what);
+}
+
 #[test]
 fn gltf_far_from_the_origin_renders_the_same_image() {
-    let d = dir();
-    let (near_s, far_s) = (d.join("near.gltf"), d.join("far.gltf"));
-    let (near_c, far_c) = (d.join("near.camera.json"), d.join("far.camera.json"));
-    write_gltf(&near_s, [0.0; 3]);
-    write_gltf(&far_s, FAR);
-    write_camera(&near_c, [0.0; 3]);
-    write_camera(&far_c, FAR);
-    compare(
-        &render(&near_s, &near_c, "gltf-near"),
-        &render(&far_s, &far_c, "gltf-far"),
-        "glTF",
-    );
+    near_and_far_agree("gltf", write_gltf, "glTF");
 }
 
 #[test]
 fn obj_far_from_the_origin_renders_the_same_image() {
-    let d = dir();
-    let (near_s, far_s) = (d.join("near.obj"), d.join("far.obj"));
-    let (near_c, far_c) = (d.join("near-obj.camera.json"), d.join("far-obj.camera.json"));
-    write_obj(&near_s, [0.0; 3]);
-    write_obj(&far_s, FAR);
-    write_camera(&near_c, [0.0; 3]);
-    write_camera(&far_c, FAR);
-    compare(
-        &render(&near_s, &near_c, "obj-near"),
-        &render(&far_s, &far_c, "obj-far"),
-        "OBJ",
-    );
+    near_and_far_agree("obj", write_obj, "OBJ");
 }

@@ -27,18 +27,12 @@ fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// Runs a Python snippet with the venv's interpreter; its stdout.
 fn py(python: &Path, code: &str, args: &[&str]) -> String {
-    let out = Command::new(python)
-        .arg("-c")
-        .arg(code)
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{code}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).trim().to_string()
+    let args: Vec<&std::ffi::OsStr> = ["-c", code]
+        .into_iter()
+        .chain(args.iter().copied())
+        .map(|a| a.as_ref())
+        .collect();
+    common::run_python(python, &args)
 }
 
 /// Products whose body is an IfcMappedItem (a placed representation map), counted with IfcOpenShell's API.
@@ -102,22 +96,7 @@ fn fzk_haus_opens_with_its_storeys_and_shared_representations() {
 
 /// `hrtao render` of `scene`: per-pixel RTAO, 64 rays × 16 frames, 320×180 from `camera`; the linear AO image.
 fn render_ao(scene: &Path, camera: &Path, radius: f32, dir: &Path) -> Vec<f32> {
-    let pfm = dir.join(format!("{}.pfm", scene.file_name().unwrap().to_string_lossy()));
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(["render", "--scene", scene.to_str().unwrap()])
-        .args(["--camera", camera.to_str().unwrap(), "--mode", "rtao"])
-        .args(["--rays", "64", "--frames", "16", "--radius", &radius.to_string()])
-        .args(["--ao-out", pfm.to_str().unwrap()])
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .expect("run hrtao");
-    assert!(
-        out.status.success(),
-        "{}: {}",
-        scene.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    hrtao_core::imageio::read_pfm(&pfm).unwrap().2
+    common::render_rtao(scene, camera, radius, (64, 16), dir)
 }
 
 /// IfcOpenShell's glTF serializer (Y up: IFC's (x, y, z) is its (x, z, −y)), the products the worker draws (no
@@ -180,16 +159,7 @@ fn a_building_made_with_ifcopenshells_api_opens_with_its_instances() {
     let Some(python) = python() else { return };
     let dir = tmp("generated");
     let path = dir.join("generated.ifc");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ifc/make_building.py");
-    let out = Command::new(&python)
-        .arg(script)
-        .arg(&path)
-        .arg("24")
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let mapped: usize = String::from_utf8_lossy(&out.stdout).trim().parse().unwrap();
-    assert_eq!(mapped, 24);
+    assert_eq!(common::make_building(&python, &path, 24), 24);
     let s = load(&path).unwrap();
     let shared = hrtao_scene::cad::shared_meshes(&s);
     assert_eq!(shared.len(), 1, "{shared:?}");

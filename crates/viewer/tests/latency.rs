@@ -2,7 +2,6 @@
 //! `--stats` stamps each frame's presentation and the input it answers on CLOCK_MONOTONIC, `--exit-after` ends a
 //! user-like run once it rests, `--ao-out` writes the view's AO per frame with its roughness.
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Duration;
 
 mod common;
@@ -16,6 +15,36 @@ fn monotonic_ms() -> f64 {
     };
     assert_eq!(unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) }, 0);
     ts.tv_sec as f64 * 1e3 + ts.tv_nsec as f64 * 1e-6
+}
+
+/// A user-like run (`--exit-after EXIT_AFTER --stats STATS`, no panel) of the bundled scene, opened, its window
+/// focused (raw input, device events, reaches the viewer while its window has the focus); the window's id.
+fn start_user_run(dir: &Path, exit_after: &str, stats: &Path) -> (Running, String) {
+    let args = [
+        "--size",
+        "400x260",
+        "--no-panel",
+        "--exit-after",
+        exit_after,
+        "--stats",
+    ];
+    let mut v = Running::launch(
+        &[&["view"], &args[..], &[stats.to_str().unwrap()]].concat(),
+        dir,
+        &[],
+    );
+    v.wait_for("] opened ", 1, Duration::from_secs(60));
+    let window = v.focus_window();
+    (v, window)
+}
+
+/// The run exits by itself (`--exit-after`) with status 0 at its rest, validation-clean.
+fn ends_at_rest(v: &mut Running) {
+    let status = v.wait_exit(Duration::from_secs(120));
+    let log = v.log_text();
+    assert!(status.success(), "hrtao view failed ({status}):\n{log}");
+    v.validation_clean();
+    assert!(log.contains("at rest"), "{log}");
 }
 
 fn read_stats(path: &Path) -> serde_json::Value {
@@ -35,23 +64,7 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     let dir = out_dir("drag");
     let stats = dir.join("stats.json");
     let start = monotonic_ms();
-    let mut v = Running::launch(
-        &[
-            "view",
-            "--size",
-            "400x260",
-            "--no-panel",
-            "--exit-after",
-            "4",
-            "--stats",
-            stats.to_str().unwrap(),
-        ],
-        &dir,
-        &[],
-    );
-    v.wait_for("] opened ", 1, Duration::from_secs(60));
-    // Raw input (device events) reaches the viewer while its window has the focus.
-    let window = v.focus_window();
+    let (mut v, window) = start_user_run(&dir, "4", &stats);
     // A moment into the still refinement, then one left drag (orbit) in the view.
     std::thread::sleep(Duration::from_millis(300));
     // A hover, then the button held over several frames as a hand does it (pressed and released within one or two
@@ -82,11 +95,7 @@ fn a_drag_is_answered_by_a_frame_stamped_after_it() {
     drag.extend(["mouseup".into(), "1".into()]);
     let stamp = monotonic_ms();
     xdotool(&drag.iter().map(String::as_str).collect::<Vec<_>>());
-    let status = v.wait_exit(Duration::from_secs(120));
-    let log = v.log_text();
-    assert!(status.success(), "hrtao view failed ({status}):\n{log}");
-    v.validation_clean();
-    assert!(log.contains("at rest"), "{log}");
+    ends_at_rest(&mut v);
 
     let s = read_stats(&stats);
     let frames = s["frames"].as_array().unwrap();
@@ -172,22 +181,7 @@ fn a_press_that_has_not_moved_holds_the_view() {
     let _x = x_input_lock();
     let dir = out_dir("press");
     let stats = dir.join("stats.json");
-    let mut v = Running::launch(
-        &[
-            "view",
-            "--size",
-            "400x260",
-            "--no-panel",
-            "--exit-after",
-            "3",
-            "--stats",
-            stats.to_str().unwrap(),
-        ],
-        &dir,
-        &[],
-    );
-    v.wait_for("] opened ", 1, Duration::from_secs(60));
-    let window = v.focus_window();
+    let (mut v, window) = start_user_run(&dir, "3", &stats);
     // An orbit first (a camera navigation has re-derived), then, into the still refinement, the button held
     // 1.5 s without motion.
     let press = |x: &str, y: &str| {
@@ -216,11 +210,7 @@ fn a_press_that_has_not_moved_holds_the_view() {
     std::thread::sleep(Duration::from_millis(1500));
     let released = monotonic_ms();
     xdotool(&["mouseup", "1"]);
-    let status = v.wait_exit(Duration::from_secs(120));
-    let log = v.log_text();
-    assert!(status.success(), "hrtao view failed ({status}):\n{log}");
-    v.validation_clean();
-    assert!(log.contains("at rest"), "{log}");
+    ends_at_rest(&mut v);
 
     let s = read_stats(&stats);
     let frames = s["frames"].as_array().unwrap();
@@ -257,34 +247,22 @@ fn a_press_that_has_not_moved_holds_the_view() {
 /// each (occluded flat pixels by the frame's own AO).
 #[test]
 fn ao_out_writes_every_frame_and_its_roughness() {
-    let _display = display_lock();
     if !display_available() {
         return;
     }
     let dir = out_dir("ao");
     let stats = dir.join("stats.json");
     let ao = dir.join("ao");
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args([
-            "view",
-            "--size",
-            "320x200",
-            "--no-panel",
-            "--no-config",
-            "--orbit",
-            "2",
-            "--exit",
-        ])
-        .arg("--stats")
-        .arg(&stats)
-        .arg("--ao-out")
-        .arg(&ao)
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .expect("run hrtao view");
-    let log = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "hrtao view failed:\n{log}");
-    assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
+    let outputs = [
+        "--stats",
+        stats.to_str().unwrap(),
+        "--ao-out",
+        ao.to_str().unwrap(),
+    ];
+    scripted_run(
+        &[&["--size", "320x200", "--no-panel", "--orbit", "2"][..], &outputs].concat(),
+        &[],
+    );
     let s = read_stats(&stats);
     let frames = s["frames"].as_array().unwrap();
     let mut pfms: Vec<PathBuf> = std::fs::read_dir(&ao)

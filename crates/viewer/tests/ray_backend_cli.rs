@@ -121,33 +121,8 @@ fn bench_runs_with_each_backend() {
     let scene = common::test_scene("rod");
     for &backend in backends("bench") {
         let json = dir.join(format!("bench-{backend}.json"));
-        cli::hrtao_ok(&[
-            "bench",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--width",
-            "64",
-            "--height",
-            "36",
-            "--orbit",
-            "2",
-            "--repeat",
-            "1",
-            "--settle",
-            "1",
-            "--rays",
-            "4",
-            "--max-rays",
-            "8",
-            "--ref-rays",
-            "16",
-            "--hrtao-frames",
-            "2",
-            "--ray-backend",
-            backend,
-            "--json",
-            json.to_str().unwrap(),
-        ]);
+        let extra = ["--ray-backend", backend, "--json", json.to_str().unwrap()];
+        cli::hrtao_ok(&cli::tiny_bench(scene.to_str().unwrap(), ("2", "1"), &extra));
         let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         assert_eq!(
             v["device"]["ray_backend"], backend,
@@ -173,12 +148,20 @@ fn an_unknown_backend_is_refused() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("query, pipeline"));
 }
 
+/// Whether there is a display (the window tests run under xvfb-run); says the test skips when there is not.
+fn display_or_skip() -> bool {
+    let there = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
+    if !there {
+        eprintln!("skipped: no display");
+    }
+    there
+}
+
 /// The viewer's scripted run with each backend (where a display is: the window tests run under xvfb-run): it
 /// exits 0 (a scripted run exits 1 on any validation message) and saves its screenshot.
 #[test]
 fn view_runs_with_each_backend() {
-    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
-        eprintln!("skipped: no display");
+    if !display_or_skip() {
         return;
     }
     let dir = tmp_dir();
@@ -207,8 +190,7 @@ fn view_runs_with_each_backend() {
 /// command line's wins over it.
 #[test]
 fn the_viewer_opens_the_device_with_the_saved_backend() {
-    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
-        eprintln!("skipped: no display");
+    if !display_or_skip() {
         return;
     }
     let dir = tmp_dir();

@@ -2,9 +2,11 @@
 //! normals (OBJ `vn`, glTF NORMAL) shades like a 384-segment one, without facet steps; with face normals (OBJ
 //! without `vn` and `--flat-normals`, glTF without NORMAL) it is at least 3x further off. The measure is the one of
 //! crates/hrtao-core/tests/shading_normals.rs, on the PNG the command writes.
-use std::f32::consts::TAU;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+mod cli;
+#[path = "../../scene/tests/common/mod.rs"]
+mod common;
 
 const W: usize = 640;
 const H: usize = 360;
@@ -15,43 +17,8 @@ fn tmp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-/// A capped cylinder of radius 1 along z (-1..1), wound counter-clockwise seen from outside: positions, the
-/// exact normal of each vertex (radial on the side, ±z on the caps, which have their own rim vertices), triangles.
-#[allow(clippy::type_complexity)]
-fn cylinder(segments: u32) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
-    let (mut p, mut n, mut ix) = (Vec::new(), Vec::new(), Vec::new());
-    let ring = |k: u32| {
-        let t = TAU * k as f32 / segments as f32;
-        (t.cos(), t.sin())
-    };
-    for k in 0..segments {
-        let (x, y) = ring(k);
-        p.extend([[x, y, -1.0], [x, y, 1.0]]);
-        n.extend([[x, y, 0.0], [x, y, 0.0]]);
-    }
-    for k in 0..segments {
-        let (i, j) = (2 * k, 2 * ((k + 1) % segments));
-        ix.extend([i, j, j + 1, i, j + 1, i + 1]);
-    }
-    for z in [-1.0f32, 1.0] {
-        let centre = p.len() as u32;
-        p.push([0.0, 0.0, z]);
-        n.push([0.0, 0.0, z]);
-        for k in 0..segments {
-            let (x, y) = ring(k);
-            p.push([x, y, z]);
-            n.push([0.0, 0.0, z]);
-        }
-        for k in 0..segments {
-            let (i, j) = (centre + 1 + k, centre + 1 + (k + 1) % segments);
-            ix.extend(if z > 0.0 { [centre, i, j] } else { [centre, j, i] });
-        }
-    }
-    (p, n, ix)
-}
-
 fn write_obj(path: &Path, segments: u32, with_vn: bool) {
-    let (p, n, ix) = cylinder(segments);
+    let (p, n, ix) = common::cylinder(segments, 1.0, 1.0);
     let mut s = String::new();
     for v in &p {
         s += &format!("v {} {} {}\n", v[0], v[1], v[2]);
@@ -74,27 +41,10 @@ fn write_obj(path: &Path, segments: u32, with_vn: bool) {
     std::fs::write(path, s).unwrap();
 }
 
-fn base64(data: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in data.chunks(3) {
-        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            out.push(if k <= c.len() {
-                T[(n >> (18 - 6 * k) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
-}
-
 /// The cylinder as a .gltf with an embedded buffer, NORMAL when asked, and a 0.8 grey material (the OBJ's
 /// default colour; glTF's default is white).
 fn write_gltf(path: &Path, segments: u32, with_normal: bool) {
-    let (p, n, ix) = cylinder(segments);
+    let (p, n, ix) = common::cylinder(segments, 1.0, 1.0);
     let f32s = |v: &[[f32; 3]]| -> Vec<u8> { v.iter().flatten().flat_map(|c| c.to_le_bytes()).collect() };
     let mut bin = f32s(&p);
     let pos_len = bin.len();
@@ -115,7 +65,7 @@ fn write_gltf(path: &Path, segments: u32, with_normal: bool) {
 "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0{normal}}},"indices":2,"material":0}}]}}],
 "nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#,
         len = bin.len(),
-        data = base64(&bin),
+        data = common::base64(&bin),
         idx_len = ix.len() * 4,
         count = p.len(),
         icount = ix.len(),
@@ -144,27 +94,18 @@ fn render(scene: &Path, extra: &[&str]) -> (Vec<f32>, Vec<bool>) {
     // Named after the whole file name: c12.obj and c12.gltf render in parallel tests.
     let png = PathBuf::from(format!("{}{}.png", scene.display(), extra.join("")));
     let camera = camera(scene);
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(["render", "--scene", scene.to_str().unwrap()])
-        .args([
+    let args: [&[&str]; 3] = [
+        &[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
             "--camera",
             camera.to_str().unwrap(),
-            "--mode",
-            "none",
-            "--frames",
-            "1",
-        ])
-        .args(["--out", png.to_str().unwrap()])
-        .args(extra)
-        .env("HRTAO_VALIDATION", "1")
-        .output()
-        .expect("run hrtao");
-    assert!(
-        out.status.success(),
-        "{}: {}",
-        scene.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
+        ],
+        &["--mode", "none", "--frames", "1", "--out", png.to_str().unwrap()],
+        extra,
+    ];
+    cli::hrtao_ok(&args.concat());
     let img = image::open(&png).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), (W as u32, H as u32));
     let px = |x: usize, y: usize| img.get_pixel(x as u32, y as u32).0;
@@ -181,62 +122,15 @@ fn render(scene: &Path, extra: &[&str]) -> (Vec<f32>, Vec<bool>) {
     (lum, hit)
 }
 
-/// Pixels at least 3 pixels from every silhouette of all the masks given (covered in all of them).
-fn interior(masks: &[&[bool]]) -> Vec<bool> {
-    let (w, h) = (W as i32, H as i32);
-    let covered =
-        |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && masks.iter().all(|m| m[(y * w + x) as usize]);
-    (0..h)
-        .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| (-3..=3).all(|dy| (-3..=3).all(|dx| covered(x + dx, y + dy))))
-        .collect()
-}
-
-fn mae(a: &[f32], b: &[f32], mask: &[bool]) -> f32 {
-    let (sum, n) = a
-        .iter()
-        .zip(b)
-        .zip(mask)
-        .filter(|(_, &m)| m)
-        .fold((0.0f64, 0usize), |(s, n), ((x, y), _)| {
-            (s + (x - y).abs() as f64, n + 1)
-        });
-    assert!(n > 10_000, "only {n} pixels to compare");
-    (sum / n as f64) as f32
-}
-
-/// The 99th percentile of the luminance step between horizontal neighbours inside `mask`.
-fn step_p99(lum: &[f32], mask: &[bool]) -> f32 {
-    let mut steps: Vec<f32> = (0..lum.len() - 1)
-        .filter(|&i| (i + 1) % W != 0 && mask[i] && mask[i + 1])
-        .map(|i| (lum[i + 1] - lum[i]).abs())
-        .collect();
-    steps.sort_by(f32::total_cmp);
-    steps[steps.len() * 99 / 100]
-}
-
 /// The issue's measure on three renders: 12 segments with the file's normals, 384 with them, 12 with face
-/// normals. Returns (MAE smooth, MAE face normals, p99 step smooth).
+/// normals.
 fn measure(
     what: &str,
     fine: &(Vec<f32>, Vec<bool>),
     smooth: &(Vec<f32>, Vec<bool>),
     flat: &(Vec<f32>, Vec<bool>),
 ) {
-    let mask = interior(&[&fine.1, &smooth.1, &flat.1]);
-    let (e_smooth, e_flat) = (mae(&smooth.0, &fine.0, &mask), mae(&flat.0, &fine.0, &mask));
-    let (p_smooth, p_fine, p_flat) = (
-        step_p99(&smooth.0, &mask),
-        step_p99(&fine.0, &mask),
-        step_p99(&flat.0, &mask),
-    );
-    eprintln!(
-        "{what}: MAE to 384 segments: normals {e_smooth:.4}, face normals {e_flat:.4}; p99 step: normals \
-         {p_smooth:.4}, 384 segments {p_fine:.4}, face normals {p_flat:.4}"
-    );
-    assert!(e_smooth <= 0.01, "{what}: {e_smooth}");
-    assert!(e_flat >= 3.0 * e_smooth, "{what}: {e_flat} vs {e_smooth}");
-    assert!(p_smooth <= 0.015, "{what}: facet steps {p_smooth}");
+    common::facet_measure(what, fine, smooth, flat, W);
 }
 
 /// OBJ with `vn`: the 12-segment cylinder shades like the 384-segment one; without `vn` and with
@@ -256,9 +150,9 @@ fn obj_normals_shade_a_coarse_cylinder_like_a_fine_one() {
     measure("OBJ smoothed", &fine, &smoothed, &flat);
     // `--smooth-angle 20` (less than the 30° between side faces) leaves the facets.
     let sharp = render(&c12_bare, &["--smooth-angle", "20"]);
-    let mask = interior(&[&fine.1, &sharp.1, &flat.1]);
+    let mask = common::interior(&[&fine.1, &sharp.1, &flat.1], W);
     assert!(
-        mae(&sharp.0, &flat.0, &mask) < 1e-3,
+        common::mae(&sharp.0, &flat.0, &mask) < 1e-3,
         "at 20° the 30° edges stay sharp"
     );
 }
@@ -281,24 +175,21 @@ fn gltf_normals_shade_a_coarse_cylinder_like_a_fine_one() {
 fn a_bad_smoothing_angle_is_refused() {
     let c12 = tmp("c12_refused.obj");
     write_obj(&c12, 12, false);
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args([
-            "render",
-            "--scene",
-            c12.to_str().unwrap(),
-            "--smooth-angle",
-            "270",
-        ])
-        .args(["--out", tmp("refused.png").to_str().unwrap()])
-        .output()
-        .unwrap();
+    let refused = tmp("refused.png");
+    let scene = c12.to_str().unwrap();
+    let out = cli::hrtao(&[
+        "render",
+        "--scene",
+        scene,
+        "--smooth-angle",
+        "270",
+        "--out",
+        refused.to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("--smooth-angle") && err.contains("0..=180"), "{err}");
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args(["render", "--smooth-angle", "30", "--flat-normals"])
-        .output()
-        .unwrap();
+    let out = cli::hrtao(&["render", "--smooth-angle", "30", "--flat-normals"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with"));
 }

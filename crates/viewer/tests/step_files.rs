@@ -31,14 +31,7 @@ fn tmp(name: &str) -> PathBuf {
 
 /// gmsh-doc's STEP files, unpacked into target/ by the project's script.
 fn step_data() -> PathBuf {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/fetch-step-data.sh");
-    let out = Command::new("bash").arg(script).output().unwrap();
-    assert!(
-        out.status.success(),
-        "scripts/fetch-step-data.sh failed (it needs apt-get and Debian's gmsh-doc):\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
+    common::scene_common::fetched_data("fetch-step-data.sh", "apt-get and Debian's gmsh-doc")
 }
 
 fn render(scene: &Path, out: &Path) -> std::process::Output {

@@ -1,7 +1,5 @@
 //! The swapchain's format rule, end to end in the window (Xvfb + lavapipe, which offers both kinds): an `_SRGB`
 //! swapchain, written as such, presents the same picture as a UNORM one — the 3D view and egui's panel.
-use std::process::Command;
-
 mod common;
 use common::*;
 
@@ -9,22 +7,25 @@ use common::*;
 fn capture(kind: &str) -> image::RgbImage {
     let dir = out_dir(&format!("swapchain-{kind}"));
     let shot = dir.join("window.png");
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        // Whole frames (no slices, whose share depends on the machine's load: the view differed by 1.3 levels
-        // in a loaded suite at 24 frames), so both runs end on the same frame of the still image.
-        .args(["view", "--size", "900x400", "--mode", "none", "--frames", "24"])
-        .arg("--no-auto-budget")
-        .arg("--screenshot-ui")
-        .arg(&shot)
-        .args(["--no-config", "--exit"])
-        .env("HRTAO_VALIDATION", "1")
-        .env("HRTAO_SWAPCHAIN_FORMAT", kind)
-        .env("RUST_LOG", "info,hrtao::view::present=debug")
-        .output()
-        .expect("run hrtao view");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(!stderr.contains("[vulkan"), "validation messages:\n{stderr}");
+    // Whole frames (no slices, whose share depends on the machine's load: the view differed by 1.3 levels
+    // in a loaded suite at 24 frames), so both runs end on the same frame of the still image.
+    let args = [
+        "--size",
+        "900x400",
+        "--mode",
+        "none",
+        "--frames",
+        "24",
+        "--no-auto-budget",
+    ];
+    let env = [
+        ("HRTAO_SWAPCHAIN_FORMAT", kind),
+        ("RUST_LOG", "info,hrtao::view::present=debug"),
+    ];
+    let stderr = scripted_run(
+        &[&args[..], &["--screenshot-ui", shot.to_str().unwrap()]].concat(),
+        &env,
+    );
     let want = if kind == "srgb" { "_SRGB" } else { "_UNORM" };
     assert!(
         stderr
@@ -57,7 +58,6 @@ fn mean_diff(
 
 #[test]
 fn an_srgb_swapchain_presents_what_a_unorm_one_does() {
-    let _display = display_lock();
     if !display_available() {
         return;
     }

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
+mod common;
 #[path = "../../scene/tests/common/threemf.rs"]
 mod threemf_writer;
 
@@ -60,22 +61,8 @@ fn box_on_plate() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
         ([-0.6, -0.6, 0.2], [0.6, 0.6, 1.4]),
     ] {
         let b = v.len() as u32;
-        for i in 0..8 {
-            let p = |k: usize, bit: usize| if i >> bit & 1 == 1 { hi[k] } else { lo[k] };
-            v.push([p(0, 0), p(1, 1), p(2, 2)]);
-        }
-        // Corner i has x from bit 0, y from bit 1, z from bit 2; faces wound outward.
-        for q in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            t.push([b + q[0], b + q[1], b + q[2]]);
-            t.push([b + q[0], b + q[2], b + q[3]]);
-        }
+        v.extend(hrtao_scene::box_corners(lo, hi));
+        t.extend(hrtao_scene::box_triangles().map(|f| f.map(|i| b + i)));
     }
     (v, t)
 }
@@ -232,14 +219,7 @@ fn model(dir: &Path, ext: &str) -> Option<PathBuf> {
                 );
                 return None;
             }
-            let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ifc/make_building.py");
-            let out = Command::new(python)
-                .arg(script)
-                .arg(&path)
-                .arg("3")
-                .output()
-                .unwrap();
-            assert!(out.status.success(), "make_building.py: {}", text(&out));
+            common::make_building(&python, &path, 3);
         }
         other => panic!("no test model of .{other}: add one here"),
     }
@@ -329,6 +309,28 @@ fn the_thumbnailer_line_previews_every_format() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A thumbnail run that gave up: it failed (with exit status `code` where given), saying `says`, within `limit` of
+/// `t0`, writing no PNG (`png`) and leaving no temporary file in `dir`, which is then removed.
+fn gave_up(
+    o: &Output,
+    code: Option<i32>,
+    says: &str,
+    (t0, limit): (Instant, Duration),
+    (dir, png): (&Path, &Path),
+) {
+    let took = t0.elapsed();
+    let t = text(o);
+    match code {
+        Some(c) => assert_eq!(o.status.code(), Some(c), "{t}"),
+        None => assert!(!o.status.success(), "{t}"),
+    }
+    assert!(t.contains(says), "{t}");
+    assert!(took < limit, "{took:?}");
+    assert!(!png.exists());
+    assert!(leftovers(dir).is_empty(), "{:?}", leftovers(dir));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn a_file_over_the_size_limit_gets_no_thumbnail() {
     let dir = tmp("too-big");
@@ -338,13 +340,13 @@ fn a_file_over_the_size_limit_gets_no_thumbnail() {
     let png = dir.join("big.png");
     let t0 = Instant::now();
     let o = exec_line(256, &big, &png).output().unwrap();
-    let t = text(&o);
-    assert!(!o.status.success(), "{t}");
-    assert!(t.contains("--max-file-mb"), "{t}");
-    assert!(t0.elapsed() < Duration::from_secs(10), "{:?}", t0.elapsed());
-    assert!(!png.exists());
-    assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
-    std::fs::remove_dir_all(&dir).unwrap();
+    gave_up(
+        &o,
+        None,
+        "--max-file-mb",
+        (t0, Duration::from_secs(10)),
+        (&dir, &png),
+    );
 }
 
 #[test]
@@ -360,12 +362,6 @@ fn a_render_over_the_time_limit_gets_no_thumbnail() {
         .arg(&png)
         .output()
         .unwrap();
-    let took = t0.elapsed();
-    let t = text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
-    assert!(t.contains("no thumbnail within 0.2 s (--timeout)"), "{t}");
-    assert!(took < Duration::from_secs(6), "{took:?}");
-    assert!(!png.exists());
-    assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
-    std::fs::remove_dir_all(&dir).unwrap();
+    let says = "no thumbnail within 0.2 s (--timeout)";
+    gave_up(&o, Some(1), says, (t0, Duration::from_secs(6)), (&dir, &png));
 }

@@ -30,27 +30,16 @@ fn render(scene: &Path, up: Option<&str>) -> Vec<f32> {
         "{}-{tag}.pfm",
         scene.file_name().unwrap().to_string_lossy()
     ));
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hrtao"));
-    cmd.args(["render", "--scene", scene.to_str().unwrap()])
-        .args([
-            "--width", "96", "--height", "54", "--mode", "rtao", "--rays", "4", "--frames", "1",
-        ])
-        // The primary visibility pinned: `auto` picks by a timing, and two runs under load may pick differently
-        // (raster and ray-query G-buffers differ in the last bits: MAE 0.0036 here).
-        .args(["--primary", "ray-query"])
-        .args(["--ao-out", pfm.to_str().unwrap()])
-        .env("HRTAO_VALIDATION", "1");
-    if let Some(u) = up {
-        cmd.arg(format!("--up={u}"));
-    }
-    let out = cmd.output().expect("run hrtao");
-    assert!(
-        out.status.success(),
-        "{} --up {up:?}: {}",
-        scene.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    hrtao_core::imageio::read_pfm(&pfm).unwrap().2
+    let up_arg = up.map(|u| format!("--up={u}"));
+    let mut args = vec!["--scene", scene.to_str().unwrap()];
+    args.extend([
+        "--width", "96", "--height", "54", "--mode", "rtao", "--rays", "4", "--frames", "1",
+    ]);
+    // The primary visibility pinned: `auto` picks by a timing, and two runs under load may pick differently
+    // (raster and ray-query G-buffers differ in the last bits: MAE 0.0036 here).
+    args.extend(["--primary", "ray-query"]);
+    args.extend(up_arg.as_deref());
+    common::render_ao_image(&args, &pfm, &format!("{} --up {up:?}", scene.display()))
 }
 
 fn mae(a: &[f32], b: &[f32]) -> f64 {
@@ -102,14 +91,7 @@ fn gltf_opens_y_up_and_3mf_z_up() {
 fn ifc_opens_z_up() {
     let Some(python) = python() else { return };
     let path = dir().join("building.ifc");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ifc/make_building.py");
-    let out = Command::new(&python)
-        .arg(script)
-        .arg(&path)
-        .arg("4")
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    common::make_building(&python, &path, 4);
     opens_upright(&path, "z", "y");
     // assimp's AC14-FZK-Haus (Debian's assimp-testmodels).
     let fzk = fzk_haus();

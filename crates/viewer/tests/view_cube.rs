@@ -157,7 +157,5 @@ fn clicking_the_cube_top_face_gives_the_top_view_and_properties_count_the_select
     let centre = (w as i32 / 2, h as i32 / 2);
     v.click_until(&window, centre, "selected instance 0", 1);
     v.wait_for("ui probe: properties: triangles = 12", 1, Duration::from_secs(30));
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }

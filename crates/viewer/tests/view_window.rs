@@ -5,24 +5,20 @@ use std::process::Command;
 
 mod common;
 use common::*;
+use glam::Vec3;
+use hrtao_core::Camera;
 
+/// The up direction of the Z-up test models.
+const Z_UP: [f32; 3] = [0.0, 0.0, 1.0];
+
+/// A scripted run (`common::scripted_view`) with `FRAMES_IN_FLIGHT`.
+fn scripted_view(args: &[&str]) -> std::process::Output {
+    common::scripted_view(args, &[("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)])
+}
+
+/// A scripted run with `FRAMES_IN_FLIGHT` that succeeds without validation messages.
 fn run_viewer(args: &[&str]) {
-    let _display = display_lock();
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .arg("view")
-        .args(args)
-        .args(["--no-config", "--exit"])
-        .env("HRTAO_VALIDATION", "1")
-        .env("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)
-        .output()
-        .expect("run hrtao view");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        out.status.success(),
-        "hrtao view failed ({}):\n{stderr}",
-        out.status
-    );
-    assert!(!stderr.contains("[vulkan"), "validation messages:\n{stderr}");
+    scripted_run(args, &[("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)]);
 }
 
 /// A JSON file the viewer wrote (`--stats`).
@@ -86,7 +82,6 @@ fn scripted_run_renders_and_saves_a_screenshot() {
 /// setting fails the scripted run.
 #[test]
 fn scripted_set_at_frame_applies_settings_as_the_panel_does() {
-    let _display = display_lock();
     if !display_available() {
         return;
     }
@@ -121,19 +116,15 @@ fn scripted_set_at_frame_applies_settings_as_the_panel_does() {
         moved > 0.9 && moved < 1.1,
         "radius 8 {narrow:.2}, 8 then 32 {changed:.2}, 32 {wide:.2}: moved {moved:.2} of the way"
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args([
-            "view",
-            "--no-config",
-            "--exit",
-            "--size",
-            "160x100",
-            "--frames",
-            "2",
-        ])
-        .args(["--set-at-frame", "1", r#"{"ao_radius": -1}"#])
-        .output()
-        .unwrap();
+    let out = scripted_view(&[
+        "--size",
+        "160x100",
+        "--frames",
+        "2",
+        "--set-at-frame",
+        "1",
+        r#"{"ao_radius": -1}"#,
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         !out.status.success() && stderr.contains("--set-at-frame 1"),
@@ -170,22 +161,10 @@ fn scripted_run_survives_a_resize() {
 
 #[test]
 fn a_bad_file_fails_cleanly_in_scripted_mode() {
-    let _display = display_lock();
     if !display_available() {
         return;
     }
-    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-        .args([
-            "view",
-            "/nonexistent/model.glb",
-            "--size",
-            "200x150",
-            "--frames",
-            "2",
-        ])
-        .args(["--no-config", "--exit"])
-        .output()
-        .expect("run hrtao view");
+    let out = scripted_view(&["/nonexistent/model.glb", "--size", "200x150", "--frames", "2"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "a missing file must fail the scripted run");
     assert!(stderr.contains("nonexistent"), "{stderr}");
@@ -195,7 +174,6 @@ fn a_bad_file_fails_cleanly_in_scripted_mode() {
 /// screen, nothing panics. Representative files of the hostile corpus (crates/scene/src/hostile.rs).
 #[test]
 fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
-    let _display = display_lock();
     if !display_available() {
         eprintln!("skipped: no DISPLAY (the test command runs under xvfb-run)");
         return;
@@ -212,25 +190,18 @@ fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
     ];
     for case in cases.iter().filter(|c| pick.contains(&c.name)) {
         let shot = dir.join(format!("{}.png", case.name));
-        let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-            .args([
-                "view",
-                "--size",
-                "320x200",
-                "--no-panel",
-                "--frames",
-                "3",
-                "--open-at-frame",
-                "1",
-            ])
-            .arg(&case.path)
-            .arg("--screenshot")
-            .arg(&shot)
-            .args(["--no-config", "--exit"])
-            .env("HRTAO_VALIDATION", "1")
-            .env("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)
-            .output()
-            .unwrap();
+        let out = scripted_view(&[
+            "--size",
+            "320x200",
+            "--no-panel",
+            "--frames",
+            "3",
+            "--open-at-frame",
+            "1",
+            case.path.to_str().unwrap(),
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!err.contains("panicked"), "{}: panic\n{err}", case.name);
         assert!(
@@ -250,29 +221,21 @@ fn hostile_files_opened_in_the_viewer_keep_the_previous_scene() {
 /// Screenshots to an unwritable place or a full disk give an error message and a clean exit status.
 #[test]
 fn screenshot_to_unwritable_or_full_destination_fails_cleanly() {
-    let _display = display_lock();
     if !display_available() {
         eprintln!("skipped: no DISPLAY (the test command runs under xvfb-run)");
         return;
     }
     // (The tests run as root, so "unwritable" is a path under a regular file.)
     for dest in ["/dev/null/shot.png", "/dev/full"] {
-        let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-            .args([
-                "view",
-                "--size",
-                "240x160",
-                "--no-panel",
-                "--frames",
-                "2",
-                "--screenshot",
-                dest,
-            ])
-            .args(["--no-config", "--exit"])
-            .env("HRTAO_VALIDATION", "1")
-            .env("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)
-            .output()
-            .unwrap();
+        let out = scripted_view(&[
+            "--size",
+            "240x160",
+            "--no-panel",
+            "--frames",
+            "2",
+            "--screenshot",
+            dest,
+        ]);
         failed_cleanly(dest, &out);
     }
 }
@@ -347,9 +310,7 @@ fn tab_and_quick_f12_taps_work_with_real_x_events() {
     xdotool(&["key", "--delay", "5", "Tab", "F12"]);
     let widths = wait_for_screenshots(&shots, 3, &mut v);
     assert_eq!(widths[2], 560, "{widths:?}");
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }
 
 /// Opening with the panel: the 3D view keeps one size from the first frame (the panel's width fits its content
@@ -610,14 +571,7 @@ fn key_5_toggles_orthographic_keeping_the_framing_at_the_pivot() {
             xdotool(&["key", key]);
         }
         wait_for_screenshots(&shots, i + 1, &mut v);
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&shots)
-            .unwrap()
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "png"))
-            .collect();
-        // Oldest first (names share the second: `MODEL-…-SS.png`, then `-2`, `-3`).
-        files.sort_by_key(|f| std::fs::metadata(f).and_then(|m| m.modified()).ok());
-        widths.push(foreground_width(&files[i]));
+        widths.push(foreground_width(&screenshots(&shots)[i]));
     }
     // Perspective: 2 units of the 2 * 10 * tan(20 deg) = 7.28 the view spans at the plane (88 px); orthographic:
     // the view spans the pivot depth's 3.64 units (176 px); back in perspective: 88 px again.
@@ -628,9 +582,15 @@ fn key_5_toggles_orthographic_keeping_the_framing_at_the_pivot() {
     assert!((84..=92).contains(&widths[0]), "{widths:?}");
     assert!((170..=182).contains(&widths[1]), "{widths:?}");
     assert!(widths[2].abs_diff(widths[0]) <= 2, "{widths:?}");
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
+}
+
+/// Pixels of a screenshot in the section colour (red).
+fn section_colour_pixels(png: &Path) -> usize {
+    let img = image::open(png).unwrap().to_rgb8();
+    img.pixels()
+        .filter(|p| p[0] as i32 > p[1] as i32 + 60 && p[0] as i32 > p[2] as i32 + 60)
+        .count()
 }
 
 #[test]
@@ -641,13 +601,7 @@ fn section_planes_from_the_command_line_cut_the_view() {
     let dir = out_dir("sections");
     // A closed 2 x 2 x 2 cube seen from above; cut at half height it shows its cap in the section colour.
     let obj = dir.join("cube.obj");
-    let mut s = String::new();
-    for i in 0..8 {
-        let c = |bit: usize| if i & bit == 0 { -1 } else { 1 };
-        s += &format!("v {} {} {}\n", c(1), c(2), c(4) + 1);
-    }
-    s += "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
-    std::fs::write(&obj, s).unwrap();
+    write_boxes_obj(&obj, &[("", [-1.0, -1.0, 0.0], [1.0, 1.0, 2.0])]);
     let cam = dir.join("cam.json");
     std::fs::write(
         &cam,
@@ -670,10 +624,7 @@ fn section_planes_from_the_command_line_cut_the_view() {
         ];
         args.extend_from_slice(sections);
         run_viewer(&args);
-        let img = image::open(&shot).unwrap().to_rgb8();
-        img.pixels()
-            .filter(|p| p[0] as i32 > p[1] as i32 + 60 && p[0] as i32 > p[2] as i32 + 60)
-            .count()
+        section_colour_pixels(&shot)
     };
     assert_eq!(red(&[], "whole.png"), 0, "no section colour without a plane");
     let cap = red(&["--section", "0,0,1,1"], "cut.png");
@@ -691,13 +642,7 @@ fn ctrl_shift_drag_moves_a_section_plane() {
     let _x = x_input_lock();
     let dir = out_dir("section-drag");
     let obj = dir.join("cube.obj");
-    let mut s = String::new();
-    for i in 0..8 {
-        let c = |bit: usize| if i & bit == 0 { -1 } else { 1 };
-        s += &format!("v {} {} {}\n", c(1), c(2), c(4) + 1);
-    }
-    s += "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
-    std::fs::write(&obj, s).unwrap();
+    write_boxes_obj(&obj, &[("", [-1.0, -1.0, 0.0], [1.0, 1.0, 2.0])]);
     let cam = dir.join("cam.json");
     std::fs::write(
         &cam,
@@ -720,23 +665,9 @@ fn ctrl_shift_drag_moves_a_section_plane() {
     );
     v.wait_for("opened", 1, std::time::Duration::from_secs(60));
     let window = v.focus_window();
-    let red = |path: &Path| {
-        let img = image::open(path).unwrap().to_rgb8();
-        img.pixels()
-            .filter(|p| p[0] as i32 > p[1] as i32 + 60 && p[0] as i32 > p[2] as i32 + 60)
-            .count()
-    };
-    let newest = |n: usize| {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&shots)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .collect();
-        files.sort_by_key(|f| std::fs::metadata(f).and_then(|m| m.modified()).ok());
-        files[n - 1].clone()
-    };
     xdotool(&["key", "F12"]);
     wait_for_screenshots(&shots, 1, &mut v);
-    let before = red(&newest(1));
+    let before = section_colour_pixels(&screenshots(&shots)[0]);
     assert!(before > 1000, "the cap shows before the drag: {before}");
     xdotool(&["mousemove", "--window", &window, "200", "200"]);
     xdotool(&["keydown", "ctrl+shift"]);
@@ -750,40 +681,24 @@ fn ctrl_shift_drag_moves_a_section_plane() {
     v.wait_for("section planes:", 1, std::time::Duration::from_secs(30));
     xdotool(&["key", "F12"]);
     wait_for_screenshots(&shots, 2, &mut v);
-    let after = red(&newest(2));
+    let after = section_colour_pixels(&screenshots(&shots)[1]);
     assert_eq!(
         after, 0,
         "the plane went up out of the cube: no cap left ({before} before)"
     );
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }
 
-/// The pixel (row 0 at the top) where a world point appears for a pinhole camera (eye, target, up, fov).
-/// A viewer (no panel) on `model` through a perspective camera of `size` pixels, once its image is at rest.
-fn start_at_rest(
-    model: &std::path::Path,
-    dir: &std::path::Path,
-    eye: [f32; 3],
-    target: [f32; 3],
-    up: [f32; 3],
-    fov: f32,
-    (w, h): (u32, u32),
-) -> Running {
-    let cam = dir.join("cam.json");
-    std::fs::write(
-        &cam,
-        format!(
-            r#"{{"eye":{eye:?},"target":{target:?},"up":{up:?},"fov_y_deg":{fov},"width":{w},"height":{h}}}"#
-        ),
-    )
-    .unwrap();
-    let size = format!("{w}x{h}");
+/// A viewer (no panel) on `model` through the perspective camera `cam` (its size the window's), once its image is
+/// at rest.
+fn start_at_rest(model: &Path, dir: &Path, cam: &Camera) -> Running {
+    let cam_file = dir.join("cam.json");
+    std::fs::write(&cam_file, serde_json::to_string(cam).unwrap()).unwrap();
+    let size = format!("{}x{}", cam.width, cam.height);
     let args = [
         model.to_str().unwrap(),
         "--camera",
-        cam.to_str().unwrap(),
+        cam_file.to_str().unwrap(),
         "--size",
         &size,
         "--no-panel",
@@ -793,38 +708,16 @@ fn start_at_rest(
     v
 }
 
-fn pixel_of(
-    eye: [f32; 3],
-    target: [f32; 3],
-    up: [f32; 3],
-    fov_deg: f32,
-    w: u32,
-    h: u32,
-    p: [f32; 3],
-) -> (i32, i32) {
-    let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let cross = |a: [f32; 3], b: [f32; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let norm = |a: [f32; 3]| {
-        let l = dot(a, a).sqrt();
-        [a[0] / l, a[1] / l, a[2] / l]
-    };
-    let fwd = norm(sub(target, eye));
-    let right = norm(cross(fwd, up));
-    let cam_up = cross(right, fwd);
-    let d = sub(p, eye);
-    let t = (fov_deg.to_radians() * 0.5).tan();
-    let nx = dot(d, right) / (dot(d, fwd) * t * w as f32 / h as f32);
-    let ny = dot(d, cam_up) / (dot(d, fwd) * t);
+/// The pixel (row 0 at the top) where the world point `p` appears through the perspective camera `cam`.
+fn pixel_of(cam: &Camera, p: [f32; 3]) -> (i32, i32) {
+    let f = cam.frame();
+    let d = Vec3::from(p) - f.eye;
+    let depth = d.dot(f.w);
+    let nx = d.dot(f.u) / f.u.length_squared() / depth;
+    let ny = d.dot(f.v) / f.v.length_squared() / depth;
     (
-        ((nx + 1.0) * 0.5 * w as f32) as i32,
-        ((1.0 - ny) * 0.5 * h as f32) as i32,
+        ((nx + 1.0) * 0.5 * cam.width as f32) as i32,
+        ((1.0 - ny) * 0.5 * cam.height as f32) as i32,
     )
 }
 
@@ -839,26 +732,18 @@ fn measuring_two_clicked_points_on_a_known_box() {
     let dir = out_dir("measure");
     let stl = dir.join("box.stl");
     write_box_stl(&stl, [0.0; 3], [40.0, 20.0, 10.0]);
-    let (eye, target, up, fov, w, h) = (
-        [20.0, -30.0, 60.0],
-        [20.0, 10.0, 10.0],
-        [0.0, 0.0, 1.0],
-        45.0,
-        560,
-        300,
-    );
-    let mut v = start_at_rest(&stl, &dir, eye, target, up, fov, (w, h));
+    let cam = Camera::perspective([20.0, -30.0, 60.0], [20.0, 10.0, 10.0], Z_UP, 45.0, (560, 300));
+    let mut v = start_at_rest(&stl, &dir, &cam);
     let window = v.focus_window();
     xdotool(&["key", "m"]);
     v.wait_for("measure mode on", 1, std::time::Duration::from_secs(30));
     let (a, b) = ([5.0f32, 5.0, 10.0], [35.0f32, 15.0, 10.0]);
     for (i, p) in [a, b].into_iter().enumerate() {
-        let at = pixel_of(eye, target, up, fov, w, h, p);
+        let at = pixel_of(&cam, p);
         v.click_until(&window, at, &format!("measure point {} picked", i + 1), 1);
     }
     v.wait_for("measured distance", 1, std::time::Duration::from_secs(30));
-    let log = v.log_text();
-    let line = log.lines().find(|l| l.contains("measured distance")).unwrap();
+    let line = v.log_line("measured distance");
     let value: f64 = line
         .split("measured distance ")
         .nth(1)
@@ -876,11 +761,9 @@ fn measuring_two_clicked_points_on_a_known_box() {
     // (Wait for the key to act: on a busy machine a key and a click can land in one frame.)
     xdotool(&["key", "m"]);
     v.wait_for("measure mode off", 1, std::time::Duration::from_secs(30));
-    let at = pixel_of(eye, target, up, fov, w, h, [20.0, 10.0, 10.0]);
+    let at = pixel_of(&cam, [20.0, 10.0, 10.0]);
     v.click_until(&window, at, "selected instance 0 (tree: box)", 1);
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }
 
 /// A screenshot larger than the window renders in the background (tiles, each until converged) while the window
@@ -972,14 +855,17 @@ fn a_big_screenshot_renders_in_the_background_while_the_window_draws() {
     // An unwritable folder fails at once; a full disk once the image is rendered (on the writer thread).
     for (dest, size) in [("/dev/null/big.png", "3840x2160"), ("/dev/full", "64x40")] {
         let t0 = std::time::Instant::now();
-        let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
-            .args(["view", "--size", "160x100", "--no-panel", "--frames", "1"])
-            .args(["--screenshot", dest, "--screenshot-size", size])
-            .args(["--no-config", "--exit"])
-            .env("HRTAO_VALIDATION", "1")
-            .env("HRTAO_FRAMES_IN_FLIGHT", FRAMES_IN_FLIGHT)
-            .output()
-            .unwrap();
+        let out = scripted_view(&[
+            "--size",
+            "160x100",
+            "--no-panel",
+            "--frames",
+            "1",
+            "--screenshot",
+            dest,
+            "--screenshot-size",
+            size,
+        ]);
         println!("{dest}: failed in {:.1} s", t0.elapsed().as_secs_f64());
         failed_cleanly(dest, &out);
     }
@@ -988,37 +874,7 @@ fn a_big_screenshot_renders_in_the_background_while_the_window_draws() {
 
 /// Writes an OBJ of axis-aligned boxes, one object each: (name, min, max).
 fn write_boxes_obj(path: &Path, boxes: &[(&str, [f32; 3], [f32; 3])]) {
-    let mut s = String::new();
-    for (k, (name, min, max)) in boxes.iter().enumerate() {
-        s += &format!("o {name}\n");
-        for i in 0..8 {
-            let pick = |bit: usize, a: f32, b: f32| if i & bit == 0 { a } else { b };
-            s += &format!(
-                "v {} {} {}\n",
-                pick(1, min[0], max[0]),
-                pick(2, min[1], max[1]),
-                pick(4, min[2], max[2])
-            );
-        }
-        let base = 8 * k + 1;
-        for q in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            s += &format!(
-                "f {} {} {} {}\n",
-                base + q[0],
-                base + q[1],
-                base + q[2],
-                base + q[3]
-            );
-        }
-    }
-    std::fs::write(path, s).unwrap();
+    std::fs::write(path, common::boxes_obj(boxes, 0)).unwrap();
 }
 
 /// A floor and two 10-unit boxes ("left" at x 0..10, "right" at x 20..30) seen from the front and above, the
@@ -1033,18 +889,11 @@ fn two_boxes_at_rest(dir: &Path) -> (Running, String, (i32, i32), (i32, i32)) {
             ("right", [20.0, 0.0, 0.0], [30.0, 10.0, 10.0]),
         ],
     );
-    let (eye, target, up, fov, w, h) = (
-        [15.0, -35.0, 45.0],
-        [15.0, 5.0, 5.0],
-        [0.0, 0.0, 1.0],
-        45.0,
-        320,
-        200,
-    );
-    let v = start_at_rest(&obj, dir, eye, target, up, fov, (w, h));
+    let cam = Camera::perspective([15.0, -35.0, 45.0], [15.0, 5.0, 5.0], Z_UP, 45.0, (320, 200));
+    let v = start_at_rest(&obj, dir, &cam);
     let window = v.focus_window();
-    let left = pixel_of(eye, target, up, fov, w, h, [5.0, 5.0, 10.0]);
-    let right = pixel_of(eye, target, up, fov, w, h, [25.0, 5.0, 10.0]);
+    let left = pixel_of(&cam, [5.0, 5.0, 10.0]);
+    let right = pixel_of(&cam, [25.0, 5.0, 10.0]);
     (v, window, left, right)
 }
 
@@ -1072,23 +921,19 @@ fn shift_click_two_parts_delete_both_and_one_undo_restores_them() {
         1,
         std::time::Duration::from_secs(30),
     );
-    let log = v.log_text();
-    let line = |needle: &str| log.lines().find(|l| l.contains(needle)).unwrap().to_string();
-    let deleted = line("edit: delete (2 instances)");
+    let deleted = v.log_line("edit: delete (2 instances)");
     assert!(
         deleted.ends_with(", 1 instances"),
         "both boxes are gone: {deleted}"
     );
-    let undone = line("edit: undo delete (2 instances)");
+    let undone = v.log_line("edit: undo delete (2 instances)");
     assert!(
         undone.ends_with(", 3 instances"),
         "one undo brings both back: {undone}"
     );
     // The boxes are back where they were: a click on the right one selects it again.
     v.click_until(&window, right, "(tree: right)", 1);
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }
 
 /// The Open… dialog with real X input: with no desktop portal (no D-Bus session here), rfd falls back to zenity;
@@ -1140,9 +985,7 @@ fn the_open_dialog_loads_a_typed_path_through_zenity() {
         1,
         std::time::Duration::from_secs(60),
     );
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }
 
 /// A desktop launch: `hrtao FILE` (no command, as `Exec=hrtao %f` runs it) from `/`, with HOME and the pictures
@@ -1215,9 +1058,7 @@ fn f12_from_a_desktop_launch_saves_into_the_pictures_directory() {
         root_before, root_after,
         "nothing written in the working directory /"
     );
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }
 
 /// Real X keys: with an instance selected, F frames it (the pivot moves to its centre); Ctrl+Q then quits with
@@ -1233,29 +1074,15 @@ fn f_frames_the_selection_and_ctrl_q_quits() {
     v.click_until(&window, right, "(tree: right)", 1);
     xdotool(&["key", "f"]);
     v.wait_for("framed the selection", 1, std::time::Duration::from_secs(30));
-    let log = v.log_text();
-    let line = log.lines().find(|l| l.contains("framed the selection")).unwrap();
+    let line = v.log_line("framed the selection");
     assert!(
         line.ends_with("framed the selection: 1 instances, centre [25.0, 5.0, 5.0]"),
         "F frames the right box only: {line}"
     );
     xdotool(&["key", "ctrl+q"]);
-    let t0 = std::time::Instant::now();
-    let status = loop {
-        if let Some(status) = v.child.try_wait().unwrap() {
-            break status;
-        }
-        assert!(
-            t0.elapsed() < std::time::Duration::from_secs(30),
-            "still running 30 s after Ctrl+Q:\n{}",
-            v.log_text()
-        );
-        std::thread::sleep(std::time::Duration::from_millis(100));
-    };
+    let status = v.wait_exit(std::time::Duration::from_secs(30));
     assert!(status.success(), "{status}:\n{}", v.log_text());
     std::thread::sleep(std::time::Duration::from_millis(300));
     assert!(v.log_text().contains("quit (Ctrl+Q)"), "{}", v.log_text());
-    v.validation_clean();
-    drop(v);
-    let _ = std::fs::remove_dir_all(&dir);
+    v.finish(&dir);
 }

@@ -68,13 +68,11 @@ pub fn assert_clean(gpu: &Gpu) {
 /// An axis-aligned quad as a mesh: centre, two half-extent edge vectors.
 pub fn quad(center: Vec3, a: Vec3, b: Vec3) -> Primitive {
     let p = [center - a - b, center + a - b, center + a + b, center - a + b];
-    Primitive {
-        positions: p.iter().map(|v| v.to_array()).collect(),
-        indices: vec![0, 1, 2, 0, 2, 3],
-        base_color: [0.8, 0.8, 0.8, 1.0],
-        double_sided: true,
-        normals: Vec::new(),
-    }
+    Primitive::new(
+        p.iter().map(|v| v.to_array()).collect(),
+        vec![0, 1, 2, 0, 2, 3],
+        [0.8, 0.8, 0.8, 1.0],
+    )
 }
 
 /// A closed axis-aligned box of half extents `h` centred at the origin.
@@ -95,13 +93,7 @@ pub fn cube(h: Vec3) -> Primitive {
         positions.extend(q.positions);
         indices.extend(q.indices.iter().map(|i| i + base));
     }
-    Primitive {
-        positions,
-        indices,
-        base_color: [0.8, 0.8, 0.8, 1.0],
-        double_sided: true,
-        normals: Vec::new(),
-    }
+    Primitive::new(positions, indices, [0.8, 0.8, 0.8, 1.0])
 }
 
 /// `floor` (instance 0) with `n` 2 x 2 x 2 blocks (instances 1..=n) standing on it in a row along x, `spacing`
@@ -122,6 +114,27 @@ pub fn row_of_blocks(floor: Primitive, n: u32, spacing: f32) -> Scene {
         });
     }
     s
+}
+
+/// `floor()` (instance 0) and a part on it (`add_part`).
+pub fn floor_with_part(name: &str, primitives: Vec<Primitive>, at: Vec3) -> Scene {
+    let mut scene = scene_of(vec![floor()]);
+    add_part(&mut scene, name, primitives, at);
+    scene
+}
+
+/// Adds a part to `scene`: a mesh `name` of `primitives` and one visible instance of it moved by `at`.
+pub fn add_part(scene: &mut Scene, name: &str, primitives: Vec<Primitive>, at: Vec3) {
+    scene.meshes.push(Mesh {
+        name: name.into(),
+        primitives,
+    });
+    scene.instances.push(Instance {
+        mesh: scene.meshes.len() as u32 - 1,
+        transform: Mat4::from_translation(at),
+        name: name.into(),
+        visible: true,
+    });
 }
 
 pub fn scene_of(prims: Vec<Primitive>) -> Scene {
@@ -145,15 +158,7 @@ pub fn floor() -> Primitive {
 }
 
 pub fn top_down_camera(height: f32, w: u32, h: u32) -> Camera {
-    Camera {
-        eye: [0.0, 0.0, height],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov_y_deg: 60.0,
-        width: w,
-        height: h,
-        ..Default::default()
-    }
+    Camera::perspective([0.0, 0.0, height], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 60.0, (w, h))
 }
 
 pub fn rtao(rays: u32, radius: f32) -> AoSettings {
@@ -354,6 +359,23 @@ pub fn shared_scene(key: &str, w: u32, h: u32) -> (Scene, Camera, f32) {
     .unwrap();
     let cam = Camera::load(&testdata(&format!("refs/{key}_{w}x{h}.camera.json"))).unwrap();
     (scene, cam, entry["radius"].as_f64().unwrap() as f32)
+}
+
+/// A scene and its camera on a device: the device, the scene, the camera and the scene's acceleration structures
+/// (dropped before the device).
+pub fn on_gpu((scene, cam): (Scene, Camera)) -> (Arc<Gpu>, Scene, Camera, SceneGpu) {
+    let gpu = gpu();
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    (gpu, scene, cam, sg)
+}
+
+/// `shared_scene(key, w, h)` on a device: the device, the scene, its camera and AO radius, and the scene's
+/// acceleration structures (dropped before the device).
+pub fn shared_scene_gpu(key: &str, w: u32, h: u32) -> (Arc<Gpu>, Scene, Camera, f32, SceneGpu) {
+    let gpu = gpu();
+    let (scene, cam, radius) = shared_scene(key, w, h);
+    let sg = SceneGpu::new(&gpu, &scene).unwrap();
+    (gpu, scene, cam, radius, sg)
 }
 
 /// The Blender Cycles AO reference of a view (`testdata/refs/KEY_WxH.cycles.exr`, R = G = B = AO, row 0 at the
@@ -577,15 +599,17 @@ pub fn check_map(
 
 /// A perspective camera with z up and a 50° vertical field of view, `width`×`height` pixels.
 pub fn z_up_camera(eye: [f32; 3], target: [f32; 3], width: u32, height: u32) -> Camera {
-    Camera {
-        eye,
-        target,
-        up: [0.0, 0.0, 1.0],
-        fov_y_deg: 50.0,
-        width,
-        height,
-        ..Camera::default()
-    }
+    z_up_camera_fov(eye, target, 50.0, (width, height))
+}
+
+/// A perspective camera with z up and a vertical field of view of `fov_y_deg`, `width`×`height` pixels.
+pub fn z_up_camera_fov(
+    eye: [f32; 3],
+    target: [f32; 3],
+    fov_y_deg: f32,
+    (width, height): (u32, u32),
+) -> Camera {
+    Camera::perspective(eye, target, [0.0, 0.0, 1.0], fov_y_deg, (width, height))
 }
 
 /// The bundled scene (`assets/default.glb`) and its camera (`assets/default.camera.json`) at `w` x `h`.
@@ -598,6 +622,32 @@ pub fn bundled(w: u32, h: u32) -> (Scene, Camera) {
         ..Camera::load(&assets.join("default.camera.json")).unwrap()
     };
     (scene, cam)
+}
+
+/// The pass-image sequence on `cam`: frames 1 to 3 still, then two of a small orbit (a new view each: navigation
+/// over a settled map), each tracing rays; `after` sees each frame's renderer (frame index from 0). The AO of
+/// frames 1, 3 and 5.
+pub fn five_frames(
+    r: &mut Headless,
+    sg: &SceneGpu,
+    scene: &Scene,
+    cam: &Camera,
+    mut after: impl FnMut(u32, &mut Headless),
+) -> Vec<Vec<f32>> {
+    let mut out = Vec::new();
+    for i in 0..5u32 {
+        let mut c = *cam;
+        if i >= 3 {
+            c.eye[0] += 0.5 * (i - 2) as f32;
+        }
+        let report = r.render(sg, scene.f(), &c).unwrap();
+        assert!(report.rays > 0, "frame {i} traced rays");
+        after(i, r);
+        if matches!(i, 0 | 2 | 4) {
+            out.push(r.read_ao().unwrap());
+        }
+    }
+    out
 }
 
 /// Surface pixels of the floor (instance 0) next to where block `part` stood: within `ring` of its old box,
@@ -621,6 +671,46 @@ pub fn ring_pixels(r: &Headless, bounds: hrtao_scene::Aabb, ring: f32) -> Vec<us
 #[allow(dead_code)]
 pub fn mean_at(img: &[f32], px: &[usize]) -> f32 {
     px.iter().map(|&i| img[i]).sum::<f32>() / px.len().max(1) as f32
+}
+
+/// Hides instance `part` of `scene` (a local edit; `sg` follows): the floor pixels around where it stood in `r`'s
+/// last frame (`ring_pixels`, 0.6 wide) and their mean AO before the edit.
+pub fn remove_part(r: &Headless, scene: &mut Scene, sg: &mut SceneGpu, part: u32) -> (Vec<usize>, f32) {
+    let ring = ring_pixels(r, scene.instance_bounds(part), 0.6);
+    let with_part = mean_at(&r.read_ao().unwrap(), &ring);
+    scene.set_visible(part, false).unwrap();
+    sg.update_instances(scene, u32::MAX).unwrap();
+    (ring, with_part)
+}
+
+/// The mean AO over the pixels `px` of `r`'s last frame, and of a fresh render of `scene` (`frames` frames of
+/// `settings`): after an edit, what the edited scene shows against what it shows from scratch.
+pub fn mean_against_fresh(
+    r: &Headless,
+    gpu: &Arc<Gpu>,
+    (scene, cam): (&Scene, &Camera),
+    (settings, frames): (AoSettings, u32),
+    px: &[usize],
+) -> (f32, f32) {
+    let after = mean_at(&r.read_ao().unwrap(), px);
+    let (fresh, _sg) = render(gpu, scene, cam, settings, frames);
+    (after, mean_at(&fresh.read_ao().unwrap(), px))
+}
+
+/// Prints the mean AO of the `ring` floor pixels by a removed block: `with_part` before the removal, `after` it
+/// (`when`), `expected` of a fresh render without the block; asserts there are more than `min_pixels` of them
+/// and the block cast a contact shadow there (`with_part` at least 0.1 darker than `expected`).
+pub fn check_contact_shadow(
+    ring: usize,
+    (with_part, after, expected): (f32, f32, f32),
+    when: &str,
+    min_pixels: usize,
+) {
+    eprintln!(
+        "{ring} floor pixels by the removed block: AO {with_part:.3} with it, {after:.3} {when}, {expected:.3} fresh"
+    );
+    assert!(ring > min_pixels, "{ring}");
+    assert!(with_part < expected - 0.1, "the block cast a contact shadow");
 }
 
 /// AO on a floor at distance `d` from an infinite wall rising from it (a 90° wedge), radius `r`:

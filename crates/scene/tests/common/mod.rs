@@ -43,6 +43,21 @@ pub fn split_glb(glb: &Path, dir: &Path, stem: &str) -> PathBuf {
     path
 }
 
+/// The folder a fetch script of the repository (`scripts/SCRIPT`: Debian packages unpacked into target/) prints;
+/// `needs` says what it needs when it fails.
+pub fn fetched_data(script: &str, needs: &str) -> PathBuf {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scripts")
+        .join(script);
+    let out = std::process::Command::new("bash").arg(path).output().unwrap();
+    assert!(
+        out.status.success(),
+        "scripts/{script} failed (it needs {needs}):\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
+}
+
 /// A fresh, unique temporary directory for one test.
 pub fn temp_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("hrtao-scene-test-{}-{tag}", std::process::id()));
@@ -126,3 +141,106 @@ pub fn write_gltf(
 }
 
 pub const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+/// A capped cylinder along z (z from -1 to 1) whose side is the curve (a cos θ, b sin θ) over `segments` steps,
+/// wound counter-clockwise seen from outside: its positions, the exact normal of each vertex (the curve's on the
+/// side, ±z on the caps, which have their own rim vertices) and its triangles.
+#[allow(clippy::type_complexity)]
+pub fn cylinder(segments: u32, a: f32, b: f32) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
+    let (mut p, mut n, mut ix) = (Vec::new(), Vec::new(), Vec::new());
+    let ring = |k: u32| {
+        let t = std::f32::consts::TAU * k as f32 / segments as f32;
+        let (nx, ny) = (t.cos() / a, t.sin() / b);
+        let l = nx.hypot(ny);
+        (a * t.cos(), b * t.sin(), [nx / l, ny / l, 0.0])
+    };
+    // Side: two vertices per step.
+    for k in 0..segments {
+        let (x, y, normal) = ring(k);
+        p.extend([[x, y, -1.0], [x, y, 1.0]]);
+        n.extend([normal, normal]);
+    }
+    for k in 0..segments {
+        let (i, j) = (2 * k, 2 * ((k + 1) % segments));
+        ix.extend([i, j, j + 1, i, j + 1, i + 1]);
+    }
+    // Caps: a centre and a ring each.
+    for z in [-1.0f32, 1.0] {
+        let centre = p.len() as u32;
+        p.push([0.0, 0.0, z]);
+        n.push([0.0, 0.0, z]);
+        for k in 0..segments {
+            let (x, y, _) = ring(k);
+            p.push([x, y, z]);
+            n.push([0.0, 0.0, z]);
+        }
+        for k in 0..segments {
+            let (i, j) = (centre + 1 + k, centre + 1 + (k + 1) % segments);
+            ix.extend(if z > 0.0 { [centre, i, j] } else { [centre, j, i] });
+        }
+    }
+    (p, n, ix)
+}
+
+/// Pixels of a `w`-wide image at least 3 pixels from every silhouette of all the masks given (covered in all).
+pub fn interior(masks: &[&[bool]], w: usize) -> Vec<bool> {
+    let (w, h) = (w as i32, (masks[0].len() / w) as i32);
+    let covered =
+        |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && masks.iter().all(|m| m[(y * w + x) as usize]);
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| (-3..=3).all(|dy| (-3..=3).all(|dx| covered(x + dx, y + dy))))
+        .collect()
+}
+
+/// The mean absolute difference of `a` and `b` inside `mask` (over 10,000 pixels).
+pub fn mae(a: &[f32], b: &[f32], mask: &[bool]) -> f32 {
+    let (sum, n) = a
+        .iter()
+        .zip(b)
+        .zip(mask)
+        .filter(|(_, &m)| m)
+        .fold((0.0f64, 0usize), |(s, n), ((x, y), _)| {
+            (s + (x - y).abs() as f64, n + 1)
+        });
+    assert!(n > 10_000, "only {n} pixels to compare");
+    (sum / n as f64) as f32
+}
+
+/// The 99th percentile of the luminance step between horizontal neighbours inside `mask` (rows `w` wide).
+pub fn step_p99(lum: &[f32], mask: &[bool], w: usize) -> f32 {
+    let mut steps: Vec<f32> = (0..lum.len() - 1)
+        .filter(|&i| (i + 1) % w != 0 && mask[i] && mask[i + 1])
+        .map(|i| (lum[i + 1] - lum[i]).abs())
+        .collect();
+    steps.sort_by(f32::total_cmp);
+    steps[steps.len() * 99 / 100]
+}
+
+/// The facet measure of issue #45 on three shadings (luminance, coverage) of `w`-wide images of the cylinder: 384
+/// segments, 12 with normals, 12 with face normals. The 12 segments with normals shade within MAE 0.01 of the
+/// 384 and have no facet steps (p99 of the horizontal step ≤ 0.015); with face normals they are ≥ 3x further
+/// off. Returns the p99 step of the face normals.
+pub fn facet_measure(
+    what: &str,
+    fine: &(Vec<f32>, Vec<bool>),
+    smooth: &(Vec<f32>, Vec<bool>),
+    flat: &(Vec<f32>, Vec<bool>),
+    w: usize,
+) -> f32 {
+    let mask = interior(&[&fine.1, &smooth.1, &flat.1], w);
+    let (e_smooth, e_flat) = (mae(&smooth.0, &fine.0, &mask), mae(&flat.0, &fine.0, &mask));
+    let (p_smooth, p_fine, p_flat) = (
+        step_p99(&smooth.0, &mask, w),
+        step_p99(&fine.0, &mask, w),
+        step_p99(&flat.0, &mask, w),
+    );
+    eprintln!(
+        "{what}: MAE to 384 segments: normals {e_smooth:.4}, face normals {e_flat:.4}; p99 step: normals \
+         {p_smooth:.4}, 384 segments {p_fine:.4}, face normals {p_flat:.4}"
+    );
+    assert!(e_smooth <= 0.01, "{what}: {e_smooth}");
+    assert!(e_flat >= 3.0 * e_smooth, "{what}: {e_flat} vs {e_smooth}");
+    assert!(p_smooth <= 0.015, "{what}: facet steps {p_smooth}");
+    p_flat
+}

@@ -7,8 +7,9 @@ use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
+use hrtao_core::barrier::{color_image_barrier, memory_barrier, record, COLOR_LAYERS, COLOR_RANGE};
 use hrtao_core::Gpu;
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
@@ -315,31 +316,13 @@ impl Presenter {
         self.destroy_internal();
         let gpu = self.gpu.clone();
         unsafe {
-            let image = gpu.device.create_image(
-                &vk::ImageCreateInfo::default()
-                    .image_type(vk::ImageType::TYPE_2D)
-                    .format(self.internal_format())
-                    .extent(vk::Extent3D {
-                        width,
-                        height,
-                        depth: 1,
-                    })
-                    .mip_levels(1)
-                    .array_layers(1)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .tiling(vk::ImageTiling::OPTIMAL)
-                    .usage(vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC)
-                    .initial_layout(vk::ImageLayout::UNDEFINED),
-                None,
-            )?;
+            let usage = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
+            let info = hrtao_core::buffer::image_2d_info(self.internal_format(), usage, (width, height));
+            let image = gpu.device.create_image(&info, None)?;
             let requirements = gpu.device.get_image_memory_requirements(image);
-            let allocation = gpu.allocator().allocate(&AllocationCreateDesc {
-                name: "viewer internal image",
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
+            let name = "viewer internal image";
+            let allocation =
+                hrtao_core::buffer::allocate(&gpu, name, requirements, MemoryLocation::GpuOnly, false);
             let allocation = match allocation {
                 Ok(a) => a,
                 Err(e) => {
@@ -384,59 +367,36 @@ impl Presenter {
     ) {
         let d = &self.gpu.device;
         let target = self.images[index as usize];
-        let range = vk::ImageSubresourceRange {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            base_mip_level: 0,
-            level_count: 1,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
-        let layers = vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
-        let barrier = |image, old, new, src_access, dst_access| {
-            vk::ImageMemoryBarrier::default()
-                .image(image)
-                .old_layout(old)
-                .new_layout(new)
-                .src_access_mask(src_access)
-                .dst_access_mask(dst_access)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .subresource_range(range)
-        };
+        let layers = COLOR_LAYERS;
+        let transfer = (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::TRANSFER);
+        let to_transfer_dst = (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
         unsafe {
             // The renderer's compute writes → transfer reads of the output buffer.
-            let mem = [vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE)];
-            let mut images = vec![barrier(
+            let mem = [memory_barrier(
+                vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE,
+                vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE,
+            )];
+            let mut images = vec![color_image_barrier(
                 target,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                to_transfer_dst,
                 vk::AccessFlags::empty(),
                 vk::AccessFlags::TRANSFER_WRITE,
             )];
             let internal = self.internal.as_ref().filter(|_| self.blit_ok);
             if let (Some(_), Some(i)) = (src, internal) {
-                images.push(barrier(
+                images.push(color_image_barrier(
                     i.image,
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    to_transfer_dst,
                     vk::AccessFlags::TRANSFER_READ,
                     vk::AccessFlags::TRANSFER_WRITE,
                 ));
             }
-            d.cmd_pipeline_barrier(
+            let after_compute = vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER;
+            record(
+                d,
                 cmd,
-                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::DependencyFlags::empty(),
+                (after_compute, vk::PipelineStageFlags::TRANSFER),
                 &mem,
-                &[],
                 &images,
             );
             let color = vk::ClearColorValue { float32: clear };
@@ -445,20 +405,13 @@ impl Presenter {
                 target,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &color,
-                &[range],
+                &[COLOR_RANGE],
             );
-            let after_clear = [vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ)];
-            d.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::DependencyFlags::empty(),
-                &after_clear,
-                &[],
-                &[],
-            );
+            let after_clear = [memory_barrier(
+                vk::AccessFlags::TRANSFER_WRITE,
+                vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ,
+            )];
+            record(d, cmd, transfer, &after_clear, &[]);
             if let Some((buffer, w, h)) = src {
                 let copy = || vk::BufferImageCopy {
                     buffer_offset: 0,
@@ -481,22 +434,16 @@ impl Presenter {
                             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                             &[copy()],
                         );
-                        let b = [barrier(
+                        let b = [color_image_barrier(
                             i.image,
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            (
+                                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            ),
                             vk::AccessFlags::TRANSFER_WRITE,
                             vk::AccessFlags::TRANSFER_READ,
                         )];
-                        d.cmd_pipeline_barrier(
-                            cmd,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::DependencyFlags::empty(),
-                            &[],
-                            &[],
-                            &b,
-                        );
+                        record(d, cmd, transfer, &[], &b);
                         let blit = vk::ImageBlit {
                             src_subresource: layers,
                             src_offsets: [
@@ -559,22 +506,20 @@ impl Presenter {
                     }
                 }
             }
-            let b = [barrier(
+            let b = [color_image_barrier(
                 target,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                (
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                ),
                 vk::AccessFlags::TRANSFER_WRITE,
                 vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
             )];
-            d.cmd_pipeline_barrier(
-                cmd,
+            let to_egui = (
                 vk::PipelineStageFlags::TRANSFER,
                 vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &b,
             );
+            record(d, cmd, to_egui, &[], &b);
         }
     }
 
@@ -582,39 +527,22 @@ impl Presenter {
     pub fn record_readback(&self, cmd: vk::CommandBuffer, index: u32, buffer: vk::Buffer) {
         let d = &self.gpu.device;
         let image = self.images[index as usize];
-        let range = vk::ImageSubresourceRange {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            base_mip_level: 0,
-            level_count: 1,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
-        let b = |old, new, sa, da| {
-            [vk::ImageMemoryBarrier::default()
-                .image(image)
-                .old_layout(old)
-                .new_layout(new)
-                .src_access_mask(sa)
-                .dst_access_mask(da)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .subresource_range(range)]
-        };
+        let present_to_copy = (
+            vk::ImageLayout::PRESENT_SRC_KHR,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        );
         unsafe {
-            d.cmd_pipeline_barrier(
-                cmd,
+            let b = [color_image_barrier(
+                image,
+                present_to_copy,
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                vk::AccessFlags::TRANSFER_READ,
+            )];
+            let stages = (
                 vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
                 vk::PipelineStageFlags::TRANSFER,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &b(
-                    vk::ImageLayout::PRESENT_SRC_KHR,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                    vk::AccessFlags::TRANSFER_READ,
-                ),
             );
+            record(d, cmd, stages, &[], &b);
             d.cmd_copy_image_to_buffer(
                 cmd,
                 image,
@@ -625,20 +553,18 @@ impl Presenter {
                     self.extent.height,
                 )],
             );
-            d.cmd_pipeline_barrier(
-                cmd,
+            let (old, new) = present_to_copy;
+            let b = [color_image_barrier(
+                image,
+                (new, old),
+                vk::AccessFlags::empty(),
+                vk::AccessFlags::empty(),
+            )];
+            let stages = (
                 vk::PipelineStageFlags::TRANSFER,
                 vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &b(
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    vk::ImageLayout::PRESENT_SRC_KHR,
-                    vk::AccessFlags::empty(),
-                    vk::AccessFlags::empty(),
-                ),
             );
+            record(d, cmd, stages, &[], &b);
             hrtao_core::buffer::host_read_barrier(&self.gpu, cmd);
         }
     }
@@ -653,18 +579,12 @@ impl Presenter {
             let info =
                 vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             d.begin_command_buffer(cmd, &info)?;
-            let barrier = [vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
-                .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)];
-            d.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::ALL_COMMANDS,
-                vk::PipelineStageFlags::ALL_COMMANDS,
-                vk::DependencyFlags::empty(),
-                &barrier,
-                &[],
-                &[],
-            );
+            let barrier = [memory_barrier(
+                vk::AccessFlags::MEMORY_WRITE,
+                vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE,
+            )];
+            let all = vk::PipelineStageFlags::ALL_COMMANDS;
+            record(d, cmd, (all, all), &barrier, &[]);
         }
         Ok(cmd)
     }

@@ -1,6 +1,5 @@
 //! What the command-line tests share: `hrtao` run with the validation layer, and rod's 160×90 reference view
-//! (the committed test scene and camera). A test binary that uses it declares the scene tests' `common` module
-//! (test_scene, testdata) beside it.
+//! (the committed test scene and camera).
 #![allow(dead_code)]
 use std::ffi::OsStr;
 use std::fmt::Debug;
@@ -61,8 +60,10 @@ pub fn ray_queries_or_skip(test: &str) -> bool {
 
 /// `render` of rod's 160×90 reference view (its committed camera, R = 10) at 8 rays per pixel, then `extra`.
 pub fn rod_view(extra: &[&str]) -> Vec<String> {
-    let scene = crate::common::test_scene("rod");
-    let camera = crate::common::testdata("refs/rod_160x90.camera.json");
+    // The scene tests' `test_scene("rod")` and its reference camera (testdata/refs/index.json).
+    let testdata = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata");
+    let scene = testdata.join("scenes/rod_assembly/rod.glb");
+    let camera = testdata.join("refs/rod_160x90.camera.json");
     let mut args: Vec<String> = [
         "render",
         "--scene",
@@ -79,4 +80,23 @@ pub fn rod_view(extra: &[&str]) -> Vec<String> {
     .collect();
     args.extend(extra.iter().map(|s| s.to_string()));
     args
+}
+
+/// `hrtao bench` of `scene` at 64×36 with the least work that still runs every part (1 repetition, 4 rays per
+/// pixel and 8 at most, 16 reference rays, 2 HRTAO frames), `orbit` navigation and `settle` static frames, then
+/// `extra`.
+pub fn tiny_bench<'a>(
+    scene: &'a str,
+    (orbit, settle): (&'a str, &'a str),
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let args: [&[&'a str]; 4] = [
+        &["bench", "--scene", scene, "--width", "64", "--height", "36"],
+        &[
+            "--orbit", orbit, "--repeat", "1", "--settle", settle, "--rays", "4",
+        ],
+        &["--max-rays", "8", "--ref-rays", "16", "--hrtao-frames", "2"],
+        extra,
+    ];
+    args.concat()
 }

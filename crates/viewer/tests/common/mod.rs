@@ -4,6 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "../../../scene/tests/common/mod.rs"]
+pub mod scene_common;
+
 /// Window tests run with two frames in flight (`HRTAO_FRAMES_IN_FLIGHT`; a software device's default is one),
 /// so that lavapipe and the validation layer exercise the frames' overlap.
 pub const FRAMES_IN_FLIGHT: &str = "2";
@@ -80,6 +83,33 @@ pub fn display_lock() -> Option<DisplayGuard> {
     let guard = X_DISPLAY.read().unwrap_or_else(|e| e.into_inner());
     HOLDS_X_DISPLAY.with(|h| h.set(true));
     Some(DisplayGuard::Shared(guard))
+}
+
+/// `hrtao view ARGS --no-config --exit` (a scripted run) with the validation layer and `env`, the display held
+/// shared while it runs.
+pub fn scripted_view(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
+    let _display = display_lock();
+    Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .arg("view")
+        .args(args)
+        .args(["--no-config", "--exit"])
+        .env("HRTAO_VALIDATION", "1")
+        .envs(env.iter().copied())
+        .output()
+        .expect("run hrtao view")
+}
+
+/// A scripted run (`scripted_view`) that succeeds without validation messages: its log.
+pub fn scripted_run(args: &[&str], env: &[(&str, &str)]) -> String {
+    let out = scripted_view(args, env);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(
+        out.status.success(),
+        "hrtao view failed ({}):\n{stderr}",
+        out.status
+    );
+    assert!(!stderr.contains("[vulkan"), "validation messages:\n{stderr}");
+    stderr
 }
 
 pub struct Running {
@@ -298,6 +328,21 @@ impl Running {
         assert!(!log.contains("[vulkan"), "validation messages:\n{log}");
         assert!(!log.contains("panicked"), "panic:\n{log}");
     }
+
+    /// The end of a test: the log is validation-clean, the viewer is killed and its folder `dir` removed.
+    pub fn finish(self, dir: &Path) {
+        self.validation_clean();
+        drop(self);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    /// The first log line containing `needle` (which a `wait_for` saw).
+    pub fn log_line(&self, needle: &str) -> String {
+        let log = self.log_text();
+        let line = log.lines().find(|l| l.contains(needle));
+        line.unwrap_or_else(|| panic!("no `{needle}` in the log:\n{log}"))
+            .to_string()
+    }
 }
 
 impl Drop for Running {
@@ -349,40 +394,81 @@ pub fn wait_for_screenshots(dir: &Path, count: usize, v: &mut Running) -> Vec<u3
     }
 }
 
+/// `hrtao render ARGS --ao-out PFM` with the validation layer, asserted successful (`what` names the run in the
+/// message otherwise): the linear AO image it wrote.
+pub fn render_ao_image(args: &[&str], pfm: &Path, what: &str) -> Vec<f32> {
+    let out = Command::new(env!("CARGO_BIN_EXE_hrtao"))
+        .arg("render")
+        .args(args)
+        .arg("--ao-out")
+        .arg(pfm)
+        .env("HRTAO_VALIDATION", "1")
+        .output()
+        .expect("run hrtao");
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    hrtao_core::imageio::read_pfm(pfm).unwrap().2
+}
+
+/// `hrtao render --mode rtao` of `scene` from `camera` (`rays` per pixel over `frames` frames, AO radius `radius`)
+/// into `dir`: the linear AO image.
+pub fn render_rtao(
+    scene: &Path,
+    camera: &Path,
+    radius: f32,
+    (rays, frames): (u32, u32),
+    dir: &Path,
+) -> Vec<f32> {
+    let pfm = dir.join(format!("{}.pfm", scene.file_name().unwrap().to_string_lossy()));
+    let (rays, frames, radius) = (rays.to_string(), frames.to_string(), radius.to_string());
+    let args = [
+        [
+            "--scene",
+            scene.to_str().unwrap(),
+            "--camera",
+            camera.to_str().unwrap(),
+        ],
+        ["--mode", "rtao", "--rays", &rays],
+        ["--frames", &frames, "--radius", &radius],
+    ];
+    render_ao_image(&args.concat(), &pfm, &scene.display().to_string())
+}
+
 /// Writes an ASCII STL of the box from `min` to `max` (12 triangles).
 pub fn write_box_stl(path: &Path, min: [f32; 3], max: [f32; 3]) {
-    let c = |i: usize| {
-        [
-            if i & 1 == 0 { min[0] } else { max[0] },
-            if i & 2 == 0 { min[1] } else { max[1] },
-            if i & 4 == 0 { min[2] } else { max[2] },
-        ]
-    };
-    let tris = [
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
+    let corners = hrtao_scene::box_corners(min, max);
     let mut s = String::from("solid box\n");
-    for t in tris {
+    for t in hrtao_scene::box_triangles() {
         s += " facet normal 0 0 0\n  outer loop\n";
-        for v in t {
-            let p = c(v);
+        for p in t.map(|v| corners[v as usize]) {
             s += &format!("   vertex {} {} {}\n", p[0], p[1], p[2]);
         }
         s += "  endloop\n endfacet\n";
     }
     s += "endsolid box\n";
     std::fs::write(path, s).unwrap();
+}
+
+/// OBJ text of closed, outward-facing boxes (name, min, max), each an object of that name where the name is not
+/// empty, their vertices numbered after `first` vertices written before them.
+pub fn boxes_obj(boxes: &[(&str, [f32; 3], [f32; 3])], first: usize) -> String {
+    let mut s = String::new();
+    for (k, (name, min, max)) in boxes.iter().enumerate() {
+        if !name.is_empty() {
+            s += &format!("o {name}\n");
+        }
+        for p in hrtao_scene::box_corners(*min, *max) {
+            s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        }
+        let base = first + 8 * k + 1;
+        for f in hrtao_scene::BOX_FACES.map(|f| f.map(|i| base + i as usize)) {
+            s += &format!("f {} {} {} {}\n", f[0], f[1], f[2], f[3]);
+        }
+    }
+    s
 }
 
 /// The PNG screenshots in `dir`, oldest first (names share the second: `MODEL-…-SS.png`, then `-2`, `-3`).
@@ -435,14 +521,30 @@ pub fn ifc_python() -> Option<PathBuf> {
     }
 }
 
-/// assimp's AC14-FZK-Haus.ifc, from Debian's assimp-testmodels (scripts/fetch-assimp-models.sh).
-pub fn fzk_haus() -> PathBuf {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/fetch-assimp-models.sh");
-    let out = Command::new("bash").arg(script).output().unwrap();
+/// Writes a building of `storeys` storeys as IFC to `path` with IfcOpenShell's API (tests/ifc/make_building.py, run
+/// by `python`): how many products it mapped to shared representations (the script's output).
+pub fn make_building(python: &Path, path: &Path, storeys: u32) -> usize {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ifc/make_building.py");
+    let storeys = storeys.to_string();
+    run_python(python, &[script.as_os_str(), path.as_os_str(), storeys.as_ref()])
+        .parse()
+        .unwrap()
+}
+
+/// `python ARGS`, asserted successful (the arguments and its error output in the message otherwise): its output,
+/// trimmed.
+pub fn run_python(python: &Path, args: &[&std::ffi::OsStr]) -> String {
+    let out = Command::new(python).args(args).output().unwrap();
     assert!(
         out.status.success(),
-        "scripts/fetch-assimp-models.sh failed (it needs apt-get and Debian's assimp-testmodels):\n{}",
+        "{args:?}\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim()).join("IFC/AC14-FZK-Haus.ifc")
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// assimp's AC14-FZK-Haus.ifc, from Debian's assimp-testmodels (scripts/fetch-assimp-models.sh).
+pub fn fzk_haus() -> PathBuf {
+    scene_common::fetched_data("fetch-assimp-models.sh", "apt-get and Debian's assimp-testmodels")
+        .join("IFC/AC14-FZK-Haus.ifc")
 }

@@ -1,7 +1,16 @@
 //! The viewer's ray budget: rays per frame, independent of the internal resolution (the hash map shares rays
 //! between the pixels of a cell, §3, so full resolution need not multiply the AO cost), converted each frame to
 //! the renderer's rays per pixel; and the frame-time target controller that adapts it while the camera moves.
-use super::device::RayFit;
+
+/// A moving frame's rays as the device model prices them (`DeviceModel::rays_that_fit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RayFit {
+    /// The rays that fit in the target over the floor, at least `least`.
+    pub fits: u32,
+    /// The rays of `device::MIN_RAY_SHARE` of the target (`device::GUESSED_SHARE` of that while the price is
+    /// the probe's guess): a budget is never cut below them.
+    pub least: u32,
+}
 
 /// Default budget: about today's 4 rays per pixel at the software default of 0.35 × an 862×800 view.
 pub const DEFAULT_RAYS_PER_FRAME: u32 = 300_000;

@@ -5,7 +5,7 @@
 //! budget (the paper's 10 rays per pixel where the device affords them, §6 / Table 1), the moving frames' filter
 //! and render scale; and the rays that fit in the target, which size the budget (`budget::next_rays_per_frame`)
 //! instead of blind steps. Pure: measurements come in as numbers.
-use super::budget::{self, MAX_RAYS_PER_FRAME, MIN_RAYS_PER_FRAME};
+use super::budget::{self, RayFit, MAX_RAYS_PER_FRAME, MIN_RAYS_PER_FRAME};
 use super::motion::{MIN_MOVING_SCALE, MOVING_FILTER_ITERATIONS};
 
 /// The frame-time target of a software device: its frames take 50-150 ms at the reduced moving scale.
@@ -65,16 +65,6 @@ const MIN_FRAMES_PER_SIDE: usize = 2;
 /// 92-131 ms frames, and the line through them priced a ray at 11 µs (it costs ~1.4 µs). That price then sized
 /// the first still image's slices for rays 8× too dear (lattice 12 at fewer rays: 70 s to converge, not 40).
 const MIN_SLOPE_T: f64 = 3.0;
-
-/// A moving frame's rays as the device model prices them (`DeviceModel::rays_that_fit`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RayFit {
-    /// The rays that fit in the target over the floor, at least `least`.
-    pub fits: u32,
-    /// The rays of `MIN_RAY_SHARE` of the target (`GUESSED_SHARE` of that while the price is the probe's
-    /// guess): a budget is never cut below them.
-    pub least: u32,
-}
 
 /// The kind of device, from `DeviceInfo::is_software`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
