@@ -287,18 +287,26 @@ pub fn parse_settings_json(s: &str) -> Result<String, String> {
     Ok(s.to_string())
 }
 
-fn parse_hash_capacity(s: &str) -> Result<u32, String> {
-    let n: u32 = s.parse().map_err(|e| format!("{e}"))?;
-    if !n.is_power_of_two() || !(1024..=1 << 28).contains(&n) {
-        return Err(format!("{n} is not a power of two within 1024..=2^28"));
+/// The value parser of an option that sets the AO setting `key` (its `--set` key): the value must pass the
+/// setting's declaration (`hrtao_core::settings`: range, rule), checked as `--set` checks it.
+fn setting<T>(key: &'static str) -> impl TypedValueParser<Value = T>
+where
+    T: std::str::FromStr + serde::Serialize + Clone + Send + Sync + 'static,
+    T::Err: std::fmt::Display,
+{
+    move |s: &str| -> Result<T, String> {
+        let v: T = s.parse().map_err(|e| format!("{e}"))?;
+        AoSettings::default()
+            .with_overrides(&serde_json::json!({ key: &v }).to_string())
+            .map(|_| v)
     }
-    Ok(n)
 }
 
 fn parse_render_scale(s: &str) -> Result<f32, String> {
     let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if !(0.05..=2.0).contains(&v) {
-        return Err(format!("{v} is not within 0.05..=2"));
+    let range = crate::view::RENDER_SCALE;
+    if !range.contains(&v) {
+        return Err(format!("{v} is not within {}..={}", range.start(), range.end()));
     }
     Ok(v)
 }
@@ -354,6 +362,24 @@ pub struct DeviceArgs {
     pub ray_backend: Option<hrtao_core::RayBackend>,
 }
 
+/// The camera, up axis and primary visibility, for `render`, `bench` and `view` (`crate::setup` applies them).
+#[derive(Args, Debug, Clone, Default)]
+pub struct SetupArgs {
+    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"} (the viewer's first view), orthographic
+    /// with "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's
+    /// `NAME.camera.json` beside it, else fit the scene.
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// World up axis: x, y, z, -x, -y or -z (default: in the viewer, the one chosen in the panel for this file;
+    /// else the camera file's, else z for the bundled scene and gen: specs, else the format's: IFC and 3MF z,
+    /// glTF y; else y).
+    #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
+    pub up: Option<UpAxis>,
+    /// Primary visibility (in `bench`, of every mode): measured (auto), ray queries or rasterised.
+    #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
+    pub primary: PrimaryChoice,
+}
+
 /// Section planes, for `render`, `bench` and `view`.
 #[derive(Args, Debug, Clone, Default)]
 pub struct SectionArgs {
@@ -388,25 +414,25 @@ pub struct AoArgs {
     #[arg(long)]
     pub radius: Option<f32>,
     /// Ray budget: rays per pixel per frame.
-    #[arg(long, default_value_t = AoSettings::default().map.rays_per_pixel)]
+    #[arg(long, default_value_t = AoSettings::default().map.rays_per_pixel, value_parser = setting::<u32>("rays_per_pixel"))]
     pub rays: u32,
     /// s_p: target feature size in pixels (eq. 2).
-    #[arg(long, default_value_t = AoSettings::default().map.s_p)]
+    #[arg(long, default_value_t = AoSettings::default().map.s_p, value_parser = setting::<f32>("s_p"))]
     pub sp: f32,
     /// s_nd: normal discretisation (eq. 5).
-    #[arg(long, default_value_t = AoSettings::default().map.s_nd)]
+    #[arg(long, default_value_t = AoSettings::default().map.s_nd, value_parser = setting::<f32>("s_nd"))]
     pub snd: f32,
     /// Rays per hash cell after which the cell stops receiving rays.
-    #[arg(long, default_value_t = AoSettings::default().map.max_samples)]
+    #[arg(long, default_value_t = AoSettings::default().map.max_samples, value_parser = setting::<u32>("max_samples"))]
     pub max_samples: u32,
     /// Minimum samples before a cell is used instead of a coarser one (§4).
-    #[arg(long, default_value_t = AoSettings::default().map.min_samples)]
+    #[arg(long, default_value_t = AoSettings::default().map.min_samples, value_parser = setting::<u32>("min_samples"))]
     pub min_samples: u32,
     /// À-trous filter iterations (0 disables the filter, §5).
-    #[arg(long, default_value_t = AoSettings::default().filter.filter_iterations)]
+    #[arg(long, default_value_t = AoSettings::default().filter.filter_iterations, value_parser = setting::<u32>("filter_iterations"))]
     pub filter_iterations: u32,
     /// Hash map capacity in cells (a power of two).
-    #[arg(long, default_value_t = AoSettings::default().map.hash_capacity, value_parser = parse_hash_capacity)]
+    #[arg(long, default_value_t = AoSettings::default().map.hash_capacity, value_parser = setting::<u32>("hash_capacity"))]
     pub hash_capacity: u32,
     /// Render a uniform grey clay instead of the materials' base colours.
     #[arg(long)]
@@ -415,20 +441,23 @@ pub struct AoArgs {
     #[arg(long)]
     pub edges: bool,
     /// Crease angle of the feature edges, in degrees.
-    #[arg(long, default_value_t = AoSettings::default().display.crease_deg)]
+    #[arg(long, default_value_t = AoSettings::default().display.crease_deg, value_parser = setting::<f32>("crease_deg"))]
     pub crease: f32,
     /// Sky light (ours): light the model with this environment and its soft shadows instead of the AO look:
     /// `uniform`, `gradient` or an equirectangular Radiance .hdr file (zenith: --up).
     #[arg(long, value_name = "uniform|gradient|FILE.hdr")]
     pub environment: Option<String>,
     /// Sky light: turn the environment counter-clockwise seen from above, in degrees.
-    #[arg(long, value_name = "DEG", default_value_t = AoSettings::default().light.environment_rotation, allow_negative_numbers = true)]
+    #[arg(long, value_name = "DEG", default_value_t = AoSettings::default().light.environment_rotation, allow_negative_numbers = true,
+        value_parser = setting::<f32>("environment_rotation"))]
     pub environment_rotation: f32,
     /// Sky light: scale the environment's light by K.
-    #[arg(long, value_name = "K", default_value_t = AoSettings::default().light.environment_intensity)]
+    #[arg(long, value_name = "K", default_value_t = AoSettings::default().light.environment_intensity,
+        value_parser = setting::<f32>("environment_intensity"))]
     pub environment_intensity: f32,
     /// Any other AO setting, as a JSON object of `AoSettings` fields (applied last), e.g.
-    /// `--set '{"refine": false, "filter_iterations": 3}'`.
+    /// `--set '{"refine": false, "filter_iterations": 3}'`. Every key with its valid values and default:
+    /// docs/command-line.md.
     #[arg(long, value_name = "JSON", value_parser = parse_settings_json)]
     pub set: Option<String>,
 }
@@ -475,28 +504,18 @@ pub struct RenderArgs {
     // Scene: every format (`formats`), or a generator spec; the bundled gearbox by default.
     #[arg(long, help = model_help("Scene", "gen:racks?rows=10&cols=10", " (default: the bundled gearbox with its camera)"))]
     pub scene: Option<String>,
-    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
-    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's
-    /// `NAME.camera.json` beside it, else fit the scene.
-    #[arg(long)]
-    pub camera: Option<PathBuf>,
+    #[command(flatten)]
+    pub setup: SetupArgs,
     /// Image width (overrides the camera file).
     #[arg(long)]
     pub width: Option<u32>,
     /// Image height (overrides the camera file).
     #[arg(long)]
     pub height: Option<u32>,
-    /// World up axis: x, y, z, -x, -y or -z (default: the camera file's, else z for the bundled scene and gen:
-    /// specs, else the format's: IFC and 3MF z, glTF y; else y).
-    #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
-    pub up: Option<UpAxis>,
     /// The plan view of a storey of an IFC building (its name, or its number from 0): only its elements, cut 1.2 m
     /// above its elevation, seen from the top in an orthographic view framing it (over --camera and --section).
     #[arg(long, value_name = "STOREY")]
     pub plan: Option<String>,
-    /// Primary visibility: measured (auto), ray queries or rasterised.
-    #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
-    pub primary: PrimaryChoice,
     #[command(flatten)]
     pub ao: AoArgs,
     /// Frames to render with the same camera (per-pixel RTAO averages them; the HRTAO map persists).
@@ -539,17 +558,8 @@ pub struct ViewArgs {
     // Model to open: every format (`formats`), or a generator spec; the bundled gearbox by default.
     #[arg(value_name = "FILE", help = model_help("Model to open", "gen:city", " (default: the bundled gearbox)"))]
     pub file: Option<String>,
-    /// Initial camera JSON (default: the scene's own `NAME.camera.json` beside it, else fit the scene).
-    #[arg(long)]
-    pub camera: Option<PathBuf>,
-    /// World up axis: x, y, z, -x, -y or -z (default: the one chosen in the panel for this file, else the
-    /// camera file's, else z for the bundled scene and gen: specs, else the format's: IFC and 3MF z, glTF y;
-    /// else y).
-    #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
-    pub up: Option<UpAxis>,
-    /// Primary visibility: measured (auto), ray queries or rasterised.
-    #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
-    pub primary: PrimaryChoice,
+    #[command(flatten)]
+    pub setup: SetupArgs,
     /// Window size, e.g. 1280x720.
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
@@ -694,11 +704,8 @@ pub struct BenchArgs {
     // Scene: every format (`formats`), or a generator spec.
     #[arg(long, required = true, help = model_help("Scene", "gen:racks?rows=10&cols=10", ""))]
     pub scene: Option<String>,
-    /// Camera JSON {"eye","target","up","fov_y_deg","width","height"}, orthographic with
-    /// "projection": "orthographic" and "ortho_height" (world height of the image); default: the scene's
-    /// `NAME.camera.json` beside it, else fit the scene.
-    #[arg(long)]
-    pub camera: Option<PathBuf>,
+    #[command(flatten)]
+    pub setup: SetupArgs,
     /// Navigation path: a JSON array of cameras (or {"cameras": [...]}); sizes come from --width/--height.
     #[arg(long, conflicts_with = "orbit")]
     pub path: Option<PathBuf>,
@@ -714,13 +721,6 @@ pub struct BenchArgs {
     /// Image height (default: the camera file's, else 180).
     #[arg(long)]
     pub height: Option<u32>,
-    /// World up axis: x, y, z, -x, -y or -z (default: the camera file's, else z for the bundled scene and gen:
-    /// specs, else the format's: IFC and 3MF z, glTF y; else y).
-    #[arg(long, value_parser = UpAxis::parse, allow_hyphen_values = true)]
-    pub up: Option<UpAxis>,
-    /// Primary visibility of every mode: measured (auto), ray queries or rasterised.
-    #[arg(long, value_enum, default_value_t = PrimaryChoice::Auto)]
-    pub primary: PrimaryChoice,
     /// At most this many static frames after the first frame and before the navigation, letting cells fill as
     /// they would during the first fraction of a second on a GPU (the paper's navigation is with a warm map).
     #[arg(long, default_value_t = 128)]

@@ -101,11 +101,11 @@ impl SetupInputs {
     pub fn from_view(args: &ViewArgs) -> SetupInputs {
         SetupInputs {
             spec: args.file.clone(),
-            camera: args.camera.clone(),
-            up: args.up,
+            camera: args.setup.camera.clone(),
+            up: args.setup.up,
             radius: args.radius,
             sections: args.sections.clone(),
-            primary: args.primary,
+            primary: args.setup.primary,
             ..Default::default()
         }
     }
@@ -114,13 +114,13 @@ impl SetupInputs {
     pub fn from_render(args: &RenderArgs) -> SetupInputs {
         SetupInputs {
             spec: args.scene.clone(),
-            camera: args.camera.clone(),
-            up: args.up,
+            camera: args.setup.camera.clone(),
+            up: args.setup.up,
             radius: args.ao.radius,
             width: args.width,
             height: args.height,
             sections: args.sections.clone(),
-            primary: args.primary,
+            primary: args.setup.primary,
             ..Default::default()
         }
     }
@@ -129,15 +129,15 @@ impl SetupInputs {
     pub fn from_bench(args: &BenchArgs) -> SetupInputs {
         SetupInputs {
             spec: args.scene.clone(),
-            camera: args.camera.clone(),
+            camera: args.setup.camera.clone(),
             auto_camera: args.auto_camera,
-            up: args.up,
+            up: args.setup.up,
             radius: args.ao.radius,
             width: args.width,
             height: args.height,
             fit_size: (320, 180),
             sections: args.sections.clone(),
-            primary: args.primary,
+            primary: args.setup.primary,
             pass_times: true,
         }
     }

@@ -15,7 +15,8 @@ settings_group! {
     /// The adaptive à-trous filter.
     pub struct FilterSettings {
         /// À-trous iterations (§5); 0 = no filter.
-        filter_iterations: u32 = 5, StillImage, paper keep;
+        /// Each iteration doubles its reach; the footprint follows the cell size.
+        filter_iterations: u32 = 5, StillImage, paper keep, range 0..=MAX_FILTER_ITERATIONS;
         /// Ours: the filter also smooths young cells' noise over more than a cell and stops where neighbours
         /// differ by more than the cells' noise (`FILTER_SIGMA`). Off: the paper's filter (bounded by the cell
         /// footprint).
@@ -24,16 +25,6 @@ settings_group! {
 }
 
 impl FilterSettings {
-    pub fn validate(&self) -> Result<(), String> {
-        if self.filter_iterations > MAX_FILTER_ITERATIONS {
-            return Err(format!(
-                "filter iterations must be at most {MAX_FILTER_ITERATIONS}, got {}",
-                self.filter_iterations
-            ));
-        }
-        Ok(())
-    }
-
     pub fn write_gpu(&self, g: &mut FrameGlobals) {
         g.filter_iterations = self.filter_iterations;
         if self.filter_iterations > 0 {

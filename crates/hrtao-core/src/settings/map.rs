@@ -1,5 +1,5 @@
 //! The paper's hash map and its sampling (§1–4, §6), and our two changes to where a cell lives.
-use super::{positive, settings_group};
+use super::settings_group;
 use crate::gpu::{self, FrameGlobals};
 
 /// Ours (`offset_bins`): eq. (5)'s bins shifted by this fraction of a bin, floor(n s_nd + offset). It keeps every
@@ -22,28 +22,34 @@ pub const MAX_CACHE_LIFETIME_S: f32 = 86_400.0;
 settings_group! {
     /// The paper's hash map and its sampling.
     pub struct MapSettings {
-        /// AO radius R in scene units (rays longer than this count as unoccluded).
-        ao_radius: f32 = 1.0, WholeMap, paper keep;
+        /// AO radius R in scene units (§1: rays longer than this count as unoccluded). The viewer's default: 8 mm
+        /// for the bundled gearbox, 5% of the bounding-box diagonal otherwise.
+        ao_radius: f32 = 1.0, WholeMap, paper keep, range 0.0..=f32::INFINITY, above_min, log, label "AO radius",
+            custom;
         /// Ray budget B: rays traced per pixel per frame (§3, §6). A viewer with a frame-time target may give a
-        /// frame its own budget (`FrameDesc::budget`).
-        rays_per_pixel: u32 = 4, StillImage, paper keep;
-        /// s_p: target feature size in view pixels (eq. 2).
-        s_p: f32 = 4.0, StillImage, paper keep;
-        /// s_nd: normal discretisation (eq. 5).
-        s_nd: f32 = 3.0, WholeMap, paper keep;
+        /// frame its own budget (`FrameDesc::budget`); the viewer's panel sets it in rays per frame.
+        rays_per_pixel: u32 = 4, StillImage, paper keep, range 0..=1024, label "ray budget", hidden;
+        /// s_p: target feature size in view pixels (eq. 2); the cell size s_w grows with distance. Larger:
+        /// coarser cells, fewer rays per cell needed, blurrier AO.
+        s_p: f32 = 4.0, StillImage, paper keep, range 0.5..=64.0, log, label "s_p";
+        /// s_nd: normal discretisation (eq. 5); cells are keyed by position and quantised normal so surfaces
+        /// with different orientations don't share AO.
+        s_nd: f32 = 3.0, WholeMap, paper keep, range 0.5..=16.0, label "s_nd";
         /// s_min: smallest world feature (eq. 3).
-        s_min: f32 = 1e-10, WholeMap, paper keep;
-        /// Rays per cell after which a cell stops receiving rays (§6: 1000).
-        max_samples: u32 = 1000, StillImage, paper keep;
+        s_min: f32 = 1e-10, WholeMap, paper keep, range 0.0..=f32::INFINITY, above_min, label "s_min", hidden;
+        /// Rays per cell after which a cell stops receiving rays (§6: 1000), freeing the budget for the others.
+        max_samples: u32 = 1000, StillImage, paper keep, range 1..=gpu::MAX_SAMPLES_LIMIT, log;
         /// Fewer samples than this in the finest cell: use the next coarser LOD (§4).
-        min_samples: u32 = 8, StillImage, paper keep;
-        /// Hash map capacity in cells (a power of two).
-        hash_capacity: u32 = 1 << 20, WholeMap, paper keep;
+        min_samples: u32 = 8, StillImage, paper keep, range 0..=256;
+        /// Hash map capacity in cells (§1, §6), a power of two: the world-space cache of AO values. Changing it
+        /// empties the cache.
+        hash_capacity: u32 = 1 << 20, WholeMap, paper keep, range 1024..=1 << 28, power_of_two, custom;
         /// Seconds a cell keeps its AO after its last use (eq. 6's lazy removal): older cells may be reclaimed
         /// while probing, and while the table has room they are kept still. Counted in time, not frames, so a
         /// region revisited within it is found, not traced again, at any frame rate. (Replaces `stale_frames`,
         /// 240 frames: 24 s at 10 fps, 1.7 s at 144 fps.)
-        cache_lifetime_s: f32 = 30.0, Nothing, paper keep;
+        cache_lifetime_s: f32 = 30.0, Nothing, paper keep, range 0.0..=MAX_CACHE_LIFETIME_S, above_min,
+            label "cache lifetime", hidden;
         /// Ours: eq. 5's normal bins shifted by a quarter bin (`NORMAL_BIN_OFFSET`), so axis-aligned faces and
         /// 30°/45°/60° chamfers never sit on a bin edge. Off: eq. 5 as published.
         offset_bins: bool = true, WholeMap, paper (false);
@@ -70,41 +76,6 @@ impl MapSettings {
         } else {
             0.0
         }
-    }
-
-    pub fn validate(&self) -> Result<(), String> {
-        positive("AO radius", self.ao_radius)?;
-        positive("s_p", self.s_p)?;
-        positive("s_nd", self.s_nd)?;
-        positive("s_min", self.s_min)?;
-        positive("cache lifetime", self.cache_lifetime_s)?;
-        if self.cache_lifetime_s > MAX_CACHE_LIFETIME_S {
-            return Err(format!(
-                "cache lifetime must be at most {MAX_CACHE_LIFETIME_S} s (a day), got {} s",
-                self.cache_lifetime_s
-            ));
-        }
-        if !self.hash_capacity.is_power_of_two() || self.hash_capacity < 1024 || self.hash_capacity > 1 << 28
-        {
-            return Err(format!(
-                "hash capacity must be a power of two in 1024..=2^28, got {}",
-                self.hash_capacity
-            ));
-        }
-        if self.rays_per_pixel > 1024 {
-            return Err(format!(
-                "ray budget {} is above 1024 rays per pixel",
-                self.rays_per_pixel
-            ));
-        }
-        if self.max_samples > gpu::MAX_SAMPLES_LIMIT {
-            return Err(format!(
-                "max samples {} is above {}",
-                self.max_samples,
-                gpu::MAX_SAMPLES_LIMIT
-            ));
-        }
-        Ok(())
     }
 
     /// The map's parameters (the capacity is the allocated table's, and the lifetime in frames is the frame

@@ -1,10 +1,13 @@
 //! User-facing AO settings, grouped by what they govern, with the paper's names.
 //!
-//! Each group (`map`, `filter`, `still`, `young`, `edits`, `display`) is declared with `settings_group!`, which
-//! writes next to every setting its default, what a change of it invalidates (`Invalidates`) and its value in
-//! the paper's mode (`AoSettings::paper`): a new setting cannot be added without them. Each group file also
-//! owns the group's validation and its share of the GPU parameters (`FrameGlobals`). Our additions to the paper
-//! are each one `bool` (off = `false`, the paper); their tuning constants live beside them.
+//! Each group (`map`, `filter`, `still`, `young`, `edits`, `display`, `light`) is declared with
+//! `settings_group!`: one line per setting gives its default, what a change of it invalidates (`Invalidates`),
+//! its value in the paper's mode (`AoSettings::paper`) and, as flags, its valid range, its label and its panel
+//! row (`SettingInfo`, `info.rs`). From that line alone follow its validation (`AoSettings::validate`), its
+//! panel row (the viewer draws `fields_mut` generically), its `--set` key and the command line's checks, and its
+//! row of the settings table in docs/command-line.md (`AoSettings::docs_table`). Each group file also owns its
+//! share of the GPU parameters (`FrameGlobals`). Our additions to the paper are each one `bool` (off = `false`,
+//! the paper); their tuning constants live beside them.
 //!
 //! In JSON (prefs, `--set`, bench results) the groups are flattened: `{"ao_radius": 2, "contact_detail": false}`.
 use serde::{Deserialize, Serialize};
@@ -14,6 +17,7 @@ use crate::gpu::FrameGlobals;
 mod display;
 mod edits;
 mod filter;
+mod info;
 mod light;
 mod map;
 mod mode;
@@ -23,6 +27,7 @@ mod young;
 pub use display::{DisplaySettings, CREASE_DEG_RANGE};
 pub use edits::EditSettings;
 pub use filter::{FilterSettings, FILTER_SIGMA, MAX_FILTER_ITERATIONS};
+pub use info::{check_fields, spaced, Kind, Range, Row, SettingInfo, SettingRef, SettingValue, TextRule};
 pub use light::{LightSettings, INTENSITY_RANGE};
 pub use map::{MapSettings, MAX_CACHE_LIFETIME_S, MAX_CELL_FRACTION, MAX_PROBE, NORMAL_BIN_OFFSET};
 pub use mode::Mode;
@@ -41,24 +46,35 @@ pub enum Invalidates {
     WholeMap,
 }
 
-/// Declares a group of settings: the struct (serde-defaulted), its `Default`, `CLASSES` (each field's
-/// `Invalidates`), `invalidates` (the largest class of the fields that differ) and `paper` (the published
-/// technique's values: `keep` = the user's value, `(expr)` = that value).
+/// Declares a group of settings, one line each:
+///
+/// ```text
+/// /// Doc: the panel's hover text and the docs table's.
+/// name: Type = default, Class, paper keep|(value) [, flag [arg]]*;
+/// ```
+///
+/// `Class` is the field's `Invalidates`; `paper keep` keeps the user's value in the paper's mode, `paper (v)`
+/// sets `v` (a `bool` so set is one of our additions). The flags are `SettingInfo`'s builder methods: `range
+/// A..=B` (required for a number: validation, slider, docs), `above_min`, `power_of_two`, `log` (slider),
+/// `label "TEXT"` (else the name with spaces), `custom` (its group's panel code draws it), `hidden` (not in the
+/// panel), `needs "SWITCH"` (disabled while that switch of the group is off), `check RULE` (a text's).
+///
+/// It writes the struct (serde-defaulted), its `Default`, `FIELDS` (each field's `SettingInfo`, checked when
+/// the crate compiles: `check_fields`), `CLASSES`, `invalidates`, `paper`, `validate` (every range and rule),
+/// `fields_mut` (each field's `SettingRef`, for the panel) and `additions_mut`.
 macro_rules! settings_group {
     (@paper $v:expr, keep) => { $v.clone() };
     (@paper $v:expr, ($p:expr)) => { $p };
-    (@addition $list:ident, $name:expr, $doc:expr, $f:expr, keep) => {};
-    (@addition $list:ident, $name:expr, $doc:expr, $f:expr, ($p:expr)) => {
-        if let Some(on) = $crate::settings::AsToggle::as_toggle(&mut $f) {
-            $list.push($crate::settings::Addition { name: $name, doc: $doc, on });
-        }
-    };
+    (@sets keep) => { false };
+    (@sets ($p:expr)) => { true };
+    (@flag $i:ident, range $r:expr) => { $i.range(*$r.start() as f64, *$r.end() as f64) };
+    (@flag $i:ident, $flag:ident $($arg:expr)?) => { $i.$flag($($arg)?) };
     (
         $(#[$meta:meta])*
         pub struct $name:ident {
             $(
                 $(#[doc = $doc:literal])*
-                $field:ident : $ty:ty = $default:expr, $class:ident, paper $paper:tt;
+                $field:ident : $ty:ty = $default:expr, $class:ident, paper $paper:tt $(, $flag:ident $($arg:expr)?)* ;
             )*
         }
     ) => {
@@ -75,7 +91,29 @@ macro_rules! settings_group {
             }
         }
 
+        const _: () = $crate::settings::check_fields($name::FIELDS);
+
         impl $name {
+            /// Every field as declared: key, label, doc, kind, range, panel row.
+            pub const FIELDS: &'static [$crate::settings::SettingInfo] = &[$({
+                const WORDS: [u8; stringify!($field).len()] = $crate::settings::spaced(stringify!($field));
+                let words = match core::str::from_utf8(&WORDS) {
+                    Ok(w) => w,
+                    Err(_) => panic!("a field name is ASCII"),
+                };
+                let kind = <$ty as $crate::settings::SettingValue>::KIND;
+                let info = $crate::settings::SettingInfo::new(
+                    stringify!($field),
+                    words,
+                    concat!($($doc, "\n",)*),
+                    kind,
+                    $crate::settings::Invalidates::$class,
+                    matches!(kind, $crate::settings::Kind::Toggle) && settings_group!(@sets $paper),
+                );
+                $( let info = settings_group!(@flag info, $flag $($arg)?); )*
+                info
+            },)*];
+
             /// Every field with what its change invalidates.
             pub const CLASSES: &'static [(&'static str, $crate::settings::Invalidates)] =
                 &[$( (stringify!($field), $crate::settings::Invalidates::$class), )*];
@@ -96,17 +134,33 @@ macro_rules! settings_group {
                 $name { $( $field: settings_group!(@paper self.$field, $paper), )* }
             }
 
-            /// Our additions in this group (the `bool` fields the paper's mode sets), with their docs: the
-            /// panel shows each as a checkbox, so adding or deleting one does not touch the panel.
+            /// Checks every field against its declaration (range, rule); the message names the setting.
+            pub fn validate(&self) -> Result<(), String> {
+                let numbers: &[Option<f64>] = &[$( $crate::settings::SettingValue::number(&self.$field), )*];
+                let texts: &[Option<&str>] = &[$( $crate::settings::SettingValue::text(&self.$field), )*];
+                for ((info, n), t) in Self::FIELDS.iter().zip(numbers).zip(texts) {
+                    if let Some(n) = n {
+                        info.check_number(*n)?;
+                    }
+                    if let Some(t) = t {
+                        info.check_text(t)?;
+                    }
+                }
+                Ok(())
+            }
+
+            /// Every field with a mutable reference to its value, in declaration order (the panel's rows).
+            pub fn fields_mut(
+                &mut self,
+            ) -> Vec<(&'static $crate::settings::SettingInfo, $crate::settings::SettingRef<'_>)> {
+                let refs: Vec<$crate::settings::SettingRef<'_>> =
+                    vec![$( $crate::settings::SettingValue::setting_ref(&mut self.$field), )*];
+                Self::FIELDS.iter().zip(refs).collect()
+            }
+
+            /// Our additions in this group (the `bool` fields the paper's mode sets), with their docs.
             pub fn additions_mut(&mut self) -> Vec<$crate::settings::Addition<'_>> {
-                #[allow(unused_mut)]
-                let mut list = Vec::new();
-                $(
-                    settings_group!(
-                        @addition list, stringify!($field), concat!($($doc, "\n",)*), self.$field, $paper
-                    );
-                )*
-                list
+                $crate::settings::Addition::of(self.fields_mut())
             }
         }
     };
@@ -121,6 +175,23 @@ pub struct Addition<'a> {
     pub on: &'a mut bool,
 }
 
+impl<'a> Addition<'a> {
+    /// The additions among a group's fields.
+    pub fn of(fields: Vec<(&'static SettingInfo, SettingRef<'a>)>) -> Vec<Addition<'a>> {
+        fields
+            .into_iter()
+            .filter_map(|(info, value)| match value {
+                SettingRef::Bool(on) if info.addition => Some(Addition {
+                    name: info.name,
+                    doc: info.doc,
+                    on,
+                }),
+                _ => None,
+            })
+            .collect()
+    }
+}
+
 impl Addition<'_> {
     /// The field name as a label ("near_field" -> "near field").
     pub fn label(&self) -> String {
@@ -132,23 +203,6 @@ impl Addition<'_> {
         self.doc.split_whitespace().collect::<Vec<_>>().join(" ")
     }
 }
-
-/// A setting that is an on/off switch (an addition of ours when the paper's mode sets it).
-pub trait AsToggle {
-    fn as_toggle(&mut self) -> Option<&mut bool> {
-        None
-    }
-}
-
-impl AsToggle for bool {
-    fn as_toggle(&mut self) -> Option<&mut bool> {
-        Some(self)
-    }
-}
-
-impl AsToggle for u32 {}
-impl AsToggle for f32 {}
-impl AsToggle for Mode {}
 
 /// All AO settings: one value, in the viewer's preferences and applied to the renderer with each frame
 /// (`frame::FrameDesc`).
@@ -303,12 +357,89 @@ impl AoSettings {
         (s, skipped)
     }
 
-    /// Checks ranges; the message names the setting.
+    /// Checks every setting against its declaration (its range or rule); the message names the setting.
     pub fn validate(&self) -> Result<(), String> {
         self.map.validate()?;
         self.filter.validate()?;
+        self.still.validate()?;
+        self.young.validate()?;
+        self.edits.validate()?;
         self.display.validate()?;
         self.light.validate()
+    }
+
+    /// Every setting as declared, group by group (the order of the panel and of the docs table).
+    pub fn fields() -> Vec<&'static SettingInfo> {
+        [
+            MapSettings::FIELDS,
+            FilterSettings::FIELDS,
+            StillSettings::FIELDS,
+            YoungMapSettings::FIELDS,
+            EditSettings::FIELDS,
+            DisplaySettings::FIELDS,
+            LightSettings::FIELDS,
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+
+    /// The declaration of the setting whose JSON name (`--set` key) is `name`.
+    pub fn field(name: &str) -> Option<&'static SettingInfo> {
+        AoSettings::fields().into_iter().find(|f| f.name == name)
+    }
+
+    /// Every setting with a mutable reference to its value, group by group.
+    pub fn fields_mut(&mut self) -> Vec<(&'static SettingInfo, SettingRef<'_>)> {
+        let mut list = self.map.fields_mut();
+        list.extend(self.filter.fields_mut());
+        list.extend(self.still.fields_mut());
+        list.extend(self.young.fields_mut());
+        list.extend(self.edits.fields_mut());
+        list.extend(self.display.fields_mut());
+        list.extend(self.light.fields_mut());
+        list
+    }
+
+    /// The settings table of docs/command-line.md, one row per setting from its declaration: `--set` key,
+    /// default, valid values, what a change invalidates, panel label, doc (tests/settings_declared.rs holds
+    /// the page to it).
+    pub fn docs_table() -> String {
+        let defaults = serde_json::to_value(AoSettings::default()).unwrap_or_default();
+        let mut t = String::from(
+            "| `--set` key | default | valid values | a change restarts | panel | what it sets |\n\
+             |---|---|---|---|---|---|\n",
+        );
+        let mut settings = AoSettings::default();
+        for (f, value) in settings.fields_mut() {
+            let json = |v: serde_json::Value| format!("`{}`", v.as_str().unwrap_or_default());
+            let values = match (f.range, value) {
+                (Some(r), _) => r.to_string(),
+                (None, SettingRef::Bool(_)) => "true, false".to_string(),
+                (None, SettingRef::Mode(_)) => Mode::ALL.map(|m| json(serde_json::json!(m))).join(", "),
+                (None, SettingRef::Axis(_)) => crate::camera::UpAxis::ALL
+                    .map(|a| json(serde_json::json!(a)))
+                    .join(", "),
+                _ => "text".to_string(),
+            };
+            let restarts = match f.invalidates {
+                Invalidates::Nothing => "nothing",
+                Invalidates::StillImage => "the still image",
+                Invalidates::WholeMap => "the whole map",
+            };
+            let panel = match f.row {
+                Row::Hidden => "—".to_string(),
+                _ if f.log => format!("{} (log)", f.label),
+                _ => f.label.to_string(),
+            };
+            t.push_str(&format!(
+                "| `{}` | `{}` | {values} | {restarts} | {panel} | {} |\n",
+                f.name,
+                defaults[f.name],
+                f.text().replace('|', "\\|")
+            ));
+        }
+        t
     }
 
     /// Writes the settings' share of the frame's GPU parameters, group by group (the young map's additions have
@@ -318,15 +449,6 @@ impl AoSettings {
         self.filter.write_gpu(g);
         self.still.write_gpu(g);
         self.display.write_gpu(g);
-    }
-}
-
-/// A number that must be finite and positive, else an error naming it.
-pub(crate) fn positive(name: &str, v: f32) -> Result<(), String> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(format!("{name} must be a positive number, got {v}"))
     }
 }
 
@@ -428,5 +550,178 @@ mod tests {
             .filter(|(k, v)| flipped[k.as_str()] != **v)
             .count();
         assert_eq!(changed, count, "each checkbox switches its own field");
+    }
+
+    /// The value `v` of setting `name` in otherwise default settings, through `--set`'s path.
+    fn set(name: &str, v: f64) -> Result<AoSettings, String> {
+        let integer = AoSettings::field(name).is_some_and(|f| f.kind == Kind::Integer);
+        let v = match integer {
+            true if v >= 0.0 => serde_json::json!(v as u64),
+            _ => serde_json::json!(v),
+        };
+        AoSettings::default().with_overrides(&serde_json::json!({ name: v }).to_string())
+    }
+
+    /// Validation is the declaration: every number accepts its range's ends (its min unless excluded) and
+    /// refuses a step past either, naming the setting; the defaults are valid.
+    #[test]
+    fn every_number_validates_exactly_its_declared_range() {
+        assert_eq!(AoSettings::default().validate(), Ok(()));
+        let mut numbers = 0;
+        for f in AoSettings::fields() {
+            let Some(r) = f.range else { continue };
+            numbers += 1;
+            let integer = f.kind == Kind::Integer;
+            let step = |v: f64| if integer { 1.0 } else { v.abs().max(1.0) * 1e-3 };
+            if r.max.is_finite() {
+                assert!(
+                    set(f.name, r.max).is_ok(),
+                    "{}: its max {} refused",
+                    f.name,
+                    r.max
+                );
+                let e = set(f.name, r.max + step(r.max)).unwrap_err();
+                assert!(e.contains(f.name) && e.contains(f.label), "{e}");
+            }
+            if r.above_min {
+                assert!(
+                    set(f.name, r.min).is_err(),
+                    "{}: its excluded min accepted",
+                    f.name
+                );
+                assert!(set(f.name, r.min + step(r.min)).is_ok(), "{}", f.name);
+            } else {
+                assert!(
+                    set(f.name, r.min).is_ok(),
+                    "{}: its min {} refused",
+                    f.name,
+                    r.min
+                );
+                if !(integer && r.min == 0.0) {
+                    assert!(
+                        set(f.name, r.min - step(r.min)).is_err(),
+                        "{}: below its min",
+                        f.name
+                    );
+                }
+            }
+            if r.power_of_two {
+                assert!(
+                    set(f.name, r.min * 3.0).is_err(),
+                    "{}: not a power of two",
+                    f.name
+                );
+            }
+            let default = serde_json::to_value(AoSettings::default()).unwrap()[f.name]
+                .as_f64()
+                .unwrap();
+            assert!(r.contains(default), "{}: default {default} outside {r}", f.name);
+        }
+        assert!(numbers >= 14, "{numbers} numbers");
+        for (name, v) in [("s_p", f64::NAN), ("environment_rotation", f64::INFINITY)] {
+            let mut s = AoSettings::default();
+            for (f, value) in s.fields_mut() {
+                if let (true, SettingRef::F32(x)) = (f.name == name, value) {
+                    *x = v as f32;
+                }
+            }
+            assert!(s.validate().unwrap_err().contains(name), "{name} = {v}");
+        }
+        let e = AoSettings::default()
+            .with_overrides(r#"{"environment": "sky.png"}"#)
+            .unwrap_err();
+        assert!(e.contains("environment"), "{e}");
+    }
+
+    /// The declaration, whole: one entry per JSON field (its `--set` key), in the JSON's order, each with a doc
+    /// and a label; every number with a range (also checked when the crate compiles, `check_fields`); the
+    /// additions are the switches with `paper (false)`; a `needs` names a switch of its group.
+    #[test]
+    fn every_setting_is_declared_with_its_doc_range_and_row() {
+        let json = serde_json::to_value(AoSettings::default()).unwrap();
+        let keys: Vec<&str> = json.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        let mut names: Vec<&str> = AoSettings::fields().iter().map(|f| f.name).collect();
+        let declared = names.clone();
+        names.sort();
+        let mut sorted_keys = keys.clone();
+        sorted_keys.sort();
+        assert_eq!(names, sorted_keys, "the declared settings are the JSON fields");
+        let classes: Vec<&str> = AoSettings::classes().iter().map(|(n, _)| *n).collect();
+        assert_eq!(declared, classes);
+        for f in AoSettings::fields() {
+            assert!(f.text().len() >= 20, "{}: no doc", f.name);
+            assert!(
+                !f.label.is_empty() && f.words == f.name.replace('_', " "),
+                "{}",
+                f.name
+            );
+            let number = matches!(f.kind, Kind::Float | Kind::Integer);
+            assert_eq!(
+                f.range.is_some(),
+                number,
+                "{}: a range exactly for a number",
+                f.name
+            );
+            assert_eq!(
+                f.addition,
+                f.kind == Kind::Toggle && AoSettings::addition_names().contains(&f.words.to_string()),
+                "{}",
+                f.name
+            );
+            if let Some(n) = f.needs {
+                let switch = AoSettings::field(n).unwrap();
+                assert_eq!(switch.kind, Kind::Toggle, "{}", f.name);
+            }
+        }
+        assert_eq!(AoSettings::field("crease_deg").unwrap().needs, Some("edges"));
+        assert!(AoSettings::field("nope").is_none());
+    }
+
+    /// `fields_mut` hands out each field's own value: writing through it changes that JSON field only.
+    #[test]
+    fn fields_mut_reaches_each_field() {
+        let mut s = AoSettings::default();
+        let before = serde_json::to_value(&s).unwrap();
+        let mut count = 0;
+        for (_, value) in s.fields_mut() {
+            match value {
+                SettingRef::Bool(b) => *b = !*b,
+                SettingRef::F32(v) => *v += 1.0,
+                SettingRef::U32(v) => *v += 1,
+                SettingRef::Mode(m) => *m = Mode::Rtao,
+                SettingRef::Text(t) => t.push('x'),
+                SettingRef::Axis(a) => *a = crate::camera::UpAxis::NegZ,
+            }
+            count += 1;
+        }
+        let after = serde_json::to_value(&s).unwrap();
+        let changed = before
+            .as_object()
+            .unwrap()
+            .iter()
+            .filter(|(k, v)| after[k.as_str()] != **v)
+            .count();
+        assert_eq!(
+            (changed, count),
+            (AoSettings::fields().len(), AoSettings::fields().len())
+        );
+    }
+
+    /// The docs table has one row per `--set` key, with its declared range and its default.
+    #[test]
+    fn the_docs_table_lists_every_key_with_its_range_and_default() {
+        let table = AoSettings::docs_table();
+        let defaults = serde_json::to_value(AoSettings::default()).unwrap();
+        assert_eq!(table.lines().count(), 2 + AoSettings::fields().len());
+        for f in AoSettings::fields() {
+            let row = table
+                .lines()
+                .find(|l| l.starts_with(&format!("| `{}` |", f.name)))
+                .unwrap_or_else(|| panic!("no row for {}", f.name));
+            assert!(row.contains(&format!("`{}`", defaults[f.name])), "{row}");
+            if let Some(r) = f.range {
+                assert!(row.contains(&r.to_string()), "{row}");
+            }
+        }
     }
 }

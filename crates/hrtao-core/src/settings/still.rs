@@ -24,9 +24,10 @@ settings_group! {
     pub struct StillSettings {
         /// Ours: while the view rests, pixels trace their own rays and converge to the ray-traced AO; primary
         /// samples are jittered when the frame allows it. Off: the paper's cell estimate only.
-        refine: bool = true, StillImage, paper (false);
+        refine: bool = true, StillImage, paper (false), label "refine when still";
         /// A still image is final once every pixel has this many rays of its own (refinement, per-pixel RTAO).
-        still_samples: u32 = 64, StillImage, paper keep;
+        still_samples: u32 = 64, StillImage, paper keep, range 1..=4096, log, label "rays per pixel",
+            needs "refine";
     }
 }
 
